@@ -1,0 +1,243 @@
+//! The loop that runs a sans-IO machine over a port.
+
+use std::io;
+use std::time::Duration;
+
+use trol_port::Port;
+use trol_proto::Instant;
+use trol_proto::link::Link;
+use trol_proto::transaction::{Initiator, Responder};
+
+/// Maps the real monotonic clock onto the core's [`Instant`].
+#[derive(Clone, Copy, Debug)]
+pub struct Clock {
+    epoch: std::time::Instant,
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Clock {
+            epoch: std::time::Instant::now(),
+        }
+    }
+}
+
+impl Clock {
+    /// Now, as the core sees it.
+    pub fn now(&self) -> Instant {
+        Instant::from_duration(self.epoch.elapsed())
+    }
+
+    /// A core instant as a real one.
+    pub fn to_std(&self, t: Instant) -> std::time::Instant {
+        self.epoch + t.since_epoch()
+    }
+}
+
+/// Which way bytes went, for traces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// Received from the line.
+    In,
+    /// Put on the line.
+    Out,
+}
+
+/// A trace hook: called with every chunk of bytes that crosses layer 1.
+pub type TraceFn = Box<dyn FnMut(Direction, &[u8], Instant) + Send>;
+
+/// What the driver needs of a state machine. Implemented for [`Link`], [`Initiator`] and
+/// [`Responder`].
+pub trait Machine {
+    /// Feed received bytes.
+    fn handle_input(&mut self, input: &[u8], now: Instant);
+    /// Run timers.
+    fn handle_timeout(&mut self, now: Instant);
+    /// Next timer.
+    fn poll_timeout(&self) -> Option<Instant>;
+    /// Bytes to send.
+    fn drain_transmit(&mut self, out: &mut Vec<u8>);
+    /// Whether input must be flushed now.
+    fn take_flush_request(&mut self) -> bool;
+}
+
+impl Machine for Link {
+    fn handle_input(&mut self, input: &[u8], now: Instant) {
+        let _ = Link::handle_input(self, input, now);
+    }
+    fn handle_timeout(&mut self, now: Instant) {
+        Link::handle_timeout(self, now)
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        Link::poll_timeout(self)
+    }
+    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
+        Link::drain_transmit(self, out)
+    }
+    fn take_flush_request(&mut self) -> bool {
+        Link::take_flush_request(self)
+    }
+}
+
+impl Machine for Initiator {
+    fn handle_input(&mut self, input: &[u8], now: Instant) {
+        Initiator::handle_input(self, input, now)
+    }
+    fn handle_timeout(&mut self, now: Instant) {
+        Initiator::handle_timeout(self, now)
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        Initiator::poll_timeout(self)
+    }
+    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
+        Initiator::drain_transmit(self, out)
+    }
+    fn take_flush_request(&mut self) -> bool {
+        Initiator::take_flush_request(self)
+    }
+}
+
+impl Machine for Responder {
+    fn handle_input(&mut self, input: &[u8], now: Instant) {
+        Responder::handle_input(self, input, now)
+    }
+    fn handle_timeout(&mut self, now: Instant) {
+        Responder::handle_timeout(self, now)
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        Responder::poll_timeout(self)
+    }
+    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
+        Responder::drain_transmit(self, out)
+    }
+    fn take_flush_request(&mut self) -> bool {
+        Responder::take_flush_request(self)
+    }
+}
+
+/// Longest single wait on the port when the machine has no timer, so that callers can check
+/// their own deadlines and stop flags.
+const IDLE_POLL: Duration = Duration::from_millis(50);
+
+/// Runs state machines over one port.
+pub struct Driver<P> {
+    port: P,
+    clock: Clock,
+    delay: Duration,
+    out: Vec<u8>,
+    rx: Vec<u8>,
+    trace: Option<TraceFn>,
+}
+
+impl<P: Port> Driver<P> {
+    /// A driver for `port`.
+    pub fn new(port: P) -> Self {
+        Driver {
+            port,
+            clock: Clock::default(),
+            delay: Duration::ZERO,
+            out: Vec::with_capacity(512),
+            rx: vec![0; 4096],
+            trace: None,
+        }
+    }
+
+    /// The clock the driver reads.
+    pub fn clock(&self) -> &Clock {
+        &self.clock
+    }
+
+    /// The port.
+    pub fn port(&self) -> &P {
+        &self.port
+    }
+
+    /// The port, mutably.
+    pub fn port_mut(&mut self) -> &mut P {
+        &mut self.port
+    }
+
+    /// Take the port back.
+    pub fn into_port(self) -> P {
+        self.port
+    }
+
+    /// SetDelay: pause between two bytes sent. The manual used 5 ms so that the C500's 286
+    /// could take each character from its UART in time; modern ports need none (default 0).
+    pub fn set_delay(&mut self, delay: Duration) {
+        self.delay = delay;
+    }
+
+    /// The inter-character delay.
+    pub fn delay(&self) -> Duration {
+        self.delay
+    }
+
+    /// Install a trace hook (or remove it with `None`).
+    pub fn set_trace(&mut self, trace: Option<TraceFn>) {
+        self.trace = trace;
+    }
+
+    fn transmit<M: Machine>(&mut self, m: &mut M) -> io::Result<()> {
+        self.out.clear();
+        m.drain_transmit(&mut self.out);
+        if self.out.is_empty() {
+            return Ok(());
+        }
+        if let Some(trace) = self.trace.as_mut() {
+            trace(Direction::Out, &self.out, self.clock.now());
+        }
+        if self.delay.is_zero() {
+            self.port.send(&self.out)
+        } else {
+            for (i, b) in self.out.iter().enumerate() {
+                if i > 0 {
+                    std::thread::sleep(self.delay);
+                }
+                self.port.send(std::slice::from_ref(b))?;
+            }
+            Ok(())
+        }
+    }
+
+    /// Run `m` until `done(m)` says so, or until `until` passes (checked only between
+    /// events). Bytes the machine queues are sent before `done` is asked.
+    pub fn run<M: Machine>(
+        &mut self,
+        m: &mut M,
+        until: Option<Instant>,
+        mut done: impl FnMut(&mut M) -> bool,
+    ) -> io::Result<()> {
+        loop {
+            self.transmit(m)?;
+            if m.take_flush_request() {
+                self.port.flush_input()?;
+            }
+            if done(m) {
+                return Ok(());
+            }
+            let now = self.clock.now();
+            if until.is_some_and(|u| now >= u) {
+                return Ok(());
+            }
+            let timer = m.poll_timeout();
+            if timer.is_some_and(|t| t <= now) {
+                m.handle_timeout(now);
+                continue;
+            }
+            let mut wake = timer.unwrap_or(now + IDLE_POLL).min(now + IDLE_POLL);
+            if let Some(u) = until {
+                wake = wake.min(u);
+            }
+            let n = self.port.recv(&mut self.rx, self.clock.to_std(wake))?;
+            let now = self.clock.now();
+            if n > 0 {
+                if let Some(trace) = self.trace.as_mut() {
+                    trace(Direction::In, &self.rx[..n], now);
+                }
+                m.handle_input(&self.rx[..n], now);
+            }
+            m.handle_timeout(now);
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! The application's error handlers of layer 3 (manual, "Callback-Routinen").
+//!
+//! The manual lets an application replace ErrOnSend, ErrOnReceive and ErrAppTimeOut (and the
+//! layer-4 FatalError, which lives in the host API). Here they are the methods of
+//! [`ErrorHandlers`]; [`DefaultHandlers`] behaves as the manual's `callback.c` is described:
+//!
+//! - ErrOnSend, ErrOnReceive: give up (RECOVERY_FAIL). Layer 2 has already retried every block
+//!   MAX_RETRIES times and performed its reset, so a failure here is a broken link.
+//! - ErrAppTimeOut: give up, except for the commands its [`TimeoutPolicy`] names: the manual
+//!   waits 90 s more for Home and without limit for Finish(FINISH_WAIT). The host API installs
+//!   that policy, since only layer 4 knows the command codes.
+//!
+//! A handler that returns [`Recovery::Success`] after a send failure makes layer 3 send the
+//! request again, marked as repeated (the controller then answers a request it already
+//! executed from its stored reply, without executing it twice); after a receive failure, it
+//! waits for the reply again.
+
+use std::time::Duration;
+
+use trol_proto::link::LinkError;
+
+/// The manual's RECOVERY_SUCCESS / RECOVERY_FAIL.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Recovery {
+    /// RECOVERY_SUCCESS: try again.
+    Success,
+    /// RECOVERY_FAIL: give up.
+    Fail,
+}
+
+/// What ErrAppTimeOut decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeoutAction {
+    /// RECOVERY_FAIL: TransSR returns TRANS_TIMEOUT.
+    Fail,
+    /// RECOVERY_SUCCESS: wait this much longer (the handler is asked again if that runs out).
+    WaitMore(Duration),
+}
+
+/// What a failed send or receive handler is told.
+#[derive(Clone, Copy, Debug)]
+pub struct FailureContext<'a> {
+    /// The layer-2 code (GetLastCommErr).
+    pub error: LinkError,
+    /// The message that was being sent (the request on the PC, the reply on the controller);
+    /// empty for a failed receive.
+    pub message: &'a [u8],
+    /// The PCI of that message.
+    pub pci: u16,
+    /// How many times the handler was already asked in this transaction.
+    pub attempts: u32,
+}
+
+/// What ErrAppTimeOut is told.
+#[derive(Clone, Copy, Debug)]
+pub struct AppTimeoutContext<'a> {
+    /// The request that was sent; its first byte is the command code.
+    pub request: &'a [u8],
+    /// Time since the request was sent.
+    pub waited: Duration,
+    /// The reply timeout (SetL3_TO_Intervall).
+    pub reply_timeout: Duration,
+    /// Whether bytes wait in the input buffer (the manual's `!BufferEmpty()`); the handler
+    /// may look but cannot take them.
+    pub input_pending: bool,
+}
+
+/// The application's error handlers. Every method has the manual's default.
+pub trait ErrorHandlers: Send {
+    /// ErrOnSend: SendData failed.
+    fn err_on_send(&mut self, ctx: &FailureContext<'_>) -> Recovery {
+        let _ = ctx;
+        Recovery::Fail
+    }
+
+    /// ErrOnReceive: ReceiveData failed.
+    fn err_on_receive(&mut self, ctx: &FailureContext<'_>) -> Recovery {
+        let _ = ctx;
+        Recovery::Fail
+    }
+
+    /// ErrAppTimeOut: no reply within the reply timeout.
+    fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
+        let _ = ctx;
+        TimeoutAction::Fail
+    }
+}
+
+/// Which requests ErrAppTimeOut waits longer for, by their bytes.
+pub type TimeoutPolicy = fn(request: &[u8]) -> Option<ExtraWait>;
+
+/// How much longer the default ErrAppTimeOut waits for a request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExtraWait {
+    /// This much beyond the reply timeout, in all.
+    Up(Duration),
+    /// Without limit (the manual's Finish(FINISH_WAIT)).
+    Unlimited,
+}
+
+/// The manual's default handlers, with a policy for ErrAppTimeOut.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DefaultHandlers {
+    policy: Option<TimeoutPolicy>,
+}
+
+impl DefaultHandlers {
+    /// Defaults whose ErrAppTimeOut waits longer for the requests `policy` names.
+    pub fn with_policy(policy: TimeoutPolicy) -> Self {
+        DefaultHandlers {
+            policy: Some(policy),
+        }
+    }
+
+    /// The manual's ErrAppTimeOut for this policy (usable by other handler sets).
+    pub fn app_timeout(
+        policy: Option<TimeoutPolicy>,
+        ctx: &AppTimeoutContext<'_>,
+    ) -> TimeoutAction {
+        match policy.and_then(|p| p(ctx.request)) {
+            Some(ExtraWait::Unlimited) => TimeoutAction::WaitMore(ctx.reply_timeout),
+            Some(ExtraWait::Up(extra)) => {
+                let limit = ctx.reply_timeout + extra;
+                if ctx.waited < limit {
+                    TimeoutAction::WaitMore(limit - ctx.waited)
+                } else {
+                    TimeoutAction::Fail
+                }
+            }
+            None => TimeoutAction::Fail,
+        }
+    }
+}
+
+impl ErrorHandlers for DefaultHandlers {
+    fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
+        DefaultHandlers::app_timeout(self.policy, ctx)
+    }
+}

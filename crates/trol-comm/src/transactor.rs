@@ -1,0 +1,201 @@
+//! TransSR over a port: the PC's side of layer 3, with the application's error handlers.
+
+use std::io;
+use std::time::Duration;
+
+use trol_port::Port;
+use trol_proto::link::{LinkConfig, LinkError};
+use trol_proto::transaction::{Decision, Failure, Initiator, InitiatorEvent, TransCode};
+
+use crate::driver::Driver;
+use crate::handlers::{
+    AppTimeoutContext, DefaultHandlers, ErrorHandlers, FailureContext, Recovery, TimeoutAction,
+};
+
+/// Why TransSR returned no reply.
+#[derive(Debug)]
+pub enum TransError {
+    /// The transaction failed with the manual's layer-3 code; `last_comm` is the layer-2
+    /// code of the last failure (GetLastCommErr), if any.
+    Failed {
+        /// TRANS_ERR_SEND, TRANS_ERR_RECEIVE or TRANS_TIMEOUT.
+        code: TransCode,
+        /// The last layer-2 failure.
+        last_comm: Option<LinkError>,
+    },
+    /// The request could not be started (too long).
+    Request(String),
+    /// The port failed.
+    Io(io::Error),
+}
+
+impl std::fmt::Display for TransError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TransError::Failed { code, last_comm } => {
+                write!(f, "transaction failed: {code}")?;
+                if let Some(e) = last_comm {
+                    write!(f, "; last link error {e}")?;
+                }
+                Ok(())
+            }
+            TransError::Request(why) => write!(f, "bad request: {why}"),
+            TransError::Io(e) => write!(f, "port error: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for TransError {}
+
+impl TransError {
+    /// The manual's layer-3 code of this failure (port errors count as the failed direction
+    /// being unknown: TRANS_ERR_SEND).
+    pub fn code(&self) -> TransCode {
+        match self {
+            TransError::Failed { code, .. } => *code,
+            TransError::Request(_) | TransError::Io(_) => TransCode::ErrSend,
+        }
+    }
+}
+
+/// The PC's end of layer 3: sends commands and returns their replies.
+pub struct Transactor<P> {
+    driver: Driver<P>,
+    initiator: Initiator,
+    handlers: Box<dyn ErrorHandlers>,
+}
+
+impl<P: Port> Transactor<P> {
+    /// A transactor over `port` with the default handlers.
+    pub fn new(port: P, cfg: LinkConfig) -> Self {
+        Transactor {
+            driver: Driver::new(port),
+            initiator: Initiator::new(cfg),
+            handlers: Box::new(DefaultHandlers::default()),
+        }
+    }
+
+    /// Replace the error handlers.
+    pub fn set_handlers(&mut self, handlers: Box<dyn ErrorHandlers>) {
+        self.handlers = handlers;
+    }
+
+    /// The driver (port, delay, trace hook).
+    pub fn driver_mut(&mut self) -> &mut Driver<P> {
+        &mut self.driver
+    }
+
+    /// The driver.
+    pub fn driver(&self) -> &Driver<P> {
+        &self.driver
+    }
+
+    /// The state machine (link settings, counters).
+    pub fn initiator(&self) -> &Initiator {
+        &self.initiator
+    }
+
+    /// The state machine, mutably.
+    pub fn initiator_mut(&mut self) -> &mut Initiator {
+        &mut self.initiator
+    }
+
+    /// SetL3_TO_Intervall, in tenths of a second.
+    pub fn set_reply_timeout_tenths(&mut self, tenths: u16) {
+        self.initiator
+            .set_reply_timeout(trol_proto::transaction::reply_timeout_from_tenths(tenths));
+    }
+
+    /// The reply timeout.
+    pub fn reply_timeout(&self) -> Duration {
+        self.initiator.reply_timeout()
+    }
+
+    /// GetLastCommErr: the last layer-2 failure.
+    pub fn last_comm_error(&self) -> Option<LinkError> {
+        self.initiator.last_comm_error()
+    }
+
+    /// TransSR: send `request` and return the controller's reply.
+    pub fn trans_sr(&mut self, request: &[u8]) -> Result<Vec<u8>, TransError> {
+        let now = self.driver.clock().now();
+        self.initiator
+            .start(request, now)
+            .map_err(|e| TransError::Request(e.to_string()))?;
+        let mut attempts = 0u32;
+        loop {
+            let mut event = None;
+            self.driver
+                .run(&mut self.initiator, None, |m| {
+                    event = m.poll_event();
+                    event.is_some()
+                })
+                .map_err(TransError::Io)?;
+            match event {
+                Some(InitiatorEvent::Reply) => {
+                    return self.initiator.take_reply().ok_or(TransError::Failed {
+                        code: TransCode::ErrReceive,
+                        last_comm: self.last_comm_error(),
+                    });
+                }
+                Some(InitiatorEvent::Failed(code)) => {
+                    return Err(TransError::Failed {
+                        code,
+                        last_comm: self.last_comm_error(),
+                    });
+                }
+                Some(InitiatorEvent::NeedDecision(failure)) => {
+                    let decision = self.ask(failure, attempts)?;
+                    attempts += 1;
+                    let now = self.driver.clock().now();
+                    self.initiator.decide(decision, now);
+                }
+                None => {}
+            }
+        }
+    }
+
+    fn ask(&mut self, failure: Failure, attempts: u32) -> Result<Decision, TransError> {
+        let decision = match failure {
+            Failure::Send(e) => {
+                let ctx = FailureContext {
+                    error: LinkError::Send(e),
+                    message: self.initiator.request(),
+                    pci: self.initiator.current_pci(),
+                    attempts,
+                };
+                recovery(self.handlers.err_on_send(&ctx))
+            }
+            Failure::Receive(e) => {
+                let ctx = FailureContext {
+                    error: LinkError::Receive(e),
+                    message: &[],
+                    pci: self.initiator.current_pci(),
+                    attempts,
+                };
+                recovery(self.handlers.err_on_receive(&ctx))
+            }
+            Failure::Timeout { waited } => {
+                let input_pending = self.driver.port_mut().available().map_err(TransError::Io)? > 0;
+                let ctx = AppTimeoutContext {
+                    request: self.initiator.request(),
+                    waited,
+                    reply_timeout: self.initiator.reply_timeout(),
+                    input_pending,
+                };
+                match self.handlers.err_app_timeout(&ctx) {
+                    TimeoutAction::Fail => Decision::GiveUp,
+                    TimeoutAction::WaitMore(d) => Decision::WaitMore(d),
+                }
+            }
+        };
+        Ok(decision)
+    }
+}
+
+fn recovery(r: Recovery) -> Decision {
+    match r {
+        Recovery::Success => Decision::Retry,
+        Recovery::Fail => Decision::GiveUp,
+    }
+}

@@ -1,0 +1,149 @@
+//! Layer 1 of TROL ("Bitübertragungs-Schicht"): moving bytes over a line.
+//!
+//! The manual gives layer 1 four services: send a byte (SendByte), get a byte (GetByte),
+//! ask whether input is waiting (BufferEmpty) and drop waiting input (FlushBuffer). [`Port`]
+//! offers them for every kind of line, each with a deadline so that nothing waits forever on
+//! a silent line:
+//!
+//! | name | port |
+//! |------|------|
+//! | `/dev/ttyUSB0`, `/dev/pts/3`, `COM1`, ... | [`serial::SerialLine`]: a serial device or pty, 8N1, raw |
+//! | `socket://HOST:PORT` | [`tcp::TcpLine`]: connects to a TCP server |
+//! | `listen://HOST:PORT` | [`tcp::TcpLine`]: waits for one client to connect |
+//! | (in process) | [`memory::pair`]: two ends of an in-memory line, optionally paced |
+//!
+//! [`faulty::Faulty`] wraps any port and injects bit errors, drops, insertions, duplicates,
+//! delays and a cut, from a seed so that a failure can be replayed.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod faulty;
+pub mod memory;
+pub mod serial;
+pub mod tcp;
+
+use std::io;
+use std::time::{Duration, Instant};
+
+/// One end of a byte line.
+pub trait Port: Send {
+    /// Put `bytes` on the line (SendByte / a buffer of them). Returns once the port took them.
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
+
+    /// Read what has arrived into `buf`, waiting until `deadline` for the first byte
+    /// (GetByte with a deadline). Returns 0 when the deadline passed with nothing received.
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize>;
+
+    /// Bytes waiting to be read (0 means the manual's BufferEmpty() is true). Never consumes.
+    fn available(&mut self) -> io::Result<usize>;
+
+    /// Drop all input waiting to be read (FlushBuffer).
+    fn flush_input(&mut self) -> io::Result<()>;
+
+    /// A name for messages and traces.
+    fn name(&self) -> String;
+}
+
+impl<P: Port + ?Sized> Port for Box<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        (**self).send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        (**self).recv(buf, deadline)
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        (**self).available()
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        (**self).flush_input()
+    }
+    fn name(&self) -> String {
+        (**self).name()
+    }
+}
+
+/// Settings for opening a port by name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PortSettings {
+    /// Baud rate of a serial device (ignored by TCP).
+    pub baud: u32,
+    /// How long opening (connecting, waiting for a client) may take.
+    pub open_timeout: Duration,
+}
+
+impl Default for PortSettings {
+    fn default() -> Self {
+        PortSettings {
+            baud: 9600,
+            open_timeout: Duration::from_secs(10),
+        }
+    }
+}
+
+/// Why a port could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum OpenError {
+    /// The name is not of a form layer 1 knows.
+    #[error("'{name}' is not a port name: {why}")]
+    BadName {
+        /// The name given.
+        name: String,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// The operating system refused.
+    #[error("cannot open port '{name}': {source}")]
+    Io {
+        /// The name given.
+        name: String,
+        /// The cause.
+        #[source]
+        source: io::Error,
+    },
+}
+
+/// Open the port called `name`: `socket://HOST:PORT`, `listen://HOST:PORT`, or the path of a
+/// serial device. The in-process names (`sim`, memory lines) are handled by the layers that
+/// own them.
+pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenError> {
+    if let Some(addr) = name.strip_prefix("socket://") {
+        return Ok(Box::new(
+            tcp::TcpLine::connect(addr, settings.open_timeout).map_err(|source| OpenError::Io {
+                name: name.to_string(),
+                source,
+            })?,
+        ));
+    }
+    if let Some(addr) = name.strip_prefix("listen://") {
+        return Ok(Box::new(
+            tcp::TcpLine::listen(addr, settings.open_timeout).map_err(|source| OpenError::Io {
+                name: name.to_string(),
+                source,
+            })?,
+        ));
+    }
+    if name.contains("://") {
+        return Err(OpenError::BadName {
+            name: name.to_string(),
+            why: "the known schemes are socket://HOST:PORT and listen://HOST:PORT".into(),
+        });
+    }
+    if name.is_empty() {
+        return Err(OpenError::BadName {
+            name: name.to_string(),
+            why: "empty; give a device path such as /dev/ttyUSB0, or socket://HOST:PORT".into(),
+        });
+    }
+    Ok(Box::new(
+        serial::SerialLine::open(name, settings.baud).map_err(|source| OpenError::Io {
+            name: name.to_string(),
+            source,
+        })?,
+    ))
+}
+
+/// Time left until `deadline`, zero when it has passed.
+pub(crate) fn remaining(deadline: Instant) -> Duration {
+    deadline.saturating_duration_since(Instant::now())
+}

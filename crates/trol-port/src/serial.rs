@@ -1,0 +1,133 @@
+//! Serial devices and pseudo-terminals, through the `serialport` crate: 8 data bits, no
+//! parity, 1 stop bit, no flow control, raw mode.
+
+use std::io::{self, Read, Write};
+use std::time::{Duration, Instant};
+
+use serialport::{ClearBuffer, DataBits, FlowControl, Parity, SerialPort, StopBits};
+
+use crate::{Port, remaining};
+
+/// A serial device (USB adapters and pseudo-terminals included).
+pub struct SerialLine {
+    port: Box<dyn SerialPort>,
+    name: String,
+}
+
+impl std::fmt::Debug for SerialLine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SerialLine")
+            .field("name", &self.name)
+            .finish()
+    }
+}
+
+impl SerialLine {
+    /// Open the device at `path` at `baud`, 8N1, raw.
+    pub fn open(path: &str, baud: u32) -> io::Result<SerialLine> {
+        let port = serialport::new(path, baud)
+            .data_bits(DataBits::Eight)
+            .parity(Parity::None)
+            .stop_bits(StopBits::One)
+            .flow_control(FlowControl::None)
+            .timeout(Duration::from_millis(100))
+            .open()
+            .map_err(io::Error::from)?;
+        Ok(SerialLine {
+            port,
+            name: path.to_string(),
+        })
+    }
+
+    /// Wrap a port opened elsewhere.
+    pub fn from_port(port: Box<dyn SerialPort>) -> SerialLine {
+        let name = port.name().unwrap_or_else(|| "serial".into());
+        SerialLine { port, name }
+    }
+
+    /// A new pseudo-terminal pair: `(controlling end, other end)`. The other end has a path
+    /// (`/dev/pts/N`) that a second process can open by name.
+    #[cfg(unix)]
+    pub fn pty_pair() -> io::Result<(SerialLine, SerialLine, String)> {
+        let (master, slave) = serialport::TTYPort::pair().map_err(io::Error::from)?;
+        let path = slave
+            .name()
+            .ok_or_else(|| io::Error::other("the pty has no path"))?;
+        Ok((
+            SerialLine {
+                port: Box::new(master),
+                name: "pty-master".into(),
+            },
+            SerialLine {
+                port: Box::new(slave),
+                name: path.clone(),
+            },
+            path,
+        ))
+    }
+}
+
+impl Port for SerialLine {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.port.write_all(bytes)?;
+        self.port.flush()
+    }
+
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            let left = remaining(deadline);
+            // serialport treats a zero timeout as "poll once".
+            self.port
+                .set_timeout(left.max(Duration::from_micros(1)))
+                .map_err(io::Error::from)?;
+            match self.port.read(buf) {
+                Ok(n) => return Ok(n),
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => return Ok(0),
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(0),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {
+                    if left.is_zero() {
+                        return Ok(0);
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn available(&mut self) -> io::Result<usize> {
+        Ok(self.port.bytes_to_read().map_err(io::Error::from)? as usize)
+    }
+
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.port.clear(ClearBuffer::Input).map_err(io::Error::from)
+    }
+
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+}
+
+/// Serial ports of this machine, as `(name, description)`.
+pub fn list() -> io::Result<Vec<(String, String)>> {
+    let ports = serialport::available_ports().map_err(io::Error::from)?;
+    Ok(ports
+        .into_iter()
+        .map(|p| {
+            let what = match p.port_type {
+                serialport::SerialPortType::UsbPort(u) => format!(
+                    "USB {:04x}:{:04x}{}",
+                    u.vid,
+                    u.pid,
+                    u.product.map(|s| format!(" {s}")).unwrap_or_default()
+                ),
+                serialport::SerialPortType::PciPort => "PCI".into(),
+                serialport::SerialPortType::BluetoothPort => "Bluetooth".into(),
+                serialport::SerialPortType::Unknown => "serial".into(),
+            };
+            (p.port_name, what)
+        })
+        .collect())
+}

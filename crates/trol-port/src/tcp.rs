@@ -1,0 +1,181 @@
+//! TCP lines: `socket://HOST:PORT` connects to a server, `listen://HOST:PORT` waits for one
+//! client. A listening line that loses its client accepts the next one, so a relay or a
+//! simulated controller survives a client reconnecting.
+
+use std::io::{self, Read, Write};
+use std::net::{Shutdown, TcpListener, TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+
+use crate::{Port, remaining};
+
+/// One end of a TCP connection carrying the byte line.
+#[derive(Debug)]
+pub struct TcpLine {
+    stream: Option<TcpStream>,
+    listener: Option<TcpListener>,
+    name: String,
+}
+
+impl TcpLine {
+    /// Connect to `addr` (`HOST:PORT`).
+    pub fn connect(addr: &str, timeout: Duration) -> io::Result<TcpLine> {
+        let mut last = io::Error::new(io::ErrorKind::NotFound, format!("no address for {addr}"));
+        for a in addr.to_socket_addrs()? {
+            match TcpStream::connect_timeout(&a, timeout) {
+                Ok(stream) => {
+                    stream.set_nodelay(true)?;
+                    return Ok(TcpLine {
+                        stream: Some(stream),
+                        listener: None,
+                        name: format!("socket://{addr}"),
+                    });
+                }
+                Err(e) => last = e,
+            }
+        }
+        Err(last)
+    }
+
+    /// Listen on `addr` (`HOST:PORT`; port 0 picks a free port, see [`TcpLine::local_addr`]).
+    /// The first client is accepted lazily, on the first send or receive.
+    pub fn listen(addr: &str, _timeout: Duration) -> io::Result<TcpLine> {
+        let listener = TcpListener::bind(addr)?;
+        listener.set_nonblocking(true)?;
+        let name = format!("listen://{}", listener.local_addr()?);
+        Ok(TcpLine {
+            stream: None,
+            listener: Some(listener),
+            name,
+        })
+    }
+
+    /// The local address of a listening line.
+    pub fn local_addr(&self) -> Option<std::net::SocketAddr> {
+        self.listener.as_ref().and_then(|l| l.local_addr().ok())
+    }
+
+    /// Whether a peer is connected.
+    pub fn is_connected(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    fn try_accept(&mut self) -> io::Result<()> {
+        if self.stream.is_some() {
+            return Ok(());
+        }
+        if let Some(listener) = &self.listener {
+            match listener.accept() {
+                Ok((stream, _)) => {
+                    stream.set_nonblocking(false)?;
+                    stream.set_nodelay(true)?;
+                    self.stream = Some(stream);
+                }
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+
+    fn lost(&mut self) {
+        if let Some(s) = self.stream.take() {
+            let _ = s.shutdown(Shutdown::Both);
+        }
+    }
+}
+
+impl Port for TcpLine {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.try_accept()?;
+        let Some(stream) = self.stream.as_mut() else {
+            // A listening line with no client: the bytes fall off the line, as on a
+            // disconnected serial cable.
+            return Ok(());
+        };
+        match stream.write_all(bytes) {
+            Ok(()) => Ok(()),
+            Err(e) if self.listener.is_some() => {
+                let _ = e;
+                self.lost();
+                Ok(())
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        loop {
+            self.try_accept()?;
+            let left = remaining(deadline);
+            let Some(stream) = self.stream.as_mut() else {
+                if left.is_zero() {
+                    return Ok(0);
+                }
+                std::thread::sleep(left.min(Duration::from_millis(10)));
+                continue;
+            };
+            stream.set_read_timeout(Some(left.max(Duration::from_micros(1))))?;
+            match stream.read(buf) {
+                Ok(0) => {
+                    if self.listener.is_some() {
+                        self.lost();
+                        continue;
+                    }
+                    return Err(io::Error::new(
+                        io::ErrorKind::ConnectionAborted,
+                        format!("{}: the peer closed the connection", self.name),
+                    ));
+                }
+                Ok(n) => return Ok(n),
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    return Ok(0);
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) if self.listener.is_some() => {
+                    let _ = e;
+                    self.lost();
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn available(&mut self) -> io::Result<usize> {
+        self.try_accept()?;
+        let Some(stream) = self.stream.as_mut() else {
+            return Ok(0);
+        };
+        stream.set_nonblocking(true)?;
+        let mut tmp = [0u8; 4096];
+        let r = stream.peek(&mut tmp);
+        stream.set_nonblocking(false)?;
+        match r {
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(0),
+            Err(e) => Err(e),
+        }
+    }
+
+    fn flush_input(&mut self) -> io::Result<()> {
+        let mut tmp = [0u8; 4096];
+        loop {
+            let n = self.available()?;
+            if n == 0 {
+                return Ok(());
+            }
+            let got = self.recv(&mut tmp, Instant::now())?;
+            if got == 0 {
+                return Ok(());
+            }
+        }
+    }
+
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+}

@@ -1,0 +1,273 @@
+//! TransSR: the PC's side of a transaction.
+
+use std::time::Duration;
+
+use super::{Decision, Failure, TransCode, pci, pci_number, reply_timeout_from_tenths};
+use crate::link::{Link, LinkConfig, LinkError, Outcome, StartError};
+use crate::time::Instant;
+
+/// What the initiator has to say.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InitiatorEvent {
+    /// The reply arrived: take it with [`Initiator::take_reply`].
+    Reply,
+    /// Something failed; call [`Initiator::decide`].
+    NeedDecision(Failure),
+    /// The transaction ended without a reply.
+    Failed(TransCode),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    Sending,
+    AwaitReply,
+    Deciding(Failure),
+    Finished,
+}
+
+/// TransSR as a sans-IO state machine over one [`Link`].
+#[derive(Debug)]
+pub struct Initiator {
+    link: Link,
+    state: State,
+    number: u8,
+    repeat: bool,
+    request: Vec<u8>,
+    reply: Option<Vec<u8>>,
+    reply_timeout: Duration,
+    sent_at: Instant,
+    reply_deadline: Option<Instant>,
+    event: Option<InitiatorEvent>,
+    stale_replies: u64,
+}
+
+impl Initiator {
+    /// An idle initiator with the default reply timeout of 15 s.
+    pub fn new(cfg: LinkConfig) -> Self {
+        Initiator {
+            link: Link::new(cfg),
+            state: State::Idle,
+            number: 0,
+            repeat: false,
+            request: Vec::new(),
+            reply: None,
+            reply_timeout: reply_timeout_from_tenths(super::DEFAULT_REPLY_TIMEOUT_TENTHS),
+            sent_at: Instant::ZERO,
+            reply_deadline: None,
+            event: None,
+            stale_replies: 0,
+        }
+    }
+
+    /// The link underneath (settings, counters, last error).
+    pub fn link(&self) -> &Link {
+        &self.link
+    }
+
+    /// The link underneath, to change its settings.
+    pub fn link_mut(&mut self) -> &mut Link {
+        &mut self.link
+    }
+
+    /// SetL3_TO_Intervall: how long to wait for a reply, in tenths of a second.
+    pub fn set_reply_timeout(&mut self, timeout: Duration) {
+        self.reply_timeout = timeout;
+    }
+
+    /// The reply timeout.
+    pub fn reply_timeout(&self) -> Duration {
+        self.reply_timeout
+    }
+
+    /// The last layer-2 failure (GetLastCommErr).
+    pub fn last_comm_error(&self) -> Option<LinkError> {
+        self.link.last_error()
+    }
+
+    /// Replies dropped because they answered an earlier transaction.
+    pub fn stale_replies(&self) -> u64 {
+        self.stale_replies
+    }
+
+    /// The request of the current (or last) transaction.
+    pub fn request(&self) -> &[u8] {
+        &self.request
+    }
+
+    /// The PCI the current request carries.
+    pub fn current_pci(&self) -> u16 {
+        pci(self.number, self.repeat)
+    }
+
+    /// Whether a transaction is under way.
+    pub fn is_busy(&self) -> bool {
+        !matches!(self.state, State::Idle | State::Finished)
+    }
+
+    /// Start a transaction: send `request`, then wait for its reply.
+    pub fn start(&mut self, request: &[u8], now: Instant) -> Result<(), StartError> {
+        if self.is_busy() {
+            return Err(StartError::Busy);
+        }
+        if request.len() > crate::link::frame::MAX_MESSAGE {
+            return Err(StartError::TooLong(crate::link::MessageTooLong(
+                request.len(),
+            )));
+        }
+        self.number = self.number.wrapping_add(1);
+        self.repeat = false;
+        self.request.clear();
+        self.request.extend_from_slice(request);
+        self.reply = None;
+        self.event = None;
+        self.send_request(now)
+    }
+
+    fn send_request(&mut self, now: Instant) -> Result<(), StartError> {
+        self.link.send(&self.request, self.current_pci(), now)?;
+        self.state = State::Sending;
+        Ok(())
+    }
+
+    /// The next event, once.
+    pub fn poll_event(&mut self) -> Option<InitiatorEvent> {
+        self.event.take()
+    }
+
+    /// The reply of a finished transaction.
+    pub fn take_reply(&mut self) -> Option<Vec<u8>> {
+        self.reply.take()
+    }
+
+    /// Answer a [`InitiatorEvent::NeedDecision`].
+    pub fn decide(&mut self, decision: Decision, now: Instant) {
+        let State::Deciding(failure) = self.state else {
+            return;
+        };
+        match (failure, decision) {
+            (_, Decision::GiveUp) => {
+                let code = match failure {
+                    Failure::Send(_) => TransCode::ErrSend,
+                    Failure::Receive(_) => TransCode::ErrReceive,
+                    Failure::Timeout { .. } => TransCode::Timeout,
+                };
+                self.state = State::Finished;
+                self.event = Some(InitiatorEvent::Failed(code));
+            }
+            (Failure::Send(_), _) => {
+                self.repeat = true;
+                if self.send_request(now).is_err() {
+                    self.state = State::Finished;
+                    self.event = Some(InitiatorEvent::Failed(TransCode::ErrSend));
+                }
+            }
+            (Failure::Receive(_), Decision::WaitMore(extra)) => self.await_reply(now + extra),
+            (Failure::Receive(_), _) => self.await_reply(now + self.reply_timeout),
+            (Failure::Timeout { .. }, Decision::WaitMore(extra)) => self.await_reply(now + extra),
+            (Failure::Timeout { .. }, _) => self.await_reply(now + self.reply_timeout),
+        }
+    }
+
+    fn await_reply(&mut self, deadline: Instant) {
+        self.state = State::AwaitReply;
+        self.reply_deadline = Some(deadline);
+        if !self.link.is_busy() {
+            // Cannot be busy: the link is idle whenever a decision is asked for.
+            let _ = self.link.receive(deadline);
+        }
+    }
+
+    /// When [`Initiator::handle_timeout`] must be called next.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        let link = self.link.poll_timeout();
+        let reply = match self.state {
+            State::AwaitReply if !self.link.receive_in_progress() => self.reply_deadline,
+            _ => None,
+        };
+        match (link, reply) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Move the bytes to put on the line into `out`.
+    pub fn drain_transmit(&mut self, out: &mut Vec<u8>) {
+        self.link.drain_transmit(out);
+    }
+
+    /// Whether layer 1's input must be flushed now.
+    pub fn take_flush_request(&mut self) -> bool {
+        self.link.take_flush_request()
+    }
+
+    /// Whether a reply may be arriving (the receiver answered ENQ).
+    pub fn reply_in_progress(&self) -> bool {
+        self.link.receive_in_progress()
+    }
+
+    /// Feed bytes from the line.
+    pub fn handle_input(&mut self, input: &[u8], now: Instant) {
+        let mut rest = input;
+        loop {
+            let used = self.link.handle_input(rest, now);
+            self.settle(now);
+            rest = &rest[used..];
+            if rest.is_empty() || !self.link.is_busy() {
+                break;
+            }
+        }
+    }
+
+    /// Tell the initiator the time.
+    pub fn handle_timeout(&mut self, now: Instant) {
+        self.link.handle_timeout(now);
+        self.settle(now);
+        if self.state == State::AwaitReply
+            && !self.link.receive_in_progress()
+            && self.reply_deadline.is_some_and(|d| now >= d)
+            && self.link.cancel_receive()
+        {
+            self.reply_deadline = None;
+            self.ask(Failure::Timeout {
+                waited: now.saturating_since(self.sent_at),
+            });
+        }
+    }
+
+    fn ask(&mut self, failure: Failure) {
+        self.state = State::Deciding(failure);
+        self.event = Some(InitiatorEvent::NeedDecision(failure));
+    }
+
+    fn settle(&mut self, now: Instant) {
+        let Some(outcome) = self.link.poll_outcome() else {
+            return;
+        };
+        match (self.state, outcome) {
+            (State::Sending, Outcome::Sent) => {
+                self.sent_at = now;
+                self.await_reply(now + self.reply_timeout);
+            }
+            (State::Sending, Outcome::Failed(LinkError::Send(e))) => self.ask(Failure::Send(e)),
+            (State::AwaitReply, Outcome::Received) => {
+                let Some((reply_pci, data)) = self.link.take_received() else {
+                    return;
+                };
+                if pci_number(reply_pci) == self.number {
+                    self.reply = Some(data);
+                    self.state = State::Finished;
+                    self.event = Some(InitiatorEvent::Reply);
+                } else {
+                    // A late reply to a transaction the PC gave up on.
+                    self.stale_replies += 1;
+                    let _ = self.link.receive(now);
+                }
+            }
+            (State::AwaitReply, Outcome::Failed(LinkError::Receive(e))) => {
+                self.ask(Failure::Receive(e))
+            }
+            _ => {}
+        }
+    }
+}

@@ -1,0 +1,244 @@
+//! TransRS: the controller's side of a transaction.
+
+use super::{Decision, Failure, PCI_REPEAT, TransCode, pci, pci_number};
+use crate::link::{Link, LinkConfig, LinkError, Outcome};
+use crate::time::Instant;
+
+/// What the responder has to say.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResponderEvent {
+    /// A request arrived: read it with [`Responder::request`], answer with
+    /// [`Responder::respond`] (the manual's MsgReceived).
+    Request,
+    /// A repeated request was answered from the stored reply, without executing it again.
+    Repeated,
+    /// The reply went out: the transaction is done (the manual's TransactionDone).
+    Done,
+    /// Something failed; call [`Responder::decide`].
+    NeedDecision(Failure),
+    /// The transaction ended with this code; the responder listens again.
+    Failed(TransCode),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    Listening,
+    Executing,
+    Replying,
+    Deciding(Failure),
+}
+
+#[derive(Debug, Default)]
+struct LastTransaction {
+    number: u8,
+    request: Vec<u8>,
+    reply: Vec<u8>,
+    valid: bool,
+}
+
+/// TransRS as a sans-IO state machine over one [`Link`]. After each transaction it listens
+/// for the next request by itself.
+#[derive(Debug)]
+pub struct Responder {
+    link: Link,
+    state: State,
+    request_pci: u16,
+    request: Vec<u8>,
+    last: LastTransaction,
+    event: Option<ResponderEvent>,
+}
+
+impl Responder {
+    /// A responder that does not listen yet; call [`Responder::listen`].
+    pub fn new(cfg: LinkConfig) -> Self {
+        Responder {
+            link: Link::new(cfg),
+            state: State::Idle,
+            request_pci: 0,
+            request: Vec::new(),
+            last: LastTransaction::default(),
+            event: None,
+        }
+    }
+
+    /// The link underneath.
+    pub fn link(&self) -> &Link {
+        &self.link
+    }
+
+    /// The link underneath, to change its settings.
+    pub fn link_mut(&mut self) -> &mut Link {
+        &mut self.link
+    }
+
+    /// The last layer-2 failure.
+    pub fn last_comm_error(&self) -> Option<LinkError> {
+        self.link.last_error()
+    }
+
+    /// Start listening for requests.
+    pub fn listen(&mut self, now: Instant) {
+        if self.state == State::Idle {
+            self.state = State::Listening;
+            let _ = self.link.receive(now);
+        }
+    }
+
+    /// Stop listening (only between transactions). Returns whether it stopped.
+    pub fn stop(&mut self) -> bool {
+        match self.state {
+            State::Idle => true,
+            State::Listening if self.link.cancel_receive() => {
+                self.state = State::Idle;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether a request is being received, executed or answered.
+    pub fn in_transaction(&self) -> bool {
+        match self.state {
+            State::Listening => self.link.receive_in_progress(),
+            State::Idle => false,
+            _ => true,
+        }
+    }
+
+    /// The request being executed.
+    pub fn request(&self) -> &[u8] {
+        &self.request
+    }
+
+    /// The PCI of the request being executed.
+    pub fn request_pci(&self) -> u16 {
+        self.request_pci
+    }
+
+    /// The next event, once.
+    pub fn poll_event(&mut self) -> Option<ResponderEvent> {
+        self.event.take()
+    }
+
+    /// Send `reply` to the request being executed.
+    pub fn respond(&mut self, reply: &[u8], now: Instant) {
+        if self.state != State::Executing {
+            return;
+        }
+        self.last.number = pci_number(self.request_pci);
+        self.last.request.clear();
+        self.last.request.extend_from_slice(&self.request);
+        self.last.reply.clear();
+        self.last.reply.extend_from_slice(reply);
+        self.last.valid = true;
+        self.send_reply(now);
+    }
+
+    fn send_reply(&mut self, now: Instant) {
+        let reply_pci = pci(self.last.number, false);
+        if self.link.send(&self.last.reply, reply_pci, now).is_ok() {
+            self.state = State::Replying;
+        } else {
+            self.event = Some(ResponderEvent::Failed(TransCode::ErrSend));
+            self.relisten(now);
+        }
+    }
+
+    /// Answer a [`ResponderEvent::NeedDecision`].
+    pub fn decide(&mut self, decision: Decision, now: Instant) {
+        let State::Deciding(failure) = self.state else {
+            return;
+        };
+        match (failure, decision) {
+            (Failure::Send(_), Decision::Retry | Decision::WaitMore(_)) => self.send_reply(now),
+            (Failure::Send(_), Decision::GiveUp) => {
+                self.event = Some(ResponderEvent::Failed(TransCode::ErrSend));
+                self.relisten(now);
+            }
+            (_, Decision::GiveUp) => {
+                self.event = Some(ResponderEvent::Failed(TransCode::ErrReceive));
+                self.relisten(now);
+            }
+            _ => self.relisten(now),
+        }
+    }
+
+    fn relisten(&mut self, now: Instant) {
+        self.state = State::Idle;
+        self.listen(now);
+    }
+
+    /// When [`Responder::handle_timeout`] must be called next.
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        self.link.poll_timeout()
+    }
+
+    /// Move the bytes to put on the line into `out`.
+    pub fn drain_transmit(&mut self, out: &mut Vec<u8>) {
+        self.link.drain_transmit(out);
+    }
+
+    /// Whether layer 1's input must be flushed now.
+    pub fn take_flush_request(&mut self) -> bool {
+        self.link.take_flush_request()
+    }
+
+    /// Feed bytes from the line.
+    pub fn handle_input(&mut self, input: &[u8], now: Instant) {
+        let mut rest = input;
+        loop {
+            let used = self.link.handle_input(rest, now);
+            self.settle(now);
+            rest = &rest[used..];
+            if rest.is_empty() || self.state != State::Listening {
+                break;
+            }
+        }
+    }
+
+    /// Tell the responder the time.
+    pub fn handle_timeout(&mut self, now: Instant) {
+        self.link.handle_timeout(now);
+        self.settle(now);
+    }
+
+    fn settle(&mut self, now: Instant) {
+        let Some(outcome) = self.link.poll_outcome() else {
+            return;
+        };
+        match (self.state, outcome) {
+            (State::Listening, Outcome::Received) => {
+                let Some((req_pci, data)) = self.link.take_received() else {
+                    return;
+                };
+                let repeated = req_pci & PCI_REPEAT != 0
+                    && self.last.valid
+                    && self.last.number == pci_number(req_pci)
+                    && self.last.request == data;
+                self.request_pci = req_pci;
+                self.request = data;
+                if repeated {
+                    self.event = Some(ResponderEvent::Repeated);
+                    self.send_reply(now);
+                } else {
+                    self.state = State::Executing;
+                    self.event = Some(ResponderEvent::Request);
+                }
+            }
+            (State::Listening, Outcome::Failed(LinkError::Receive(e))) => {
+                self.state = State::Deciding(Failure::Receive(e));
+                self.event = Some(ResponderEvent::NeedDecision(Failure::Receive(e)));
+            }
+            (State::Replying, Outcome::Sent) => {
+                self.event = Some(ResponderEvent::Done);
+                self.relisten(now);
+            }
+            (State::Replying, Outcome::Failed(LinkError::Send(e))) => {
+                self.state = State::Deciding(Failure::Send(e));
+                self.event = Some(ResponderEvent::NeedDecision(Failure::Send(e)));
+            }
+            _ => {}
+        }
+    }
+}

@@ -11,9 +11,8 @@
 //!   that policy, since only layer 4 knows the command codes.
 //!
 //! A handler that returns [`Recovery::Success`] after a send failure makes layer 3 send the
-//! request again, marked as repeated (the controller then answers a request it already
-//! executed from its stored reply, without executing it twice); after a receive failure, it
-//! waits for the reply again.
+//! message again (a failed SendData never delivered it, so nothing runs twice); after a
+//! receive failure, it waits for the message again.
 
 use std::time::Duration;
 

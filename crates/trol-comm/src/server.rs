@@ -15,8 +15,6 @@ use crate::handlers::{DefaultHandlers, ErrorHandlers, FailureContext, Recovery};
 pub enum ServerEvent {
     /// A request was executed and its reply sent.
     Executed,
-    /// A repeated request was answered from the stored reply, not executed again.
-    Repeated,
     /// A request was executed but its reply could not be sent (TRANS_ERR_SEND).
     ReplyFailed(LinkError),
     /// A request could not be received (TRANS_ERR_RECEIVE); nothing was executed.
@@ -75,7 +73,6 @@ impl<P: Port> Server<P> {
     ) -> io::Result<ServerEvent> {
         let give_up = self.driver.clock().now() + idle;
         let mut attempts = 0u32;
-        let mut repeated = false;
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -95,14 +92,7 @@ impl<P: Port> Server<P> {
                     let reply = execute(self.responder.request());
                     self.responder.respond(&reply, now);
                 }
-                Some(ResponderEvent::Repeated) => repeated = true,
-                Some(ResponderEvent::Done) => {
-                    return Ok(if repeated {
-                        ServerEvent::Repeated
-                    } else {
-                        ServerEvent::Executed
-                    });
-                }
+                Some(ResponderEvent::Done) => return Ok(ServerEvent::Executed),
                 Some(ResponderEvent::NeedDecision(failure)) => {
                     let (error, recovery) = match failure {
                         Failure::Send(e) => {

@@ -32,7 +32,6 @@ pub struct Initiator {
     link: Link,
     state: State,
     number: u8,
-    repeat: bool,
     request: Vec<u8>,
     reply: Option<Vec<u8>>,
     reply_timeout: Duration,
@@ -49,7 +48,6 @@ impl Initiator {
             link: Link::new(cfg),
             state: State::Idle,
             number: 0,
-            repeat: false,
             request: Vec::new(),
             reply: None,
             reply_timeout: reply_timeout_from_tenths(super::DEFAULT_REPLY_TIMEOUT_TENTHS),
@@ -97,7 +95,7 @@ impl Initiator {
 
     /// The PCI the current request carries.
     pub fn current_pci(&self) -> u16 {
-        pci(self.number, self.repeat)
+        pci(self.number)
     }
 
     /// Whether a transaction is under way.
@@ -116,7 +114,6 @@ impl Initiator {
             )));
         }
         self.number = self.number.wrapping_add(1);
-        self.repeat = false;
         self.request.clear();
         self.request.extend_from_slice(request);
         self.reply = None;
@@ -156,7 +153,6 @@ impl Initiator {
                 self.event = Some(InitiatorEvent::Failed(code));
             }
             (Failure::Send(_), _) => {
-                self.repeat = true;
                 if self.send_request(now).is_err() {
                     self.state = State::Finished;
                     self.event = Some(InitiatorEvent::Failed(TransCode::ErrSend));

@@ -13,13 +13,18 @@
 //! | bits  | meaning |
 //! |-------|---------|
 //! | 0..7  | transaction number, counted by the PC; a reply carries its request's number |
-//! | 8     | REPEAT: the PC sends this request again after a failed send |
-//! | 9..15 | reserved, sent as 0, ignored |
+//! | 8..15 | reserved, sent as 0, ignored |
 //!
 //! A reply whose number is not that of the pending request is stale (from a transaction the
-//! PC gave up on) and is dropped. A request with REPEAT set whose number and bytes equal the
-//! last request the controller executed is answered from the stored reply instead of being
-//! executed again.
+//! PC gave up on) and is dropped.
+//!
+//! # Delivery
+//!
+//! Layer 2 delivers a message only when EOT arrives, and EOT is the last thing SendData
+//! does. So when SendData fails, the message was not delivered, and sending it again cannot
+//! execute a command twice. When SendData succeeds the EOT may still be lost; the controller
+//! then has not executed the command, the PC sees no reply (TRANS_TIMEOUT), and GetStatus
+//! tells which of the two happened.
 
 mod initiator;
 mod responder;
@@ -71,12 +76,9 @@ pub fn reply_timeout_from_tenths(tenths: u16) -> Duration {
     Duration::from_millis(u64::from(tenths) * 100)
 }
 
-/// Bit 8 of the PCI: the request is sent again.
-pub const PCI_REPEAT: u16 = 0x0100;
-
-/// Build a PCI.
-pub const fn pci(number: u8, repeat: bool) -> u16 {
-    number as u16 | if repeat { PCI_REPEAT } else { 0 }
+/// Build the PCI of transaction `number`.
+pub const fn pci(number: u8) -> u16 {
+    number as u16
 }
 
 /// The transaction number of a PCI.
@@ -104,8 +106,8 @@ pub enum Failure {
 pub enum Decision {
     /// RECOVERY_FAIL: end the transaction with its error code.
     GiveUp,
-    /// RECOVERY_SUCCESS: send the request (or reply) again after a send failure, or wait for
-    /// the message again after a receive failure.
+    /// RECOVERY_SUCCESS: send the request (or reply) again after a send failure (it was not
+    /// delivered), or wait for the message again after a receive failure.
     Retry,
     /// RECOVERY_SUCCESS after a timeout: wait this much longer for the reply.
     WaitMore(Duration),

@@ -1,6 +1,6 @@
 //! TransRS: the controller's side of a transaction.
 
-use super::{Decision, Failure, PCI_REPEAT, TransCode, pci, pci_number};
+use super::{Decision, Failure, TransCode};
 use crate::link::{Link, LinkConfig, LinkError, Outcome};
 use crate::time::Instant;
 
@@ -10,8 +10,6 @@ pub enum ResponderEvent {
     /// A request arrived: read it with [`Responder::request`], answer with
     /// [`Responder::respond`] (the manual's MsgReceived).
     Request,
-    /// A repeated request was answered from the stored reply, without executing it again.
-    Repeated,
     /// The reply went out: the transaction is done (the manual's TransactionDone).
     Done,
     /// Something failed; call [`Responder::decide`].
@@ -29,14 +27,6 @@ enum State {
     Deciding(Failure),
 }
 
-#[derive(Debug, Default)]
-struct LastTransaction {
-    number: u8,
-    request: Vec<u8>,
-    reply: Vec<u8>,
-    valid: bool,
-}
-
 /// TransRS as a sans-IO state machine over one [`Link`]. After each transaction it listens
 /// for the next request by itself.
 #[derive(Debug)]
@@ -45,7 +35,7 @@ pub struct Responder {
     state: State,
     request_pci: u16,
     request: Vec<u8>,
-    last: LastTransaction,
+    reply: Vec<u8>,
     event: Option<ResponderEvent>,
 }
 
@@ -57,7 +47,7 @@ impl Responder {
             state: State::Idle,
             request_pci: 0,
             request: Vec::new(),
-            last: LastTransaction::default(),
+            reply: Vec::new(),
             event: None,
         }
     }
@@ -126,18 +116,15 @@ impl Responder {
         if self.state != State::Executing {
             return;
         }
-        self.last.number = pci_number(self.request_pci);
-        self.last.request.clear();
-        self.last.request.extend_from_slice(&self.request);
-        self.last.reply.clear();
-        self.last.reply.extend_from_slice(reply);
-        self.last.valid = true;
+        self.reply.clear();
+        self.reply.extend_from_slice(reply);
         self.send_reply(now);
     }
 
     fn send_reply(&mut self, now: Instant) {
-        let reply_pci = pci(self.last.number, false);
-        if self.link.send(&self.last.reply, reply_pci, now).is_ok() {
+        // The reply carries the request's transaction number (the PCI's low byte).
+        let reply_pci = self.request_pci & 0x00FF;
+        if self.link.send(&self.reply, reply_pci, now).is_ok() {
             self.state = State::Replying;
         } else {
             self.event = Some(ResponderEvent::Failed(TransCode::ErrSend));
@@ -212,19 +199,10 @@ impl Responder {
                 let Some((req_pci, data)) = self.link.take_received() else {
                     return;
                 };
-                let repeated = req_pci & PCI_REPEAT != 0
-                    && self.last.valid
-                    && self.last.number == pci_number(req_pci)
-                    && self.last.request == data;
                 self.request_pci = req_pci;
                 self.request = data;
-                if repeated {
-                    self.event = Some(ResponderEvent::Repeated);
-                    self.send_reply(now);
-                } else {
-                    self.state = State::Executing;
-                    self.event = Some(ResponderEvent::Request);
-                }
+                self.state = State::Executing;
+                self.event = Some(ResponderEvent::Request);
             }
             (State::Listening, Outcome::Failed(LinkError::Receive(e))) => {
                 self.state = State::Deciding(Failure::Receive(e));

@@ -214,13 +214,24 @@ impl Wire {
         limit: Duration,
         mut done: impl FnMut(&mut A, &mut B) -> bool,
     ) -> bool {
+        self.run_t(a, b, limit, |a, b, _| done(a, b))
+    }
+
+    /// [`Wire::run`], with the current time passed to `done`.
+    pub fn run_t<A: End, B: End>(
+        &mut self,
+        a: &mut A,
+        b: &mut B,
+        limit: Duration,
+        mut done: impl FnMut(&mut A, &mut B, Instant) -> bool,
+    ) -> bool {
         let end = self.now + limit;
         for _ in 0..10_000_000 {
-            if done(a, b) {
+            if done(a, b, self.now) {
                 return true;
             }
             if self.now > end || !self.step(a, b) {
-                return done(a, b);
+                return done(a, b, self.now);
             }
         }
         panic!("simulation did not settle");

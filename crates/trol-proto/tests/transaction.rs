@@ -1,0 +1,262 @@
+//! Layer 3 (TransSR / TransRS) between two ends, with injected time.
+
+mod common;
+
+use std::time::Duration;
+
+use common::{Script, Wire};
+use trol_proto::Instant;
+use trol_proto::link::{LinkConfig, ReceiveError, SendError};
+use trol_proto::transaction::{
+    Decision, Failure, Initiator, InitiatorEvent, Responder, ResponderEvent, TransCode, pci_number,
+};
+
+fn pair() -> (Wire, Initiator, Responder) {
+    let mut r = Responder::new(LinkConfig::default());
+    r.listen(Instant::ZERO);
+    (Wire::new(), Initiator::new(LinkConfig::default()), r)
+}
+
+/// Run one transaction; the responder answers every request with `reply(request)`.
+/// `decide` answers the initiator's failures. Returns the initiator's final event and the
+/// number of times the responder executed a request.
+fn transact(
+    w: &mut Wire,
+    i: &mut Initiator,
+    r: &mut Responder,
+    request: &[u8],
+    reply: impl Fn(&[u8]) -> Vec<u8>,
+    mut decide: impl FnMut(Failure) -> Decision,
+) -> (InitiatorEvent, u32) {
+    i.start(request, w.now).unwrap();
+    let mut executed = 0;
+    loop {
+        let mut ev = None;
+        let mut rev = None;
+        w.run(i, r, Duration::from_secs(3600), |i, r| {
+            ev = i.poll_event();
+            rev = r.poll_event();
+            ev.is_some() || rev == Some(ResponderEvent::Request)
+        });
+        if rev == Some(ResponderEvent::Request) {
+            executed += 1;
+            let answer = reply(r.request());
+            r.respond(&answer, w.now);
+        }
+        match ev {
+            Some(InitiatorEvent::NeedDecision(f)) => i.decide(decide(f), w.now),
+            Some(e) => return (e, executed),
+            None if rev.is_some() => {}
+            None => panic!("stalled"),
+        }
+    }
+}
+
+#[test]
+fn a_transaction_returns_the_reply_to_its_request() {
+    let (mut w, mut i, mut r) = pair();
+    let (ev, n) = transact(
+        &mut w,
+        &mut i,
+        &mut r,
+        &[7, 1, 2],
+        |q| q.iter().rev().copied().collect(),
+        |_| Decision::GiveUp,
+    );
+    assert_eq!(ev, InitiatorEvent::Reply);
+    assert_eq!(n, 1);
+    assert_eq!(i.take_reply(), Some(vec![2, 1, 7]));
+    // And a second one, numbered on.
+    let (ev, _) = transact(
+        &mut w,
+        &mut i,
+        &mut r,
+        &[8],
+        |_| vec![0, 0],
+        |_| Decision::GiveUp,
+    );
+    assert_eq!(ev, InitiatorEvent::Reply);
+    assert_eq!(pci_number(r.request_pci()), 2);
+}
+
+#[test]
+fn a_silent_controller_gives_trans_err_send() {
+    let mut i = Initiator::new(LinkConfig::default());
+    let mut peer = Script::default();
+    let mut w = Wire::new();
+    i.start(&[1], w.now).unwrap();
+    let mut failures = Vec::new();
+    let mut ev = None;
+    w.run(&mut i, &mut peer, Duration::from_secs(60), |i, _| {
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    if let Some(InitiatorEvent::NeedDecision(f)) = ev {
+        failures.push(f);
+        i.decide(Decision::GiveUp, w.now);
+    }
+    assert_eq!(failures, vec![Failure::Send(SendError::TimeoutEnq)]);
+    assert_eq!(
+        i.poll_event(),
+        Some(InitiatorEvent::Failed(TransCode::ErrSend))
+    );
+    assert_eq!(i.last_comm_error().map(|e| e.code()), Some(0x03));
+}
+
+#[test]
+fn no_reply_in_time_gives_trans_timeout_after_the_reply_timeout() {
+    let (mut w, mut i, mut r) = pair();
+    i.set_reply_timeout(Duration::from_secs(15));
+    i.start(&[42], w.now).unwrap();
+    // The controller receives the request but never answers.
+    let mut ev = None;
+    w.run(&mut i, &mut r, Duration::from_secs(100), |i, r| {
+        let _ = r.poll_event();
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    let Some(InitiatorEvent::NeedDecision(Failure::Timeout { waited })) = ev else {
+        panic!("{ev:?}")
+    };
+    assert_eq!(waited, Duration::from_secs(15));
+    i.decide(Decision::GiveUp, w.now);
+    assert_eq!(
+        i.poll_event(),
+        Some(InitiatorEvent::Failed(TransCode::Timeout))
+    );
+}
+
+#[test]
+fn wait_more_after_a_timeout_still_gets_a_late_reply() {
+    let (mut w, mut i, mut r) = pair();
+    i.start(&[42], w.now).unwrap();
+    let mut ev = None;
+    w.run(&mut i, &mut r, Duration::from_secs(100), |i, r| {
+        let _ = r.poll_event();
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert!(matches!(
+        ev,
+        Some(InitiatorEvent::NeedDecision(Failure::Timeout { .. }))
+    ));
+    i.decide(Decision::WaitMore(Duration::from_secs(90)), w.now);
+    w.advance(Duration::from_secs(30));
+    r.respond(&[0, 0], w.now);
+    let mut ev = None;
+    w.run(&mut i, &mut r, Duration::from_secs(100), |i, _| {
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(ev, Some(InitiatorEvent::Reply));
+    assert_eq!(i.take_reply(), Some(vec![0, 0]));
+}
+
+#[test]
+fn a_reply_that_breaks_off_gives_trans_err_receive() {
+    let mut i = Initiator::new(LinkConfig::default());
+    let mut peer = Script::default();
+    let mut w = Wire::new();
+    i.start(&[1], w.now).unwrap();
+    // Play the controller by hand: take the request, then start a reply and stop.
+    use trol_proto::link::control::{ACK, ENQ};
+    let mut ev = None;
+    peer.to_send = vec![ACK];
+    w.run(&mut i, &mut peer, Duration::from_secs(1), |_, p| {
+        p.received.len() >= 11
+    });
+    peer.to_send = vec![ACK];
+    w.run(&mut i, &mut peer, Duration::from_secs(1), |_, p| {
+        p.received.len() >= 12
+    });
+    peer.to_send = vec![ENQ];
+    w.run(&mut i, &mut peer, Duration::from_secs(60), |i, _| {
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(
+        ev,
+        Some(InitiatorEvent::NeedDecision(Failure::Receive(
+            ReceiveError::TimeoutSoh
+        )))
+    );
+    i.decide(Decision::GiveUp, w.now);
+    assert_eq!(
+        i.poll_event(),
+        Some(InitiatorEvent::Failed(TransCode::ErrReceive))
+    );
+}
+
+#[test]
+fn a_stale_reply_is_never_taken_for_the_answer_to_a_newer_request() {
+    use trol_proto::link::{Link, Outcome};
+    // The controller's side is played by a bare link, so that it can send a late reply to
+    // an earlier transaction right before the right one.
+    let mut i = Initiator::new(LinkConfig::default());
+    let mut c = Link::new(LinkConfig::default());
+    let mut w = Wire::new();
+    c.receive(w.now).unwrap();
+    i.start(b"second", w.now).unwrap();
+    let mut got = None;
+    w.run(&mut i, &mut c, Duration::from_secs(10), |_, c| {
+        got = got.or(c.poll_outcome());
+        got.is_some()
+    });
+    assert_eq!(got, Some(Outcome::Received));
+    let (req_pci, req) = c.take_received().unwrap();
+    assert_eq!(req, b"second");
+    let stale = trol_proto::transaction::pci(pci_number(req_pci).wrapping_sub(1));
+    c.send(b"late answer to the first", stale, w.now).unwrap();
+    let mut sent = 0;
+    let mut ev = None;
+    w.run_t(&mut i, &mut c, Duration::from_secs(10), |i, c, now| {
+        if c.poll_outcome() == Some(Outcome::Sent) {
+            sent += 1;
+            if sent == 1 {
+                c.send(b"answer to the second", req_pci, now).unwrap();
+            }
+        }
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(ev, Some(InitiatorEvent::Reply));
+    assert_eq!(
+        i.take_reply().as_deref(),
+        Some(&b"answer to the second"[..])
+    );
+    assert_eq!(i.stale_replies(), 1);
+}
+
+#[test]
+fn a_send_retried_after_err_on_send_reaches_the_controller_once() {
+    // The first ENQ is lost (the controller is deaf for a moment); the handler asks for a
+    // retry and the request is executed exactly once.
+    let (mut w, mut i, mut r) = pair();
+    r.stop();
+    i.start(b"move", w.now).unwrap();
+    let mut ev = None;
+    w.run(&mut i, &mut r, Duration::from_secs(10), |i, _| {
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(
+        ev,
+        Some(InitiatorEvent::NeedDecision(Failure::Send(
+            SendError::TimeoutEnq
+        )))
+    );
+    r.listen(w.now);
+    i.decide(Decision::Retry, w.now);
+    let mut executed = 0;
+    let mut ev = None;
+    w.run_t(&mut i, &mut r, Duration::from_secs(30), |i, r, now| {
+        if r.poll_event() == Some(ResponderEvent::Request) {
+            executed += 1;
+            r.respond(&[0, 0], now);
+        }
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(ev, Some(InitiatorEvent::Reply));
+    assert_eq!(executed, 1);
+}

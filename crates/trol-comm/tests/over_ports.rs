@@ -1,0 +1,303 @@
+//! Layers 1-3 over real ports: the in-memory line, TCP, the fault injector, and a
+//! pseudo-terminal pair between two processes.
+
+use std::time::{Duration, Instant};
+
+use trol_comm::{
+    AppTimeoutContext, DefaultHandlers, ErrorHandlers, ExtraWait, FailureContext, Recovery, Server,
+    ServerEvent, TimeoutAction, TransError, Transactor,
+};
+use trol_port::Port;
+use trol_port::faulty::{FaultConfig, Faulty};
+use trol_port::memory;
+use trol_proto::link::{LinkConfig, Timeouts};
+use trol_proto::transaction::TransCode;
+
+/// Requests understood by the test controller: "echo" returns the request reversed,
+/// "quit" ends the server, "big N" returns N bytes.
+fn execute(request: &[u8]) -> Vec<u8> {
+    if let Some(n) = request.strip_prefix(b"big ") {
+        let n: usize = std::str::from_utf8(n).unwrap().parse().unwrap();
+        return (0..n).map(|i| (i % 251) as u8).collect();
+    }
+    request.iter().rev().copied().collect()
+}
+
+fn serve<P: Port>(mut server: Server<P>, max_idle: Duration) -> u32 {
+    let mut executed = 0;
+    let mut quit = false;
+    let started = Instant::now();
+    while !quit && started.elapsed() < max_idle {
+        let ev = server
+            .serve(Duration::from_millis(100), &mut |req| {
+                quit = req == b"quit";
+                execute(req)
+            })
+            .unwrap();
+        if ev == ServerEvent::Executed {
+            executed += 1;
+        }
+    }
+    executed
+}
+
+fn quick_link() -> LinkConfig {
+    LinkConfig {
+        timeouts: Timeouts::uniform(Duration::from_millis(200)),
+        ..LinkConfig::default()
+    }
+}
+
+#[test]
+fn transactions_over_the_in_memory_line() {
+    let (a, b) = memory::pair(None);
+    let server = std::thread::spawn(move || {
+        serve(
+            Server::new(b, LinkConfig::default()),
+            Duration::from_secs(30),
+        )
+    });
+    let mut t = Transactor::new(a, LinkConfig::default());
+    for len in [0usize, 1, 2, 3, 300, 4000, 65000] {
+        let req: Vec<u8> = (0..len).map(|i| (i * 13) as u8).collect();
+        let reply = t.trans_sr(&req).unwrap();
+        assert_eq!(
+            reply,
+            req.iter().rev().copied().collect::<Vec<_>>(),
+            "len {len}"
+        );
+    }
+    assert_eq!(t.trans_sr(b"big 65535").unwrap().len(), 65535);
+    t.trans_sr(b"quit").unwrap();
+    assert_eq!(server.join().unwrap(), 9);
+}
+
+#[test]
+fn transactions_over_a_paced_line_take_the_line_time() {
+    let (a, b) = memory::pair(Some(38400));
+    let cfg = LinkConfig::for_line(38400, Duration::ZERO);
+    let server = std::thread::spawn(move || serve(Server::new(b, cfg), Duration::from_secs(30)));
+    let mut t = Transactor::new(a, cfg);
+    let started = Instant::now();
+    let reply = t.trans_sr(&[0x55; 3000]).unwrap();
+    let took = started.elapsed();
+    assert_eq!(reply.len(), 3000);
+    // 2 x 3000 bytes plus framing at 3840 bytes/s is at least 1.6 s of line time.
+    assert!(took >= Duration::from_millis(1600), "took {took:?}");
+    t.trans_sr(b"quit").unwrap();
+    server.join().unwrap();
+}
+
+#[test]
+fn transactions_over_tcp() {
+    let listen = trol_port::tcp::TcpLine::listen("127.0.0.1:0", Duration::from_secs(1)).unwrap();
+    let addr = listen.local_addr().unwrap();
+    let server = std::thread::spawn(move || {
+        serve(
+            Server::new(listen, LinkConfig::default()),
+            Duration::from_secs(30),
+        )
+    });
+    let port = trol_port::open(&format!("socket://{addr}"), &Default::default()).unwrap();
+    let mut t = Transactor::new(port, LinkConfig::default());
+    assert_eq!(t.trans_sr(b"abc").unwrap(), b"cba");
+    t.trans_sr(b"quit").unwrap();
+    assert_eq!(server.join().unwrap(), 2);
+}
+
+#[test]
+fn a_noisy_line_still_carries_every_transaction() {
+    let (a, b) = memory::pair(None);
+    let noise = |seed| FaultConfig {
+        seed,
+        bit_error_rate: 1e-5,
+        ..FaultConfig::default()
+    };
+    let b = Faulty::new(b, noise(2));
+    let server =
+        std::thread::spawn(move || serve(Server::new(b, quick_link()), Duration::from_secs(60)));
+    let a = Faulty::new(a, noise(1));
+    let mut t = Transactor::new(a, quick_link());
+    for i in 0..20u32 {
+        let req: Vec<u8> = (0..2000u32).map(|k| (k ^ i) as u8).collect();
+        let reply = t.trans_sr(&req).unwrap();
+        assert_eq!(reply, req.iter().rev().copied().collect::<Vec<_>>());
+    }
+    let flips = t.driver().port().stats().flipped_bits;
+    assert!(flips > 0, "the line did flip bits ({flips})");
+    t.trans_sr(b"quit").unwrap();
+    server.join().unwrap();
+}
+
+#[test]
+fn a_cut_line_ends_the_transaction_with_a_code_not_a_hang() {
+    let (a, _b) = memory::pair(None);
+    let a = Faulty::new(
+        a,
+        FaultConfig {
+            cut_after: Some(0),
+            ..FaultConfig::default()
+        },
+    );
+    let mut t = Transactor::new(a, quick_link());
+    let started = Instant::now();
+    let err = t.trans_sr(b"hello").unwrap_err();
+    assert!(started.elapsed() < Duration::from_secs(5));
+    assert_eq!(err.code(), TransCode::ErrSend);
+    assert_eq!(
+        t.last_comm_error().map(|e| e.name()),
+        Some("ERR_TIMEOUT_ENQ")
+    );
+    match err {
+        TransError::Failed { code, .. } => assert_eq!(code, TransCode::ErrSend),
+        other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn a_controller_that_never_answers_gives_trans_timeout() {
+    let (a, b) = memory::pair(None);
+    // A controller that receives the request and then hangs.
+    let hang = std::thread::spawn(move || {
+        let mut s = Server::new(b, LinkConfig::default());
+        let _ = s.serve(Duration::from_secs(2), &mut |_| {
+            std::thread::sleep(Duration::from_millis(1500));
+            vec![0, 0]
+        });
+    });
+    let mut t = Transactor::new(a, LinkConfig::default());
+    t.set_reply_timeout_tenths(5);
+    let err = t.trans_sr(b"slow").unwrap_err();
+    assert_eq!(err.code(), TransCode::Timeout);
+    hang.join().unwrap();
+}
+
+struct Counting {
+    sends: std::sync::Arc<std::sync::atomic::AtomicU32>,
+}
+
+impl ErrorHandlers for Counting {
+    fn err_on_send(&mut self, ctx: &FailureContext<'_>) -> Recovery {
+        self.sends.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        assert_eq!(ctx.error.name(), "ERR_TIMEOUT_ENQ");
+        assert_eq!(ctx.message, b"again");
+        if ctx.attempts < 2 {
+            Recovery::Success
+        } else {
+            Recovery::Fail
+        }
+    }
+}
+
+#[test]
+fn a_replaced_err_on_send_is_asked_and_can_retry() {
+    let (a, _b) = memory::pair(None);
+    let mut t = Transactor::new(a, quick_link());
+    let sends = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
+    t.set_handlers(Box::new(Counting {
+        sends: sends.clone(),
+    }));
+    let err = t.trans_sr(b"again").unwrap_err();
+    assert_eq!(err.code(), TransCode::ErrSend);
+    // Asked three times: two retries, then it gave up.
+    assert_eq!(sends.load(std::sync::atomic::Ordering::SeqCst), 3);
+}
+
+#[test]
+fn the_default_err_app_timeout_waits_longer_only_for_what_the_policy_names() {
+    fn policy(req: &[u8]) -> Option<ExtraWait> {
+        match req.first() {
+            Some(1) => Some(ExtraWait::Up(Duration::from_secs(90))),
+            Some(2) => Some(ExtraWait::Unlimited),
+            _ => None,
+        }
+    }
+    let mut h = DefaultHandlers::with_policy(policy);
+    let ctx = |request: &'static [u8], waited: u64| AppTimeoutContext {
+        request,
+        waited: Duration::from_secs(waited),
+        reply_timeout: Duration::from_secs(15),
+        input_pending: false,
+    };
+    assert_eq!(h.err_app_timeout(&ctx(&[0], 15)), TimeoutAction::Fail);
+    assert_eq!(
+        h.err_app_timeout(&ctx(&[1], 15)),
+        TimeoutAction::WaitMore(Duration::from_secs(90))
+    );
+    assert_eq!(h.err_app_timeout(&ctx(&[1], 105)), TimeoutAction::Fail);
+    assert_eq!(
+        h.err_app_timeout(&ctx(&[2], 10_000)),
+        TimeoutAction::WaitMore(Duration::from_secs(15))
+    );
+    assert_eq!(
+        DefaultHandlers::default().err_app_timeout(&ctx(&[1], 15)),
+        TimeoutAction::Fail
+    );
+}
+
+// ------------------------------------------------------------ two processes over a pty
+
+const PEER_ENV: &str = "TROL_TEST_PTY_PEER";
+
+/// The controller half of the pty test, run in a second process (this test binary started
+/// again with only this test selected). Does nothing when run on its own.
+#[test]
+#[ignore = "runs as the peer process of transactions_between_two_processes_over_a_pty"]
+fn pty_peer_process() {
+    let Ok(path) = std::env::var(PEER_ENV) else {
+        return;
+    };
+    let line = trol_port::serial::SerialLine::open(&path, 38400).expect("open pty");
+    let n = serve(
+        Server::new(line, LinkConfig::default()),
+        Duration::from_secs(60),
+    );
+    println!("peer executed {n}");
+}
+
+#[cfg(unix)]
+#[test]
+fn transactions_between_two_processes_over_a_pty() {
+    let (master, _slave, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let child = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([
+            "--exact",
+            "pty_peer_process",
+            "--ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(PEER_ENV, &path)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut t = Transactor::new(master, LinkConfig::default());
+    // The peer needs a moment to start; the first transaction may time out on ENQ.
+    let started = Instant::now();
+    loop {
+        match t.trans_sr(b"ping") {
+            Ok(r) => {
+                assert_eq!(r, b"gnip");
+                break;
+            }
+            Err(e) if started.elapsed() < Duration::from_secs(20) => {
+                let _ = e;
+            }
+            Err(e) => panic!("peer never answered: {e}"),
+        }
+    }
+    for len in [0usize, 2, 3, 257, 5000, 65535] {
+        let req: Vec<u8> = (0..len).map(|i| (i * 7 + 1) as u8).collect();
+        let reply = t.trans_sr(&req).unwrap();
+        assert_eq!(
+            reply,
+            req.iter().rev().copied().collect::<Vec<_>>(),
+            "len {len}"
+        );
+    }
+    t.trans_sr(b"quit").unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("peer executed 8"), "{text}");
+}

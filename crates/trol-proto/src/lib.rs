@@ -19,3 +19,55 @@ pub mod time;
 pub mod transaction;
 
 pub use time::Instant;
+
+/// Entry points for the fuzz targets in `fuzz/` (and their stable-toolchain test); not API.
+#[doc(hidden)]
+pub mod fuzzing {
+    use crate::link::{Link, LinkConfig, Outcome, frame};
+    use crate::time::Instant;
+    use std::time::Duration;
+
+    /// Feed `data` to a receiving link end as the line would: the first byte of each
+    /// chunk says how many bytes the chunk has and how much time passes before it. Whatever
+    /// the bytes, the link must not panic, must end every transfer with a message no longer
+    /// than the header announced, or with a code, and must keep its timers in the future.
+    pub fn receive(data: &[u8]) {
+        let cfg = LinkConfig {
+            max_message: 4096,
+            ..LinkConfig::default()
+        };
+        let mut link = Link::new(cfg);
+        let mut now = Instant::ZERO;
+        let _ = link.receive(now);
+        let mut out = Vec::new();
+        let mut rest = data;
+        while let Some((&ctl, tail)) = rest.split_first() {
+            let n = usize::from(ctl & 0x3F).min(tail.len());
+            now = now + Duration::from_millis(u64::from(ctl >> 6) * 400);
+            link.handle_timeout(now);
+            let (chunk, tail) = tail.split_at(n);
+            let mut input = chunk;
+            while !input.is_empty() {
+                let used = link.handle_input(input, now);
+                input = &input[used..];
+                if !link.is_busy() {
+                    let _ = link.receive(now);
+                }
+            }
+            link.drain_transmit(&mut out);
+            if let Some(t) = link.poll_timeout() {
+                assert!(t >= now, "a timer in the past");
+            }
+            match link.poll_outcome() {
+                Some(Outcome::Received) => {
+                    let (_, msg) = link.take_received().expect("a received message");
+                    assert!(msg.len() <= cfg.max_message.min(frame::MAX_MESSAGE));
+                    let _ = link.receive(now);
+                }
+                Some(Outcome::Failed(e)) => assert!(e.code() != 0),
+                _ => {}
+            }
+            rest = tail;
+        }
+    }
+}

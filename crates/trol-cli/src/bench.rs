@@ -1,0 +1,122 @@
+//! `trol bench ...`: measurements written to docs/performance.md.
+
+use std::time::{Duration, Instant};
+
+use clap::{Args, Subcommand};
+use serde::Serialize;
+use trol_comm::{Driver, receive_data, send_data};
+use trol_port::memory;
+use trol_proto::link::frame::{self, FRAME_SIZE, MAX_MESSAGE};
+use trol_proto::link::{Link, LinkConfig};
+
+#[derive(Subcommand)]
+pub enum Bench {
+    /// Send one message over an in-memory line paced at a baud rate (8N1, 10 bits a byte)
+    /// and report the time, the bytes the line carried and the efficiency.
+    ///
+    /// Example: trol bench link --baud 38400 --bytes 65535 --json
+    Link(LinkArgs),
+}
+
+#[derive(Args)]
+pub struct LinkArgs {
+    /// Baud rate of the line.
+    #[arg(long, default_value_t = 38400, value_parser = clap::value_parser!(u32).range(300..=4_000_000))]
+    baud: u32,
+    /// Payload bytes (0..65535).
+    #[arg(long, default_value_t = 65535, value_parser = clap::value_parser!(u32).range(0..=65535))]
+    bytes: u32,
+    /// How many transfers to time (the figures are per transfer, the best run).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeat: u32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct LinkReport {
+    baud: u32,
+    payload_bytes: usize,
+    wire_bytes: u64,
+    seconds: f64,
+    line_seconds: f64,
+    efficiency: f64,
+    format_efficiency: f64,
+    frame_size: usize,
+    payload_bytes_per_second: f64,
+}
+
+pub fn run(b: Bench) -> Result<(), String> {
+    match b {
+        Bench::Link(a) => link(a),
+    }
+}
+
+fn link(a: LinkArgs) -> Result<(), String> {
+    let len = a.bytes as usize;
+    debug_assert!(len <= MAX_MESSAGE);
+    let message: Vec<u8> = (0..len).map(|i| (i * 131 + 7) as u8).collect();
+    let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
+    let mut best: Option<LinkReport> = None;
+    for _ in 0..a.repeat {
+        let (tx, rx) = memory::pair(Some(a.baud));
+        let receiver = std::thread::spawn(move || {
+            let mut driver = Driver::new(rx);
+            let mut link = Link::new(cfg);
+            receive_data(&mut driver, &mut link, Duration::from_secs(30))
+                .map(|(_, data)| data)
+                .map_err(|e| e.to_string())
+        });
+        let mut driver = Driver::new(tx);
+        let mut link = Link::new(cfg);
+        let started = Instant::now();
+        send_data(&mut driver, &mut link, &message, 0).map_err(|e| e.to_string())?;
+        let received = receiver.join().map_err(|_| "receiver thread failed")??;
+        let seconds = started.elapsed().as_secs_f64();
+        if received != message {
+            return Err("the message arrived damaged".into());
+        }
+        let line = driver.port().stats();
+        let wire = line.total();
+        let report = LinkReport {
+            baud: a.baud,
+            payload_bytes: len,
+            wire_bytes: wire,
+            seconds,
+            line_seconds: wire as f64 * 10.0 / f64::from(a.baud),
+            efficiency: if wire == 0 {
+                0.0
+            } else {
+                len as f64 / wire as f64
+            },
+            format_efficiency: len as f64 / frame::wire_bytes_for(len) as f64,
+            frame_size: FRAME_SIZE,
+            payload_bytes_per_second: len as f64 / seconds,
+        };
+        if best.as_ref().is_none_or(|b| report.seconds < b.seconds) {
+            best = Some(report);
+        }
+    }
+    let r = best.ok_or("no run")?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{} payload bytes at {} baud: {} bytes on the line, {:.3} s ({:.3} s of line time), \
+             efficiency {:.2} % (frame format allows {:.2} %), {:.0} payload bytes/s",
+            r.payload_bytes,
+            r.baud,
+            r.wire_bytes,
+            r.seconds,
+            r.line_seconds,
+            r.efficiency * 100.0,
+            r.format_efficiency * 100.0,
+            r.payload_bytes_per_second
+        );
+    }
+    Ok(())
+}

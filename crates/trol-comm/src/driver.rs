@@ -4,9 +4,7 @@ use std::io;
 use std::time::Duration;
 
 use trol_port::Port;
-use trol_proto::Instant;
-use trol_proto::link::Link;
-use trol_proto::transaction::{Initiator, Responder};
+use trol_proto::{Instant, Machine};
 
 /// Maps the real monotonic clock onto the core's [`Instant`].
 #[derive(Clone, Copy, Debug)]
@@ -45,75 +43,6 @@ pub enum Direction {
 
 /// A trace hook: called with every chunk of bytes that crosses layer 1.
 pub type TraceFn = Box<dyn FnMut(Direction, &[u8], Instant) + Send>;
-
-/// What the driver needs of a state machine. Implemented for [`Link`], [`Initiator`] and
-/// [`Responder`].
-pub trait Machine {
-    /// Feed received bytes.
-    fn handle_input(&mut self, input: &[u8], now: Instant);
-    /// Run timers.
-    fn handle_timeout(&mut self, now: Instant);
-    /// Next timer.
-    fn poll_timeout(&self) -> Option<Instant>;
-    /// Bytes to send.
-    fn drain_transmit(&mut self, out: &mut Vec<u8>);
-    /// Whether input must be flushed now.
-    fn take_flush_request(&mut self) -> bool;
-}
-
-impl Machine for Link {
-    fn handle_input(&mut self, input: &[u8], now: Instant) {
-        let _ = Link::handle_input(self, input, now);
-    }
-    fn handle_timeout(&mut self, now: Instant) {
-        Link::handle_timeout(self, now)
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        Link::poll_timeout(self)
-    }
-    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
-        Link::drain_transmit(self, out)
-    }
-    fn take_flush_request(&mut self) -> bool {
-        Link::take_flush_request(self)
-    }
-}
-
-impl Machine for Initiator {
-    fn handle_input(&mut self, input: &[u8], now: Instant) {
-        Initiator::handle_input(self, input, now)
-    }
-    fn handle_timeout(&mut self, now: Instant) {
-        Initiator::handle_timeout(self, now)
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        Initiator::poll_timeout(self)
-    }
-    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
-        Initiator::drain_transmit(self, out)
-    }
-    fn take_flush_request(&mut self) -> bool {
-        Initiator::take_flush_request(self)
-    }
-}
-
-impl Machine for Responder {
-    fn handle_input(&mut self, input: &[u8], now: Instant) {
-        Responder::handle_input(self, input, now)
-    }
-    fn handle_timeout(&mut self, now: Instant) {
-        Responder::handle_timeout(self, now)
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        Responder::poll_timeout(self)
-    }
-    fn drain_transmit(&mut self, out: &mut Vec<u8>) {
-        Responder::drain_transmit(self, out)
-    }
-    fn take_flush_request(&mut self) -> bool {
-        Responder::take_flush_request(self)
-    }
-}
 
 /// Longest single wait on the port when the machine has no timer, so that callers can check
 /// their own deadlines and stop flags.
@@ -180,7 +109,7 @@ impl<P: Port> Driver<P> {
 
     fn transmit<M: Machine>(&mut self, m: &mut M) -> io::Result<()> {
         self.out.clear();
-        m.drain_transmit(&mut self.out);
+        m.transmit(&mut self.out);
         if self.out.is_empty() {
             return Ok(());
         }
@@ -210,7 +139,7 @@ impl<P: Port> Driver<P> {
     ) -> io::Result<()> {
         loop {
             self.transmit(m)?;
-            if m.take_flush_request() {
+            if m.wants_flush() {
                 self.port.flush_input()?;
             }
             if done(m) {
@@ -220,9 +149,9 @@ impl<P: Port> Driver<P> {
             if until.is_some_and(|u| now >= u) {
                 return Ok(());
             }
-            let timer = m.poll_timeout();
+            let timer = m.next_deadline();
             if timer.is_some_and(|t| t <= now) {
-                m.handle_timeout(now);
+                m.tick(now);
                 continue;
             }
             let mut wake = timer.unwrap_or(now + IDLE_POLL).min(now + IDLE_POLL);
@@ -235,9 +164,9 @@ impl<P: Port> Driver<P> {
                 if let Some(trace) = self.trace.as_mut() {
                     trace(Direction::In, &self.rx[..n], now);
                 }
-                m.handle_input(&self.rx[..n], now);
+                m.feed(&self.rx[..n], now);
             }
-            m.handle_timeout(now);
+            m.tick(now);
         }
     }
 }

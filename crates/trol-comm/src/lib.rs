@@ -17,13 +17,14 @@ mod handlers;
 mod server;
 mod transactor;
 
-pub use driver::{Clock, Direction, Driver, Machine, TraceFn};
+pub use driver::{Clock, Direction, Driver, TraceFn};
 pub use handlers::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, ExtraWait, FailureContext, Recovery,
     TimeoutAction, TimeoutPolicy,
 };
 pub use server::{Server, ServerEvent};
 pub use transactor::{TransError, Transactor};
+pub use trol_proto::Machine;
 
 use std::time::Duration;
 

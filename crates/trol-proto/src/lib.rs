@@ -20,6 +20,48 @@ pub mod transaction;
 
 pub use time::Instant;
 
+/// What every sans-IO machine of this crate offers to whoever moves its bytes and keeps its
+/// time: the driver in `trol-comm`, or a test's simulated line. Implemented by
+/// [`link::Link`], [`transaction::Initiator`] and [`transaction::Responder`].
+pub trait Machine {
+    /// Feed bytes received from the line.
+    fn feed(&mut self, input: &[u8], now: Instant);
+    /// Tell the time; runs timers that have expired.
+    fn tick(&mut self, now: Instant);
+    /// When [`Machine::tick`] must be called next, if a timer runs.
+    fn next_deadline(&self) -> Option<Instant>;
+    /// Move the bytes to put on the line into `out` (appending).
+    fn transmit(&mut self, out: &mut Vec<u8>);
+    /// Whether layer 1's input must be flushed now (reading clears the request).
+    fn wants_flush(&mut self) -> bool;
+}
+
+macro_rules! machine_for {
+    ($t:ty) => {
+        impl Machine for $t {
+            fn feed(&mut self, input: &[u8], now: Instant) {
+                let _ = self.handle_input(input, now);
+            }
+            fn tick(&mut self, now: Instant) {
+                self.handle_timeout(now)
+            }
+            fn next_deadline(&self) -> Option<Instant> {
+                self.poll_timeout()
+            }
+            fn transmit(&mut self, out: &mut Vec<u8>) {
+                self.drain_transmit(out)
+            }
+            fn wants_flush(&mut self) -> bool {
+                self.take_flush_request()
+            }
+        }
+    };
+}
+
+machine_for!(link::Link);
+machine_for!(transaction::Initiator);
+machine_for!(transaction::Responder);
+
 /// Entry points for the fuzz targets in `fuzz/` (and their stable-toolchain test); not API.
 #[doc(hidden)]
 pub mod fuzzing {

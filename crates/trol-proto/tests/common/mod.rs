@@ -6,41 +6,8 @@ use std::time::Duration;
 
 use trol_port::faulty::{FaultConfig, FaultInjector};
 use trol_proto::Instant;
-use trol_proto::link::Link;
-use trol_proto::transaction::{Initiator, Responder};
 
-pub trait End {
-    fn input(&mut self, bytes: &[u8], now: Instant);
-    fn timeout(&mut self, now: Instant);
-    fn next(&self) -> Option<Instant>;
-    fn transmit(&mut self, out: &mut Vec<u8>);
-    fn flush(&mut self) -> bool;
-}
-
-macro_rules! end_for {
-    ($t:ty) => {
-        impl End for $t {
-            fn input(&mut self, bytes: &[u8], now: Instant) {
-                let _ = self.handle_input(bytes, now);
-            }
-            fn timeout(&mut self, now: Instant) {
-                self.handle_timeout(now)
-            }
-            fn next(&self) -> Option<Instant> {
-                self.poll_timeout()
-            }
-            fn transmit(&mut self, out: &mut Vec<u8>) {
-                self.drain_transmit(out)
-            }
-            fn flush(&mut self) -> bool {
-                self.take_flush_request()
-            }
-        }
-    };
-}
-end_for!(Link);
-end_for!(Initiator);
-end_for!(Responder);
+pub use trol_proto::Machine as End;
 
 /// A scripted peer: records what it receives; sends what the test tells it to.
 #[derive(Default)]
@@ -50,17 +17,17 @@ pub struct Script {
 }
 
 impl End for Script {
-    fn input(&mut self, bytes: &[u8], _now: Instant) {
+    fn feed(&mut self, bytes: &[u8], _now: Instant) {
         self.received.extend_from_slice(bytes);
     }
-    fn timeout(&mut self, _now: Instant) {}
-    fn next(&self) -> Option<Instant> {
+    fn tick(&mut self, _now: Instant) {}
+    fn next_deadline(&self) -> Option<Instant> {
         None
     }
     fn transmit(&mut self, out: &mut Vec<u8>) {
         out.append(&mut self.to_send);
     }
-    fn flush(&mut self) -> bool {
+    fn wants_flush(&mut self) -> bool {
         false
     }
 }
@@ -152,13 +119,13 @@ impl Wire {
         self.push(Dir::BtoA, out.clone());
         self.scratch = out;
         let now = self.now;
-        if a.flush() {
+        if a.wants_flush() {
             self.flushes += 1;
             while self.ba.front().is_some_and(|(t, _)| *t <= now) {
                 self.ba.pop_front();
             }
         }
-        if b.flush() {
+        if b.wants_flush() {
             self.flushes += 1;
             while self.ab.front().is_some_and(|(t, _)| *t <= now) {
                 self.ab.pop_front();
@@ -173,14 +140,14 @@ impl Wire {
         let now = self.now;
         let due = self.ab.front().is_some_and(|x| x.0 <= now)
             || self.ba.front().is_some_and(|x| x.0 <= now)
-            || a.next().is_some_and(|t| t <= now)
-            || b.next().is_some_and(|t| t <= now);
+            || a.next_deadline().is_some_and(|t| t <= now)
+            || b.next_deadline().is_some_and(|t| t <= now);
         if !due {
             let next = [
                 self.ab.front().map(|x| x.0),
                 self.ba.front().map(|x| x.0),
-                a.next(),
-                b.next(),
+                a.next_deadline(),
+                b.next_deadline(),
             ]
             .into_iter()
             .flatten()
@@ -191,16 +158,16 @@ impl Wire {
             }
         }
         let now = self.now;
-        a.timeout(now);
-        b.timeout(now);
+        a.tick(now);
+        b.tick(now);
         self.transmit_all(a, b);
         let chunk: Vec<u8> = drain_arrived(&mut self.ab, now);
         if !chunk.is_empty() {
-            b.input(&chunk, now);
+            b.feed(&chunk, now);
         }
         let chunk: Vec<u8> = drain_arrived(&mut self.ba, now);
         if !chunk.is_empty() {
-            a.input(&chunk, now);
+            a.feed(&chunk, now);
         }
         self.transmit_all(a, b);
         true

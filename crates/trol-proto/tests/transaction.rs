@@ -52,6 +52,21 @@ fn transact(
     }
 }
 
+/// Run until the initiator has something to say; the responder's events are ignored (it
+/// plays a controller that never answers unless the test makes it).
+fn next_event<B: common::End>(
+    w: &mut Wire,
+    i: &mut Initiator,
+    peer: &mut B,
+) -> Option<InitiatorEvent> {
+    let mut ev = None;
+    w.run(i, peer, Duration::from_secs(100), |i, _| {
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    ev
+}
+
 #[test]
 fn a_transaction_returns_the_reply_to_its_request() {
     let (mut w, mut i, mut r) = pair();
@@ -86,11 +101,7 @@ fn a_silent_controller_gives_trans_err_send() {
     let mut w = Wire::new();
     i.start(&[1], w.now).unwrap();
     let mut failures = Vec::new();
-    let mut ev = None;
-    w.run(&mut i, &mut peer, Duration::from_secs(60), |i, _| {
-        ev = i.poll_event();
-        ev.is_some()
-    });
+    let ev = next_event(&mut w, &mut i, &mut peer);
     if let Some(InitiatorEvent::NeedDecision(f)) = ev {
         failures.push(f);
         i.decide(Decision::GiveUp, w.now);
@@ -109,12 +120,7 @@ fn no_reply_in_time_gives_trans_timeout_after_the_reply_timeout() {
     i.set_reply_timeout(Duration::from_secs(15));
     i.start(&[42], w.now).unwrap();
     // The controller receives the request but never answers.
-    let mut ev = None;
-    w.run(&mut i, &mut r, Duration::from_secs(100), |i, r| {
-        let _ = r.poll_event();
-        ev = i.poll_event();
-        ev.is_some()
-    });
+    let ev = next_event(&mut w, &mut i, &mut r);
     let Some(InitiatorEvent::NeedDecision(Failure::Timeout { waited })) = ev else {
         panic!("{ev:?}")
     };
@@ -130,12 +136,7 @@ fn no_reply_in_time_gives_trans_timeout_after_the_reply_timeout() {
 fn wait_more_after_a_timeout_still_gets_a_late_reply() {
     let (mut w, mut i, mut r) = pair();
     i.start(&[42], w.now).unwrap();
-    let mut ev = None;
-    w.run(&mut i, &mut r, Duration::from_secs(100), |i, r| {
-        let _ = r.poll_event();
-        ev = i.poll_event();
-        ev.is_some()
-    });
+    let ev = next_event(&mut w, &mut i, &mut r);
     assert!(matches!(
         ev,
         Some(InitiatorEvent::NeedDecision(Failure::Timeout { .. }))
@@ -143,11 +144,7 @@ fn wait_more_after_a_timeout_still_gets_a_late_reply() {
     i.decide(Decision::WaitMore(Duration::from_secs(90)), w.now);
     w.advance(Duration::from_secs(30));
     r.respond(&[0, 0], w.now);
-    let mut ev = None;
-    w.run(&mut i, &mut r, Duration::from_secs(100), |i, _| {
-        ev = i.poll_event();
-        ev.is_some()
-    });
+    let ev = next_event(&mut w, &mut i, &mut r);
     assert_eq!(ev, Some(InitiatorEvent::Reply));
     assert_eq!(i.take_reply(), Some(vec![0, 0]));
 }
@@ -234,11 +231,7 @@ fn a_send_retried_after_err_on_send_reaches_the_controller_once() {
     let (mut w, mut i, mut r) = pair();
     r.stop();
     i.start(b"move", w.now).unwrap();
-    let mut ev = None;
-    w.run(&mut i, &mut r, Duration::from_secs(10), |i, _| {
-        ev = i.poll_event();
-        ev.is_some()
-    });
+    let ev = next_event(&mut w, &mut i, &mut r);
     assert_eq!(
         ev,
         Some(InitiatorEvent::NeedDecision(Failure::Send(

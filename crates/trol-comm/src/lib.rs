@@ -105,30 +105,20 @@ pub fn receive_data<P: Port>(
             outcome.is_some()
         })
         .map_err(LinkCallError::Io)?;
+    if outcome.is_none() && !link.cancel_receive() {
+        // The transfer started just before the deadline: let it end.
+        driver
+            .run(link, None, |l| {
+                outcome = l.poll_outcome();
+                outcome.is_some()
+            })
+            .map_err(LinkCallError::Io)?;
+    }
     match outcome {
         Some(Outcome::Received) => link.take_received().ok_or(LinkCallError::Idle),
         Some(Outcome::Failed(trol_proto::link::LinkError::Receive(e))) => {
             Err(LinkCallError::Protocol(e))
         }
-        _ => {
-            if link.cancel_receive() {
-                Err(LinkCallError::Idle)
-            } else {
-                // The transfer started just now: let it end.
-                driver
-                    .run(link, None, |l| {
-                        outcome = l.poll_outcome();
-                        outcome.is_some()
-                    })
-                    .map_err(LinkCallError::Io)?;
-                match outcome {
-                    Some(Outcome::Received) => link.take_received().ok_or(LinkCallError::Idle),
-                    Some(Outcome::Failed(trol_proto::link::LinkError::Receive(e))) => {
-                        Err(LinkCallError::Protocol(e))
-                    }
-                    _ => Err(LinkCallError::Idle),
-                }
-            }
-        }
+        _ => Err(LinkCallError::Idle),
     }
 }

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use trol_port::Port;
 use trol_proto::link::{LinkConfig, LinkError};
-use trol_proto::transaction::{Decision, Failure, Responder, ResponderEvent, TransCode};
+use trol_proto::transaction::{Decision, Failure, Responder, ResponderEvent};
 
 use crate::driver::Driver;
 use crate::handlers::{DefaultHandlers, ErrorHandlers, FailureContext, Recovery};
@@ -73,6 +73,7 @@ impl<P: Port> Server<P> {
     ) -> io::Result<ServerEvent> {
         let give_up = self.driver.clock().now() + idle;
         let mut attempts = 0u32;
+        let mut reply_len = 0usize;
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -90,6 +91,7 @@ impl<P: Port> Server<P> {
                 None => return Ok(ServerEvent::Idle),
                 Some(ResponderEvent::Request) => {
                     let reply = execute(self.responder.request());
+                    reply_len = reply.len();
                     self.responder.respond(&reply, now);
                 }
                 Some(ResponderEvent::Done) => return Ok(ServerEvent::Executed),
@@ -133,15 +135,17 @@ impl<P: Port> Server<P> {
                     }
                 }
                 Some(ResponderEvent::Failed(code)) => {
-                    let error = self
-                        .responder
-                        .last_comm_error()
-                        .unwrap_or(LinkError::Receive(trol_proto::link::ReceiveError::BadEnq));
-                    return Ok(if code == TransCode::ErrSend {
-                        ServerEvent::ReplyFailed(error)
-                    } else {
-                        ServerEvent::ReceiveFailed(error)
-                    });
+                    // Only a reply that layer 2 refused to start ends up here: the request
+                    // was executed, the reply could not go out, and the server listens again.
+                    let _ = code;
+                    return Err(io::Error::new(
+                        io::ErrorKind::InvalidInput,
+                        format!(
+                            "the reply of {reply_len} bytes is longer than the {} bytes layer 2 can carry; \
+                             it was not sent",
+                            trol_proto::link::frame::MAX_MESSAGE
+                        ),
+                    ));
                 }
             }
         }

@@ -241,10 +241,6 @@ impl Receiver {
                 self.block.push(byte);
                 self.state = State::InBlock(block);
                 self.deadline = Some(now + self.cfg.line_time(self.need) + self.cfg.timeouts.termc);
-                if self.need == 1 {
-                    // Not reachable with the layouts above; kept for safety.
-                    self.finish_block(now);
-                }
             }
             State::AwaitEot => {
                 if control::accepts(byte, EOT) {

@@ -117,7 +117,19 @@ impl<P: Port> Transactor<P> {
     }
 
     /// TransSR: send `request` and return the controller's reply.
+    ///
+    /// If the port fails (an I/O error), the transaction is abandoned, the port's input is
+    /// flushed, and the next call starts afresh.
     pub fn trans_sr(&mut self, request: &[u8]) -> Result<Vec<u8>, TransError> {
+        let result = self.run_transaction(request);
+        if let Err(TransError::Io(_)) = result {
+            self.initiator.abort();
+            let _ = self.driver.port_mut().flush_input();
+        }
+        result
+    }
+
+    fn run_transaction(&mut self, request: &[u8]) -> Result<Vec<u8>, TransError> {
         let now = self.driver.clock().now();
         self.initiator
             .start(request, now)

@@ -324,3 +324,56 @@ fn transactions_between_two_processes_over_a_pty() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("peer executed 8"), "{text}");
 }
+
+/// A port that fails its `n`-th receive with an I/O error, once.
+struct FailsOnce<P> {
+    inner: P,
+    recvs: u32,
+    fail_at: u32,
+}
+
+impl<P: Port> Port for FailsOnce<P> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> std::io::Result<usize> {
+        self.recvs += 1;
+        if self.recvs == self.fail_at {
+            return Err(std::io::Error::other("the adapter was unplugged"));
+        }
+        self.inner.recv(buf, deadline)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "fails-once".into()
+    }
+}
+
+#[test]
+fn a_port_error_mid_transaction_is_reported_and_the_next_transaction_works() {
+    let (a, b) = memory::pair(None);
+    let server =
+        std::thread::spawn(move || serve(Server::new(b, quick_link()), Duration::from_secs(30)));
+    let port = FailsOnce {
+        inner: a,
+        recvs: 0,
+        fail_at: 2,
+    };
+    let mut t = Transactor::new(port, quick_link());
+    let err = t.trans_sr(b"first").unwrap_err();
+    assert!(matches!(err, TransError::Io(_)), "{err}");
+    // The controller may still be finishing its side; give its link time to reset.
+    std::thread::sleep(Duration::from_millis(1500));
+    let _ = t.driver_mut().port_mut().flush_input();
+    let reply = t
+        .trans_sr(b"second")
+        .expect("the next transaction must start afresh");
+    assert_eq!(reply, b"dnoces");
+    t.trans_sr(b"quit").unwrap();
+    server.join().unwrap();
+}

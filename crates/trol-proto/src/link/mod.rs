@@ -202,6 +202,19 @@ impl Link {
         }
     }
 
+    /// Drop whatever transfer is under way, without a word on the line, and go idle: for
+    /// when layer 1 itself failed (the port is gone), so that the next transfer starts clean.
+    /// The caller should flush the port's input before it starts one.
+    pub fn abort(&mut self) {
+        self.sender.reset();
+        self.receiver.reset();
+        self.role = Role::Idle;
+        self.deferred = None;
+        self.quiet_until = None;
+        self.outcome = None;
+        self.flush = false;
+    }
+
     fn begin_send(&mut self, message: &[u8], pci: u16, now: Instant) {
         // Length was checked by the caller.
         let _ = self.sender.start(message, pci, now);

@@ -127,6 +127,16 @@ impl Initiator {
         Ok(())
     }
 
+    /// Abandon the current transaction (the port failed under it): the link drops its
+    /// transfer and the initiator is idle again, so the next [`Initiator::start`] works.
+    pub fn abort(&mut self) {
+        self.link.abort();
+        self.state = State::Idle;
+        self.reply = None;
+        self.reply_deadline = None;
+        self.event = None;
+    }
+
     /// The next event, once.
     pub fn poll_event(&mut self) -> Option<InitiatorEvent> {
         self.event.take()

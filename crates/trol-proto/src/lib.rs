@@ -6,7 +6,8 @@
 //! passes in the time.
 //!
 //! - [`link`]: layer 2, the BSC-like link (SendData / ReceiveData);
-//! - [`transaction`]: layer 3, transactions (TransSR on the PC, TransRS on the controller).
+//! - [`transaction`]: layer 3, transactions (TransSR on the PC, TransRS on the controller);
+//! - [`application`]: layer 4, the command records of every API call and their replies.
 //!
 //! Layer 1 (ports) and the drivers that run these machines live in `trol-port` and
 //! `trol-comm`. The byte-exact specification is docs/protocol.md.
@@ -14,6 +15,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod application;
 pub mod link;
 pub mod time;
 pub mod transaction;

@@ -1,0 +1,221 @@
+//! Locations and location names (manual, "Locations", "Verwendete Datentypen").
+
+/// The coordinate system of a location: the manual's POS_PREC, POS_JOINT, POS_CART.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Tag {
+    /// POS_PREC (0): a precision point, encoder counts per joint (TLONG).
+    Prec = 0,
+    /// POS_JOINT (1): joint angles in radians.
+    Joint = 1,
+    /// POS_CART (2): x y z in mm, yaw pitch roll in radians.
+    Cart = 2,
+}
+
+impl Tag {
+    /// The tag with this value.
+    pub fn from_u8(v: u8) -> Option<Tag> {
+        match v {
+            0 => Some(Tag::Prec),
+            1 => Some(Tag::Joint),
+            2 => Some(Tag::Cart),
+            _ => None,
+        }
+    }
+
+    /// The manual's constant name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tag::Prec => "POS_PREC",
+            Tag::Joint => "POS_JOINT",
+            Tag::Cart => "POS_CART",
+        }
+    }
+}
+
+/// Most coordinates a location holds (SLocData has 8; the last two are for a gantry's extra
+/// axes, which the A465 here does not have).
+pub const MAX_DIMS: usize = 8;
+/// Coordinates of the A465's six axes: numDims may be 1..=6 on the wire.
+pub const ARM_DIMS: usize = 6;
+
+/// A location: the manual's SLocData, with numDims = the number of values.
+///
+/// Only the given values travel; the controller sets the rest to 0.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Location {
+    /// POS_PREC: encoder counts.
+    Prec(Vec<i32>),
+    /// POS_JOINT: radians.
+    Joint(Vec<f32>),
+    /// POS_CART: mm and radians.
+    Cart(Vec<f32>),
+}
+
+impl Location {
+    /// Its tag.
+    pub fn tag(&self) -> Tag {
+        match self {
+            Location::Prec(_) => Tag::Prec,
+            Location::Joint(_) => Tag::Joint,
+            Location::Cart(_) => Tag::Cart,
+        }
+    }
+
+    /// numDims.
+    pub fn num_dims(&self) -> usize {
+        match self {
+            Location::Prec(v) => v.len(),
+            Location::Joint(v) | Location::Cart(v) => v.len(),
+        }
+    }
+
+    /// The six arm coordinates as f64, missing ones 0 (counts stay counts).
+    pub fn to_array6(&self) -> [f64; 6] {
+        let mut out = [0.0; 6];
+        match self {
+            Location::Prec(v) => v
+                .iter()
+                .take(6)
+                .enumerate()
+                .for_each(|(i, x)| out[i] = *x as f64),
+            Location::Joint(v) | Location::Cart(v) => v
+                .iter()
+                .take(6)
+                .enumerate()
+                .for_each(|(i, x)| out[i] = *x as f64),
+        }
+        out
+    }
+
+    /// A location of `tag` from six values (counts are rounded to the nearest integer).
+    pub fn from_array6(tag: Tag, v: [f64; 6]) -> Location {
+        match tag {
+            Tag::Prec => Location::Prec(v.iter().map(|x| x.round() as i32).collect()),
+            Tag::Joint => Location::Joint(v.iter().map(|x| *x as f32).collect()),
+            Tag::Cart => Location::Cart(v.iter().map(|x| *x as f32).collect()),
+        }
+    }
+
+    /// Whether every value is finite (no NaN or infinity).
+    pub fn is_finite(&self) -> bool {
+        match self {
+            Location::Prec(_) => true,
+            Location::Joint(v) | Location::Cart(v) => v.iter().all(|x| x.is_finite()),
+        }
+    }
+}
+
+/// A location name (TLocName): 8 bytes, blank-padded, not NUL-terminated.
+///
+/// Up to 8 characters; the first a letter or `#`, the rest letters, digits or `_`. A name
+/// starting with `#` holds a precision point, any other a cartesian location.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct LocName([u8; 8]);
+
+/// Why a name is not a location name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BadLocName(pub String);
+
+impl std::fmt::Display for BadLocName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "bad location name {:?}: up to 8 characters, the first a letter or '#', \
+             the rest letters, digits or '_'",
+            self.0
+        )
+    }
+}
+
+impl std::error::Error for BadLocName {}
+
+impl LocName {
+    /// A name from text (checked).
+    pub fn new(name: &str) -> Result<LocName, BadLocName> {
+        LocName::from_bytes(name.as_bytes())
+    }
+
+    /// A name from the 8 wire bytes or a shorter slice: blanks (or a NUL, as C strings
+    /// end) close it.
+    pub fn from_bytes(raw: &[u8]) -> Result<LocName, BadLocName> {
+        let bad = || BadLocName(String::from_utf8_lossy(raw).into_owned());
+        let end = raw
+            .iter()
+            .position(|&b| b == b' ' || b == 0)
+            .unwrap_or(raw.len());
+        let name = &raw[..end];
+        // After the name only blanks (or the C string's end) may follow.
+        let rest = &raw[end..];
+        let rest_ok = match rest.iter().position(|&b| b == 0) {
+            Some(nul) => rest[..nul].iter().all(|&b| b == b' '),
+            None => rest.iter().all(|&b| b == b' '),
+        };
+        if name.is_empty() || name.len() > 8 || !rest_ok {
+            return Err(bad());
+        }
+        let first_ok = name[0].is_ascii_alphabetic() || name[0] == b'#';
+        let rest_chars_ok = name[1..]
+            .iter()
+            .all(|&b| b.is_ascii_alphanumeric() || b == b'_');
+        if !first_ok || !rest_chars_ok {
+            return Err(bad());
+        }
+        let mut out = [b' '; 8];
+        out[..name.len()].copy_from_slice(name);
+        Ok(LocName(out))
+    }
+
+    /// The 8 wire bytes.
+    pub fn bytes(&self) -> [u8; 8] {
+        self.0
+    }
+
+    /// The name without padding.
+    pub fn as_str(&self) -> &str {
+        let end = self.0.iter().position(|&b| b == b' ').unwrap_or(8);
+        // Only ASCII was let in.
+        std::str::from_utf8(&self.0[..end]).unwrap_or("")
+    }
+
+    /// Whether it names a precision point (starts with `#`).
+    pub fn is_precision(&self) -> bool {
+        self.0[0] == b'#'
+    }
+}
+
+impl std::fmt::Debug for LocName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "LocName({:?})", self.as_str())
+    }
+}
+
+impl std::fmt::Display for LocName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for LocName {
+    type Err = BadLocName;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        LocName::new(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_follow_the_manual() {
+        assert_eq!(LocName::new("test_001").unwrap().bytes(), *b"test_001");
+        assert_eq!(LocName::new("p1").unwrap().bytes(), *b"p1      ");
+        assert!(LocName::new("#home").unwrap().is_precision());
+        assert_eq!(LocName::from_bytes(b"ab\0garbage").unwrap().as_str(), "ab");
+        for bad in ["", "1abc", "toolong_9", "a-b", "_x", "a b", "##"] {
+            assert!(LocName::new(bad).is_err(), "{bad:?}");
+        }
+        assert!(LocName::from_bytes(b"ab  c   ").is_err());
+    }
+}

@@ -1,0 +1,430 @@
+//! Forward and closed-form inverse kinematics of the A465, with a tool transform.
+//!
+//! Conventions (docs/a465.md has the figures):
+//! - joint frames follow the standard Denavit-Hartenberg table of `../shared/reference/a465.md`
+//!   (θ offsets 0, -90°, -90°, 0, 0, 0; d 330.2, 0, 0, 330.2, 0, 76.2; a 0, 304.8, 0...; α -90°,
+//!   0, -90°, +90°, -90°, 0). All joints 0: the arm points straight up. +J1 turns +x toward +y;
+//!   +J2 tilts the arm toward +x; +J3 bends the forearm forward.
+//! - the *tool frame* sits at the flange centre with its x axis along the last segment, out of
+//!   the flange (manual, "Das Roboter-Koordinatensystem", Abbildung 3); y as DH frame 6's y.
+//! - a cartesian location is the tool centre point's pose in the world frame:
+//!   x y z in mm, and R = Rz(yaw)·Ry(pitch)·Rx(roll) (angles about the world's z, y, x axes).
+//!   All joints 0 is (0, 0, 1041.4, 0, -π/2, 0): the tool's x axis points up.
+//! - the tool transform places the tool tip in the tool frame (same six-number form); every
+//!   cartesian computation goes through it.
+
+use glam::{DMat3, DVec3};
+use std::f64::consts::PI;
+
+use crate::model::{A2, D1, D4, D6, limits, within_limits};
+
+/// Six joint angles in radians, joint 1 first.
+pub type Joints = [f64; 6];
+
+/// A rigid transform: rotation then translation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Rotation (columns are the frame's axes in the parent frame).
+    pub rot: DMat3,
+    /// Origin in the parent frame, mm.
+    pub pos: DVec3,
+}
+
+impl Pose {
+    /// The identity.
+    pub const IDENTITY: Pose = Pose {
+        rot: DMat3::IDENTITY,
+        pos: DVec3::ZERO,
+    };
+
+    /// From x y z (mm) and yaw pitch roll (radians), R = Rz(yaw)·Ry(pitch)·Rx(roll).
+    pub fn from_xyzypr(v: [f64; 6]) -> Pose {
+        let rot = DMat3::from_rotation_z(v[3])
+            * DMat3::from_rotation_y(v[4])
+            * DMat3::from_rotation_x(v[5]);
+        Pose {
+            rot,
+            pos: DVec3::new(v[0], v[1], v[2]),
+        }
+    }
+
+    /// x y z yaw pitch roll. At pitch ±90° (gimbal lock) the roll is 0 and the yaw takes
+    /// the whole turn about z.
+    pub fn to_xyzypr(&self) -> [f64; 6] {
+        let r = |i: usize, j: usize| self.rot.col(j)[i];
+        let cp = (r(0, 0) * r(0, 0) + r(1, 0) * r(1, 0)).sqrt();
+        let pitch = (-r(2, 0)).atan2(cp);
+        let (yaw, roll) = if cp > 1e-9 {
+            (r(1, 0).atan2(r(0, 0)), r(2, 1).atan2(r(2, 2)))
+        } else {
+            // R = Rz(yaw)·Ry(±90°): the roll cannot be told from the yaw.
+            ((-r(0, 1)).atan2(r(1, 1)), 0.0)
+        };
+        [self.pos.x, self.pos.y, self.pos.z, yaw, pitch, roll]
+    }
+
+    /// `self` followed by `other` (other expressed in self's frame).
+    pub fn then(&self, other: &Pose) -> Pose {
+        Pose {
+            rot: self.rot * other.rot,
+            pos: self.pos + self.rot * other.pos,
+        }
+    }
+
+    /// The inverse transform.
+    pub fn inverse(&self) -> Pose {
+        let rt = self.rot.transpose();
+        Pose {
+            rot: rt,
+            pos: -(rt * self.pos),
+        }
+    }
+}
+
+/// One DH step: Rz(θ)·Tz(d)·Tx(a)·Rx(α).
+fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> Pose {
+    let (st, ct) = theta.sin_cos();
+    let (sa, ca) = alpha.sin_cos();
+    Pose {
+        rot: DMat3::from_cols(
+            DVec3::new(ct, st, 0.0),
+            DVec3::new(-st * ca, ct * ca, sa),
+            DVec3::new(st * sa, -ct * sa, ca),
+        ),
+        pos: DVec3::new(a * ct, a * st, d),
+    }
+}
+
+const HALF_PI: f64 = PI / 2.0;
+
+/// The rotation of the first three joints (DH frame 3 in the base frame).
+fn r03(q1: f64, q2: f64, q3: f64) -> DMat3 {
+    dh(q1, D1, 0.0, -HALF_PI).rot
+        * dh(q2 - HALF_PI, 0.0, A2, 0.0).rot
+        * dh(q3 - HALF_PI, 0.0, 0.0, -HALF_PI).rot
+}
+
+/// DH frame 6 (the flange, z out of it) in the base frame.
+pub fn flange_dh(q: &Joints) -> Pose {
+    dh(q[0], D1, 0.0, -HALF_PI)
+        .then(&dh(q[1] - HALF_PI, 0.0, A2, 0.0))
+        .then(&dh(q[2] - HALF_PI, 0.0, 0.0, -HALF_PI))
+        .then(&dh(q[3], D4, 0.0, HALF_PI))
+        .then(&dh(q[4], 0.0, 0.0, -HALF_PI))
+        .then(&dh(q[5], D6, 0.0, 0.0))
+}
+
+/// The tool frame's axes in DH frame 6: tool x = DH z, tool y = DH y, tool z = -DH x.
+fn tool_in_dh6() -> DMat3 {
+    DMat3::from_cols(DVec3::Z, DVec3::Y, DVec3::NEG_X)
+}
+
+/// Wrap an angle into (-π, π].
+pub fn wrap(a: f64) -> f64 {
+    let mut x = (a + PI).rem_euclid(2.0 * PI) - PI;
+    if x <= -PI {
+        x += 2.0 * PI;
+    }
+    x
+}
+
+/// Which of the arm's configurations a solution is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Config {
+    /// Reaching backward, over the head (J1 turned half a turn from the wrist's direction).
+    pub backward: bool,
+    /// Elbow below the line from shoulder to wrist.
+    pub elbow_down: bool,
+    /// Wrist flipped (J5 negative in the forward sense).
+    pub flip: bool,
+}
+
+impl std::fmt::Display for Config {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // CRS's own letters: Forward/Backward, Up/Down, Noflip/Flip.
+        write!(
+            f,
+            "{}{}{}",
+            if self.backward { 'B' } else { 'F' },
+            if self.elbow_down { 'D' } else { 'U' },
+            if self.flip { 'F' } else { 'N' }
+        )
+    }
+}
+
+/// One inverse-kinematics solution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solution {
+    /// The joint angles, each wrapped into (-π, π].
+    pub q: Joints,
+    /// Its configuration.
+    pub config: Config,
+    /// Whether every joint is within its limits.
+    pub within_limits: bool,
+}
+
+/// Every solution for a pose: up to 8.
+#[derive(Clone, Copy, Debug)]
+pub struct Solutions {
+    items: [Solution; 8],
+    len: usize,
+}
+
+impl Solutions {
+    /// The solutions.
+    pub fn as_slice(&self) -> &[Solution] {
+        &self.items[..self.len]
+    }
+
+    /// How many.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are none (the pose is out of reach).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// Why no joint angles reach a pose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IkError {
+    /// The wrist centre is farther from (or nearer to) the shoulder than the arm can reach.
+    OutOfReach,
+    /// Every solution has a joint outside its limits; `joint` (1..6) of the nearest one.
+    JointLimit {
+        /// The joint, 1-based.
+        joint: usize,
+    },
+}
+
+impl std::fmt::Display for IkError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            IkError::OutOfReach => write!(f, "the pose is out of the arm's reach"),
+            IkError::JointLimit { joint } => {
+                write!(f, "every configuration puts joint {joint} beyond its limit")
+            }
+        }
+    }
+}
+
+impl std::error::Error for IkError {}
+
+/// Below this the wrist centre counts as on the base axis, and J5 as 0 (singular cases).
+const SINGULAR: f64 = 1e-9;
+
+/// The arm's kinematics with a tool transform.
+#[derive(Clone, Copy, Debug)]
+pub struct Kinematics {
+    tool: Pose,
+    tool_inv: Pose,
+}
+
+impl Default for Kinematics {
+    fn default() -> Self {
+        Kinematics::new([0.0; 6])
+    }
+}
+
+impl Kinematics {
+    /// Kinematics with the tool transform `tool` (x y z mm, yaw pitch roll rad, in the tool
+    /// frame).
+    pub fn new(tool: [f64; 6]) -> Kinematics {
+        let tool = Pose::from_xyzypr(tool);
+        Kinematics {
+            tool,
+            tool_inv: tool.inverse(),
+        }
+    }
+
+    /// The tool transform.
+    pub fn tool(&self) -> [f64; 6] {
+        self.tool.to_xyzypr()
+    }
+
+    /// Forward kinematics: the tool centre point's pose.
+    pub fn fk(&self, q: &Joints) -> Pose {
+        let f = flange_dh(q);
+        let flange_tool = Pose {
+            rot: f.rot * tool_in_dh6(),
+            pos: f.pos,
+        };
+        flange_tool.then(&self.tool)
+    }
+
+    /// Forward kinematics as a cartesian location.
+    pub fn fk_xyzypr(&self, q: &Joints) -> [f64; 6] {
+        self.fk(q).to_xyzypr()
+    }
+
+    /// Every joint solution for the tool centre point at `tcp`. `current` settles the
+    /// singular cases: on the base axis J1 keeps its value, at J5 = 0 J4 keeps its value.
+    pub fn ik_all(&self, tcp: &Pose, current: &Joints) -> Solutions {
+        let flange = tcp.then(&self.tool_inv);
+        let r06 = flange.rot * tool_in_dh6().transpose();
+        let w = flange.pos - r06.z_axis * D6;
+        let mut out = Solutions {
+            items: [Solution {
+                q: [0.0; 6],
+                config: Config {
+                    backward: false,
+                    elbow_down: false,
+                    flip: false,
+                },
+                within_limits: false,
+            }; 8],
+            len: 0,
+        };
+        let rxy = (w.x * w.x + w.y * w.y).sqrt();
+        let base_q1 = if rxy > SINGULAR {
+            w.y.atan2(w.x)
+        } else {
+            current[0]
+        };
+        let s = w.z - D1;
+        let c3 = (rxy * rxy + s * s - A2 * A2 - D4 * D4) / (2.0 * A2 * D4);
+        if !(-1.0 - 1e-12..=1.0 + 1e-12).contains(&c3) {
+            return out;
+        }
+        let c3 = c3.clamp(-1.0, 1.0);
+        let s3_abs = (1.0 - c3 * c3).sqrt();
+        for backward in [false, true] {
+            let q1 = wrap(if backward { base_q1 + PI } else { base_q1 });
+            let r = if backward { -rxy } else { rxy };
+            for elbow_down in [false, true] {
+                // Forward reach: a positive J3 keeps the elbow above the shoulder-wrist line.
+                let up_sign = if backward { -1.0 } else { 1.0 };
+                let s3 = if elbow_down {
+                    -up_sign * s3_abs
+                } else {
+                    up_sign * s3_abs
+                };
+                let q3 = s3.atan2(c3);
+                let q2 = r.atan2(s) - (D4 * s3).atan2(A2 + D4 * c3);
+                let m = r03(q1, q2, q3).transpose() * r06;
+                let e = |i: usize, j: usize| m.col(j)[i];
+                // m = Rz(q4)·Ry(-q5)·Rz(q6).
+                let sb = (e(0, 2) * e(0, 2) + e(1, 2) * e(1, 2)).sqrt();
+                let cb = e(2, 2);
+                for flip in [false, true] {
+                    let (q4, q5, q6) = if sb > SINGULAR {
+                        let sbs = if flip { -sb } else { sb };
+                        let a = (e(1, 2) / sbs).atan2(e(0, 2) / sbs);
+                        let g = (e(2, 1) / sbs).atan2(-e(2, 0) / sbs);
+                        (a, -sbs.atan2(cb), g)
+                    } else if cb > 0.0 {
+                        // J5 = 0: only q4 + q6 is fixed; keep J4.
+                        let sum = e(1, 0).atan2(e(0, 0));
+                        let q4 = if flip { current[3] + PI } else { current[3] };
+                        (q4, 0.0, sum - q4)
+                    } else {
+                        // J5 = ±180°: beyond its ±105° limit, so no usable solution.
+                        continue;
+                    };
+                    let q = [q1, wrap(q2), wrap(q3), wrap(q4), wrap(q5), wrap(q6)];
+                    out.items[out.len] = Solution {
+                        q,
+                        config: Config {
+                            backward,
+                            elbow_down,
+                            flip,
+                        },
+                        within_limits: within_limits(&q),
+                    };
+                    out.len += 1;
+                }
+            }
+        }
+        out
+    }
+
+    /// The solution within the limits nearest to `current` (the one a motion takes).
+    pub fn ik_nearest(&self, tcp: &Pose, current: &Joints) -> Result<Joints, IkError> {
+        let all = self.ik_all(tcp, current);
+        if all.is_empty() {
+            return Err(IkError::OutOfReach);
+        }
+        let dist = |q: &Joints| -> f64 {
+            q.iter()
+                .zip(current)
+                .map(|(a, b)| wrap(a - b).powi(2))
+                .sum()
+        };
+        let best = all
+            .as_slice()
+            .iter()
+            .filter(|s| s.within_limits)
+            .min_by(|a, b| dist(&a.q).total_cmp(&dist(&b.q)));
+        match best {
+            Some(s) => Ok(s.q),
+            None => {
+                let nearest = all
+                    .as_slice()
+                    .iter()
+                    .min_by(|a, b| dist(&a.q).total_cmp(&dist(&b.q)))
+                    .expect("not empty");
+                let lim = limits();
+                let joint = (0..6)
+                    .find(|&i| nearest.q[i].abs() > lim[i] + 1e-9)
+                    .unwrap_or(0);
+                Err(IkError::JointLimit { joint: joint + 1 })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9)
+    }
+
+    #[test]
+    fn fk_matches_the_published_checks() {
+        let k = Kinematics::default();
+        let deg = |v: [f64; 6]| v.map(f64::to_radians);
+        let p = |q| {
+            let x = k.fk_xyzypr(&deg(q));
+            [x[0], x[1], x[2]]
+        };
+        assert!(close(p([0.0; 6]), [0.0, 0.0, 1041.4]));
+        assert!(close(
+            p([0.0, 90.0, 0.0, 0.0, 0.0, 0.0]),
+            [711.2, 0.0, 330.2]
+        ));
+        assert!(close(
+            p([0.0, 0.0, 90.0, 0.0, 0.0, 0.0]),
+            [406.4, 0.0, 635.0]
+        ));
+        assert!(close(
+            p([90.0, 0.0, 90.0, 0.0, 0.0, 0.0]),
+            [0.0, 406.4, 635.0]
+        ));
+        // (0,0,90,0,90,0): tool straight down at x 330.2, z 558.8.
+        let down = k.fk_xyzypr(&deg([0.0, 0.0, 90.0, 0.0, 90.0, 0.0]));
+        assert!(
+            close([down[0], down[1], down[2]], [330.2, 0.0, 558.8]),
+            "{down:?}"
+        );
+        assert!((down[4] - HALF_PI).abs() < 1e-9, "pitch {down:?}");
+        let up = k.fk_xyzypr(&[0.0; 6]);
+        assert!((up[4] + HALF_PI).abs() < 1e-9, "zero pose pitch {up:?}");
+    }
+
+    #[test]
+    fn xyzypr_round_trips() {
+        for v in [
+            [1.0, 2.0, 3.0, 0.3, -0.4, 1.2],
+            [0.0, 0.0, 0.0, -2.0, 1.0, -3.0],
+        ] {
+            let back = Pose::from_xyzypr(v).to_xyzypr();
+            for i in 0..6 {
+                assert!((back[i] - v[i]).abs() < 1e-12, "{v:?} {back:?}");
+            }
+        }
+    }
+}

@@ -1,0 +1,18 @@
+//! The CRS A465: its kinematic model, closed-form inverse kinematics, and a simulation of
+//! the arm in time behind the C500's BIOS.
+//!
+//! - [`model`]: link lengths, limits, speeds, encoders, the READY pose;
+//! - [`kinematics`]: forward kinematics and all-solutions inverse kinematics with a tool
+//!   transform; usable on the PC as well as in the simulated controller;
+//! - [`arm`]: the simulated arm (timed motion, gripper, location table, safety checks).
+//!
+//! Conventions and which figures are assumptions: docs/a465.md.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod arm;
+pub mod kinematics;
+pub mod model;
+
+pub use kinematics::{Config, IkError, Joints, Kinematics, Pose, Solution, Solutions};

@@ -92,7 +92,7 @@ fn out_of_reach_and_limits_are_reported() {
     assert_eq!(k.ik_nearest(&far, &[0.0; 6]), Err(IkError::OutOfReach));
     assert!(k.ik_all(&far, &[0.0; 6]).is_empty());
     // Straight down below the base: reachable in principle only with J2 beyond ±90°.
-    let under = Pose::from_xyzypr([100.0, 0.0, -150.0, 0.0, 1.5707963, 0.0]);
+    let under = Pose::from_xyzypr([100.0, 0.0, -150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]);
     match k.ik_nearest(&under, &[0.0; 6]) {
         Err(IkError::JointLimit { joint }) => assert!((1..=6).contains(&joint)),
         other => panic!("{other:?}"),

@@ -1,0 +1,149 @@
+//! The controller's main loop: terminal mode and server mode over one port.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use trol_comm::{Server, ServerEvent};
+use trol_port::Port;
+use trol_proto::link::LinkConfig;
+
+use crate::bios::Bios;
+use crate::pcp::Pcp;
+use crate::terminal::{PROMPT, Terminal};
+
+/// Which mode the controller is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Not serving TROL (a C500 would speak RAPL); waits for the activation sequence.
+    Terminal,
+    /// Serving TROL requests (the PCP runs).
+    Server,
+}
+
+/// A log hook: called after each request with its bytes, its reply's bytes and how the
+/// transaction ended.
+pub type LogFn = Box<dyn FnMut(&[u8], &[u8], ServerEvent) + Send>;
+
+/// The controller: a PCP server over a port.
+pub struct Controller<P, B> {
+    server: Server<P>,
+    pcp: Pcp<B>,
+    mode: Mode,
+    terminal: Terminal,
+    log: Option<LogFn>,
+}
+
+impl<P: Port, B: Bios> Controller<P, B> {
+    /// A controller on `port` in `mode`.
+    pub fn new(port: P, cfg: LinkConfig, pcp: Pcp<B>, mode: Mode) -> Self {
+        Controller {
+            server: Server::new(port, cfg),
+            pcp,
+            mode,
+            terminal: Terminal::default(),
+            log: None,
+        }
+    }
+
+    /// Log each request.
+    pub fn set_log(&mut self, log: LogFn) {
+        self.log = Some(log);
+    }
+
+    /// The mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The PCP server.
+    pub fn pcp_mut(&mut self) -> &mut Pcp<B> {
+        &mut self.pcp
+    }
+
+    /// Run one step: serve for at most `slice` in the current mode.
+    pub fn step(&mut self, slice: Duration) -> std::io::Result<()> {
+        match self.mode {
+            Mode::Terminal => {
+                let port = self.server.driver_mut().port_mut();
+                let mut buf = [0u8; 256];
+                let n = port.recv(&mut buf, Instant::now() + slice)?;
+                let mut out = Vec::new();
+                let activated = self.terminal.feed(&buf[..n], &mut out);
+                if !out.is_empty() {
+                    port.send(&out)?;
+                }
+                if activated {
+                    port.flush_input()?;
+                    self.mode = Mode::Server;
+                }
+            }
+            Mode::Server => {
+                let pcp = &mut self.pcp;
+                let mut last: (Vec<u8>, Vec<u8>) = (Vec::new(), Vec::new());
+                let ev = self.server.serve(slice, &mut |req| {
+                    let reply = pcp.handle(req);
+                    last = (req.to_vec(), reply.clone());
+                    reply
+                })?;
+                if ev != ServerEvent::Idle {
+                    if let Some(log) = self.log.as_mut() {
+                        log(&last.0, &last.1, ev);
+                    }
+                }
+                if self.pcp.take_terminate() {
+                    self.mode = Mode::Terminal;
+                    self.server
+                        .driver_mut()
+                        .port_mut()
+                        .send(PROMPT.as_bytes())?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Run until `stop` is set.
+    pub fn run(&mut self, stop: &AtomicBool) -> std::io::Result<()> {
+        while !stop.load(Ordering::Relaxed) {
+            self.step(Duration::from_millis(50))?;
+        }
+        Ok(())
+    }
+}
+
+/// An embedded controller on a thread; stops and joins when dropped.
+pub struct Embedded {
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Embedded {
+    /// Run `controller` on a thread of its own.
+    pub fn spawn<P: Port + 'static, B: Bios + 'static>(
+        mut controller: Controller<P, B>,
+    ) -> Embedded {
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::Builder::new()
+            .name("trol-controller".into())
+            .spawn(move || {
+                // A failing in-memory line means the host end is gone: stop quietly.
+                let _ = controller.run(&flag);
+            })
+            .expect("spawn the controller thread");
+        Embedded {
+            stop,
+            thread: Some(thread),
+        }
+    }
+}
+
+impl Drop for Embedded {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}

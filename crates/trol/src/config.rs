@@ -1,0 +1,271 @@
+//! trol.cfg (manual, "Konfiguration").
+//!
+//! Three entries, one per line: the baud rate, the port, and the tool transform (six
+//! numbers: x y z in mm, yaw pitch roll in radians, separated by blanks or commas). The file
+//! is read from the current directory, or from the file the environment variable
+//! `TROL_CONFIG` names.
+//!
+//! Further settings of ours may follow, one `key = value` per line; they matter only for the
+//! embedded controller (port `sim`):
+//!
+//! | key | value | default |
+//! |---|---|---|
+//! | `time_scale` | how much faster than real time the simulation runs | 1 |
+//! | `locations` | a location file to load (relative to trol.cfg's folder) | none |
+//! | `table_z` | the table plane, mm | 0 |
+//! | `homed` | `yes`: the simulated arm starts homed | no |
+//! | `object` | width of an object between the fingers, mm | none |
+//!
+//! Blank lines and lines starting with `#` are skipped.
+
+use std::path::{Path, PathBuf};
+
+/// The file name looked for in the current directory.
+pub const FILE_NAME: &str = "trol.cfg";
+/// The environment variable that names another file.
+pub const ENV_VAR: &str = "TROL_CONFIG";
+
+/// The settings of trol.cfg.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Baud rate.
+    pub baud: u32,
+    /// The port (a serial device, `socket://host:port`, `listen://host:port`, or `sim`).
+    pub port: String,
+    /// The tool transform.
+    pub tool: [f64; 6],
+    /// Simulation speed-up (port `sim`).
+    pub time_scale: f64,
+    /// Location file (port `sim`).
+    pub locations: Option<PathBuf>,
+    /// Table plane, mm (port `sim`).
+    pub table_z: f64,
+    /// The simulated arm starts homed.
+    pub homed: bool,
+    /// Object width between the fingers, mm.
+    pub object: Option<f64>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            baud: 9600,
+            port: "sim".into(),
+            tool: [0.0; 6],
+            time_scale: 1.0,
+            locations: None,
+            table_z: 0.0,
+            homed: false,
+            object: None,
+        }
+    }
+}
+
+/// A missing or malformed trol.cfg.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConfigError {
+    /// The file.
+    pub file: PathBuf,
+    /// The line (1-based), if the error is in one.
+    pub line: Option<usize>,
+    /// What is wrong and what is expected.
+    pub message: String,
+}
+
+impl std::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{l}: {}", self.file.display(), self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+impl Config {
+    /// Where trol.cfg is: `$TROL_CONFIG`, else `./trol.cfg`.
+    pub fn default_path() -> PathBuf {
+        std::env::var_os(ENV_VAR)
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from(FILE_NAME))
+    }
+
+    /// Read trol.cfg from its default place.
+    pub fn load() -> Result<Config, ConfigError> {
+        Config::from_file(&Config::default_path())
+    }
+
+    /// Read a configuration file.
+    pub fn from_file(path: &Path) -> Result<Config, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            file: path.to_path_buf(),
+            line: None,
+            message: format!(
+                "cannot read it ({e}); trol.cfg holds three lines: the baud rate, the port, \
+                 and the tool transform (x y z yaw pitch roll); set {ENV_VAR} to use another file"
+            ),
+        })?;
+        let mut cfg = Config::parse(&text).map_err(|(line, message)| ConfigError {
+            file: path.to_path_buf(),
+            line: Some(line),
+            message,
+        })?;
+        if let Some(loc) = &cfg.locations {
+            if loc.is_relative() {
+                let dir = path.parent().unwrap_or(Path::new("."));
+                cfg.locations = Some(dir.join(loc));
+            }
+        }
+        Ok(cfg)
+    }
+
+    /// Parse the text of a configuration file; an error is (line, message).
+    pub fn parse(text: &str) -> Result<Config, (usize, String)> {
+        let mut cfg = Config::default();
+        let mut entry = 0;
+        let mut last_line = 0;
+        for (i, raw) in text.lines().enumerate() {
+            let n = i + 1;
+            last_line = n;
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            match entry {
+                0 => {
+                    cfg.baud = line.parse().ok().filter(|b| *b > 0).ok_or((
+                        n,
+                        format!(
+                            "expected the baud rate (a whole number such as 9600), found {line:?}"
+                        ),
+                    ))?;
+                }
+                1 => {
+                    if line.contains(char::is_whitespace) {
+                        return Err((
+                            n,
+                            format!(
+                                "expected the port (a device such as /dev/ttyUSB0 or COM1, \
+                                 socket://HOST:PORT, or sim), found {line:?}"
+                            ),
+                        ));
+                    }
+                    cfg.port = line.to_string();
+                }
+                2 => {
+                    let nums: Vec<&str> = line
+                        .split(|c: char| c.is_whitespace() || c == ',')
+                        .filter(|s| !s.is_empty())
+                        .collect();
+                    let values: Option<Vec<f64>> = nums
+                        .iter()
+                        .map(|s| s.parse::<f64>().ok().filter(|x| x.is_finite()))
+                        .collect();
+                    match values {
+                        Some(v) if v.len() == 6 => cfg.tool.copy_from_slice(&v),
+                        _ => {
+                            return Err((
+                                n,
+                                format!(
+                                    "expected the tool transform: six numbers (x y z in mm, yaw \
+                                     pitch roll in radians) separated by blanks or commas, found {line:?}"
+                                ),
+                            ));
+                        }
+                    }
+                }
+                _ => {
+                    let (key, value) = line.split_once('=').ok_or((
+                        n,
+                        format!("expected `key = value` after the three entries, found {line:?}"),
+                    ))?;
+                    let (key, value) = (key.trim(), value.trim());
+                    let number = |what: &str| {
+                        value
+                            .parse::<f64>()
+                            .ok()
+                            .filter(|x| x.is_finite())
+                            .ok_or((n, format!("{key}: expected {what}, found {value:?}")))
+                    };
+                    match key {
+                        "time_scale" => {
+                            cfg.time_scale = number("a positive number")?;
+                            if cfg.time_scale <= 0.0 {
+                                return Err((n, "time_scale must be positive".into()));
+                            }
+                        }
+                        "locations" => cfg.locations = Some(PathBuf::from(value)),
+                        "table_z" => cfg.table_z = number("a height in mm")?,
+                        "object" => cfg.object = Some(number("a width in mm")?),
+                        "homed" => {
+                            cfg.homed = match value {
+                                "yes" | "true" | "1" => true,
+                                "no" | "false" | "0" => false,
+                                _ => {
+                                    return Err((
+                                        n,
+                                        format!("homed: expected yes or no, found {value:?}"),
+                                    ));
+                                }
+                            }
+                        }
+                        _ => {
+                            return Err((
+                                n,
+                                format!(
+                                    "unknown setting {key:?}; known: time_scale, locations, table_z, homed, object"
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+            entry += 1;
+        }
+        if entry < 3 {
+            let what = ["the baud rate", "the port", "the tool transform"][entry];
+            return Err((
+                last_line + 1,
+                format!("missing entry {}: {what}", entry + 1),
+            ));
+        }
+        Ok(cfg)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_three_entries_and_settings() {
+        let c =
+            Config::parse("38400\n/dev/ttyUSB0\n0, 0, 120.5, 0 0 1.5\ntime_scale = 10\n").unwrap();
+        assert_eq!(c.baud, 38400);
+        assert_eq!(c.port, "/dev/ttyUSB0");
+        assert_eq!(c.tool, [0.0, 0.0, 120.5, 0.0, 0.0, 1.5]);
+        assert_eq!(c.time_scale, 10.0);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_the_form() {
+        let e = Config::parse("fast\nsim\n0 0 0 0 0 0\n").unwrap_err();
+        assert_eq!(e.0, 1);
+        assert!(e.1.contains("baud rate"));
+        let e = Config::parse("9600\nsim\n0 0 0 0 0\n").unwrap_err();
+        assert_eq!(e.0, 3);
+        assert!(e.1.contains("six numbers"));
+        let e = Config::parse("9600\nsim\n").unwrap_err();
+        assert!(e.1.contains("tool transform"), "{e:?}");
+        let e = Config::parse("9600\nsim\n0 0 0 0 0 0\nspeed = 3\n").unwrap_err();
+        assert_eq!(e.0, 4);
+    }
+
+    #[test]
+    fn a_missing_file_is_named() {
+        let e = Config::from_file(Path::new("/nonexistent/trol.cfg")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/trol.cfg"));
+        assert!(e.to_string().contains("three lines"));
+    }
+}

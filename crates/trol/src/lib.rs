@@ -1,0 +1,119 @@
+//! TROL: drive a CRS A465 arm through its C500 controller.
+//!
+//! The Rust API is [`Robot`]: open it on a port (or `sim`, the embedded simulated
+//! controller), then call one method per TROL API function. Errors keep "the controller said
+//! no" ([`Error::Refused`]) apart from "the link failed" ([`Error::Link`]), and
+//! [`Error::code`] gives the manual's return code.
+//!
+//! ```
+//! use trol::{Robot, SimSettings, Tag, PosMode};
+//! let mut robot = Robot::embedded(SimSettings { time_scale: 100.0, ..SimSettings::default() });
+//! robot.home(0)?;
+//! robot.joint(1, 0.5)?;
+//! robot.finish()?;
+//! let joints = robot.position(Tag::Joint, PosMode::Commanded)?;
+//! assert!((joints.to_array6()[0] - 0.5).abs() < 1e-6);
+//! # Ok::<(), trol::Error>(())
+//! ```
+//!
+//! The C API of the manual (`include/trol.h`) is in [`ffi`]; `cargo build --release` builds
+//! it as `libtrol.so` and `libtrol.a`.
+
+#![warn(missing_docs)]
+
+pub mod config;
+pub mod ffi;
+mod robot;
+
+pub use config::{Config, ConfigError};
+pub use robot::{Error, Result, Robot, timeout_policy};
+pub use trol_controller::SimSettings;
+pub use trol_proto::application::codes::Command;
+pub use trol_proto::application::errors;
+pub use trol_proto::application::{FinishMode, LocName, Location, PosMode, Tag};
+
+use trol_a465::arm::{ArmSettings, parse_locations};
+use trol_proto::application::errors::trol_code_name;
+
+/// The settings of the embedded controller from trol.cfg.
+pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
+    let locations = match &cfg.locations {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| Error::Setup(format!("{}: {e}", path.display())))?;
+            parse_locations(&text).map_err(|e| Error::Setup(format!("{}: {e}", path.display())))?
+        }
+        None => Vec::new(),
+    };
+    Ok(SimSettings {
+        arm: ArmSettings {
+            table_z: cfg.table_z,
+            object_width: cfg.object,
+            homed: cfg.homed,
+        },
+        time_scale: cfg.time_scale,
+        locations,
+        tool: cfg.tool,
+    })
+}
+
+/// A return value with its name: `0 (success)`, `-32102 (TROL_ERR_LOCATION)`,
+/// `-1 (BIOS_NOT_HOMED)`.
+pub fn describe(value: i16) -> String {
+    if let Some(name) = trol_code_name(value) {
+        return format!("{value} ({name})");
+    }
+    match trol_a465::arm::code::describe(value) {
+        Some((name, _)) if value != 0 => format!("{value} ({name})"),
+        _ if value == 0 => "0 (success)".to_string(),
+        _ => format!("{value} (BIOS code)"),
+    }
+}
+
+/// Check that the server answers (InitTROL(1)): one GetStatus transaction.
+pub fn check_server(robot: &mut Robot) -> Result<()> {
+    robot.status().map(drop).map_err(|e| {
+        Error::Setup(format!(
+            "the controller's TROL server does not answer ({e}); check the cable and the port, \
+             that the baud rate in trol.cfg matches the controller, and that `trol init` has \
+             activated the server"
+        ))
+    })
+}
+
+/// Bring the controller into server mode and apply the tool transform (InitTROL(0), `trol
+/// init`): the activation sequence of docs/protocol.md, then GetStatus, then
+/// SetToolTransform.
+pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
+    if check_server(robot).is_err() {
+        let port = robot.transactor_mut().driver_mut().port_mut();
+        let io = |e: std::io::Error| Error::Setup(format!("port error: {e}"));
+        port.send(b"\x03\r").map_err(io)?;
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        port.flush_input().map_err(io)?;
+        port.send(trol_controller::terminal::ACTIVATE.as_bytes())
+            .map_err(io)?;
+        port.send(b"\r").map_err(io)?;
+        let mut seen = Vec::new();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(3);
+        let mut buf = [0u8; 256];
+        while !String::from_utf8_lossy(&seen)
+            .contains(trol_controller::terminal::ACTIVATED.trim_end())
+        {
+            let n = port.recv(&mut buf, deadline).map_err(io)?;
+            if n == 0 {
+                return Err(Error::Setup(format!(
+                    "the controller did not answer the activation line `{}` (it answered {:?}); \
+                     check the cable, the port and the baud rate in trol.cfg",
+                    trol_controller::terminal::ACTIVATE,
+                    String::from_utf8_lossy(&seen)
+                )));
+            }
+            seen.extend_from_slice(&buf[..n]);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        port.flush_input().map_err(io)?;
+        check_server(robot)?;
+    }
+    robot.set_tool_transform(tool)
+}

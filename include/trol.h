@@ -1,0 +1,182 @@
+/*
+ * trol.h - the TROL API (TU Vienna Robot Control Library) for the CRS A465 / C500.
+ *
+ * Names, types and codes as in the manual (Melzer, TROL 2.1, 1998): chapter "TROL API",
+ * "Rückgabewerte und Fehlercodes", "Callback-Routinen". Build against libtrol:
+ *
+ *     cc app.c -Iinclude -Ltarget/release -ltrol -lpthread -ldl -lm
+ *
+ * Every function returns the manual's codes: 0 = success, > -32000 a BIOS code,
+ * <= -32000 a TROL code. Values the manual names without giving them (FINISH_*, POS_COMMANDED,
+ * POS_ACT, RECOVERY_*, INITTROL_*) are fixed in docs/protocol.md.
+ */
+#ifndef TROL_H
+#define TROL_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* troltype.h: the manual's sizes on every platform. */
+typedef int32_t  TLONG;
+typedef uint32_t TULONG;
+typedef int16_t  TINT;
+typedef uint16_t TUINT;
+typedef uint16_t TBOOL;
+typedef int8_t   TCHAR;
+typedef uint8_t  TUCHAR;
+typedef uint8_t  TUCCHAR;
+
+#define POS_PREC  0  /* precision point (motor) location */
+#define POS_JOINT 1  /* joint (angular) location */
+#define POS_CART  2  /* cartesian location */
+
+#define POS_COMMANDED 0
+#define POS_ACT       1
+
+#define FINISH_STATUS 0
+#define FINISH_WAIT   1
+
+#define RECOVERY_SUCCESS 0
+#define RECOVERY_FAIL    1
+
+#define INITTROL_SUCCESS 0
+#define INITTROL_FAILURE 1
+
+/* Layer-4 codes. */
+#define TROL_ERR_COMM      (-32001)
+#define TROL_ERR_BAD_RSIZE (-32002)
+#define TROL_ERR_ARG_RANGE (-32003)
+#define TROL_ERR_UNKNOWN   (-32051)
+#define TROL_ERR_BAD_CSIZE (-32052)
+#define TROL_RETVAL_RANGE  (-32101)
+#define TROL_ERR_LOCATION  (-32102)
+
+/* Layer-3 codes (TransSR / TransRS). */
+#define TRANS_SUCCESS     0x00
+#define TRANS_ERR_SEND    0x01
+#define TRANS_ERR_RECEIVE 0x02
+#define TRANS_TIMEOUT     0x03
+
+/* Layer-2 codes: NAK codes, SendData and ReceiveData return values (GetLastCommErr;
+ * mask with 0xff, the high byte holds the NAK code for ERR_NAK and ERR_ABORT). */
+#define ERR_FID       0x01
+#define ERR_ETB       0x02
+#define ERR_TOO_LARGE 0x04
+#define ERR_BCC       0xf1
+#define ERR_STX       0xf2
+#define ERR_ETX       0xf4
+#define ERR_SOH       0xf8
+#define ERR_WRONG_CCHAR    0x01
+#define ERR_NAK            0x02
+#define ERR_TIMEOUT_ENQ    0x03
+#define ERR_TIMEOUT_NAK    0x04
+#define ERR_TIMEOUT_ETX    0x05
+#define ERR_LIMIT_EXCEEDED 0x07
+#define ERR_ABORT          0x80
+#define ERR_TIMEOUT_SOH    0x81
+#define ERR_TIMEOUT_STX    0x82
+#define ERR_TIMEOUT_TERMC  0x83
+#define ERR_TIMEOUT_EOT    0x84
+#define ERR_BAD_ENQ        0x85
+#define ERR_BAD_EOT        0x86
+
+/* Command codes (commands.h). */
+#define TROL_APPRO 0
+#define TROL_APPRO_II 1
+#define TROL_CLOSE 2
+#define TROL_DEPART 3
+#define TROL_FINISH 4
+#define TROL_GRIP 5
+#define TROL_HALT 6
+#define TROL_HOME 7
+#define TROL_JOG 8
+#define TROL_JOINT 9
+#define TROL_MA 10
+#define TROL_MI 11
+#define TROL_MOVE 12
+#define TROL_MOVE_II 13
+#define TROL_OPEN 14
+#define TROL_READY 15
+#define TROL_SET_TOOL_TRANSFORM 16
+#define TROL_SPEED 17
+#define LAST_CAT1_CODE 17
+#define LAST_CAT2_CODE 63
+#define TROL_GET_POSITION 128
+#define LAST_CAT3_CODE 128
+#define TROL_TERMINATE_PCP 192
+#define TROL_GET_STATUS 193
+#define LAST_CAT4_CODE 193
+
+/* The manual requires structure alignment off or 16 bit. */
+#pragma pack(push, 2)
+typedef struct
+{
+    TUCCHAR tag;      /* POS_PREC, POS_JOINT or POS_CART */
+    TUCCHAR numDims;  /* number of relevant coordinates */
+    union
+    {
+        TLONG prec[8];   /* motor location */
+        float joint[8];  /* joint location */
+        float cart[8];   /* cartesian location */
+    } data;
+}
+SLocData;
+#pragma pack(pop)
+
+/* 8 bytes, blank-padded, not NUL-terminated (a shorter NUL-terminated string is accepted). */
+typedef TUCCHAR TLocName[8];
+
+/* A message handed to an error handler. */
+typedef struct { TUINT numBytes; TUCHAR *data; } SInData;
+typedef SInData SOutData;
+
+/* CAT1 */
+TINT TROLAppro(TLocName locName, SLocData *pDisp, TUINT straight);
+TINT TROLApproII(SLocData *pTarget, SLocData *pDisp, TUINT straight);
+TINT TROLClose(TUINT perForce);
+TINT TROLDepart(SLocData *pDisp, TUINT straight);
+TINT TROLFinish(TUINT mode);
+TINT TROLGrip(TUINT dist);
+TINT TROLHalt(void);
+TINT TROLHome(TUINT axis);
+TINT TROLJog(SLocData *pDisp, TUINT straight);
+TINT TROLJoint(TUINT jointNum, float radians);
+TINT TROLMA(SLocData *pTarget);
+TINT TROLMI(SLocData *pDisp);
+TINT TROLMove(TLocName locName, TUINT straight);
+TINT TROLMoveII(SLocData *pTarget, TUINT straight);
+TINT TROLOpen(TUINT perForce);
+TINT TROLReady(void);
+TINT TROLSetToolTransform(SLocData *md);
+TINT TROLSpeed(TUINT perMaxSpeed);
+/* CAT3 */
+TINT TROLGetPosition(SLocData *pos, TINT mode);
+/* CAT4 */
+TINT TROLTerminatePCP(void);
+TINT TROLGetStatus(int *lastBIOSRetVal);
+
+/* Other functions */
+TUINT InitTROL(TUINT serOnly);
+TUINT CleanupTROL(void);
+void SetL3_TO_Intervall(TUINT TO_Intervall);
+void SetDelay(TUINT delay);           /* milliseconds between two bytes sent */
+TUINT GetLastCommErr(void);
+
+/* Error handlers (callback.c): install your own; NULL restores the default. */
+typedef TUINT (*TROLErrOnSendFn)(SInData *in, TUINT *PCI);
+typedef TUINT (*TROLErrOnReceiveFn)(SOutData *out, TUINT *PCI);
+typedef TUINT (*TROLErrAppTimeOutFn)(SInData *in);
+typedef TINT (*TROLFatalErrorFn)(TUINT command, TINT errorCode);
+void TROLSetErrOnSend(TROLErrOnSendFn handler);
+void TROLSetErrOnReceive(TROLErrOnReceiveFn handler);
+void TROLSetErrAppTimeOut(TROLErrAppTimeOutFn handler);
+void TROLSetFatalError(TROLFatalErrorFn handler);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TROL_H */

@@ -92,7 +92,10 @@ impl<P: Port> Server<P> {
                 Some(ResponderEvent::Request) => {
                     let reply = execute(self.responder.request());
                     reply_len = reply.len();
-                    self.responder.respond(&reply, now);
+                    // Executing may take long (Finish waits for the arm): time the reply
+                    // from when it is ready, not from when the request arrived.
+                    let ready = self.driver.clock().now();
+                    self.responder.respond(&reply, ready);
                 }
                 Some(ResponderEvent::Done) => return Ok(ServerEvent::Executed),
                 Some(ResponderEvent::NeedDecision(failure)) => {

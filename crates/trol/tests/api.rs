@@ -1,0 +1,465 @@
+//! The API over the whole stack (Rust API, layers 1-4, the controller's server, the
+//! simulated A465): every function, every error code on the side that detects it,
+//! exactly-once after a lost reply or a lost request, and a command added only here.
+
+use std::io;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use trol::errors::*;
+use trol::{Error, Location, PosMode, Robot, SimSettings, Tag};
+use trol_a465::arm::Stored;
+use trol_controller::{Context, Handler, Pcp, SimBios};
+use trol_port::Port;
+use trol_proto::link::{LinkConfig, Timeouts};
+
+fn quick() -> LinkConfig {
+    LinkConfig {
+        timeouts: Timeouts::uniform(Duration::from_millis(150)),
+        ..LinkConfig::default()
+    }
+}
+
+fn settings() -> SimSettings {
+    SimSettings {
+        time_scale: 50.0,
+        locations: vec![
+            (
+                "p1".into(),
+                Stored::Cart([400.0, 0.0, 300.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]),
+            ),
+            ("#zero".into(), Stored::Prec([0; 6])),
+        ],
+        ..SimSettings::default()
+    }
+}
+
+/// A port whose two directions can be cut: `deaf` drops what arrives, `mute` what is sent.
+struct Switchable<P> {
+    inner: P,
+    deaf: Arc<AtomicBool>,
+    mute: Arc<AtomicBool>,
+    deaf_after_eot: Arc<AtomicBool>,
+}
+
+impl<P: Port> Port for Switchable<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        if self.mute.load(Ordering::SeqCst) {
+            return Ok(());
+        }
+        self.inner.send(bytes)?;
+        // The request's EOT went out: from now on lose what comes back (the reply).
+        if bytes.contains(&0x87) && self.deaf_after_eot.swap(false, Ordering::SeqCst) {
+            self.deaf.store(true, Ordering::SeqCst);
+        }
+        Ok(())
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        if self.deaf.load(Ordering::SeqCst) {
+            Ok(0)
+        } else {
+            Ok(n)
+        }
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "switchable".into()
+    }
+}
+
+struct Rig {
+    robot: Robot,
+    deaf: Arc<AtomicBool>,
+    mute: Arc<AtomicBool>,
+    deaf_after_eot: Arc<AtomicBool>,
+}
+
+fn rig_with(pcp: Pcp<SimBios>) -> Rig {
+    let (line, handle) = trol_controller::embedded_with(pcp, quick());
+    let deaf = Arc::new(AtomicBool::new(false));
+    let mute = Arc::new(AtomicBool::new(false));
+    let deaf_after_eot = Arc::new(AtomicBool::new(false));
+    let port = Switchable {
+        inner: line,
+        deaf: deaf.clone(),
+        mute: mute.clone(),
+        deaf_after_eot: deaf_after_eot.clone(),
+    };
+    let mut robot = Robot::over(Box::new(port), quick(), Some(handle));
+    robot.set_reply_timeout_tenths(10);
+    Rig {
+        robot,
+        deaf,
+        mute,
+        deaf_after_eot,
+    }
+}
+
+fn rig() -> Rig {
+    rig_with(Pcp::new(SimBios::new(settings())))
+}
+
+fn joints(r: &mut Robot) -> [f64; 6] {
+    r.position(Tag::Joint, PosMode::Commanded)
+        .unwrap()
+        .to_array6()
+}
+
+#[test]
+fn every_api_function_over_the_whole_stack() {
+    let mut rig = rig();
+    let r = &mut rig.robot;
+    // Motion before Home is refused by the BIOS, and GetStatus says it was called.
+    let e = r.joint(1, 0.1).unwrap_err();
+    assert!(e.is_refusal());
+    assert_eq!(e.code(), trol_a465::arm::code::NOT_HOMED);
+    assert_eq!(r.status().unwrap(), (true, trol_a465::arm::code::NOT_HOMED));
+    r.home(0).unwrap();
+    assert!(r.is_moving().unwrap());
+    r.finish().unwrap();
+    assert!(!r.is_moving().unwrap());
+    r.speed(150).unwrap();
+    r.joint(1, 0.3).unwrap();
+    r.finish().unwrap();
+    assert!((joints(r)[0] - 0.3).abs() < 1e-6);
+    r.mi(&[0.1, 0.2]).unwrap();
+    r.finish().unwrap();
+    let q = joints(r);
+    assert!((q[0] - 0.4).abs() < 1e-6 && (q[1] - 0.2).abs() < 1e-6);
+    r.ma(&[0.0, 0.3, 1.2, 0.0, 0.3]).unwrap();
+    r.finish().unwrap();
+    assert!((joints(r)[2] - 1.2).abs() < 1e-6);
+    r.move_to("p1", false).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!(
+        (c[0] - 400.0).abs() < 1e-2 && (c[2] - 300.0).abs() < 1e-2,
+        "{c:?}"
+    );
+    r.depart(&[-50.0], true).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!(
+        (c[2] - 350.0).abs() < 1e-2,
+        "tool x points down: depart -50 goes up: {c:?}"
+    );
+    r.appro("p1", &[-20.0], true).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!((c[2] - 320.0).abs() < 1e-2, "{c:?}");
+    r.jog(&[10.0, 5.0], true).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!(
+        (c[0] - 410.0).abs() < 1e-2 && (c[1] - 5.0).abs() < 1e-2,
+        "{c:?}"
+    );
+    let target = Location::Cart(vec![
+        420.0,
+        50.0,
+        250.0,
+        0.0,
+        std::f32::consts::FRAC_PI_2,
+        0.0,
+    ]);
+    r.move_ii(&target, false).unwrap();
+    r.appro_ii(&target, &[-30.0], false).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!((c[2] - 280.0).abs() < 1e-2, "{c:?}");
+    // Precision point round trip.
+    let prec = r.position(Tag::Prec, PosMode::Commanded).unwrap();
+    r.ready().unwrap();
+    r.finish().unwrap();
+    assert!(joints(r).iter().all(|x| x.abs() < 1e-9));
+    r.move_ii(&prec, false).unwrap();
+    r.finish().unwrap();
+    assert_eq!(r.position(Tag::Prec, PosMode::Commanded).unwrap(), prec);
+    // Actual settles on commanded once the arm stands.
+    std::thread::sleep(Duration::from_millis(20));
+    let act = r.position(Tag::Prec, PosMode::Actual).unwrap();
+    assert_eq!(act, prec);
+    // Halt in mid-motion: the arm stops and stays.
+    r.speed(10).unwrap();
+    r.joint(1, 1.0).unwrap();
+    std::thread::sleep(Duration::from_millis(20));
+    r.halt().unwrap();
+    let stopped = joints(r);
+    assert!(!r.is_moving().unwrap());
+    std::thread::sleep(Duration::from_millis(20));
+    assert_eq!(joints(r), stopped);
+    // Gripper.
+    r.close(60).unwrap();
+    r.finish().unwrap();
+    r.open_gripper(100).unwrap();
+    r.grip(25).unwrap();
+    r.finish().unwrap();
+    // Tool transform: the TCP moves 100 mm along the tool x axis.
+    let before = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    r.set_tool_transform(&[100.0]).unwrap();
+    let after = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    let moved = ((after[0] - before[0]).powi(2)
+        + (after[1] - before[1]).powi(2)
+        + (after[2] - before[2]).powi(2))
+    .sqrt();
+    assert!((moved - 100.0).abs() < 1e-2, "{moved}");
+    r.terminate_pcp().unwrap();
+}
+
+#[test]
+fn every_error_code_on_the_side_that_detects_it() {
+    let mut rig = rig_with(extended_pcp());
+    let r = &mut rig.robot;
+    // Host: TROL_ERR_ARG_RANGE, nothing sent.
+    for e in [
+        r.close(0).unwrap_err(),
+        r.open_gripper(101).unwrap_err(),
+        r.grip(51).unwrap_err(),
+        r.speed(151).unwrap_err(),
+        r.home(7).unwrap_err(),
+        r.joint(0, 0.1).unwrap_err(),
+        r.jog(&[1.0, 2.0, 3.0, 4.0], false).unwrap_err(),
+        r.move_to("9bad", false).unwrap_err(),
+        r.move_ii(&Location::Joint(vec![0.0]), false).unwrap_err(),
+        r.mi(&[]).unwrap_err(),
+    ] {
+        assert!(matches!(e, Error::Argument(_)), "{e}");
+        assert_eq!(e.code(), TROL_ERR_ARG_RANGE);
+    }
+    // Controller: TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, TROL_ERR_ARG_RANGE, TROL_ERR_LOCATION.
+    assert_eq!(
+        r.transact_raw(&[99]).unwrap(),
+        TROL_ERR_UNKNOWN.to_le_bytes()
+    );
+    assert_eq!(r.status().unwrap(), (false, TROL_ERR_UNKNOWN));
+    assert_eq!(
+        r.transact_raw(&[200]).unwrap(),
+        TROL_ERR_UNKNOWN.to_le_bytes()
+    );
+    assert_eq!(
+        r.transact_raw(&[6, 0]).unwrap(),
+        TROL_ERR_BAD_CSIZE.to_le_bytes()
+    );
+    assert_eq!(r.status().unwrap(), (false, TROL_ERR_BAD_CSIZE));
+    assert_eq!(
+        r.transact_raw(&[2, 0]).unwrap(),
+        TROL_ERR_ARG_RANGE.to_le_bytes()
+    );
+    let e = r.move_to("nowhere", false).unwrap_err();
+    assert!(e.is_refusal());
+    assert_eq!(e.code(), TROL_ERR_LOCATION);
+    assert_eq!(r.status().unwrap(), (false, TROL_ERR_LOCATION));
+    assert_eq!(
+        r.appro("nowhere", &[1.0], false).unwrap_err().code(),
+        TROL_ERR_LOCATION
+    );
+    // Controller: TROL_RETVAL_RANGE, the real value through GetStatus.
+    let e = r.cat1_transaction(&[ODD_BIOS], &[]).unwrap_err();
+    assert_eq!(e.code(), TROL_RETVAL_RANGE);
+    assert_eq!(r.status().unwrap(), (true, -32500));
+    // Host: TROL_ERR_BAD_RSIZE.
+    let e = r.cat1_transaction(&[BAD_REPLY], &[]).unwrap_err();
+    assert!(matches!(e, Error::BadReply(_)));
+    assert_eq!(e.code(), TROL_ERR_BAD_RSIZE);
+    // Host: TROL_ERR_COMM, the link is gone.
+    rig.deaf.store(true, Ordering::SeqCst);
+    let e = rig.robot.halt().unwrap_err();
+    assert!(matches!(e, Error::Link { .. }), "{e}");
+    assert_eq!(e.code(), TROL_ERR_COMM);
+    assert!(rig.robot.last_comm_error().is_some());
+}
+
+/// A relative move whose reply is lost: GetStatus afterwards says the BIOS was called and
+/// with what result, so the application does not repeat it.
+#[test]
+fn exactly_once_when_the_reply_is_lost() {
+    let mut rig = rig();
+    rig.robot.home(0).unwrap();
+    rig.robot.finish().unwrap();
+    rig.deaf_after_eot.store(true, Ordering::SeqCst);
+    let e = rig.robot.joint(1, 0.25).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM);
+    rig.deaf.store(false, Ordering::SeqCst);
+    // Give both link ends their reset time, then ask.
+    std::thread::sleep(Duration::from_millis(800));
+    let _ = rig
+        .robot
+        .transactor_mut()
+        .driver_mut()
+        .port_mut()
+        .flush_input();
+    assert_eq!(rig.robot.status().unwrap(), (true, 0), "the Joint ran once");
+    rig.robot.finish().unwrap();
+    assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6);
+}
+
+/// The request itself is lost: GetStatus still describes the command before, so the
+/// application knows the move did not run and sends it again.
+#[test]
+fn exactly_once_when_the_request_is_lost() {
+    let mut rig = rig();
+    rig.robot.home(0).unwrap();
+    rig.robot.finish().unwrap();
+    // A command that leaves a status the move cannot leave.
+    assert_eq!(
+        rig.robot.move_to("nowhere", false).unwrap_err().code(),
+        TROL_ERR_LOCATION
+    );
+    rig.mute.store(true, Ordering::SeqCst);
+    assert_eq!(rig.robot.joint(1, 0.25).unwrap_err().code(), TROL_ERR_COMM);
+    rig.mute.store(false, Ordering::SeqCst);
+    std::thread::sleep(Duration::from_millis(800));
+    let _ = rig
+        .robot
+        .transactor_mut()
+        .driver_mut()
+        .port_mut()
+        .flush_input();
+    assert_eq!(
+        rig.robot.status().unwrap(),
+        (false, TROL_ERR_LOCATION),
+        "the Joint never ran"
+    );
+    assert_eq!(joints(&mut rig.robot)[0], 0.0);
+    rig.robot.joint(1, 0.25).unwrap();
+    rig.robot.finish().unwrap();
+    assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6);
+}
+
+// Extending TROL with new commands, as the manual's section "Erweiterung von TROL um eigene
+// Kommandos" describes, without touching the library: a code in its class's range (the
+// next free one), a record, a handler in the dispatch table, and an API function.
+
+/// CAT1: a BIOS call that returns a value in TROL's range (record: the code alone).
+const ODD_BIOS: u8 = trol_proto::application::codes::LAST_CAT1_CODE + 1;
+/// CAT2: read the finger distance (record: the code; reply: i16 0, f32 mm).
+const GET_FINGERS: u8 = 64;
+/// CAT2: a handler that answers with a reply of the wrong size.
+const BAD_REPLY: u8 = 65;
+
+fn odd_bios(_bios: &mut SimBios, bytes: &[u8]) -> Result<i16, i16> {
+    if bytes.len() != 1 {
+        return Err(TROL_ERR_BAD_CSIZE);
+    }
+    Ok(-32500)
+}
+
+fn get_fingers(ctx: &mut Context<'_, SimBios>, bytes: &[u8]) -> Vec<u8> {
+    if bytes.len() != 1 {
+        ctx.status.record_refusal(TROL_ERR_BAD_CSIZE);
+        return TROL_ERR_BAD_CSIZE.to_le_bytes().to_vec();
+    }
+    let now = ctx.bios.now();
+    let mm = ctx.bios.arm().fingers(now) as f32;
+    let mut out = ctx.status.record_bios(0).to_le_bytes().to_vec();
+    out.extend_from_slice(&mm.to_le_bytes());
+    out
+}
+
+fn bad_reply(_ctx: &mut Context<'_, SimBios>, _bytes: &[u8]) -> Vec<u8> {
+    vec![0, 0, 0]
+}
+
+fn extended_pcp() -> Pcp<SimBios> {
+    let mut pcp = Pcp::new(SimBios::new(settings()));
+    pcp.register(ODD_BIOS, Handler::Cat1(odd_bios)).unwrap();
+    pcp.register(GET_FINGERS, Handler::Other(get_fingers))
+        .unwrap();
+    pcp.register(BAD_REPLY, Handler::Other(bad_reply)).unwrap();
+    // The table rejects gaps and handlers of the wrong class.
+    assert!(pcp.register(70, Handler::Other(bad_reply)).is_err());
+    assert!(pcp.register(66, Handler::Cat1(odd_bios)).is_err());
+    assert_eq!(pcp.last_code(trol_proto::application::Class::Cat2), 65);
+    pcp
+}
+
+/// The added API function.
+fn get_fingers_api(robot: &mut Robot) -> trol::Result<f32> {
+    let reply = robot.transact_raw(&[GET_FINGERS])?;
+    match reply.as_slice() {
+        [0, 0, a, b, c, d] => Ok(f32::from_le_bytes([*a, *b, *c, *d])),
+        [a, b] => Err(Error::Refused {
+            command: trol::Command::Halt,
+            code: i16::from_le_bytes([*a, *b]),
+        }),
+        _ => Err(Error::Setup("bad reply".into())),
+    }
+}
+
+#[test]
+fn a_command_added_only_in_the_tests_works_end_to_end() {
+    let mut rig = rig_with(extended_pcp());
+    assert_eq!(get_fingers_api(&mut rig.robot).unwrap(), 50.0);
+    rig.robot.grip(20).unwrap();
+    rig.robot.finish().unwrap();
+    assert_eq!(get_fingers_api(&mut rig.robot).unwrap(), 20.0);
+    assert_eq!(rig.robot.status().unwrap(), (true, 0));
+    // The built-in commands are untouched.
+    assert_eq!(
+        rig.robot.move_to("nowhere", false).unwrap_err().code(),
+        TROL_ERR_LOCATION
+    );
+}
+
+#[test]
+fn the_default_err_app_timeout_waits_for_a_long_finish() {
+    // Reply timeout 0.1 s; a homing that takes 2 s (x 6 axes / 50) must not time out.
+    let mut rig = rig();
+    rig.robot.set_reply_timeout_tenths(1);
+    rig.robot.home(0).unwrap();
+    rig.robot.finish().unwrap();
+    assert!(!rig.robot.is_moving().unwrap());
+}
+
+#[test]
+fn robots_from_a_config_file() {
+    let dir = std::env::temp_dir().join(format!("trol-cfg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locs.txt\nhomed = yes\n",
+    )
+    .unwrap();
+    let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
+    let mut r = Robot::from_config(&cfg).unwrap();
+    r.move_to("p2", false).unwrap();
+    r.finish().unwrap();
+    let c = r
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!((c[0] - 420.0).abs() < 1e-2, "{c:?}");
+    std::fs::write(dir.join("bad.cfg"), "9600\nsim\n1 2 3\n").unwrap();
+    let e = trol::Config::from_file(&dir.join("bad.cfg")).unwrap_err();
+    assert_eq!(e.line, Some(3));
+    assert!(e.to_string().contains("bad.cfg:3"));
+}

@@ -15,7 +15,25 @@ fn lib_dir() -> PathBuf {
     exe.parent().unwrap().parent().unwrap().to_path_buf()
 }
 
+/// `cargo test` builds the trol crate as a Rust library only; build libtrol.a (and .so) too,
+/// once, with the same cargo and profile (a no-op when it is up to date).
+fn build_libtrol() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let mut cmd = Command::new(cargo);
+        cmd.args(["build", "-p", "trol", "--lib", "--manifest-path"])
+            .arg(root().join("Cargo.toml"));
+        if lib_dir().ends_with("release") {
+            cmd.arg("--release");
+        }
+        let status = cmd.status().expect("run cargo to build libtrol");
+        assert!(status.success(), "building libtrol failed");
+    });
+}
+
 fn build_and_run(name: &str) -> String {
+    build_libtrol();
     let root = root();
     let lib = lib_dir();
     assert!(

@@ -23,8 +23,8 @@ pub enum Error {
     /// the controller detected (TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, TROL_ERR_LOCATION,
     /// TROL_RETVAL_RANGE, TROL_ERR_ARG_RANGE).
     Refused {
-        /// The command.
-        command: Command,
+        /// The command's code (a built-in one, or one an application added).
+        command: u8,
         /// The value.
         code: i16,
     },
@@ -38,7 +38,12 @@ pub enum Error {
         error: TransError,
     },
     /// The reply did not fit the command (TROL_ERR_BAD_RSIZE).
-    BadReply(ReplyError),
+    BadReply {
+        /// The command's code.
+        command: u8,
+        /// The reply's length.
+        len: usize,
+    },
     /// The port could not be opened, or the configuration is wrong.
     Setup(String),
 }
@@ -50,7 +55,7 @@ impl Error {
             Error::Refused { code, .. } => *code,
             Error::Argument(_) => TROL_ERR_ARG_RANGE,
             Error::Link { .. } | Error::Setup(_) => TROL_ERR_COMM,
-            Error::BadReply(_) => TROL_ERR_BAD_RSIZE,
+            Error::BadReply { .. } => TROL_ERR_BAD_RSIZE,
         }
     }
 
@@ -64,20 +69,45 @@ impl std::fmt::Display for Error {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Error::Refused { command, code } => {
-                write!(f, "{command} returned {}", crate::describe(*code))
+                write!(
+                    f,
+                    "{} returned {}",
+                    command_name(*command),
+                    crate::describe(*code)
+                )
             }
             Error::Argument(e) => write!(f, "{e}"),
             Error::Link { command, error } => match command {
                 Some(c) => write!(f, "TROL_ERR_COMM: {c}: {error}"),
                 None => write!(f, "TROL_ERR_COMM: {error}"),
             },
-            Error::BadReply(e) => write!(f, "{e}"),
+            Error::BadReply { command, len } => write!(
+                f,
+                "TROL_ERR_BAD_RSIZE: a reply of {len} bytes does not fit {}",
+                command_name(*command)
+            ),
             Error::Setup(why) => write!(f, "{why}"),
         }
     }
 }
 
 impl std::error::Error for Error {}
+
+fn command_name(code: u8) -> String {
+    match Command::from_code(code) {
+        Some(c) => c.to_string(),
+        None => format!("command {code}"),
+    }
+}
+
+impl From<ReplyError> for Error {
+    fn from(e: ReplyError) -> Self {
+        Error::BadReply {
+            command: e.command.code(),
+            len: e.len,
+        }
+    }
+}
 
 /// Results of the API.
 pub type Result<T> = std::result::Result<T, Error>;
@@ -188,22 +218,22 @@ impl Robot {
     /// The manual's Cat1Transaction: send a CAT1 request; its one-word reply is returned
     /// (0 as `Ok`, anything else as [`Error::Refused`] unless `ok_values` lists it).
     pub fn cat1_transaction(&mut self, request: &[u8], ok_values: &[i16]) -> Result<i16> {
-        let command = request.first().and_then(|c| Command::from_code(*c));
+        let command = request.first().copied().unwrap_or_default();
         let reply = self.transact_raw(request)?;
         let value = match reply.as_slice() {
             [a, b] => i16::from_le_bytes([*a, *b]),
             _ => {
-                return Err(Error::BadReply(ReplyError {
-                    command: command.unwrap_or(Command::Halt),
+                return Err(Error::BadReply {
+                    command,
                     len: reply.len(),
-                }));
+                });
             }
         };
         if value == 0 || ok_values.contains(&value) {
             Ok(value)
         } else {
             Err(Error::Refused {
-                command: command.unwrap_or(Command::Halt),
+                command,
                 code: value,
             })
         }
@@ -220,17 +250,20 @@ impl Robot {
                 command: Some(command),
                 error,
             })?;
-        Reply::decode(command, &bytes).map_err(Error::BadReply)
+        Ok(Reply::decode(command, &bytes)?)
     }
 
     fn cat1(&mut self, req: Request, ok: &[i16]) -> Result<i16> {
         let command = req.command();
         match self.request(&req)? {
             Reply::Code(v) if v == 0 || ok.contains(&v) => Ok(v),
-            Reply::Code(code) => Err(Error::Refused { command, code }),
-            other => Err(Error::Refused {
-                command,
-                code: other.value(),
+            Reply::Code(code) => Err(Error::Refused {
+                command: command.code(),
+                code,
+            }),
+            other => Err(Error::BadReply {
+                command: command.code(),
+                len: other.encode().len(),
             }),
         }
     }
@@ -381,13 +414,13 @@ impl Robot {
         match self.request(&Request::GetPosition { tag, mode })? {
             Reply::Position(loc) if loc.tag() == tag => Ok(loc),
             Reply::Code(code) => Err(Error::Refused {
-                command: Command::GetPosition,
+                command: Command::GetPosition.code(),
                 code,
             }),
-            _ => Err(Error::BadReply(ReplyError {
-                command: Command::GetPosition,
-                len: 0,
-            })),
+            other => Err(Error::BadReply {
+                command: Command::GetPosition.code(),
+                len: other.encode().len(),
+            }),
         }
     }
 
@@ -402,13 +435,13 @@ impl Robot {
         match self.request(&Request::GetStatus)? {
             Reply::Status { bios_called, last } => Ok((bios_called, last)),
             Reply::Code(code) => Err(Error::Refused {
-                command: Command::GetStatus,
+                command: Command::GetStatus.code(),
                 code,
             }),
-            Reply::Position(_) => Err(Error::BadReply(ReplyError {
-                command: Command::GetStatus,
-                len: 0,
-            })),
+            other => Err(Error::BadReply {
+                command: Command::GetStatus.code(),
+                len: other.encode().len(),
+            }),
         }
     }
 }

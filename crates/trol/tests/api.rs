@@ -287,7 +287,16 @@ fn every_error_code_on_the_side_that_detects_it() {
     assert_eq!(r.status().unwrap(), (true, -32500));
     // Host: TROL_ERR_BAD_RSIZE.
     let e = r.cat1_transaction(&[BAD_REPLY], &[]).unwrap_err();
-    assert!(matches!(e, Error::BadReply(_)));
+    assert!(
+        matches!(
+            e,
+            Error::BadReply {
+                command: BAD_REPLY,
+                len: 3
+            }
+        ),
+        "{e}"
+    );
     assert_eq!(e.code(), TROL_ERR_BAD_RSIZE);
     // Host: TROL_ERR_COMM, the link is gone.
     rig.deaf.store(true, Ordering::SeqCst);
@@ -407,7 +416,7 @@ fn get_fingers_api(robot: &mut Robot) -> trol::Result<f32> {
     match reply.as_slice() {
         [0, 0, a, b, c, d] => Ok(f32::from_le_bytes([*a, *b, *c, *d])),
         [a, b] => Err(Error::Refused {
-            command: trol::Command::Halt,
+            command: GET_FINGERS,
             code: i16::from_le_bytes([*a, *b]),
         }),
         _ => Err(Error::Setup("bad reply".into())),

@@ -97,13 +97,6 @@ fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> Pose {
 
 const HALF_PI: f64 = PI / 2.0;
 
-/// The rotation of the first three joints (DH frame 3 in the base frame).
-fn r03(q1: f64, q2: f64, q3: f64) -> DMat3 {
-    dh(q1, D1, 0.0, -HALF_PI).rot
-        * dh(q2 - HALF_PI, 0.0, A2, 0.0).rot
-        * dh(q3 - HALF_PI, 0.0, 0.0, -HALF_PI).rot
-}
-
 /// DH frame 6 (the flange, z out of it) in the base frame.
 pub fn flange_dh(q: &Joints) -> Pose {
     dh(q[0], D1, 0.0, -HALF_PI)
@@ -126,6 +119,18 @@ pub fn wrap(a: f64) -> f64 {
         x += 2.0 * PI;
     }
     x
+}
+
+/// Wrap an angle within one turn of (-π, π] into it (cheaper than [`wrap`]).
+#[inline]
+fn wrap_once(a: f64) -> f64 {
+    if a > PI {
+        a - 2.0 * PI
+    } else if a <= -PI {
+        a + 2.0 * PI
+    } else {
+        a
+    }
 }
 
 /// Which of the arm's configurations a solution is.
@@ -261,6 +266,15 @@ impl Kinematics {
 
     /// Every joint solution for the tool centre point at `tcp`. `current` settles the
     /// singular cases: on the base axis J1 keeps its value, at J5 = 0 J4 keeps its value.
+    ///
+    /// Closed form, with as few trigonometric calls as the geometry allows:
+    /// - the wrist centre gives J1, and J2, J3 two ways (elbow up, down) by the law of
+    ///   cosines; the sines and cosines of J2 + J3 follow by angle addition, not by calls;
+    /// - J2 and J3 turn about parallel axes, so the arm's rotation R03 depends on J1 and
+    ///   J2 + J3 only and is written out; the wrist's rotation R03ᵀ·R06 = Rz(J4)·Ry(-J5)·Rz(J6)
+    ///   gives J4..J6, and the flipped wrist is (J4 + 180°, -J5, J6 + 180°);
+    /// - reaching backward mirrors the arm: (J1 + 180°, -J2, -J3) has R03·Rz(180°), so its
+    ///   wrist is (J4 + 180°, J5, J6) of the forward one with the same elbow.
     pub fn ik_all(&self, tcp: &Pose, current: &Joints) -> Solutions {
         let flange = tcp.then(&self.tool_inv);
         let r06 = flange.rot * tool_in_dh6().transpose();
@@ -278,52 +292,80 @@ impl Kinematics {
             len: 0,
         };
         let rxy = (w.x * w.x + w.y * w.y).sqrt();
-        let base_q1 = if rxy > SINGULAR {
-            w.y.atan2(w.x)
+        let (q1, s1, c1) = if rxy > SINGULAR {
+            (w.y.atan2(w.x), w.y / rxy, w.x / rxy)
         } else {
-            current[0]
+            let (s1, c1) = current[0].sin_cos();
+            (current[0], s1, c1)
         };
         let s = w.z - D1;
-        let c3 = (rxy * rxy + s * s - A2 * A2 - D4 * D4) / (2.0 * A2 * D4);
+        let l2 = rxy * rxy + s * s;
+        let c3 = (l2 - A2 * A2 - D4 * D4) / (2.0 * A2 * D4);
         if !(-1.0 - 1e-12..=1.0 + 1e-12).contains(&c3) {
             return out;
         }
         let c3 = c3.clamp(-1.0, 1.0);
         let s3_abs = (1.0 - c3 * c3).sqrt();
-        for backward in [false, true] {
-            let q1 = wrap(if backward { base_q1 + PI } else { base_q1 });
-            let r = if backward { -rxy } else { rxy };
-            for elbow_down in [false, true] {
-                // Forward reach: a positive J3 keeps the elbow above the shoulder-wrist line.
-                let up_sign = if backward { -1.0 } else { 1.0 };
-                let s3 = if elbow_down {
-                    -up_sign * s3_abs
-                } else {
-                    up_sign * s3_abs
-                };
-                let q3 = s3.atan2(c3);
-                let q2 = r.atan2(s) - (D4 * s3).atan2(A2 + D4 * c3);
-                let m = r03(q1, q2, q3).transpose() * r06;
-                let e = |i: usize, j: usize| m.col(j)[i];
-                // m = Rz(q4)·Ry(-q5)·Rz(q6).
-                let sb = (e(0, 2) * e(0, 2) + e(1, 2) * e(1, 2)).sqrt();
-                let cb = e(2, 2);
+        let l = l2.sqrt();
+        if l < SINGULAR {
+            // The wrist centre on the shoulder axis: unreachable while A2 ≠ D4 (c3 < -1
+            // above); kept so that the divisions below never divide by zero.
+            return out;
+        }
+        // The shoulder-wrist line: its angle φ from the vertical toward the reach, and the
+        // upper arm's angle β from it (positive sin J3); the elbow down mirrors β and J3.
+        let phi = rxy.atan2(s);
+        let (sphi, cphi) = (rxy / l, s / l);
+        let q3_pos = s3_abs.atan2(c3);
+        let beta_pos = (D4 * s3_abs).atan2(A2 + D4 * c3);
+        let (sbeta_pos, cbeta_pos) = (D4 * s3_abs / l, (A2 + D4 * c3) / l);
+        let z6 = r06.z_axis;
+        for elbow_down in [false, true] {
+            let sign = if elbow_down { -1.0 } else { 1.0 };
+            let q3 = sign * q3_pos;
+            let q2 = wrap_once(phi - sign * beta_pos);
+            // sin, cos of J2 = φ - β, then of J2 + J3.
+            let (sb, cb) = (sign * sbeta_pos, cbeta_pos);
+            let (s2, c2) = (sphi * cb - cphi * sb, cphi * cb + sphi * sb);
+            let (s3, c3) = (sign * s3_abs, c3);
+            let (s23, c23) = (s2 * c3 + c2 * s3, c2 * c3 - s2 * s3);
+            // DH frame 3 in the base frame: Rz(J1)·Rx(-90°)·Rz(J2 + J3 - 180°)·Rx(-90°).
+            let (c, sn) = (-c23, -s23);
+            let x3 = DVec3::new(c1 * c, s1 * c, -sn);
+            let y3 = DVec3::new(s1, -c1, 0.0);
+            let z3 = DVec3::new(-c1 * sn, -s1 * sn, -c);
+            let e02 = x3.dot(z6);
+            let e12 = y3.dot(z6);
+            let e22 = z3.dot(z6);
+            let sw = (e02 * e02 + e12 * e12).sqrt();
+            // (J4, J5, J6) forward and backward.
+            let (fwd, bwd) = if sw > SINGULAR {
+                let e20 = z3.dot(r06.x_axis);
+                let e21 = z3.dot(r06.y_axis);
+                let q4 = e12.atan2(e02);
+                let q5 = -sw.atan2(e22);
+                let q6 = e21.atan2(-e20);
+                ((q4, q5, q6), (wrap_once(q4 + PI), q5, q6))
+            } else if e22 > 0.0 {
+                // J5 = 0: only J4 + J6 is fixed; keep J4.
+                let sum = y3.dot(r06.x_axis).atan2(x3.dot(r06.x_axis));
+                let q4 = wrap(current[3]);
+                ((q4, 0.0, wrap_once(sum - q4)), (q4, 0.0, wrap(sum + PI - q4)))
+            } else {
+                // J5 = ±180°: beyond its ±105° limit, so no usable solution.
+                continue;
+            };
+            let arms = [
+                (false, [q1, q2, q3], fwd),
+                (true, [wrap_once(q1 + PI), -q2, -q3], bwd),
+            ];
+            for (backward, [a1, a2, a3], (q4, q5, q6)) in arms {
                 for flip in [false, true] {
-                    let (q4, q5, q6) = if sb > SINGULAR {
-                        let sbs = if flip { -sb } else { sb };
-                        let a = (e(1, 2) / sbs).atan2(e(0, 2) / sbs);
-                        let g = (e(2, 1) / sbs).atan2(-e(2, 0) / sbs);
-                        (a, -sbs.atan2(cb), g)
-                    } else if cb > 0.0 {
-                        // J5 = 0: only q4 + q6 is fixed; keep J4.
-                        let sum = e(1, 0).atan2(e(0, 0));
-                        let q4 = if flip { current[3] + PI } else { current[3] };
-                        (q4, 0.0, sum - q4)
+                    let q = if flip {
+                        [a1, a2, a3, wrap_once(q4 + PI), -q5, wrap_once(q6 + PI)]
                     } else {
-                        // J5 = ±180°: beyond its ±105° limit, so no usable solution.
-                        continue;
+                        [a1, a2, a3, q4, q5, q6]
                     };
-                    let q = [q1, wrap(q2), wrap(q3), wrap(q4), wrap(q5), wrap(q6)];
                     out.items[out.len] = Solution {
                         q,
                         config: Config {

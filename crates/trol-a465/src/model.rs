@@ -27,8 +27,19 @@ pub const ENCODER_LINES: [f64; 6] = [1000.0, 1000.0, 1000.0, 500.0, 500.0, 500.0
 pub const GEAR_RATIOS: [f64; 6] = [100.0, 100.0, 100.0, 101.0, 100.0, 101.0];
 
 /// Joint limits in radians.
+pub const LIMITS_RAD: [f64; 6] = {
+    let mut out = [0.0; 6];
+    let mut i = 0;
+    while i < 6 {
+        out[i] = LIMITS_DEG[i] * (PI / 180.0);
+        i += 1;
+    }
+    out
+};
+
+/// Joint limits in radians.
 pub fn limits() -> [f64; 6] {
-    LIMITS_DEG.map(f64::to_radians)
+    LIMITS_RAD
 }
 
 /// Maximum joint speeds in radians per second.
@@ -78,8 +89,7 @@ pub const READY: [f64; 6] = [0.0; 6];
 
 /// Whether joint values lie within the limits (with a hair of tolerance for rounding).
 pub fn within_limits(q: &[f64; 6]) -> bool {
-    let lim = limits();
-    q.iter().zip(lim).all(|(x, l)| x.abs() <= l + 1e-9)
+    q.iter().zip(LIMITS_RAD).all(|(x, l)| x.abs() <= l + 1e-9)
 }
 
 /// Index of the first joint outside its limit.

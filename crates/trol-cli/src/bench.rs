@@ -16,6 +16,38 @@ pub enum Bench {
     ///
     /// Example: trol bench link --baud 38400 --bytes 65535 --json
     Link(LinkArgs),
+    /// Time all-solutions inverse kinematics of the A465 over random reachable poses (made by
+    /// forward kinematics from random joints within the limits, with a tool transform), and
+    /// check every solution by forward kinematics before timing.
+    ///
+    /// Example: trol bench ik --poses 100000 --json
+    Ik(IkArgs),
+}
+
+#[derive(Args)]
+pub struct IkArgs {
+    /// How many random poses.
+    #[arg(long, default_value_t = 100_000, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    poses: u32,
+    /// How many passes over the poses to time (the figure is the best pass).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeat: u32,
+    /// Seed of the random poses.
+    #[arg(long, default_value_t = 465)]
+    seed: u64,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct IkReport {
+    poses: usize,
+    solutions: usize,
+    solutions_per_pose: f64,
+    max_position_error_mm: f64,
+    seconds: f64,
+    ns_per_pose: f64,
 }
 
 #[derive(Args)]
@@ -50,6 +82,7 @@ struct LinkReport {
 pub fn run(b: Bench) -> Result<(), String> {
     match b {
         Bench::Link(a) => link(a),
+        Bench::Ik(a) => ik(a),
     }
 }
 
@@ -116,6 +149,78 @@ fn link(a: LinkArgs) -> Result<(), String> {
             r.efficiency * 100.0,
             r.format_efficiency * 100.0,
             r.payload_bytes_per_second
+        );
+    }
+    Ok(())
+}
+
+fn ik(a: IkArgs) -> Result<(), String> {
+    use trol_a465::Kinematics;
+    use trol_a465::model::limits;
+    // A small xorshift generator: the poses only need to be spread, not cryptographic, and
+    // the seed makes a run repeatable.
+    let mut state = a.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut uniform = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let kin = Kinematics::new([0.0, 0.0, 120.0, 0.0, 0.0, 0.0]);
+    let lim = limits();
+    let n = a.poses as usize;
+    let mut joints = Vec::with_capacity(n);
+    let mut poses = Vec::with_capacity(n);
+    for _ in 0..n {
+        let q: [f64; 6] = std::array::from_fn(|i| (uniform() * 2.0 - 1.0) * lim[i]);
+        poses.push(kin.fk(&q));
+        joints.push(q);
+    }
+    // Check once, untimed: every solution reproduces its pose, and the joints that made the
+    // pose are among them.
+    let mut solutions = 0;
+    let mut max_err: f64 = 0.0;
+    for (pose, q) in poses.iter().zip(&joints) {
+        let all = kin.ik_all(pose, q);
+        if all.is_empty() {
+            return Err(format!("no solution for the pose of joints {q:?}"));
+        }
+        solutions += all.len();
+        for s in all.as_slice() {
+            max_err = max_err.max((kin.fk(&s.q).pos - pose.pos).length());
+        }
+    }
+    if max_err > 1e-6 {
+        return Err(format!("a solution misses its pose by {max_err} mm"));
+    }
+    let mut best = f64::INFINITY;
+    for _ in 0..a.repeat {
+        let started = Instant::now();
+        let mut count = 0usize;
+        for (pose, q) in poses.iter().zip(&joints) {
+            count += std::hint::black_box(kin.ik_all(std::hint::black_box(pose), q)).len();
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        std::hint::black_box(count);
+        best = best.min(seconds);
+    }
+    let r = IkReport {
+        poses: n,
+        solutions,
+        solutions_per_pose: solutions as f64 / n as f64,
+        max_position_error_mm: max_err,
+        seconds: best,
+        ns_per_pose: best * 1e9 / n as f64,
+    };
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{} poses, {:.2} solutions each (largest position error {:.1e} mm): {:.1} ns per pose",
+            r.poses, r.solutions_per_pose, r.max_position_error_mm, r.ns_per_pose
         );
     }
     Ok(())

@@ -6,7 +6,8 @@
 //!   0, -90°, +90°, -90°, 0). All joints 0: the arm points straight up. +J1 turns +x toward +y;
 //!   +J2 tilts the arm toward +x; +J3 bends the forearm forward.
 //! - the *tool frame* sits at the flange centre with its x axis along the last segment, out of
-//!   the flange (manual, "Das Roboter-Koordinatensystem", Abbildung 3); y as DH frame 6's y.
+//!   the flange (manual, "Das Roboter-Koordinatensystem", Abbildung 3); y along the world's
+//!   y axis when J1 = J4 = J6 = 0 (our choice: the manual does not fix y and z).
 //! - a cartesian location is the tool centre point's pose in the world frame:
 //!   x y z in mm, and R = Rz(yaw)·Ry(pitch)·Rx(roll) (angles about the world's z, y, x axes).
 //!   All joints 0 is (0, 0, 1041.4, 0, -π/2, 0): the tool's x axis points up.
@@ -107,9 +108,12 @@ pub fn flange_dh(q: &Joints) -> Pose {
         .then(&dh(q[5], D6, 0.0, 0.0))
 }
 
-/// The tool frame's axes in DH frame 6: tool x = DH z, tool y = DH y, tool z = -DH x.
+/// The tool frame's axes in DH frame 6: tool x = DH z (out of the flange), tool y = -DH y,
+/// tool z = DH x. With J4 = J6 = 0 and J1 = 0 the tool's y axis is the world's y axis, so
+/// the upright zero pose is (yaw 0, pitch -90°, roll 0) and the tool pointing straight down
+/// is (yaw 0, pitch 90°, roll 0), both with J4 and J6 in the middle of their ranges.
 fn tool_in_dh6() -> DMat3 {
-    DMat3::from_cols(DVec3::Z, DVec3::Y, DVec3::NEG_X)
+    DMat3::from_cols(DVec3::Z, DVec3::NEG_Y, DVec3::X)
 }
 
 /// Wrap an angle into (-π, π].
@@ -350,7 +354,10 @@ impl Kinematics {
                 // J5 = 0: only J4 + J6 is fixed; keep J4.
                 let sum = y3.dot(r06.x_axis).atan2(x3.dot(r06.x_axis));
                 let q4 = wrap(current[3]);
-                ((q4, 0.0, wrap_once(sum - q4)), (q4, 0.0, wrap(sum + PI - q4)))
+                (
+                    (q4, 0.0, wrap_once(sum - q4)),
+                    (q4, 0.0, wrap(sum + PI - q4)),
+                )
             } else {
                 // J5 = ±180°: beyond its ±105° limit, so no usable solution.
                 continue;
@@ -453,8 +460,18 @@ mod tests {
             "{down:?}"
         );
         assert!((down[4] - HALF_PI).abs() < 1e-9, "pitch {down:?}");
+        assert!(
+            down[3].abs() < 1e-9 && down[5].abs() < 1e-9,
+            "yaw, roll {down:?}"
+        );
         let up = k.fk_xyzypr(&[0.0; 6]);
         assert!((up[4] + HALF_PI).abs() < 1e-9, "zero pose pitch {up:?}");
+        assert!(up[3].abs() < 1e-9 && up[5].abs() < 1e-9, "yaw, roll {up:?}");
+        // Off the gimbal lock: J5 at 30° tilts the tool 30° forward from up; J6 turns it
+        // about its own x axis (the roll).
+        let tilt = k.fk_xyzypr(&deg([0.0, 0.0, 0.0, 0.0, 30.0, 0.0]));
+        assert!((tilt[4] + 60f64.to_radians()).abs() < 1e-9, "{tilt:?}");
+        assert!(tilt[3].abs() < 1e-9 && tilt[5].abs() < 1e-9, "{tilt:?}");
     }
 
     #[test]

@@ -35,6 +35,13 @@ pub mod code {
     pub const BELOW_TABLE: i16 = -4;
     /// A location of the wrong kind (a precision point where a cartesian one is needed).
     pub const BAD_LOCATION: i16 = -5;
+    /// A straight line that passes a singularity (the wrist centre across the base axis, or
+    /// the wrist through J5 = 0 with a half turn of J4): the arm cannot follow it with its
+    /// joints moving smoothly.
+    pub const SINGULAR_PATH: i16 = -6;
+    /// An axis or joint number outside 0..6 (Home) or 1..6 (Joint), or a value that is not
+    /// a finite number.
+    pub const BAD_ARGUMENT: i16 = -7;
 
     /// Name and meaning of a code.
     pub fn describe(v: i16) -> Option<(&'static str, &'static str)> {
@@ -49,6 +56,14 @@ pub mod code {
             ),
             BELOW_TABLE => ("BIOS_BELOW_TABLE", "the tool tip would go below the table"),
             BAD_LOCATION => ("BIOS_BAD_LOCATION", "a location of the wrong kind"),
+            SINGULAR_PATH => (
+                "BIOS_SINGULAR_PATH",
+                "the straight line passes a singularity and cannot be followed",
+            ),
+            BAD_ARGUMENT => (
+                "BIOS_BAD_ARGUMENT",
+                "an axis number out of range or a value that is not a number",
+            ),
             _ => return None,
         })
     }
@@ -115,6 +130,10 @@ pub const SERVO_LAG: f64 = 0.01;
 pub const HOME_TIME: f64 = 2.0;
 /// Points checked along a path for the safety checks and used to follow a straight line.
 const PATH_SAMPLES: usize = 64;
+/// The largest change of any joint between two neighbouring points of a straight line,
+/// radians (30°, while a smooth line of the arm's reach changes far less per 1/64 of it):
+/// more means the line crosses a singularity.
+const MAX_PATH_STEP: f64 = std::f64::consts::PI / 6.0;
 
 #[derive(Clone, Debug)]
 enum Path {
@@ -408,6 +427,9 @@ impl Arm {
     /// Home one axis (1..6) or all (0). The arm drives the axes to their zero (the home
     /// switches) and counts them as homed.
     pub fn home(&mut self, axis: u8, now: f64) -> i16 {
+        if axis > 6 {
+            return code::BAD_ARGUMENT;
+        }
         let mut to = self.planned_end();
         let axes: Vec<usize> = if axis == 0 {
             (0..6).collect()
@@ -497,6 +519,9 @@ impl Arm {
         if let Err(c) = self.need_homed() {
             return c;
         }
+        if to.iter().any(|x| !x.is_finite()) {
+            return code::BAD_ARGUMENT;
+        }
         if first_outside_limits(&to).is_some() {
             return code::JOINT_LIMIT;
         }
@@ -527,6 +552,11 @@ impl Arm {
             return c;
         }
         let q0 = self.planned_end();
+        // The target first: out of reach is the clearer answer than whatever fails on the
+        // way there.
+        if self.kin.ik_all(&to, &q0).is_empty() {
+            return code::OUT_OF_REACH;
+        }
         let from = self.kin.fk(&q0);
         let (q_from, q_to) = (DQuat::from_mat3(&from.rot), DQuat::from_mat3(&to.rot));
         let mut samples = Vec::with_capacity(PATH_SAMPLES + 1);
@@ -537,9 +567,9 @@ impl Arm {
             if pose.pos.z < self.settings.table_z - 1e-9 {
                 return code::BELOW_TABLE;
             }
-            let q = match self.kin.ik_nearest(&pose, &prev) {
+            let q = match self.follow(&pose, &prev) {
                 Ok(q) => q,
-                Err(e) => return ik_code(e),
+                Err(c) => return c,
             };
             samples.push(q);
             prev = q;
@@ -581,7 +611,42 @@ impl Arm {
         code::OK
     }
 
+    /// The next joints along a straight line: the solution nearest the previous point,
+    /// whatever its limits, so that the arm keeps its configuration as a real one does. If
+    /// that solution is beyond a limit the line leaves the limits (JOINT_LIMIT); if even the
+    /// nearest one is far away the line crosses a singularity (SINGULAR_PATH).
+    fn follow(&self, pose: &Pose, prev: &Joints) -> Result<Joints, i16> {
+        if !pose.pos.is_finite() || !pose.rot.is_finite() {
+            return Err(code::BAD_ARGUMENT);
+        }
+        let all = self.kin.ik_all(pose, prev);
+        let step = |q: &Joints| -> f64 {
+            (0..6)
+                .map(|i| wrap(q[i] - prev[i]).abs())
+                .fold(0.0, f64::max)
+        };
+        let next = all
+            .as_slice()
+            .iter()
+            .min_by(|a, b| step(&a.q).total_cmp(&step(&b.q)))
+            .ok_or(code::OUT_OF_REACH)?;
+        if step(&next.q) > MAX_PATH_STEP {
+            return Err(code::SINGULAR_PATH);
+        }
+        // Continue each joint from the previous one (J4 and J6 may pass ±180° only where
+        // their limits allow it, which they do not: ±180° is their limit).
+        let q: Joints = std::array::from_fn(|i| prev[i] + wrap(next.q[i] - prev[i]));
+        if first_outside_limits(&q).is_some() {
+            return Err(code::JOINT_LIMIT);
+        }
+        Ok(q)
+    }
+
     fn move_pose(&mut self, to: Pose, straight: bool, now: f64) -> i16 {
+        // A target below the table says so first, whatever else is wrong with it.
+        if to.pos.z < self.settings.table_z - 1e-9 {
+            return code::BELOW_TABLE;
+        }
         if straight {
             self.move_line(to, now)
         } else {
@@ -597,16 +662,15 @@ impl Arm {
         if let Err(c) = self.need_homed() {
             return c;
         }
+        if let Target::Cart(v) = target {
+            return self.move_pose(Pose::from_xyzypr(v), straight, now);
+        }
         if straight {
             let q = match self.joints_for(&target) {
                 Ok(q) => q,
                 Err(c) => return c,
             };
-            let pose = match target {
-                Target::Cart(v) => Pose::from_xyzypr(v),
-                _ => self.kin.fk(&q),
-            };
-            self.move_line(pose, now)
+            self.move_line(self.kin.fk(&q), now)
         } else {
             match self.joints_for(&target) {
                 Ok(q) => self.move_joints(q, now),
@@ -651,6 +715,9 @@ impl Arm {
 
     /// Joint: one joint (1..6) by an increment in radians.
     pub fn joint(&mut self, joint: u8, radians: f64, now: f64) -> i16 {
+        if !(1..=6).contains(&joint) || !radians.is_finite() {
+            return code::BAD_ARGUMENT;
+        }
         let mut to = self.planned_end();
         to[joint as usize - 1] += radians;
         self.move_joints(to, now)

@@ -141,3 +141,152 @@ fn precision_points_round_trip() {
         );
     }
 }
+
+/// What a refusal must leave alone: the planned end, when the motions end, and where the arm
+/// is commanded to be now and later.
+fn snapshot(arm: &mut Arm, t: f64) -> ([f64; 6], f64, [f64; 6], [f64; 6], i16) {
+    (
+        arm.planned_end(),
+        arm.done_at(t),
+        arm.commanded(t),
+        arm.commanded(t + 100.0),
+        arm.finish_status(t),
+    )
+}
+
+const DOWN: f64 = std::f64::consts::FRAC_PI_2;
+
+/// Move (joint-interpolated) to a cartesian location and wait for it.
+fn settle_at(arm: &mut Arm, loc: [f64; 6], t: f64) -> f64 {
+    assert_eq!(
+        arm.move_to(Target::Cart(loc), false, t),
+        code::OK,
+        "{loc:?}"
+    );
+    arm.done_at(t)
+}
+
+#[test]
+fn a_turn_in_place_that_swings_the_wrist_out_of_reach_is_refused_and_changes_nothing() {
+    let mut arm = homed_arm();
+    // The tool tip 674.6 mm from the shoulder, beyond the wrist's 635 mm reach, so the tool
+    // must point away from the arm. Turning it in place (a straight move of length 0 with
+    // the orientation interpolated) swings the wrist centre around the tip, out of reach,
+    // although both ends can be reached.
+    let from = [617.7, 0.0, 601.4, 0.0, 0.5, -3.1];
+    let to = [617.7, 0.0, 601.4, -1.0, -0.4, 1.2];
+    let t = settle_at(&mut arm, to, 0.0);
+    let t = settle_at(&mut arm, from, t);
+    let before = snapshot(&mut arm, t);
+    assert_eq!(arm.move_to(Target::Cart(to), true, t), code::OUT_OF_REACH);
+    assert_eq!(snapshot(&mut arm, t), before);
+    assert_eq!(arm.move_to(Target::Cart(to), false, t), code::OK);
+}
+
+#[test]
+fn a_line_past_a_joint_limit_is_refused_although_both_ends_are_within_limits() {
+    let mut arm = homed_arm();
+    // J1 at 170°: a line in -y turns J1 through 180°, beyond its ±175° limit, while its end
+    // (J1 = -170° in the same configuration) lies within the limits.
+    let q = [170f64.to_radians(), 0.6, 0.8, 0.0, 0.5, 0.0];
+    assert_eq!(arm.ma(q, 0.0), code::OK);
+    let t = arm.done_at(0.0);
+    let wrist_y = arm.kinematics().fk(&q).pos.y;
+    let before = snapshot(&mut arm, t);
+    assert_eq!(
+        arm.jog([0.0, -2.0 * wrist_y, 0.0], true, t),
+        code::JOINT_LIMIT
+    );
+    assert_eq!(snapshot(&mut arm, t), before);
+    // A target beyond a limit itself, by joints.
+    assert_eq!(arm.joint(1, 0.2, t), code::JOINT_LIMIT);
+    assert_eq!(arm.joint(5, -3.0, t), code::JOINT_LIMIT);
+    assert_eq!(snapshot(&mut arm, t), before);
+}
+
+#[test]
+fn a_line_across_the_base_axis_is_a_singular_path_and_changes_nothing() {
+    let mut arm = homed_arm();
+    // Tool pointing up, the wrist passing 5 mm from the base axis: J1 would swing half a
+    // turn in an instant.
+    let t = settle_at(&mut arm, [5.0, 100.0, 950.0, 0.0, -DOWN, 0.0], 0.0);
+    let before = snapshot(&mut arm, t);
+    assert_eq!(arm.jog([0.0, -200.0, 0.0], true, t), code::SINGULAR_PATH);
+    assert_eq!(snapshot(&mut arm, t), before);
+}
+
+#[test]
+fn an_unreachable_target_is_refused_and_changes_nothing() {
+    let mut arm = homed_arm();
+    let t = settle_at(&mut arm, [400.0, 0.0, 300.0, 0.0, DOWN, 0.0], 0.0);
+    let before = snapshot(&mut arm, t);
+    for straight in [false, true] {
+        assert_eq!(
+            arm.move_to(
+                Target::Cart([900.0, 0.0, 300.0, 0.0, DOWN, 0.0]),
+                straight,
+                t
+            ),
+            code::OUT_OF_REACH
+        );
+        assert_eq!(
+            arm.appro(
+                Target::Cart([400.0, 0.0, 300.0, 0.0, DOWN, 0.0]),
+                [-600.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                straight,
+                t
+            ),
+            code::OUT_OF_REACH,
+            "600 mm back along the tool, pointing down: 900 mm up"
+        );
+        assert_eq!(arm.jog([0.0, 0.0, -400.0], straight, t), code::BELOW_TABLE);
+    }
+    assert_eq!(snapshot(&mut arm, t), before);
+}
+
+#[test]
+fn bad_axes_and_values_are_refused() {
+    let mut arm = homed_arm();
+    let before = snapshot(&mut arm, 0.0);
+    assert_eq!(arm.home(7, 0.0), code::BAD_ARGUMENT);
+    assert_eq!(arm.joint(0, 0.1, 0.0), code::BAD_ARGUMENT);
+    assert_eq!(arm.joint(7, 0.1, 0.0), code::BAD_ARGUMENT);
+    assert_eq!(arm.joint(1, f64::NAN, 0.0), code::BAD_ARGUMENT);
+    assert_eq!(
+        arm.ma([0.0, f64::INFINITY, 0.0, 0.0, 0.0, 0.0], 0.0),
+        code::BAD_ARGUMENT
+    );
+    assert_eq!(snapshot(&mut arm, 0.0), before);
+}
+
+#[test]
+fn the_actual_position_lags_while_moving_and_settles_when_stopped() {
+    use trol_a465::arm::SERVO_LAG;
+    use trol_a465::model::counts_per_radian;
+    let mut arm = homed_arm();
+    let target = [1.0, 0.4, -0.3, 0.2, 0.3, 0.4];
+    arm.ma(target, 0.0);
+    let end = arm.done_at(0.0);
+    let per_rad = counts_per_radian();
+    let t = end / 2.0;
+    let commanded = arm.position(t, Which::Commanded);
+    let actual = arm.position(t, Which::Actual);
+    // Mid-move, joint 1 (the longest way) is behind the command by about speed × lag.
+    let behind = commanded[0] - actual[0];
+    assert!(behind > 0.0, "actual {actual:?} commanded {commanded:?}");
+    let expected = commanded[0] - arm.commanded(t - SERVO_LAG)[0];
+    assert!(
+        (behind - expected).abs() <= 0.5 / per_rad[0] + 1e-12,
+        "{behind} vs {expected}"
+    );
+    // Stopped: the encoders read the commanded position to within half a count.
+    let after = end + SERVO_LAG + 1e-6;
+    let a = arm.position(after, Which::Actual);
+    for i in 0..6 {
+        assert!(
+            (a[i] - target[i]).abs() <= 0.5 / per_rad[i] + 1e-12,
+            "{a:?}"
+        );
+    }
+    assert_eq!(arm.position(after, Which::Commanded), target);
+}

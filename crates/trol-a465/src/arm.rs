@@ -33,15 +33,13 @@ pub mod code {
     pub const JOINT_LIMIT: i16 = -3;
     /// The tool tip would go below the table plane.
     pub const BELOW_TABLE: i16 = -4;
-    /// A location of the wrong kind (a precision point where a cartesian one is needed).
-    pub const BAD_LOCATION: i16 = -5;
     /// A straight line that passes a singularity (the wrist centre across the base axis, or
     /// the wrist through J5 = 0 with a half turn of J4): the arm cannot follow it with its
     /// joints moving smoothly.
-    pub const SINGULAR_PATH: i16 = -6;
+    pub const SINGULAR_PATH: i16 = -5;
     /// An axis or joint number outside 0..6 (Home) or 1..6 (Joint), or a value that is not
     /// a finite number.
-    pub const BAD_ARGUMENT: i16 = -7;
+    pub const BAD_ARGUMENT: i16 = -6;
 
     /// Name and meaning of a code.
     pub fn describe(v: i16) -> Option<(&'static str, &'static str)> {
@@ -55,7 +53,6 @@ pub mod code {
                 "the target or path passes a joint limit",
             ),
             BELOW_TABLE => ("BIOS_BELOW_TABLE", "the tool tip would go below the table"),
-            BAD_LOCATION => ("BIOS_BAD_LOCATION", "a location of the wrong kind"),
             SINGULAR_PATH => (
                 "BIOS_SINGULAR_PATH",
                 "the straight line passes a singularity and cannot be followed",

@@ -6,8 +6,10 @@
 //!   transform; usable on the PC as well as in the simulated controller;
 //! - [`arm`]: the simulated arm (timed motion, gripper, location table, safety checks).
 //!
-//! Conventions and which figures are assumptions: docs/a465.md.
-
+//! Conventions and which figures are assumptions: docs/a465.md, included below (its
+//! example runs as a doctest).
+//!
+#![doc = include_str!("../../../docs/a465.md")]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 

@@ -22,6 +22,32 @@ pub enum Bench {
     ///
     /// Example: trol bench ik --poses 100000 --json
     Ik(IkArgs),
+    /// Time small transactions (TROLSpeed, a 2-byte request and a 2-byte reply) against a
+    /// controller: the embedded simulator by default, or --port.
+    ///
+    /// Example: trol bench transact --count 2000 --json
+    Transact(TransactArgs),
+}
+
+#[derive(Args)]
+pub struct TransactArgs {
+    /// How many transactions.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    count: u32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    conn: crate::common::Conn,
+}
+
+#[derive(Serialize)]
+struct TransactReport {
+    port: String,
+    transactions: u32,
+    seconds: f64,
+    us_per_transaction: f64,
+    transactions_per_second: f64,
 }
 
 #[derive(Args)]
@@ -83,6 +109,7 @@ pub fn run(b: Bench) -> Result<(), String> {
     match b {
         Bench::Link(a) => link(a),
         Bench::Ik(a) => ik(a),
+        Bench::Transact(a) => transact(a),
     }
 }
 
@@ -221,6 +248,36 @@ fn ik(a: IkArgs) -> Result<(), String> {
         println!(
             "{} poses, {:.2} solutions each (largest position error {:.1e} mm): {:.1} ns per pose",
             r.poses, r.solutions_per_pose, r.max_position_error_mm, r.ns_per_pose
+        );
+    }
+    Ok(())
+}
+
+fn transact(a: TransactArgs) -> Result<(), String> {
+    let (mut robot, cfg) = a.conn.robot()?;
+    // One to warm up (the first transaction on a line pays for its set-up).
+    robot.speed(100).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    for _ in 0..a.count {
+        robot.speed(100).map_err(|e| e.to_string())?;
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let r = TransactReport {
+        port: cfg.port,
+        transactions: a.count,
+        seconds,
+        us_per_transaction: seconds * 1e6 / f64::from(a.count),
+        transactions_per_second: f64::from(a.count) / seconds,
+    };
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "{} transactions on {}: {:.1} us each, {:.0} per second",
+            r.transactions, r.port, r.us_per_transaction, r.transactions_per_second
         );
     }
     Ok(())

@@ -1,31 +1,100 @@
-//! `trol`: the TROL utilities in one binary.
+//! `trol`: the TROL utilities in one binary (the manual's "Installation von TROL": inittrol,
+//! cluptrol, interp, link, protest), plus the simulator, a tracer, benchmarks and a demo.
 
 mod bench;
+mod common;
+mod demo;
+mod init;
+mod interp;
+mod link;
+mod records;
+mod sim;
+mod trace;
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-/// TROL, the TU Vienna Robot Control Library: utilities for the CRS A465 link.
+/// TROL, the TU Vienna Robot Control Library: utilities for driving a CRS A465 through its
+/// C500 controller. Every command reads trol.cfg (or $TROL_CONFIG) like any TROL program;
+/// --port, --baud and --config override it. Without trol.cfg the port is `sim`, the
+/// embedded simulator.
 #[derive(Parser)]
-#[command(name = "trol", version, about, long_about = None)]
+#[command(name = "trol", version, about, long_about = None, after_help = "\
+Examples:
+  trol demo                                   # the manual's pick example on the simulator
+  trol interp                                 # type TROL commands
+  trol sim                                    # a simulated controller on a new pty
+  trol init --port /dev/pts/3                 # activate the controller's TROL server
+  trol interp script.trol --port /dev/pts/3   # run a script against it
+  trol cleanup --port /dev/pts/3              # end the server")]
 struct Cli {
+    /// More log output on stderr (-v info, -vv debug, -vvv trace); RUST_LOG also works.
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Measure the protocol: link throughput over a paced in-memory line.
+    /// The command interpreter: one TROL API call per line, interactive or from a script.
+    Interp(interp::InterpArgs),
+    /// Activate the controller's TROL server with trol.cfg's tool transform (inittrol).
+    #[command(after_help = "Example: trol init --port /dev/ttyUSB0 --baud 9600")]
+    Init(common::Conn),
+    /// End the controller's TROL server, back to terminal mode (cluptrol).
+    #[command(after_help = "Example: trol cleanup --port /dev/ttyUSB0")]
+    Cleanup(common::Conn),
+    /// The simulated controller (C500 with an A465) as its own process.
+    Sim(sim::SimArgs),
+    /// Relay between the controller's port and an application's (the manual's link.exe).
+    Link(link::LinkArgs),
+    /// Show the traffic layer by layer, live between two ports or from a capture.
+    #[command(subcommand)]
+    Trace(trace::Trace),
+    /// List the serial ports of this machine.
+    Ports,
+    /// Measure: link throughput, transactions, inverse kinematics.
     #[command(subcommand)]
     Bench(bench::Bench),
+    /// The manual's pick example on the embedded simulator, step by step.
+    Demo(demo::DemoArgs),
 }
 
-fn main() {
+fn ports() -> Result<(), String> {
+    let list = trol_port::serial::list().map_err(|e| format!("cannot list the ports: {e}"))?;
+    if list.is_empty() {
+        println!(
+            "no serial ports found (a USB adapter shows up as /dev/ttyUSB0 or COMn once \
+             plugged in; `trol sim` makes a pty to try things with)"
+        );
+    }
+    for (name, what) in list {
+        println!("{name:<24} {what}");
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
     let cli = Cli::parse();
+    common::init_logging(cli.verbose);
     let result = match cli.command {
-        Command::Bench(b) => bench::run(b),
+        Command::Interp(a) => interp::run(a),
+        Command::Init(c) => init::init(&c).map(|()| ExitCode::SUCCESS),
+        Command::Cleanup(c) => init::cleanup(&c).map(|()| ExitCode::SUCCESS),
+        Command::Sim(a) => sim::run(a).map(|()| ExitCode::SUCCESS),
+        Command::Link(a) => link::run(a).map(|()| ExitCode::SUCCESS),
+        Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
+        Command::Ports => ports().map(|()| ExitCode::SUCCESS),
+        Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),
+        Command::Demo(a) => demo::run(a),
     };
-    if let Err(e) = result {
-        eprintln!("trol: {e}");
-        std::process::exit(1);
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("trol: {e}");
+            ExitCode::FAILURE
+        }
     }
 }

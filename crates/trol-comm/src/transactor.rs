@@ -90,6 +90,11 @@ impl<P: Port> Transactor<P> {
         &self.driver
     }
 
+    /// Give the port back (a relay that activated the controller goes on with it).
+    pub fn into_port(self) -> P {
+        self.driver.into_port()
+    }
+
     /// The state machine (link settings, counters).
     pub fn initiator(&self) -> &Initiator {
         &self.initiator

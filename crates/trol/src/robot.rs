@@ -239,6 +239,12 @@ impl Robot {
         }
     }
 
+    /// Give the port back, ending the connection (`trol link` activates the controller, then
+    /// relays over the same port). An embedded controller stops.
+    pub fn into_port(self) -> Box<dyn Port> {
+        self.transactor.into_port()
+    }
+
     /// Check, send and decode a built-in request.
     pub fn request(&mut self, req: &Request) -> Result<Reply> {
         req.validate().map_err(Error::Argument)?;

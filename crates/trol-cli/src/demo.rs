@@ -1,0 +1,101 @@
+//! `trol demo`: the manual's pick example ("TROLAppro") against the embedded controller,
+//! printing each step, its result and where the arm is.
+
+use std::process::ExitCode;
+
+use clap::Args;
+use trol::{PosMode, Robot, Tag};
+use trol_a465::arm::Stored;
+
+use crate::common::{Conn, waiting};
+
+#[derive(Args, Debug)]
+#[command(after_help = "\
+Examples:
+  trol demo                      # embedded simulator, 5 times faster than real time
+  trol demo --time-scale 1       # in real time
+  trol demo --port /dev/ttyUSB0  # a real controller (location test_001 must exist there)")]
+pub struct DemoArgs {
+    #[command(flatten)]
+    conn: Conn,
+}
+
+/// The location of the manual's example: 400 mm in front of the robot, 150 mm above the
+/// table, the tool pointing down.
+pub const TEST_001: [f64; 6] = [400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+
+pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
+    if a.conn.time_scale.is_none() {
+        a.conn.time_scale = Some(5.0);
+    }
+    let cfg = a.conn.config()?;
+    let mut robot = if cfg.port == "sim" {
+        let mut settings = trol::sim_settings(&cfg).map_err(|e| e.to_string())?;
+        if !settings.locations.iter().any(|(n, _)| n == "test_001") {
+            settings
+                .locations
+                .push(("test_001".into(), Stored::Cart(TEST_001)));
+        }
+        println!(
+            "trol demo: the manual's pick example on the embedded simulator ({}x real time)",
+            settings.time_scale
+        );
+        Robot::embedded(settings)
+    } else {
+        let (robot, _) = a.conn.robot()?;
+        println!("trol demo: the manual's pick example on {}", cfg.port);
+        robot
+    };
+    type Step = (&'static str, fn(&mut Robot) -> trol::Result<()>);
+    let steps: &[Step] = &[
+        ("TROLHome(0)", |r| r.home(0)),
+        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLOpen(50)", |r| r.open_gripper(50)),
+        // From READY (upright) the tool must turn over to point down: a joint-interpolated
+        // approach first, then the manual's straight one.
+        ("TROLAppro(\"test_001\", x -150, joint)", |r| {
+            r.appro("test_001", &[-150.0], false)
+        }),
+        ("TROLAppro(\"test_001\", x -90, straight)", |r| {
+            r.appro("test_001", &[-90.0], true)
+        }),
+        ("TROLMove(\"test_001\", straight)", |r| {
+            r.move_to("test_001", true)
+        }),
+        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLClose(60)", |r| r.close(60)),
+        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLDepart(x -90, straight)", |r| r.depart(&[-90.0], true)),
+        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+    ];
+    let mut failed = 0;
+    for (i, (name, f)) in steps.iter().enumerate() {
+        let result = waiting(name, || f(&mut robot));
+        let outcome = match &result {
+            Ok(()) => "0 (success)".to_string(),
+            Err(e) => {
+                failed += 1;
+                e.to_string()
+            }
+        };
+        let at = robot
+            .position(Tag::Cart, PosMode::Commanded)
+            .map(|l| {
+                let v = l.to_array6();
+                format!("x {:7.1} y {:7.1} z {:7.1} mm", v[0], v[1], v[2])
+            })
+            .unwrap_or_else(|e| format!("position unknown: {e}"));
+        println!(
+            "{:>2}/{} {name:<44} -> {outcome:<14} arm at {at}",
+            i + 1,
+            steps.len()
+        );
+    }
+    if failed == 0 {
+        println!("trol demo: all {} steps succeeded", steps.len());
+        Ok(ExitCode::SUCCESS)
+    } else {
+        println!("trol demo: {failed} of {} steps failed", steps.len());
+        Ok(ExitCode::FAILURE)
+    }
+}

@@ -1,0 +1,49 @@
+//! `trol init` and `trol cleanup` (the manual's inittrol and cluptrol, "Initialisierung"):
+//! activate the controller's TROL server with the tool transform of trol.cfg, and end it.
+
+use trol::Robot;
+
+use crate::common::Conn;
+
+const CHECK: &str = "check that the controller is on and connected to this port, that the \
+                     port is the right one (`trol ports` lists them), and that the baud rate \
+                     matches the controller's";
+
+pub fn init(conn: &Conn) -> Result<(), String> {
+    let cfg = conn.config()?;
+    if cfg.port == "sim" {
+        println!(
+            "port sim: the embedded simulator runs inside each program and starts active; \
+             there is nothing to activate. Give --port (or set it in trol.cfg) to activate a \
+             controller on a line."
+        );
+        return Ok(());
+    }
+    let mut robot = Robot::open(&cfg.port, cfg.baud).map_err(|e| format!("{e}; {CHECK}"))?;
+    trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
+    println!(
+        "the TROL server on {} is active (baud {}, tool transform {:?})",
+        cfg.port, cfg.baud, cfg.tool
+    );
+    Ok(())
+}
+
+pub fn cleanup(conn: &Conn) -> Result<(), String> {
+    let cfg = conn.config()?;
+    if cfg.port == "sim" {
+        println!("port sim: the embedded simulator ends with each program; nothing to end.");
+        return Ok(());
+    }
+    let mut robot = Robot::open(&cfg.port, cfg.baud).map_err(|e| format!("{e}; {CHECK}"))?;
+    robot.terminate_pcp().map_err(|e| {
+        format!(
+            "the controller did not take TerminatePCP: {e}. Is its TROL server active (`trol \
+             init`)? Also {CHECK}"
+        )
+    })?;
+    println!(
+        "the TROL server on {} has ended; the controller is back in terminal mode",
+        cfg.port
+    );
+    Ok(())
+}

@@ -1,0 +1,42 @@
+//! Layer-4 records in words, for the simulator's log and the trace.
+
+use trol_proto::application::{Command, Reply, Request};
+
+use crate::interp::commands::format_location;
+
+/// A request: `TROLHome(axis 0)`, or what is wrong with it.
+pub fn request(bytes: &[u8]) -> String {
+    match Request::decode(bytes) {
+        Ok(r) => {
+            let args = format!("{r:?}");
+            // `Home { axis: 0 }` -> `axis: 0`
+            let inner = args
+                .split_once('{')
+                .map(|(_, rest)| rest.trim_end_matches('}').trim().to_string())
+                .unwrap_or_default();
+            format!("{}({inner})", r.command().api_name())
+        }
+        Err(e) => format!(
+            "undecodable request {:02x?}: {e} ({})",
+            &bytes[..bytes.len().min(16)],
+            trol::describe(e.code())
+        ),
+    }
+}
+
+/// A reply to `request`: its value with its name, a location, or the status.
+pub fn reply(request: &[u8], bytes: &[u8]) -> String {
+    let Some(command) = request.first().and_then(|c| Command::from_code(*c)) else {
+        return format!("reply {bytes:02x?}");
+    };
+    match Reply::decode(command, bytes) {
+        Ok(Reply::Code(v)) => trol::describe(v),
+        Ok(Reply::Position(loc)) => format_location(&loc),
+        Ok(Reply::Status { bios_called, last }) => format!(
+            "BIOSCalled {}, lastErrorCode {}",
+            u8::from(bios_called),
+            trol::describe(last)
+        ),
+        Err(e) => format!("reply {bytes:02x?} does not fit {command}: {e}"),
+    }
+}

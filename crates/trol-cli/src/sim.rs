@@ -1,0 +1,162 @@
+//! `trol sim`: the simulated controller as its own process, on a serial device, a new pty,
+//! or TCP. It starts in terminal mode, as a C500 does, until `trol init` activates it.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use clap::Args;
+use trol_a465::arm::{ArmSettings, parse_locations};
+use trol_comm::ServerEvent;
+use trol_controller::{Controller, Mode, Pcp, SimBios, SimSettings};
+use trol_port::Port;
+use trol_proto::link::LinkConfig;
+
+use crate::common::positive;
+use crate::records;
+
+#[derive(Args, Debug)]
+#[command(after_help = "\
+Examples:
+  trol sim                                   # on a new pty; prints its path
+  trol sim --port listen://127.0.0.1:7000    # clients connect to socket://127.0.0.1:7000
+  trol sim --port /dev/ttyUSB1 --baud 38400 --locations examples/locations.txt
+  trol sim --time-scale 20 --table-z -10 --homed
+
+The first line of output names where clients connect: `trol sim: serving on NAME`.")]
+pub struct SimArgs {
+    /// Where to serve: `pty` (a new pseudo-terminal), a serial device, or
+    /// listen://HOST:PORT (port 0 picks a free one).
+    #[arg(long, default_value = "pty")]
+    port: String,
+    /// Baud rate of a serial device.
+    #[arg(long, default_value_t = 9600)]
+    baud: u32,
+    /// The location table to load (docs/a465.md, "Locations").
+    #[arg(long, value_name = "FILE")]
+    locations: Option<PathBuf>,
+    /// Run the simulation this many times faster than real time.
+    #[arg(long, default_value_t = 1.0, value_parser = positive)]
+    time_scale: f64,
+    /// The table plane (world z, mm): the tool tip may not go below it.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    table_z: f64,
+    /// Start homed (a real arm must be homed after power-up).
+    #[arg(long)]
+    homed: bool,
+    /// Width of an object between the fingers, mm: closing stops there.
+    #[arg(long, value_name = "MM")]
+    object: Option<f64>,
+    /// Start in server mode, as if `trol init` had run.
+    #[arg(long)]
+    server: bool,
+}
+
+pub fn run(a: SimArgs) -> Result<(), String> {
+    let locations = match &a.locations {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+            parse_locations(&text).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => Vec::new(),
+    };
+    let n_locations = locations.len();
+    let settings = SimSettings {
+        arm: ArmSettings {
+            table_z: a.table_z,
+            object_width: a.object,
+            homed: a.homed,
+        },
+        time_scale: a.time_scale,
+        locations,
+        tool: [0.0; 6],
+    };
+    // Keep the pty's other end open, so that clients may come and go.
+    let mut _keep: Option<Box<dyn Port>> = None;
+    let (port, name): (Box<dyn Port>, String) = if a.port == "pty" {
+        #[cfg(unix)]
+        {
+            let (master, slave, path) = trol_port::serial::SerialLine::pty_pair()
+                .map_err(|e| format!("cannot create a pty: {e}"))?;
+            _keep = Some(Box::new(slave));
+            (Box::new(master), path)
+        }
+        #[cfg(not(unix))]
+        return Err("pseudo-terminals need a Unix system; use listen://HOST:PORT".into());
+    } else if let Some(addr) = a.port.strip_prefix("listen://") {
+        let line = trol_port::tcp::TcpLine::listen(addr, Duration::from_secs(10))
+            .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+        let at = line
+            .local_addr()
+            .map(|a| format!("socket://{a}"))
+            .unwrap_or_else(|| a.port.clone());
+        (Box::new(line), at)
+    } else {
+        let settings = trol_port::PortSettings {
+            baud: a.baud,
+            ..Default::default()
+        };
+        (
+            trol_port::open(&a.port, &settings).map_err(|e| e.to_string())?,
+            a.port.clone(),
+        )
+    };
+    println!("trol sim: serving on {name}");
+    println!(
+        "  {} mode, time scale {}, table at z = {} mm, {} location(s), {}",
+        if a.server { "server" } else { "terminal" },
+        a.time_scale,
+        a.table_z,
+        n_locations,
+        if a.homed { "homed" } else { "not homed" }
+    );
+    if !a.server {
+        println!("  activate it with: trol init --port {name}");
+    }
+    let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
+    let pcp = Pcp::new(SimBios::new(settings));
+    let mode = if a.server {
+        Mode::Server
+    } else {
+        Mode::Terminal
+    };
+    let mut controller = Controller::new(port, cfg, pcp, mode);
+    controller.set_log(Box::new(|req, reply, ev| match ev {
+        ServerEvent::Executed => {
+            println!(
+                "{} -> {}",
+                records::request(req),
+                records::reply(req, reply)
+            )
+        }
+        ServerEvent::ReplyFailed(e) => println!(
+            "{} -> {} (the reply was lost: {e})",
+            records::request(req),
+            records::reply(req, reply)
+        ),
+        ServerEvent::ReceiveFailed(e) => println!("a request could not be received: {e}"),
+        ServerEvent::Idle => {}
+    }));
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut last_mode = controller.mode();
+    loop {
+        controller
+            .step(Duration::from_millis(50))
+            .map_err(|e| format!("the line failed: {e}"))?;
+        if controller.mode() != last_mode {
+            last_mode = controller.mode();
+            println!(
+                "{}",
+                match last_mode {
+                    Mode::Server => "activated: serving TROL",
+                    Mode::Terminal => "TerminatePCP: back in terminal mode",
+                }
+            );
+        }
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            return Ok(());
+        }
+    }
+}

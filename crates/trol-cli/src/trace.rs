@@ -1,0 +1,442 @@
+//! `trol trace`: the traffic layer by layer. Layer 2's control codes, headers and frames with
+//! their checks; layer 3's transaction numbers; layer 4's records decoded into commands and
+//! replies with their return codes; with times. Either as a spy between an application and
+//! the controller (a relay like `trol link` that also decodes), or from a capture file.
+//!
+//! The capture format is text, one chunk of bytes per line:
+//! `SECONDS DIRECTION HEX`, for example `0.012345 pc 99` (DIRECTION is `pc` for bytes from
+//! the application, `ctl` for bytes from the controller).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::{Args, Subcommand};
+use trol_proto::link::codes::NakCode;
+use trol_proto::link::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, accepts};
+use trol_proto::link::frame::{FRAME_SIZE, HEADER_LEN, frame_count, lrc};
+
+use crate::link::{Side, open_side, relay};
+use crate::records;
+
+#[derive(Subcommand, Debug)]
+pub enum Trace {
+    /// Relay between the controller's port and the application's, and show what passes.
+    ///
+    /// Example: trol trace spy /dev/pts/4 listen://127.0.0.1:7001 --capture run.cap
+    /// (the application then uses --port socket://127.0.0.1:7001)
+    Spy(SpyArgs),
+    /// Decode a capture written by `trol trace spy --capture`.
+    ///
+    /// Example: trol trace read run.cap
+    Read {
+        /// The capture file.
+        file: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct SpyArgs {
+    /// The controller's port: a serial device, a pty, or socket://HOST:PORT.
+    controller: String,
+    /// The application's side: `pty` (a new pseudo-terminal), a serial device, or
+    /// listen://HOST:PORT.
+    application: String,
+    /// Baud rate of serial devices.
+    #[arg(long, default_value_t = 9600)]
+    baud: u32,
+    /// Also write the raw traffic to this capture file.
+    #[arg(long, value_name = "FILE")]
+    capture: Option<PathBuf>,
+}
+
+/// Who sent the bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dir {
+    /// The application (the PC).
+    Pc,
+    /// The controller.
+    Ctl,
+}
+
+impl Dir {
+    fn label(self) -> &'static str {
+        match self {
+            Dir::Pc => "PC  -> CTL",
+            Dir::Ctl => "CTL -> PC ",
+        }
+    }
+    fn word(self) -> &'static str {
+        match self {
+            Dir::Pc => "pc",
+            Dir::Ctl => "ctl",
+        }
+    }
+}
+
+/// One direction's block parser.
+#[derive(Default)]
+struct Stream {
+    pending: Vec<u8>,
+    /// The message being received: its length, PCI, bytes so far (from the header's first
+    /// word), and frames accepted.
+    message: Option<(usize, u16, Vec<u8>, usize)>,
+    /// Terminal text (bytes outside the protocol, shown as text).
+    text: Vec<u8>,
+    /// An ENQ went out from this side: a header may follow (so a byte within one bit of
+    /// SOH starts one; otherwise only SOH itself does, as `>` of a prompt is one bit away).
+    after_enq: bool,
+}
+
+/// Decodes both directions and writes lines to `out`.
+pub struct Decoder<W: Write> {
+    out: W,
+    pc: Stream,
+    ctl: Stream,
+    last_request: Option<(Vec<u8>, f64)>,
+}
+
+impl<W: Write> Decoder<W> {
+    pub fn new(out: W) -> Self {
+        Decoder {
+            out,
+            pc: Stream::default(),
+            ctl: Stream::default(),
+            last_request: None,
+        }
+    }
+
+    fn stream(&mut self, dir: Dir) -> &mut Stream {
+        match dir {
+            Dir::Pc => &mut self.pc,
+            Dir::Ctl => &mut self.ctl,
+        }
+    }
+
+    fn line(&mut self, t: f64, dir: Dir, what: String) {
+        let _ = writeln!(self.out, "{:>10.3} ms  {}  {what}", t * 1e3, dir.label());
+    }
+
+    /// Bytes from `dir` at `t` seconds.
+    pub fn feed(&mut self, t: f64, dir: Dir, bytes: &[u8]) {
+        let s = match dir {
+            Dir::Pc => &mut self.pc,
+            Dir::Ctl => &mut self.ctl,
+        };
+        s.pending.extend_from_slice(bytes);
+        loop {
+            let s = match dir {
+                Dir::Pc => &mut self.pc,
+                Dir::Ctl => &mut self.ctl,
+            };
+            let Some(&b) = s.pending.first() else {
+                break;
+            };
+            // Inside a message, a block starts with SOH or STX; its length is known.
+            let need = if b == SOH || (s.after_enq && accepts(b, SOH)) {
+                HEADER_LEN
+            } else if accepts(b, STX) {
+                match &s.message {
+                    Some((len, _, _, frames)) if *frames < frame_count(*len) => {
+                        let start = 2 + frames * FRAME_SIZE;
+                        (len - start).min(FRAME_SIZE) + 6
+                    }
+                    _ => 1,
+                }
+            } else if accepts(b, NAK) && !(b.is_ascii_graphic() || b == b' ') {
+                // (`R` is one bit from NAK: printable bytes outside a block are text.)
+                2
+            } else {
+                1
+            };
+            if s.pending.len() < need {
+                break;
+            }
+            let block: Vec<u8> = s.pending.drain(..need).collect();
+            self.block(t, dir, &block);
+        }
+    }
+
+    fn flush_text(&mut self, t: f64, dir: Dir) {
+        let s = match dir {
+            Dir::Pc => &mut self.pc,
+            Dir::Ctl => &mut self.ctl,
+        };
+        if s.text.is_empty() {
+            return;
+        }
+        let text = String::from_utf8_lossy(&s.text).escape_debug().to_string();
+        s.text.clear();
+        self.line(t, dir, format!("terminal text \"{text}\""));
+    }
+
+    fn block(&mut self, t: f64, dir: Dir, block: &[u8]) {
+        let b = block[0];
+        if block.len() == 1 && (b.is_ascii_graphic() || b == b' ' || b == b'\r' || b == b'\n') {
+            let s = match dir {
+                Dir::Pc => &mut self.pc,
+                Dir::Ctl => &mut self.ctl,
+            };
+            s.text.push(b);
+            if b == b'\r' || b == b'\n' {
+                self.flush_text(t, dir);
+            }
+            return;
+        }
+        self.flush_text(t, dir);
+        if block.len() == HEADER_LEN && accepts(b, SOH) {
+            self.stream(dir).after_enq = false;
+            let len = u16::from_le_bytes([block[1], block[2]]) as usize;
+            let pci = u16::from_le_bytes([block[3], block[4]]);
+            let bcc = u16::from_le_bytes([block[7], block[8]]);
+            let ok = bcc == lrc(&block[1..7]) && accepts(block[9], ETX);
+            let first: Vec<u8> = block[5..7.min(5 + len)].to_vec();
+            self.line(
+                t,
+                dir,
+                format!(
+                    "HEADER #bytes {len}, PCI {pci:#06x} (transaction {}), first word \
+                     {:02x?}, BCC {bcc:#06x} {}",
+                    pci & 0xFF,
+                    &block[5..7],
+                    if ok { "ok" } else { "WRONG" }
+                ),
+            );
+            let s = match dir {
+                Dir::Pc => &mut self.pc,
+                Dir::Ctl => &mut self.ctl,
+            };
+            s.message = if ok { Some((len, pci, first, 0)) } else { None };
+            return;
+        }
+        if accepts(b, STX) && block.len() > 6 {
+            let n = block.len() - 6;
+            let data = &block[1..1 + n];
+            let fid = u16::from_le_bytes([block[1 + n], block[2 + n]]);
+            let bcc = u16::from_le_bytes([block[3 + n], block[4 + n]]);
+            let end = block[5 + n];
+            let ok = bcc == lrc(&block[1..3 + n]);
+            let term = if accepts(end, ETX) {
+                "ETX"
+            } else if accepts(end, ETB) {
+                "ETB"
+            } else {
+                "bad terminator"
+            };
+            self.line(
+                t,
+                dir,
+                format!(
+                    "FRAME id {fid}, {n} data bytes, BCC {bcc:#06x} {}, {term}",
+                    if ok { "ok" } else { "WRONG" }
+                ),
+            );
+            let s = match dir {
+                Dir::Pc => &mut self.pc,
+                Dir::Ctl => &mut self.ctl,
+            };
+            if let Some((_, _, bytes, frames)) = s.message.as_mut() {
+                if ok && fid as usize == *frames {
+                    bytes.extend_from_slice(data);
+                    *frames += 1;
+                }
+            }
+            return;
+        }
+        if accepts(b, NAK) && block.len() == 2 {
+            let code = NakCode::from_byte(block[1])
+                .map(|c| c.name().to_string())
+                .unwrap_or_else(|| format!("{:#04x}", block[1]));
+            self.line(t, dir, format!("NAK {code}"));
+            return;
+        }
+        let name = if accepts(b, ENQ) {
+            "ENQ"
+        } else if accepts(b, ACK) {
+            "ACK"
+        } else if accepts(b, EOT) {
+            "EOT"
+        } else {
+            let what = control::name_of(b)
+                .map(|n| format!("{n} out of place"))
+                .unwrap_or_else(|| format!("byte {b:#04x} outside a block"));
+            self.line(t, dir, what);
+            return;
+        };
+        self.line(t, dir, name.to_string());
+        self.stream(dir).after_enq = name == "ENQ";
+        if name == "EOT" {
+            self.message_done(t, dir);
+        }
+    }
+
+    fn message_done(&mut self, t: f64, dir: Dir) {
+        let s = match dir {
+            Dir::Pc => &mut self.pc,
+            Dir::Ctl => &mut self.ctl,
+        };
+        let Some((len, pci, bytes, _)) = s.message.take() else {
+            return;
+        };
+        if bytes.len() != len {
+            self.line(
+                t,
+                dir,
+                format!("message incomplete: {} of {len} bytes", bytes.len()),
+            );
+            return;
+        }
+        let n = pci & 0xFF;
+        match dir {
+            Dir::Pc => {
+                let text = records::request(&bytes);
+                self.line(t, dir, format!("REQUEST #{n}: {text}"));
+                self.last_request = Some((bytes, t));
+            }
+            Dir::Ctl => {
+                let (text, after) = match &self.last_request {
+                    Some((req, t0)) => (
+                        records::reply(req, &bytes),
+                        format!(" ({:.1} ms after the request)", (t - t0) * 1e3),
+                    ),
+                    None => (format!("{bytes:02x?}"), String::new()),
+                };
+                self.line(t, dir, format!("REPLY   #{n}: {text}{after}"));
+            }
+        }
+    }
+}
+
+/// Read a capture file into the decoder.
+fn read(file: &PathBuf) -> Result<(), String> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let stdout = std::io::stdout();
+    let mut d = Decoder::new(stdout.lock());
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let bad = |why: &str| {
+            format!(
+                "{}:{}: {why}; expected `SECONDS pc|ctl HEX`, like `0.0125 pc 99`",
+                file.display(),
+                n + 1
+            )
+        };
+        let mut parts = line.split_whitespace();
+        let t: f64 = parts
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| bad("no time"))?;
+        let dir = match parts.next() {
+            Some("pc") => Dir::Pc,
+            Some("ctl") => Dir::Ctl,
+            _ => return Err(bad("no direction")),
+        };
+        let hex: String = parts.collect();
+        if hex.len() % 2 != 0 {
+            return Err(bad("an odd number of hex digits"));
+        }
+        let bytes = (0..hex.len())
+            .step_by(2)
+            .map(|i| u8::from_str_radix(&hex[i..i + 2], 16))
+            .collect::<Result<Vec<u8>, _>>()
+            .map_err(|_| bad("not hex"))?;
+        d.feed(t, dir, &bytes);
+    }
+    Ok(())
+}
+
+pub fn run(t: Trace) -> Result<(), String> {
+    match t {
+        Trace::Read { file } => read(&file),
+        Trace::Spy(a) => {
+            let mut ctl = open_side(&a.controller, a.baud, Side::Controller)?;
+            let mut app = open_side(&a.application, a.baud, Side::Application)?;
+            println!("trol trace: application on {}", app.name);
+            let mut capture = match &a.capture {
+                Some(p) => Some(std::io::BufWriter::new(
+                    std::fs::File::create(p)
+                        .map_err(|e| format!("cannot create {}: {e}", p.display()))?,
+                )),
+                None => None,
+            };
+            let start = Instant::now();
+            let stdout = std::io::stdout();
+            let mut d = Decoder::new(stdout.lock());
+            relay(&mut ctl.port, &mut app.port, &mut |from_app, bytes| {
+                let t = start.elapsed().as_secs_f64();
+                let dir = if from_app { Dir::Pc } else { Dir::Ctl };
+                if let Some(c) = capture.as_mut() {
+                    let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+                    let _ = writeln!(c, "{t:.6} {} {hex}", dir.word());
+                    let _ = c.flush();
+                }
+                d.feed(t, dir, bytes);
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use trol_proto::link::frame::{Header, encode_frame};
+
+    #[test]
+    fn a_transaction_decodes_layer_by_layer() {
+        let mut out = Vec::new();
+        let mut d = Decoder::new(&mut out);
+        // TROLHome(0) as a 2-byte message, travelling in the header alone.
+        let req = [7u8, 0];
+        d.feed(0.0, Dir::Pc, &[ENQ]);
+        d.feed(0.001, Dir::Ctl, &[ACK]);
+        d.feed(0.002, Dir::Pc, &Header::for_message(&req, 1).encode());
+        d.feed(0.003, Dir::Ctl, &[ACK]);
+        d.feed(0.004, Dir::Pc, &[EOT]);
+        // The reply: -1 as a 2-byte message, in pieces.
+        let reply = (-1i16).to_le_bytes();
+        let h = Header::for_message(&reply, 1).encode();
+        d.feed(0.010, Dir::Ctl, &[ENQ]);
+        d.feed(0.011, Dir::Pc, &[ACK]);
+        d.feed(0.012, Dir::Ctl, &h[..4]);
+        d.feed(0.013, Dir::Ctl, &h[4..]);
+        d.feed(0.014, Dir::Pc, &[NAK, 0xF1]);
+        d.feed(0.015, Dir::Ctl, &[EOT]);
+        // A longer request with one frame: MoveII.
+        let long: Vec<u8> = (0..40u8).collect();
+        d.feed(0.02, Dir::Pc, &Header::for_message(&long, 2).encode());
+        let mut f = Vec::new();
+        encode_frame(&long, 0, &mut f);
+        d.feed(0.021, Dir::Pc, &f);
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("PC  -> CTL  ENQ"), "{text}");
+        assert!(
+            text.contains("HEADER #bytes 2, PCI 0x0001 (transaction 1)"),
+            "{text}"
+        );
+        assert!(text.contains("REQUEST #1: TROLHome(axis: 0)"), "{text}");
+        assert!(text.contains("NAK ERR_BCC"), "{text}");
+        assert!(text.contains("REPLY   #1: -1 (BIOS_NOT_HOMED)"), "{text}");
+        assert!(text.contains("FRAME id 0, 38 data bytes, BCC"), "{text}");
+        assert!(text.contains("ok, ETX"), "{text}");
+    }
+
+    #[test]
+    fn terminal_text_and_a_damaged_header_are_shown() {
+        let mut out = Vec::new();
+        let mut d = Decoder::new(&mut out);
+        d.feed(0.0, Dir::Pc, b"PCP TROL\r");
+        d.feed(0.05, Dir::Ctl, b"\r\n>>");
+        d.feed(0.06, Dir::Pc, &[ENQ]);
+        let mut h = Header::for_message(&[7, 0], 1).encode();
+        h[2] ^= 0x10;
+        d.feed(0.1, Dir::Pc, &h);
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("terminal text \"PCP TROL\\r\""), "{text}");
+        assert!(text.contains("CTL -> PC   terminal text \"\\r\""), "{text}");
+        assert!(text.contains("WRONG"), "{text}");
+    }
+}

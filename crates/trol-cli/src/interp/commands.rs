@@ -396,14 +396,13 @@ pub fn parse(tokens: &[Token], line_len: usize) -> Result<Action, SyntaxError> {
     let Some(spec) = find(word) else {
         let mut names: Vec<&str> = SPECS.iter().map(|s| s.command.short_name()).collect();
         names.extend(OWN.iter().map(|o| o.0));
+        let bare = lower.strip_prefix("trol").unwrap_or(&lower);
         let hint = names
             .iter()
-            .find(|n| {
-                let n = n.to_ascii_lowercase();
-                let bare = lower.strip_prefix("trol").unwrap_or(&lower);
-                n.starts_with(bare) || bare.starts_with(&n)
-            })
-            .map(|n| format!("; did you mean `{n}`?"))
+            .map(|n| (edit_distance(&n.to_ascii_lowercase(), bare), n))
+            .filter(|(d, _)| *d <= 2)
+            .min_by_key(|(d, _)| *d)
+            .map(|(_, n)| format!("; did you mean `{n}`?"))
             .unwrap_or_default();
         return Err(SyntaxError::at(
             first,
@@ -417,6 +416,24 @@ pub fn parse(tokens: &[Token], line_len: usize) -> Result<Action, SyntaxError> {
     }
     cur.finish(name)?;
     build(spec, values).map(Action::Call)
+}
+
+/// Levenshtein distance, for "did you mean".
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for j in 0..b.len() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != b[j]))
+                .min(row[j] + 1)
+                .min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
 }
 
 /// A parsed argument.

@@ -100,7 +100,7 @@ impl Session {
                     Outcome::Ok
                 }
                 Err(text) => {
-                    eprintln!("{origin} error: {text}");
+                    eprintln!("{}error: {text}", prefix(origin));
                     Outcome::Failed
                 }
             },
@@ -176,6 +176,15 @@ impl Session {
             )),
             Err(e) => Err(format!("{}: {e}", trol::describe(e.code()))),
         }
+    }
+}
+
+/// `file:line: ` before a message, nothing in a terminal.
+fn prefix(origin: &str) -> String {
+    if origin.is_empty() {
+        String::new()
+    } else {
+        format!("{origin} ")
     }
 }
 

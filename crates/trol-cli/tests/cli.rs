@@ -1,0 +1,503 @@
+//! The built `trol` binary, each subcommand, and the utilities working together across
+//! processes over pseudo-terminals and TCP.
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const TROL: &str = env!("CARGO_BIN_EXE_trol");
+
+/// A scratch folder of this test's own, without a trol.cfg (so the port is `sim`).
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("trol-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn trol(dir: &Path, args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(TROL)
+        .args(args)
+        .current_dir(dir)
+        .env_remove("TROL_CONFIG")
+        .env_remove("RUST_LOG")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start trol");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn text(o: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// A background `trol` process, killed when dropped; its first line of output names where
+/// it serves (`... serving on NAME` / `... applications use NAME`).
+struct Background {
+    child: Child,
+    name: String,
+    lines: std::sync::mpsc::Receiver<String>,
+}
+
+impl Background {
+    fn start(dir: &Path, args: &[&str], marker: &str) -> Background {
+        let mut child = Command::new(TROL)
+            .args(args)
+            .current_dir(dir)
+            .env_remove("TROL_CONFIG")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start trol");
+        let out = BufReader::new(child.stdout.take().unwrap());
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in out.lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let name = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let Ok(line) = rx.recv_timeout(left) else {
+                break None;
+            };
+            if let Some(i) = line.find(marker) {
+                break line[i + marker.len()..]
+                    .split_whitespace()
+                    .next()
+                    .map(|n| n.trim_end_matches(')').to_string());
+            }
+        };
+        let Some(name) = name else {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("trol {args:?} did not say `{marker}`");
+        };
+        Background {
+            child,
+            name,
+            lines: rx,
+        }
+    }
+
+    /// The output lines so far.
+    fn output(&self) -> Vec<String> {
+        self.lines.try_iter().collect()
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn demo_runs_to_the_end_and_every_step_succeeds() {
+    let dir = scratch("demo");
+    let o = trol(&dir, &["demo", "--time-scale", "50"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let steps: Vec<&str> = out.lines().filter(|l| l.contains(" -> ")).collect();
+    assert_eq!(steps.len(), 11, "{out}");
+    for s in &steps {
+        assert!(s.contains("-> 0 (success)"), "{s}");
+    }
+    assert!(out.contains("all 11 steps succeeded"), "{out}");
+    // The arm ends 90 mm above test_001 (400, 0, 150).
+    assert!(
+        steps
+            .last()
+            .unwrap()
+            .contains("x   400.0 y     0.0 z   240.0 mm"),
+        "{out}"
+    );
+}
+
+const SCRIPT: &str = "\
+; the manual's pick example
+TROLHome 0
+finish
+speed 150
+appro test_001 c(-150)
+Appro test_001 (-90) straight
+move test_001 1
+finish wait
+close 60
+finish
+getposition cart commanded
+getposition prec actual
+depart c(-90) 1
+finish
+getposition joint
+getstatus
+";
+
+#[test]
+fn interp_runs_a_script_and_prints_each_result_with_its_name() {
+    let dir = scratch("script");
+    std::fs::write(dir.join("pick.trol"), SCRIPT).unwrap();
+    std::fs::write(
+        dir.join("locations.txt"),
+        "test_001 400 0 150 0 1.5707963 0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locations.txt\n",
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp", "pick.trol"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let results: Vec<&str> = out.lines().collect();
+    assert_eq!(results.len(), 15, "{out}");
+    assert!(
+        results[0].starts_with("TROLHome 0  ->  0 (success)"),
+        "{out}"
+    );
+    assert!(
+        results[9].contains("c(400.000, 0.000, 150.000, 0.00000, 1.57080, 0.00000)"),
+        "{out}"
+    );
+    assert!(results[10].contains("->  p(0, "), "{out}");
+    assert!(
+        results[14].contains("BIOSCalled 1, lastErrorCode 0 (success)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn interp_stops_at_the_first_failure_unless_told_to_go_on() {
+    let dir = scratch("failures");
+    let script = "home 0\nmove nowhere\nready\nclose 200\nfly 3\nfinish\n";
+    let o = trol(&dir, &["interp", "--time-scale", "50"], script);
+    let (out, err) = text(&o);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("<stdin>:2: error: TROLMove failed: -32102 (TROL_ERR_LOCATION)"),
+        "{err}"
+    );
+    assert!(err.contains("stopped at line 2"), "{err}");
+    assert!(!out.contains("ready"), "{out}");
+
+    let o = trol(&dir, &["interp", "-k", "--time-scale", "50"], script);
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(out.contains("ready  ->  0 (success)"), "{out}");
+    assert!(out.contains("finish  ->  0 (success)"), "{out}");
+    assert!(
+        err.contains(
+            "<stdin>:4:7: error: `force` 200 is out of range 1..100 (TROL_ERR_ARG_RANGE, -32003)\n  close 200\n        ^^^"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("<stdin>:5:1: error: unknown command `fly`"),
+        "{err}"
+    );
+    assert!(err.contains("3 command(s) failed"), "{err}");
+}
+
+#[test]
+fn interp_error_messages_point_at_the_column() {
+    let dir = scratch("syntax");
+    let cases = [
+        (
+            "moveii c(400, 0, 150",
+            "1:21: error: expected `)` to close the location begun at column 8",
+        ),
+        (
+            "home",
+            "1:5: error: expected `axis`, a whole number 0..6 after `Home`",
+        ),
+        (
+            "joint 2 abc",
+            "1:9: error: expected `radians`, a number, found `abc`",
+        ),
+        ("speed 0", "1:7: error: `percent` 0 is out of range 1..150"),
+        ("grip 51", "1:6: error: `dist` 51 is out of range 0..50"),
+        (
+            "ma c(0.1)",
+            "1:4: error: MA takes j(...) here, not a cartesian location",
+        ),
+        (
+            "halt 1",
+            "1:6: error: unexpected `1`: Halt takes no more arguments",
+        ),
+        (
+            "move test_001 maybe",
+            "1:15: error: expected the straight flag",
+        ),
+        ("close 5x", "1:7: error: `5x` is not a number"),
+        ("42", "1:1: error: expected a command name"),
+        (
+            "trolfinsh",
+            "1:1: error: unknown command `trolfinsh`; did you mean `Finish`?",
+        ),
+    ];
+    for (line, expected) in cases {
+        let o = trol(&dir, &["interp"], &format!("{line}\n"));
+        let (_, err) = text(&o);
+        assert!(!o.status.success(), "{line}");
+        assert!(err.contains(expected), "{line}: {err}");
+    }
+}
+
+#[test]
+fn interp_help_lists_every_command_with_arguments_and_ranges() {
+    let dir = scratch("help");
+    let o = trol(&dir, &["interp"], "help\nhelp trolclose\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    for name in [
+        "Appro NAME",
+        "ApproII target:",
+        "Close force:1..100",
+        "Depart disp:",
+        "Finish [mode:wait|status]",
+        "Grip dist:0..50",
+        "Halt",
+        "Home axis:0..6",
+        "Jog delta:c(1..3 values)",
+        "Joint joint:1..6 radians:real",
+        "MA joints:j(1..6 values)",
+        "MI joints:",
+        "Move NAME",
+        "MoveII target:c|p(6 values)",
+        "Open force:1..100",
+        "Ready",
+        "SetToolTransform tool:",
+        "Speed percent:1..150",
+        "GetPosition [form:cart|joint|prec] [mode:commanded|actual]",
+        "TerminatePCP",
+        "GetStatus",
+        "delay ms:0..600000",
+    ] {
+        assert!(out.contains(name), "help lacks `{name}`:\n{out}");
+    }
+    assert!(out.contains("TROLClose: close the gripper"), "{out}");
+}
+
+#[test]
+fn subcommands_have_help_with_examples() {
+    let dir = scratch("helps");
+    for sub in [
+        "interp", "init", "cleanup", "sim", "link", "trace", "ports", "bench", "demo",
+    ] {
+        let o = trol(&dir, &[sub, "--help"], "");
+        let (out, _) = text(&o);
+        assert!(o.status.success(), "{sub}");
+        assert!(out.contains("Usage: trol"), "{sub}: {out}");
+        if !["trace", "ports", "bench"].contains(&sub) {
+            assert!(
+                out.contains("Example"),
+                "{sub} --help has no example:\n{out}"
+            );
+        }
+    }
+}
+
+#[test]
+fn ports_lists_or_says_there_are_none() {
+    let dir = scratch("ports");
+    let o = trol(&dir, &["ports"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(!out.trim().is_empty());
+}
+
+#[test]
+fn benches_print_json() {
+    let dir = scratch("bench");
+    let o = trol(&dir, &["bench", "ik", "--poses", "2000", "--json"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["poses"], 2000);
+    assert!(v["ns_per_pose"].as_f64().unwrap() > 0.0);
+    assert!(v["max_position_error_mm"].as_f64().unwrap() < 1e-6);
+
+    let o = trol(&dir, &["bench", "transact", "--count", "50", "--json"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["transactions"], 50);
+    assert_eq!(v["port"], "sim");
+
+    let o = trol(
+        &dir,
+        &[
+            "bench", "link", "--bytes", "600", "--baud", "115200", "--json",
+        ],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["payload_bytes"], 600);
+}
+
+#[test]
+fn init_says_what_to_check_when_the_controller_does_not_answer() {
+    let dir = scratch("silent");
+    // A pty with nobody behind it.
+    let (_master, _slave, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let o = trol(&dir, &["init", "--port", &path], "");
+    let (_, err) = text(&o);
+    assert!(!o.status.success());
+    assert!(err.contains("did not answer"), "{err}");
+    assert!(err.contains("baud rate"), "{err}");
+    let o = trol(&dir, &["cleanup", "--port", &path], "");
+    let (_, err) = text(&o);
+    assert!(!o.status.success());
+    assert!(err.contains("trol init"), "{err}");
+}
+
+/// The whole chain across processes: `trol sim` on a pty, `trol init` on it, `trol link`
+/// from that pty to TCP, a script through the link, `trol cleanup` through it too.
+#[test]
+fn sim_init_link_interp_cleanup_across_processes() {
+    let dir = scratch("chain");
+    std::fs::write(
+        dir.join("locations.txt"),
+        "test_001 400 0 150 0 1.5707963 0\n#park 0 0 0 0 0 0\n",
+    )
+    .unwrap();
+    let sim = Background::start(
+        &dir,
+        &["sim", "--time-scale", "50", "--locations", "locations.txt"],
+        "serving on ",
+    );
+    assert!(sim.name.starts_with("/dev/"), "{}", sim.name);
+    // Before init the controller is in terminal mode: the interpreter finds no server.
+    let o = trol(&dir, &["interp", "--port", &sim.name], "getstatus\n");
+    assert!(!o.status.success());
+    assert!(text(&o).1.contains("trol init"), "{}", text(&o).1);
+
+    let o = trol(&dir, &["init", "--port", &sim.name], "");
+    assert!(o.status.success(), "{:?}", text(&o));
+    assert!(text(&o).0.contains("is active"));
+
+    let link = Background::start(
+        &dir,
+        &["link", &sim.name, "listen://127.0.0.1:0", "--no-init"],
+        "applications use ",
+    );
+    assert!(link.name.starts_with("socket://"), "{}", link.name);
+    std::fs::write(dir.join("pick.trol"), SCRIPT).unwrap();
+    let o = trol(&dir, &["interp", "pick.trol", "--port", &link.name], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.contains("getposition cart commanded  ->  c(400.000, 0.000, 150.000"),
+        "{out}"
+    );
+    // A second client after the first left: the link accepts it.
+    let o = trol(
+        &dir,
+        &["interp", "--port", &link.name],
+        "move #park\nfinish\ngetposition prec\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.contains("getposition prec  ->  p(0, 0, 0, 0, 0, 0)"),
+        "{out}"
+    );
+
+    let o = trol(&dir, &["cleanup", "--port", &link.name], "");
+    assert!(o.status.success(), "{:?}", text(&o));
+    std::thread::sleep(Duration::from_millis(300));
+    let log = sim.output().join("\n");
+    assert!(log.contains("activated: serving TROL"), "{log}");
+    assert!(log.contains("TROLHome(axis: 0) -> 0 (success)"), "{log}");
+    assert!(log.contains("TROLTerminatePCP() -> 0 (success)"), "{log}");
+    assert!(log.contains("back in terminal mode"), "{log}");
+}
+
+/// `trol trace spy` between a simulator on TCP and an application, with a capture, then
+/// `trol trace read` of the capture.
+#[test]
+fn trace_spies_on_a_session_and_reads_its_capture() {
+    let dir = scratch("trace");
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--server",
+            "--homed",
+            "--time-scale",
+            "50",
+        ],
+        "serving on ",
+    );
+    let spy = Background::start(
+        &dir,
+        &[
+            "trace",
+            "spy",
+            &sim.name,
+            "listen://127.0.0.1:0",
+            "--capture",
+            "run.cap",
+        ],
+        "application on ",
+    );
+    let o = trol(
+        &dir,
+        &["interp", "--port", &spy.name],
+        "close 500\nhome 9\n",
+    );
+    // close 500 and home 9 are refused by the interpreter before anything is sent.
+    assert!(!o.status.success());
+    let o = trol(
+        &dir,
+        &["interp", "--port", &spy.name],
+        "joint 1 0.5\nfinish\ngetposition joint\n",
+    );
+    assert!(o.status.success(), "{:?}", text(&o));
+    std::thread::sleep(Duration::from_millis(300));
+    let live = spy.output().join("\n");
+    assert!(live.contains("PC  -> CTL  ENQ"), "{live}");
+    assert!(live.contains("REQUEST #"), "{live}");
+    assert!(live.contains("TROLJoint(joint: 1, radians: 0.5)"), "{live}");
+    assert!(live.contains("REPLY   #"), "{live}");
+    drop(spy);
+    let o = trol(&dir, &["trace", "read", "run.cap"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(out.contains("HEADER #bytes"), "{out}");
+    assert!(out.contains("BCC"), "{out}");
+    assert!(
+        out.contains("TROLGetPosition(tag: Joint, mode: Commanded)"),
+        "{out}"
+    );
+    assert!(out.contains("j(0.50000, 0.00000"), "{out}");
+    assert!(out.contains("ms after the request"), "{out}");
+    // A damaged capture is reported with its line.
+    std::fs::write(dir.join("bad.cap"), "0.1 pc 99\nnonsense\n").unwrap();
+    let o = trol(&dir, &["trace", "read", "bad.cap"], "");
+    assert!(!o.status.success());
+    assert!(text(&o).1.contains("bad.cap:2:"), "{:?}", text(&o));
+}

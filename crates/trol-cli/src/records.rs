@@ -8,7 +8,8 @@ use crate::interp::commands::format_location;
 pub fn request(bytes: &[u8]) -> String {
     match Request::decode(bytes) {
         Ok(r) => {
-            let args = format!("{r:?}");
+            // Debug's `LocName("test_001")` reads better as `"test_001"`.
+            let args = format!("{r:?}").replace("LocName(", "(");
             // `Home { axis: 0 }` -> `axis: 0`
             let inner = args
                 .split_once('{')

@@ -67,27 +67,17 @@ impl Session {
 
     /// Run one line; print its result to stdout, or its error to stderr after `origin`.
     fn line(&mut self, line: &str, origin: &str, echo: bool) -> Outcome {
-        let tokens = match scanner::scan(line) {
-            Ok(t) => t,
-            Err(e) => {
-                eprintln!(
-                    "{origin}{}: error: {}\n{}",
-                    e.col,
-                    e.message,
-                    e.render(line)
-                );
-                return Outcome::Failed;
-            }
-        };
-        let action = match commands::parse(&tokens, line.chars().count()) {
+        let parsed =
+            scanner::scan(line).and_then(|tokens| commands::parse(&tokens, line.chars().count()));
+        let action = match parsed {
             Ok(a) => a,
             Err(e) => {
-                eprintln!(
-                    "{origin}{}: error: {}\n{}",
-                    e.col,
-                    e.message,
-                    e.render(line)
-                );
+                let at = if origin.is_empty() {
+                    format!("column {}", e.col)
+                } else {
+                    format!("{origin}{}", e.col)
+                };
+                eprintln!("{at}: error: {}\n{}", e.message, e.render(line));
                 return Outcome::Failed;
             }
         };
@@ -125,7 +115,8 @@ impl Session {
                         println!("{}  ->  {text}", line.trim());
                     }
                     eprintln!(
-                        "{origin} error: {} failed: {text}",
+                        "{}error: {} failed: {text}",
+                        prefix(origin),
                         req.command().api_name()
                     );
                     Outcome::Failed

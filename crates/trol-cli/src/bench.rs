@@ -105,6 +105,21 @@ struct LinkReport {
     payload_bytes_per_second: f64,
 }
 
+/// Print a report as JSON, or as the line `text` makes of it.
+fn print_report<R: Serialize>(
+    r: &R,
+    json: bool,
+    text: impl FnOnce(&R) -> String,
+) -> Result<(), String> {
+    if json {
+        let out = serde_json::to_string_pretty(r).map_err(|e| e.to_string())?;
+        println!("{out}");
+    } else {
+        println!("{}", text(r));
+    }
+    Ok(())
+}
+
 pub fn run(b: Bench) -> Result<(), String> {
     match b {
         Bench::Link(a) => link(a),
@@ -159,15 +174,10 @@ fn link(a: LinkArgs) -> Result<(), String> {
         }
     }
     let r = best.ok_or("no run")?;
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
-        );
-    } else {
-        println!(
+    print_report(&r, a.json, |r| {
+        format!(
             "{} payload bytes at {} baud: {} bytes on the line, {:.3} s ({:.3} s of line time), \
-             efficiency {:.2} % (frame format allows {:.2} %), {:.0} payload bytes/s",
+                 efficiency {:.2} % (frame format allows {:.2} %), {:.0} payload bytes/s",
             r.payload_bytes,
             r.baud,
             r.wire_bytes,
@@ -176,9 +186,8 @@ fn link(a: LinkArgs) -> Result<(), String> {
             r.efficiency * 100.0,
             r.format_efficiency * 100.0,
             r.payload_bytes_per_second
-        );
-    }
-    Ok(())
+        )
+    })
 }
 
 fn ik(a: IkArgs) -> Result<(), String> {
@@ -239,18 +248,12 @@ fn ik(a: IkArgs) -> Result<(), String> {
         seconds: best,
         ns_per_pose: best * 1e9 / n as f64,
     };
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
-        );
-    } else {
-        println!(
+    print_report(&r, a.json, |r| {
+        format!(
             "{} poses, {:.2} solutions each (largest position error {:.1e} mm): {:.1} ns per pose",
             r.poses, r.solutions_per_pose, r.max_position_error_mm, r.ns_per_pose
-        );
-    }
-    Ok(())
+        )
+    })
 }
 
 fn transact(a: TransactArgs) -> Result<(), String> {
@@ -269,16 +272,10 @@ fn transact(a: TransactArgs) -> Result<(), String> {
         us_per_transaction: seconds * 1e6 / f64::from(a.count),
         transactions_per_second: f64::from(a.count) / seconds,
     };
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
-        );
-    } else {
-        println!(
+    print_report(&r, a.json, |r| {
+        format!(
             "{} transactions on {}: {:.1} us each, {:.0} per second",
             r.transactions, r.port, r.us_per_transaction, r.transactions_per_second
-        );
-    }
-    Ok(())
+        )
+    })
 }

@@ -2,18 +2,16 @@
 //! or TCP. It starts in terminal mode, as a C500 does, until `trol init` activates it.
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use clap::Args;
 use trol_a465::arm::{ArmSettings, parse_locations};
 use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp, SimBios, SimSettings};
-use trol_port::Port;
 use trol_proto::link::LinkConfig;
 
 use crate::common::positive;
+use crate::link::{Side, open_side};
 use crate::records;
 
 #[derive(Args, Debug)]
@@ -53,6 +51,7 @@ pub struct SimArgs {
     server: bool,
 }
 
+/// Serve until the process is stopped (Ctrl-C) or the line fails.
 pub fn run(a: SimArgs) -> Result<(), String> {
     let locations = match &a.locations {
         Some(p) => {
@@ -73,36 +72,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         locations,
         tool: [0.0; 6],
     };
-    // Keep the pty's other end open, so that clients may come and go.
-    let mut _keep: Option<Box<dyn Port>> = None;
-    let (port, name): (Box<dyn Port>, String) = if a.port == "pty" {
-        #[cfg(unix)]
-        {
-            let (master, slave, path) = trol_port::serial::SerialLine::pty_pair()
-                .map_err(|e| format!("cannot create a pty: {e}"))?;
-            _keep = Some(Box::new(slave));
-            (Box::new(master), path)
-        }
-        #[cfg(not(unix))]
-        return Err("pseudo-terminals need a Unix system; use listen://HOST:PORT".into());
-    } else if let Some(addr) = a.port.strip_prefix("listen://") {
-        let line = trol_port::tcp::TcpLine::listen(addr, Duration::from_secs(10))
-            .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
-        let at = line
-            .local_addr()
-            .map(|a| format!("socket://{a}"))
-            .unwrap_or_else(|| a.port.clone());
-        (Box::new(line), at)
-    } else {
-        let settings = trol_port::PortSettings {
-            baud: a.baud,
-            ..Default::default()
-        };
-        (
-            trol_port::open(&a.port, &settings).map_err(|e| e.to_string())?,
-            a.port.clone(),
-        )
-    };
+    // A new pty or a listening socket, like the application's side of a relay.
+    let opened = open_side(&a.port, a.baud, Side::Application)?;
+    let name = opened.name.clone();
     println!("trol sim: serving on {name}");
     println!(
         "  {} mode, time scale {}, table at z = {} mm, {} location(s), {}",
@@ -122,7 +94,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     } else {
         Mode::Terminal
     };
-    let mut controller = Controller::new(port, cfg, pcp, mode);
+    let mut controller = Controller::new(opened.port, cfg, pcp, mode);
     controller.set_log(Box::new(|req, reply, ev| match ev {
         ServerEvent::Executed => {
             println!(
@@ -139,7 +111,6 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         ServerEvent::ReceiveFailed(e) => println!("a request could not be received: {e}"),
         ServerEvent::Idle => {}
     }));
-    let stop = Arc::new(AtomicBool::new(false));
     let mut last_mode = controller.mode();
     loop {
         controller
@@ -154,9 +125,6 @@ pub fn run(a: SimArgs) -> Result<(), String> {
                     Mode::Terminal => "TerminatePCP: back in terminal mode",
                 }
             );
-        }
-        if stop.load(std::sync::atomic::Ordering::Relaxed) {
-            return Ok(());
         }
     }
 }

@@ -613,9 +613,6 @@ impl Arm {
     /// that solution is beyond a limit the line leaves the limits (JOINT_LIMIT); if even the
     /// nearest one is far away the line crosses a singularity (SINGULAR_PATH).
     fn follow(&self, pose: &Pose, prev: &Joints) -> Result<Joints, i16> {
-        if !pose.pos.is_finite() || !pose.rot.is_finite() {
-            return Err(code::BAD_ARGUMENT);
-        }
         let all = self.kin.ik_all(pose, prev);
         let step = |q: &Joints| -> f64 {
             (0..6)
@@ -640,6 +637,9 @@ impl Arm {
     }
 
     fn move_pose(&mut self, to: Pose, straight: bool, now: f64) -> i16 {
+        if !to.pos.is_finite() || !to.rot.is_finite() {
+            return code::BAD_ARGUMENT;
+        }
         // A target below the table says so first, whatever else is wrong with it.
         if to.pos.z < self.settings.table_z - 1e-9 {
             return code::BELOW_TABLE;

@@ -256,6 +256,17 @@ fn bad_axes_and_values_are_refused() {
         arm.ma([0.0, f64::INFINITY, 0.0, 0.0, 0.0, 0.0], 0.0),
         code::BAD_ARGUMENT
     );
+    for straight in [false, true] {
+        let nan = [400.0, f64::NAN, 300.0, 0.0, DOWN, 0.0];
+        assert_eq!(
+            arm.move_to(Target::Cart(nan), straight, 0.0),
+            code::BAD_ARGUMENT
+        );
+        assert_eq!(
+            arm.jog([0.0, 0.0, f64::INFINITY], straight, 0.0),
+            code::BAD_ARGUMENT
+        );
+    }
     assert_eq!(snapshot(&mut arm, 0.0), before);
 }
 

@@ -191,17 +191,12 @@ fn link(a: LinkArgs) -> Result<(), String> {
 }
 
 fn ik(a: IkArgs) -> Result<(), String> {
+    use rand::{Rng, SeedableRng};
     use trol_a465::Kinematics;
     use trol_a465::model::limits;
-    // A small xorshift generator: the poses only need to be spread, not cryptographic, and
-    // the seed makes a run repeatable.
-    let mut state = a.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    let mut uniform = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    // Seeded, so that a run can be repeated.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);
+    let mut uniform = move || rng.random::<f64>();
     let kin = Kinematics::new([0.0, 0.0, 120.0, 0.0, 0.0, 0.0]);
     let lim = limits();
     let n = a.poses as usize;

@@ -140,9 +140,7 @@ pub fn run(a: LinkArgs) -> Result<(), String> {
         "trol link: relaying {} <-> {} (applications use {})",
         a.controller, a.application, app.name
     );
-    let mut bytes = [0u64; 2];
     relay(&mut ctl.port, &mut app.port, &mut |from_app, chunk| {
-        bytes[usize::from(from_app)] += chunk.len() as u64;
         tracing::debug!(
             from = if from_app {
                 "application"

@@ -31,13 +31,34 @@ pub fn reply(request: &[u8], bytes: &[u8]) -> String {
         return format!("reply {bytes:02x?}");
     };
     match Reply::decode(command, bytes) {
-        Ok(Reply::Code(v)) => trol::describe(v),
-        Ok(Reply::Position(loc)) => format_location(&loc),
-        Ok(Reply::Status { bios_called, last }) => format!(
-            "BIOSCalled {}, lastErrorCode {}",
-            u8::from(bios_called),
-            trol::describe(last)
-        ),
+        Ok(r) => reply_text(&r),
         Err(e) => format!("reply {bytes:02x?} does not fit {command}: {e}"),
     }
+}
+
+/// A decoded reply: `0 (success)`, `c(400.000, ...)`, `BIOSCalled 1, lastErrorCode 0 (success)`.
+pub fn reply_text(r: &Reply) -> String {
+    match r {
+        Reply::Code(v) => trol::describe(*v),
+        Reply::Position(loc) => format_location(loc),
+        Reply::Status { bios_called, last } => format!(
+            "BIOSCalled {}, lastErrorCode {}",
+            u8::from(*bios_called),
+            trol::describe(*last)
+        ),
+    }
+}
+
+/// What a return value means, from the BIOS's or the manual's code list (empty if neither
+/// knows it).
+pub fn meaning(v: i16) -> &'static str {
+    trol_a465::arm::code::describe(v)
+        .map(|(_, m)| m)
+        .or_else(|| {
+            trol::errors::TROL_CODES
+                .iter()
+                .find(|c| c.0 == v)
+                .map(|c| c.2)
+        })
+        .unwrap_or("")
 }

@@ -119,16 +119,10 @@ impl<W: Write> Decoder<W> {
 
     /// Bytes from `dir` at `t` seconds.
     pub fn feed(&mut self, t: f64, dir: Dir, bytes: &[u8]) {
-        let s = match dir {
-            Dir::Pc => &mut self.pc,
-            Dir::Ctl => &mut self.ctl,
-        };
+        let s = self.stream(dir);
         s.pending.extend_from_slice(bytes);
         loop {
-            let s = match dir {
-                Dir::Pc => &mut self.pc,
-                Dir::Ctl => &mut self.ctl,
-            };
+            let s = self.stream(dir);
             let Some(&b) = s.pending.first() else {
                 break;
             };
@@ -158,10 +152,7 @@ impl<W: Write> Decoder<W> {
     }
 
     fn flush_text(&mut self, t: f64, dir: Dir) {
-        let s = match dir {
-            Dir::Pc => &mut self.pc,
-            Dir::Ctl => &mut self.ctl,
-        };
+        let s = self.stream(dir);
         if s.text.is_empty() {
             return;
         }
@@ -173,10 +164,7 @@ impl<W: Write> Decoder<W> {
     fn block(&mut self, t: f64, dir: Dir, block: &[u8]) {
         let b = block[0];
         if block.len() == 1 && (b.is_ascii_graphic() || b == b' ' || b == b'\r' || b == b'\n') {
-            let s = match dir {
-                Dir::Pc => &mut self.pc,
-                Dir::Ctl => &mut self.ctl,
-            };
+            let s = self.stream(dir);
             s.text.push(b);
             if b == b'\r' || b == b'\n' {
                 self.flush_text(t, dir);
@@ -202,10 +190,7 @@ impl<W: Write> Decoder<W> {
                     if ok { "ok" } else { "WRONG" }
                 ),
             );
-            let s = match dir {
-                Dir::Pc => &mut self.pc,
-                Dir::Ctl => &mut self.ctl,
-            };
+            let s = self.stream(dir);
             s.message = if ok { Some((len, pci, first, 0)) } else { None };
             return;
         }
@@ -231,10 +216,7 @@ impl<W: Write> Decoder<W> {
                     if ok { "ok" } else { "WRONG" }
                 ),
             );
-            let s = match dir {
-                Dir::Pc => &mut self.pc,
-                Dir::Ctl => &mut self.ctl,
-            };
+            let s = self.stream(dir);
             if let Some((_, _, bytes, frames)) = s.message.as_mut() {
                 if ok && fid as usize == *frames {
                     bytes.extend_from_slice(data);
@@ -271,10 +253,7 @@ impl<W: Write> Decoder<W> {
     }
 
     fn message_done(&mut self, t: f64, dir: Dir) {
-        let s = match dir {
-            Dir::Pc => &mut self.pc,
-            Dir::Ctl => &mut self.ctl,
-        };
+        let s = self.stream(dir);
         let Some((len, pci, bytes, _)) = s.message.take() else {
             return;
         };

@@ -501,3 +501,40 @@ fn trace_spies_on_a_session_and_reads_its_capture() {
     assert!(!o.status.success());
     assert!(text(&o).1.contains("bad.cap:2:"), "{:?}", text(&o));
 }
+
+/// `trol sim`'s options reach the arm: the table height refuses a move that the default
+/// table allows; `--homed` allows motion without TROLHome.
+#[test]
+fn sim_options_set_the_table_and_the_homed_state() {
+    let dir = scratch("simopts");
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--server",
+            "--homed",
+            "--time-scale",
+            "50",
+            "--table-z",
+            "900",
+        ],
+        "serving on ",
+    );
+    // From READY (the tool tip at z 1041.4) down 200 mm: below a table at 900.
+    let o = trol(
+        &dir,
+        &["interp", "--port", &sim.name],
+        "jog (0 0 -100)\nfinish\njog (0 0 -100)\n",
+    );
+    let (out, err) = text(&o);
+    assert!(
+        out.contains("jog (0 0 -100)  ->  0 (success)"),
+        "{out}\n{err}"
+    );
+    assert!(
+        err.contains("<stdin>:3: error: TROLJog failed: -4 (BIOS_BELOW_TABLE)"),
+        "{out}\n{err}"
+    );
+}

@@ -17,7 +17,8 @@ use trol_proto::application::reply::Reply;
 use trol_proto::application::request::{Request, long_wait};
 
 use crate::common::{Conn, waiting};
-use commands::{Action, OWN, SPECS, format_location, usage};
+use crate::records;
+use commands::{Action, OWN, SPECS, usage};
 
 #[derive(Args, Debug)]
 #[command(after_help = "\
@@ -147,24 +148,15 @@ impl Session {
                 if v == 0 || (status && v == 1) {
                     Ok(trol::describe(v))
                 } else {
-                    let meaning = trol_a465::arm::code::describe(v)
-                        .map(|(_, m)| format!(": {m}"))
-                        .or_else(|| {
-                            trol::errors::TROL_CODES
-                                .iter()
-                                .find(|c| c.0 == v)
-                                .map(|c| format!(": {}", c.2))
-                        })
-                        .unwrap_or_default();
-                    Err(format!("{}{meaning}", trol::describe(v)))
+                    let meaning = records::meaning(v);
+                    if meaning.is_empty() {
+                        Err(trol::describe(v))
+                    } else {
+                        Err(format!("{}: {meaning}", trol::describe(v)))
+                    }
                 }
             }
-            Ok(Reply::Position(loc)) => Ok(format_location(&loc)),
-            Ok(Reply::Status { bios_called, last }) => Ok(format!(
-                "BIOSCalled {}, lastErrorCode {}",
-                u8::from(bios_called),
-                trol::describe(last)
-            )),
+            Ok(other) => Ok(records::reply_text(&other)),
             Err(e) => Err(format!("{}: {e}", trol::describe(e.code()))),
         }
     }

@@ -40,30 +40,6 @@ pub mod code {
     /// An axis or joint number outside 0..6 (Home) or 1..6 (Joint), or a value that is not
     /// a finite number.
     pub const BAD_ARGUMENT: i16 = -6;
-
-    /// Name and meaning of a code.
-    pub fn describe(v: i16) -> Option<(&'static str, &'static str)> {
-        Some(match v {
-            OK => ("BIOS_OK", "done"),
-            MOVING => ("BIOS_MOVING", "the arm or the gripper still moves"),
-            NOT_HOMED => ("BIOS_NOT_HOMED", "the arm must be homed first (TROLHome)"),
-            OUT_OF_REACH => ("BIOS_OUT_OF_REACH", "the target or path is out of reach"),
-            JOINT_LIMIT => (
-                "BIOS_JOINT_LIMIT",
-                "the target or path passes a joint limit",
-            ),
-            BELOW_TABLE => ("BIOS_BELOW_TABLE", "the tool tip would go below the table"),
-            SINGULAR_PATH => (
-                "BIOS_SINGULAR_PATH",
-                "the straight line passes a singularity and cannot be followed",
-            ),
-            BAD_ARGUMENT => (
-                "BIOS_BAD_ARGUMENT",
-                "an axis number out of range or a value that is not a number",
-            ),
-            _ => return None,
-        })
-    }
 }
 
 /// A location in the controller's table.

@@ -4,10 +4,10 @@
 mod bench;
 mod common;
 mod demo;
+mod described;
 mod init;
 mod interp;
 mod link;
-mod records;
 mod sim;
 mod trace;
 

@@ -7,12 +7,11 @@ use std::time::Duration;
 use clap::Args;
 use trol_a465::arm::{ArmSettings, parse_locations};
 use trol_comm::ServerEvent;
-use trol_controller::{Controller, Mode, Pcp, SimBios, SimSettings};
+use trol_controller::{Controller, Mode, Pcp, SimBackend, SimSettings};
 use trol_proto::link::LinkConfig;
 
 use crate::common::positive;
 use crate::link::{Side, open_side};
-use crate::records;
 
 #[derive(Args, Debug)]
 #[command(after_help = "\
@@ -49,6 +48,11 @@ pub struct SimArgs {
     /// Start in server mode, as if `trol init` had run.
     #[arg(long)]
     server: bool,
+    /// Commands an application added, described in FILE (docs/extending.md): the log shows
+    /// them by name. `trol sim` has no handlers for them and answers TROL_ERR_UNKNOWN; a
+    /// controller program of the application's own serves them.
+    #[arg(long, value_name = "FILE")]
+    commands: Option<PathBuf>,
 }
 
 /// Serve until the process is stopped (Ctrl-C) or the line fails.
@@ -88,28 +92,36 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         println!("  activate it with: trol init --port {name}");
     }
     let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
-    let pcp = Pcp::new(SimBios::new(settings));
+    let pcp = Pcp::new(SimBackend::new(settings));
+    let described = crate::described::catalog(a.commands.as_deref())?;
     let mode = if a.server {
         Mode::Server
     } else {
         Mode::Terminal
     };
     let mut controller = Controller::new(opened.port, cfg, pcp, mode);
-    controller.set_log(Box::new(|req, reply, ev| match ev {
-        ServerEvent::Executed => {
-            println!(
-                "{} -> {}",
-                records::request(req),
-                records::reply(req, reply)
-            )
+    // The server's own catalog knows what it serves; the described commands name the rest.
+    controller.set_log(Box::new(move |served, req, reply, ev| {
+        let catalog = match req.first() {
+            Some(c) if served.get(*c).is_none() => &described,
+            _ => served,
+        };
+        let codes = trol_controller::SIM_CODES;
+        let (req, reply) = (
+            catalog.request_text(req),
+            catalog.reply_text(req, reply, codes),
+        );
+        match ev {
+            ServerEvent::Executed => println!("{req} -> {reply}"),
+            ServerEvent::ReplyFailed(e) => {
+                println!("{req} -> {reply} (the reply was lost: {e})")
+            }
+            ServerEvent::ReplyTooLong { len } => {
+                println!("{req} -> a reply of {len} bytes, too long to send")
+            }
+            ServerEvent::ReceiveFailed(e) => println!("a request could not be received: {e}"),
+            ServerEvent::Idle | ServerEvent::Pending => {}
         }
-        ServerEvent::ReplyFailed(e) => println!(
-            "{} -> {} (the reply was lost: {e})",
-            records::request(req),
-            records::reply(req, reply)
-        ),
-        ServerEvent::ReceiveFailed(e) => println!("a request could not be received: {e}"),
-        ServerEvent::Idle => {}
     }));
     let mut last_mode = controller.mode();
     loop {

@@ -16,8 +16,9 @@ use trol_proto::link::codes::NakCode;
 use trol_proto::link::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, accepts};
 use trol_proto::link::frame::{FRAME_SIZE, HEADER_LEN, frame_count, lrc};
 
+use trol_proto::application::Catalog;
+
 use crate::link::{Side, open_side, relay};
-use crate::records;
 
 #[derive(Subcommand, Debug)]
 pub enum Trace {
@@ -32,6 +33,10 @@ pub enum Trace {
     Read {
         /// The capture file.
         file: PathBuf,
+        /// Commands an application added, described in FILE (docs/extending.md), shown by
+        /// their names and arguments.
+        #[arg(long, value_name = "FILE")]
+        commands: Option<PathBuf>,
     },
 }
 
@@ -48,6 +53,10 @@ pub struct SpyArgs {
     /// Also write the raw traffic to this capture file.
     #[arg(long, value_name = "FILE")]
     capture: Option<PathBuf>,
+    /// Commands an application added, described in FILE (docs/extending.md), shown by their
+    /// names and arguments.
+    #[arg(long, value_name = "FILE")]
+    commands: Option<PathBuf>,
 }
 
 /// Who sent the bytes.
@@ -91,15 +100,18 @@ struct Stream {
 /// Decodes both directions and writes lines to `out`.
 pub struct Decoder<W: Write> {
     out: W,
+    catalog: Catalog,
     pc: Stream,
     ctl: Stream,
     last_request: Option<(Vec<u8>, f64)>,
 }
 
 impl<W: Write> Decoder<W> {
-    pub fn new(out: W) -> Self {
+    /// A decoder that names records from `catalog`.
+    pub fn new(out: W, catalog: Catalog) -> Self {
         Decoder {
             out,
+            catalog,
             pc: Stream::default(),
             ctl: Stream::default(),
             last_request: None,
@@ -268,14 +280,15 @@ impl<W: Write> Decoder<W> {
         let n = pci & 0xFF;
         match dir {
             Dir::Pc => {
-                let text = records::request(&bytes);
+                let text = self.catalog.request_text(&bytes);
                 self.line(t, dir, format!("REQUEST #{n}: {text}"));
                 self.last_request = Some((bytes, t));
             }
             Dir::Ctl => {
                 let (text, after) = match &self.last_request {
                     Some((req, t0)) => (
-                        records::reply(req, &bytes),
+                        self.catalog
+                            .reply_text(req, &bytes, trol_controller::SIM_CODES),
                         format!(" ({:.1} ms after the request)", (t - t0) * 1e3),
                     ),
                     None => (format!("{bytes:02x?}"), String::new()),
@@ -287,11 +300,11 @@ impl<W: Write> Decoder<W> {
 }
 
 /// Read a capture file into the decoder.
-fn read(file: &PathBuf) -> Result<(), String> {
+fn read(file: &PathBuf, catalog: Catalog) -> Result<(), String> {
     let text = std::fs::read_to_string(file)
         .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
     let stdout = std::io::stdout();
-    let mut d = Decoder::new(stdout.lock());
+    let mut d = Decoder::new(stdout.lock(), catalog);
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -330,8 +343,11 @@ fn read(file: &PathBuf) -> Result<(), String> {
 
 pub fn run(t: Trace) -> Result<(), String> {
     match t {
-        Trace::Read { file } => read(&file),
+        Trace::Read { file, commands } => {
+            read(&file, crate::described::catalog(commands.as_deref())?)
+        }
         Trace::Spy(a) => {
+            let catalog = crate::described::catalog(a.commands.as_deref())?;
             let mut ctl = open_side(&a.controller, a.baud, Side::Controller)?;
             let mut app = open_side(&a.application, a.baud, Side::Application)?;
             println!("trol trace: application on {}", app.name);
@@ -344,7 +360,7 @@ pub fn run(t: Trace) -> Result<(), String> {
             };
             let start = Instant::now();
             let stdout = std::io::stdout();
-            let mut d = Decoder::new(stdout.lock());
+            let mut d = Decoder::new(stdout.lock(), catalog);
             relay(&mut ctl.port, &mut app.port, &mut |from_app, bytes| {
                 let t = start.elapsed().as_secs_f64();
                 let dir = if from_app { Dir::Pc } else { Dir::Ctl };
@@ -367,7 +383,7 @@ mod tests {
     #[test]
     fn a_transaction_decodes_layer_by_layer() {
         let mut out = Vec::new();
-        let mut d = Decoder::new(&mut out);
+        let mut d = Decoder::new(&mut out, Catalog::builtin());
         // TROLHome(0) as a 2-byte message, travelling in the header alone.
         let req = [7u8, 0];
         d.feed(0.0, Dir::Pc, &[ENQ]);
@@ -396,7 +412,7 @@ mod tests {
             text.contains("HEADER #bytes 2, PCI 0x0001 (transaction 1)"),
             "{text}"
         );
-        assert!(text.contains("REQUEST #1: TROLHome(axis: 0)"), "{text}");
+        assert!(text.contains("REQUEST #1: TROLHome 0"), "{text}");
         assert!(text.contains("NAK ERR_BCC"), "{text}");
         assert!(text.contains("REPLY   #1: -1 (BIOS_NOT_HOMED)"), "{text}");
         assert!(text.contains("FRAME id 0, 38 data bytes, BCC"), "{text}");
@@ -406,7 +422,7 @@ mod tests {
     #[test]
     fn terminal_text_and_a_damaged_header_are_shown() {
         let mut out = Vec::new();
-        let mut d = Decoder::new(&mut out);
+        let mut d = Decoder::new(&mut out, Catalog::builtin());
         d.feed(0.0, Dir::Pc, b"PCP TROL\r");
         d.feed(0.05, Dir::Ctl, b"\r\n>>");
         d.feed(0.06, Dir::Pc, &[ENQ]);

@@ -85,8 +85,9 @@ pub trait ErrorHandlers: Send {
     }
 }
 
-/// Which requests ErrAppTimeOut waits longer for, by their bytes.
-pub type TimeoutPolicy = fn(request: &[u8]) -> Option<ExtraWait>;
+/// Which requests ErrAppTimeOut waits longer for, by their bytes (the host API builds it
+/// from its commands' descriptions).
+pub type TimeoutPolicy = std::sync::Arc<dyn Fn(&[u8]) -> Option<ExtraWait> + Send + Sync>;
 
 /// How much longer the default ErrAppTimeOut waits for a request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,7 +99,7 @@ pub enum ExtraWait {
 }
 
 /// The manual's default handlers, with a policy for ErrAppTimeOut.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Default)]
 pub struct DefaultHandlers {
     policy: Option<TimeoutPolicy>,
 }
@@ -113,7 +114,7 @@ impl DefaultHandlers {
 
     /// The manual's ErrAppTimeOut for this policy (usable by other handler sets).
     pub fn app_timeout(
-        policy: Option<TimeoutPolicy>,
+        policy: Option<&TimeoutPolicy>,
         ctx: &AppTimeoutContext<'_>,
     ) -> TimeoutAction {
         match policy.and_then(|p| p(ctx.request)) {
@@ -133,6 +134,6 @@ impl DefaultHandlers {
 
 impl ErrorHandlers for DefaultHandlers {
     fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
-        DefaultHandlers::app_timeout(self.policy, ctx)
+        DefaultHandlers::app_timeout(self.policy.as_ref(), ctx)
     }
 }

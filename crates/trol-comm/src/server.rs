@@ -17,10 +17,19 @@ pub enum ServerEvent {
     Executed,
     /// A request was executed but its reply could not be sent (TRANS_ERR_SEND).
     ReplyFailed(LinkError),
+    /// A request was executed but its reply is longer than layer 2 can carry
+    /// (`trol_proto::link::frame::MAX_MESSAGE`); it was not sent.
+    ReplyTooLong {
+        /// The reply's length.
+        len: usize,
+    },
     /// A request could not be received (TRANS_ERR_RECEIVE); nothing was executed.
     ReceiveFailed(LinkError),
     /// Nothing arrived in the time given.
     Idle,
+    /// A request arrived and `execute` deferred its reply: send it with [`Server::respond`],
+    /// then call [`Server::serve`] again to finish the transaction.
+    Pending,
 }
 
 /// The controller's end of layer 3: receives requests, has them executed, sends replies.
@@ -63,6 +72,23 @@ impl<P: Port> Server<P> {
         &mut self.responder
     }
 
+    /// The request being executed (after [`ServerEvent::Pending`]).
+    pub fn request(&self) -> &[u8] {
+        self.responder.request()
+    }
+
+    /// Send the reply of a request whose execution was deferred.
+    pub fn respond(&mut self, reply: &[u8]) {
+        let now = self.driver.clock().now();
+        self.responder.respond(reply, now);
+    }
+
+    /// Let `d` pass while a deferred request executes, keeping the port's input moving.
+    pub fn wait(&mut self, d: Duration) -> io::Result<()> {
+        let until = self.driver.clock().now() + d;
+        self.driver.run(&mut self.responder, Some(until), |_| false)
+    }
+
     /// Serve until one transaction has ended, or until `idle` has passed with no request
     /// under way. `execute` gets the request bytes and returns the reply bytes (the manual's
     /// MsgReceived).
@@ -71,9 +97,18 @@ impl<P: Port> Server<P> {
         idle: Duration,
         execute: &mut dyn FnMut(&[u8]) -> Vec<u8>,
     ) -> io::Result<ServerEvent> {
+        self.serve_deferrable(idle, &mut |req| Some(execute(req)))
+    }
+
+    /// Like [`Server::serve`], but `execute` may return `None` to defer the reply
+    /// ([`ServerEvent::Pending`]): the server then waits for [`Server::respond`].
+    pub fn serve_deferrable(
+        &mut self,
+        idle: Duration,
+        execute: &mut dyn FnMut(&[u8]) -> Option<Vec<u8>>,
+    ) -> io::Result<ServerEvent> {
         let give_up = self.driver.clock().now() + idle;
         let mut attempts = 0u32;
-        let mut reply_len = 0usize;
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -90,8 +125,9 @@ impl<P: Port> Server<P> {
                 None if self.responder.in_transaction() => continue,
                 None => return Ok(ServerEvent::Idle),
                 Some(ResponderEvent::Request) => {
-                    let reply = execute(self.responder.request());
-                    reply_len = reply.len();
+                    let Some(reply) = execute(self.responder.request()) else {
+                        return Ok(ServerEvent::Pending);
+                    };
                     // Executing may take long (Finish waits for the arm): time the reply
                     // from when it is ready, not from when the request arrived.
                     let ready = self.driver.clock().now();
@@ -104,7 +140,7 @@ impl<P: Port> Server<P> {
                             let error = LinkError::Send(e);
                             let ctx = FailureContext {
                                 error,
-                                message: &[],
+                                message: self.responder.reply(),
                                 pci: self.responder.request_pci(),
                                 attempts,
                             };
@@ -141,14 +177,9 @@ impl<P: Port> Server<P> {
                     // Only a reply that layer 2 refused to start ends up here: the request
                     // was executed, the reply could not go out, and the server listens again.
                     let _ = code;
-                    return Err(io::Error::new(
-                        io::ErrorKind::InvalidInput,
-                        format!(
-                            "the reply of {reply_len} bytes is longer than the {} bytes layer 2 can carry; \
-                             it was not sent",
-                            trol_proto::link::frame::MAX_MESSAGE
-                        ),
-                    ));
+                    return Ok(ServerEvent::ReplyTooLong {
+                        len: self.responder.reply().len(),
+                    });
                 }
             }
         }

@@ -6,10 +6,11 @@ use std::time::{Duration, Instant};
 
 use trol_comm::{Server, ServerEvent};
 use trol_port::Port;
+use trol_proto::application::Catalog;
 use trol_proto::link::LinkConfig;
 
-use crate::bios::Bios;
-use crate::pcp::Pcp;
+use crate::backend::Backend;
+use crate::pcp::{Handled, Pcp};
 use crate::terminal::{PROMPT, Terminal};
 
 /// Which mode the controller is in.
@@ -21,9 +22,14 @@ pub enum Mode {
     Server,
 }
 
-/// A log hook: called after each request with its bytes, its reply's bytes and how the
-/// transaction ended.
-pub type LogFn = Box<dyn FnMut(&[u8], &[u8], ServerEvent) + Send>;
+/// A log hook: called after each request with the server's catalog (to put the request and
+/// reply in words by the commands it knows, added ones included), the request's bytes, the
+/// reply's bytes and how the transaction ended.
+pub type LogFn = Box<dyn FnMut(&Catalog, &[u8], &[u8], ServerEvent) + Send>;
+
+/// How often a deferred reply (Finish(FINISH_WAIT), Home) asks the backend whether the arm
+/// is idle.
+const POLL: Duration = Duration::from_millis(5);
 
 /// The controller: a PCP server over a port.
 pub struct Controller<P, B> {
@@ -32,9 +38,11 @@ pub struct Controller<P, B> {
     mode: Mode,
     terminal: Terminal,
     log: Option<LogFn>,
+    /// The last request and its reply, for the log.
+    last: (Vec<u8>, Vec<u8>),
 }
 
-impl<P: Port, B: Bios> Controller<P, B> {
+impl<P: Port, B: Backend> Controller<P, B> {
     /// A controller on `port` in `mode`.
     pub fn new(port: P, cfg: LinkConfig, pcp: Pcp<B>, mode: Mode) -> Self {
         Controller {
@@ -43,6 +51,7 @@ impl<P: Port, B: Bios> Controller<P, B> {
             mode,
             terminal: Terminal::default(),
             log: None,
+            last: (Vec::new(), Vec::new()),
         }
     }
 
@@ -79,16 +88,38 @@ impl<P: Port, B: Bios> Controller<P, B> {
                 }
             }
             Mode::Server => {
-                let pcp = &mut self.pcp;
-                let mut last: (Vec<u8>, Vec<u8>) = (Vec::new(), Vec::new());
-                let ev = self.server.serve(slice, &mut |req| {
-                    let reply = pcp.handle(req);
-                    last = (req.to_vec(), reply.clone());
-                    reply
-                })?;
-                if ev != ServerEvent::Idle {
+                let ev = if self.pcp.is_pending() {
+                    // A long call: ask the backend between short waits on the line, so the
+                    // thread never sleeps inside the backend.
+                    match self.pcp.poll() {
+                        Some(reply) => {
+                            self.server.respond(&reply);
+                            self.last.1 = reply;
+                            self.server.serve(slice, &mut |_| Vec::new())?
+                        }
+                        None => {
+                            self.server.wait(POLL.min(slice))?;
+                            return Ok(());
+                        }
+                    }
+                } else {
+                    let pcp = &mut self.pcp;
+                    let last = &mut self.last;
+                    self.server.serve_deferrable(slice, &mut |req| {
+                        last.0 = req.to_vec();
+                        last.1.clear();
+                        match pcp.handle(req) {
+                            Handled::Reply(reply) => {
+                                last.1 = reply.clone();
+                                Some(reply)
+                            }
+                            Handled::Pending => None,
+                        }
+                    })?
+                };
+                if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     if let Some(log) = self.log.as_mut() {
-                        log(&last.0, &last.1, ev);
+                        log(self.pcp.catalog(), &self.last.0, &self.last.1, ev);
                     }
                 }
                 if self.pcp.take_terminate() {
@@ -120,7 +151,7 @@ pub struct Embedded {
 
 impl Embedded {
     /// Run `controller` on a thread of its own.
-    pub fn spawn<P: Port + 'static, B: Bios + 'static>(
+    pub fn spawn<P: Port + 'static, B: Backend + 'static>(
         mut controller: Controller<P, B>,
     ) -> Embedded {
         let stop = Arc::new(AtomicBool::new(false));

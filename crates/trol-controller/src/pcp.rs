@@ -2,14 +2,19 @@
 //! one dispatch table per transaction class, indexed by `code - 64·class`, and the
 //! bookkeeping of BIOSCalled and lastErrorCode for GetStatus.
 //!
-//! It is sans-IO: [`Pcp::handle`] takes a request's bytes and returns the reply's bytes
-//! (the manual's MsgReceived). [`crate::Controller`] runs it behind layer 3.
+//! Each entry holds a command's description and its handler. The server decodes a request
+//! from the description (size, then ranges, with the manual's codes) before the handler runs,
+//! so a handler gets checked, typed arguments. It is sans-IO: [`Pcp::handle`] takes a
+//! request's bytes and returns the reply's bytes (the manual's MsgReceived), or says that the
+//! reply waits until the arm is idle; [`Pcp::poll`] then asks the backend and gives the reply
+//! when it is due. [`crate::Controller`] runs it behind layer 3.
 
-use trol_proto::application::codes::{Class, Command};
-use trol_proto::application::errors::{TROL_ERR_UNKNOWN, TROL_RETVAL_RANGE, is_trol_code};
-use trol_proto::application::{Reply, Request};
+use trol_proto::application::code::{Code, TROL_ERR_ARG_RANGE, TROL_RETVAL_RANGE};
+use trol_proto::application::record::Value;
+use trol_proto::application::table;
+use trol_proto::application::{Catalog, CatalogError, Class, CommandDef, Location, Reply, Tag};
 
-use crate::bios::Bios;
+use crate::backend::{Backend, PosMode, Target};
 
 /// What GetStatus reports: whether the last CAT1/CAT2 command called the BIOS, and the
 /// BIOS's value or the TROL code that kept it from being called.
@@ -18,48 +23,58 @@ pub struct Status {
     /// BIOSCalled.
     pub bios_called: bool,
     /// lastErrorCode.
-    pub last_error_code: i16,
+    pub last_error_code: Code,
 }
 
 impl Status {
     /// Record a BIOS call's value; returns what the reply carries (TROL_RETVAL_RANGE for a
     /// value in TROL's range, as CAT2 handlers must do themselves).
-    pub fn record_bios(&mut self, value: i16) -> i16 {
+    pub fn record_bios(&mut self, value: i16) -> Code {
         self.bios_called = true;
-        self.last_error_code = value;
-        if is_trol_code(value) {
+        self.last_error_code = Code(value);
+        if Code(value).is_trol() {
             TROL_RETVAL_RANGE
         } else {
-            value
+            Code(value)
         }
     }
 
     /// Record that the BIOS was not called, and why.
-    pub fn record_refusal(&mut self, code: i16) {
+    pub fn record_refusal(&mut self, code: Code) {
         self.bios_called = false;
         self.last_error_code = code;
     }
 }
 
-/// A CAT1 handler: decodes its request, checks it, calls the BIOS once. `Ok(value)`: the
-/// BIOS was called and returned `value`. `Err(code)`: it was not, for this TROL code. The
-/// server builds the reply from that (manual: CAT1 handlers build no reply themselves).
-pub type Cat1Handler<B> = fn(&mut B, &[u8]) -> Result<i16, i16>;
+/// What a CAT1 handler did: called the BIOS, which returned this value, and whether the
+/// reply is due now or once the arm is idle (Finish(FINISH_WAIT), Home).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Executed {
+    /// Reply now.
+    Now(i16),
+    /// Reply once the backend no longer moves (or with this value at once if it failed).
+    WhenIdle(i16),
+}
+
+/// A CAT1 handler: gets the decoded, checked arguments, calls the BIOS once. `Err(code)`: the
+/// BIOS was not called, for this TROL code. The server builds the reply (manual: CAT1
+/// handlers build no reply themselves) and keeps GetStatus's record.
+pub type Cat1Handler<B> = fn(&mut B, &Call<'_>) -> Result<Executed, Code>;
 
 /// What CAT2..CAT4 handlers work with.
 pub struct Context<'a, B> {
-    /// The BIOS.
-    pub bios: &'a mut B,
+    /// The backend.
+    pub backend: &'a mut B,
     /// BIOSCalled / lastErrorCode (CAT2 handlers must keep it).
     pub status: &'a mut Status,
     /// Set to end server mode once the reply is sent (TerminatePCP).
     pub terminate: &'a mut bool,
 }
 
-/// A handler of CAT2..CAT4: builds its reply itself.
-pub type OtherHandler<B> = fn(&mut Context<'_, B>, &[u8]) -> Vec<u8>;
+/// A handler of CAT2..CAT4: gets the decoded arguments and builds its reply itself.
+pub type OtherHandler<B> = fn(&mut Context<'_, B>, &Call<'_>) -> Reply;
 
-/// A dispatch-table entry.
+/// A dispatch-table entry's handler.
 pub enum Handler<B> {
     /// A CAT1 command.
     Cat1(Cat1Handler<B>),
@@ -69,74 +84,112 @@ pub enum Handler<B> {
 
 impl<B> Clone for Handler<B> {
     fn clone(&self) -> Self {
-        match self {
-            Handler::Cat1(h) => Handler::Cat1(*h),
-            Handler::Other(h) => Handler::Other(*h),
-        }
+        *self
     }
 }
 
-/// Why a handler could not be added.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RegisterError(pub String);
+impl<B> Copy for Handler<B> {}
 
-impl std::fmt::Display for RegisterError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why a command could not be added.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum RegisterError {
+    /// The code is not the next one of its class (the manual's tables have no gaps).
+    #[error("code {code} leaves a gap or repeats one: the next {class} code is {next}")]
+    Gap {
+        /// The code.
+        code: u8,
+        /// Its class.
+        class: Class,
+        /// The next free code of the class.
+        next: usize,
+    },
+    /// A CAT1 code with a handler of another class, or the reverse.
+    #[error("code {code} is {class}; CAT1 codes take a CAT1 handler and the others not")]
+    WrongHandler {
+        /// The code.
+        code: u8,
+        /// Its class.
+        class: Class,
+    },
+    /// The name (or code) is taken.
+    #[error("{0}")]
+    Taken(#[from] CatalogError),
 }
 
-impl std::error::Error for RegisterError {}
+/// The reply a long call waits to send.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    value: Code,
+}
 
-/// The PCP server's layer 4 over a BIOS.
+/// The PCP server's layer 4 over a backend.
 pub struct Pcp<B> {
-    bios: B,
+    backend: B,
     tables: [Vec<Handler<B>>; 4],
+    catalog: Catalog,
     status: Status,
     terminate: bool,
+    pending: Option<Pending>,
 }
 
-impl<B: Bios> Pcp<B> {
+/// What [`Pcp::handle`] did with a request.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Handled {
+    /// Send this reply.
+    Reply(Vec<u8>),
+    /// The reply waits until the backend is idle: call [`Pcp::poll`].
+    Pending,
+}
+
+impl<B: Backend> Pcp<B> {
     /// A server with every built-in command in its table (the manual's `entrypoint()`).
-    pub fn new(bios: B) -> Pcp<B> {
+    pub fn new(backend: B) -> Pcp<B> {
         let mut pcp = Pcp {
-            bios,
+            backend,
             tables: [Vec::new(), Vec::new(), Vec::new(), Vec::new()],
+            catalog: Catalog::builtin(),
             status: Status::default(),
             terminate: false,
+            pending: None,
         };
-        for &c in Command::ALL {
-            let h = match c.class() {
+        for def in table::BUILTIN {
+            let handler = match def.class() {
                 Class::Cat1 => Handler::Cat1(builtin_cat1::<B> as Cat1Handler<B>),
-                Class::Cat2 => unreachable!("no built-in CAT2 commands"),
-                Class::Cat3 | Class::Cat4 => Handler::Other(builtin_other::<B> as OtherHandler<B>),
+                _ => Handler::Other(builtin_other::<B> as OtherHandler<B>),
             };
-            pcp.register(c.code(), h)
-                .expect("built-in codes have no gaps");
+            pcp.enter(def, handler)
+                .expect("the built-in codes have no gaps");
         }
         pcp
     }
-}
 
-impl<B> Pcp<B> {
     /// Add a command (manual, "Modifikation der betroffenen Source-Dateien", step 3:
-    /// `dispatchTableX[code - X*64] = handler`). The code must be the next one of its class,
-    /// so that the table has no gaps; a CAT1 code needs a [`Handler::Cat1`].
-    pub fn register(&mut self, code: u8, handler: Handler<B>) -> Result<(), RegisterError> {
-        let class = Class::of(code);
-        let table = &mut self.tables[class.index()];
+    /// `dispatchTableX[code - X*64] = handler`). Its code must be the next one of its class,
+    /// so that the table has no gaps; a CAT1 code needs a [`Handler::Cat1`]; its name must be
+    /// new. From then on the server decodes, checks, dispatches and logs it by `def`.
+    pub fn register(&mut self, def: CommandDef, handler: Handler<B>) -> Result<(), RegisterError> {
+        self.catalog.add(def)?;
+        self.enter(&def, handler)
+    }
+
+    fn enter(&mut self, def: &CommandDef, handler: Handler<B>) -> Result<(), RegisterError> {
+        let class = def.class();
+        let table = &self.tables[class.index()];
         let next = class.base() as usize + table.len();
-        if code as usize != next {
-            return Err(RegisterError(format!(
-                "code {code} leaves a gap or repeats one: the next {class} code is {next}"
-            )));
+        if def.code as usize != next {
+            return Err(RegisterError::Gap {
+                code: def.code,
+                class,
+                next,
+            });
         }
         if matches!(handler, Handler::Cat1(_)) != (class == Class::Cat1) {
-            return Err(RegisterError(format!(
-                "code {code} is {class}; CAT1 codes take a CAT1 handler and the others not"
-            )));
+            return Err(RegisterError::WrongHandler {
+                code: def.code,
+                class,
+            });
         }
-        table.push(handler);
+        self.tables[class.index()].push(handler);
         Ok(())
     }
 
@@ -145,14 +198,19 @@ impl<B> Pcp<B> {
         class.base() as i32 + self.tables[class.index()].len() as i32 - 1
     }
 
-    /// The BIOS.
-    pub fn bios(&self) -> &B {
-        &self.bios
+    /// The commands this server knows: the built-in ones and the registered ones.
+    pub fn catalog(&self) -> &Catalog {
+        &self.catalog
     }
 
-    /// The BIOS, mutably.
-    pub fn bios_mut(&mut self) -> &mut B {
-        &mut self.bios
+    /// The backend.
+    pub fn backend(&self) -> &B {
+        &self.backend
+    }
+
+    /// The backend, mutably.
+    pub fn backend_mut(&mut self) -> &mut B {
+        &mut self.backend
     }
 
     /// BIOSCalled and lastErrorCode.
@@ -165,117 +223,203 @@ impl<B> Pcp<B> {
         std::mem::take(&mut self.terminate)
     }
 
-    /// MsgReceived: execute a request and build its reply.
-    pub fn handle(&mut self, request: &[u8]) -> Vec<u8> {
-        let Some(&code) = request.first() else {
-            self.status.record_refusal(TROL_ERR_UNKNOWN);
-            return TROL_ERR_UNKNOWN.to_le_bytes().to_vec();
-        };
-        let class = Class::of(code);
-        let index = (code - class.base()) as usize;
-        let Some(handler) = self.tables[class.index()].get(index).cloned() else {
-            if matches!(class, Class::Cat1 | Class::Cat2) {
-                self.status.record_refusal(TROL_ERR_UNKNOWN);
+    /// Whether a reply waits for the arm to be idle.
+    pub fn is_pending(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// MsgReceived: execute a request; its reply, or [`Handled::Pending`].
+    pub fn handle(&mut self, request: &[u8]) -> Handled {
+        let code = request.first().copied();
+        let class = code.map(Class::of);
+        let (def, values) = match self.catalog.decode(request) {
+            Ok((def, values)) => (*def, values),
+            Err(e) => {
+                // A refused CAT1/CAT2 request did not call the BIOS; GetStatus says so.
+                if matches!(class, None | Some(Class::Cat1 | Class::Cat2)) {
+                    self.status.record_refusal(e.code());
+                }
+                return Handled::Reply(Reply::Code(e.code()).encode());
             }
-            return TROL_ERR_UNKNOWN.to_le_bytes().to_vec();
+        };
+        let index = (def.code - def.class().base()) as usize;
+        let handler = self.tables[def.class().index()][index];
+        let call = Call {
+            def: &def,
+            args: &values,
         };
         match handler {
-            Handler::Cat1(h) => {
-                let value = match h(&mut self.bios, request) {
-                    Ok(v) => self.status.record_bios(v),
-                    Err(code) => {
-                        self.status.record_refusal(code);
-                        code
+            Handler::Cat1(h) => match h(&mut self.backend, &call) {
+                Ok(Executed::Now(v)) => {
+                    Handled::Reply(Reply::Code(self.status.record_bios(v)).encode())
+                }
+                Ok(Executed::WhenIdle(v)) => {
+                    let value = self.status.record_bios(v);
+                    if !value.is_success() {
+                        return Handled::Reply(Reply::Code(value).encode());
                     }
-                };
-                value.to_le_bytes().to_vec()
-            }
+                    self.pending = Some(Pending { value });
+                    match self.poll() {
+                        Some(reply) => Handled::Reply(reply),
+                        None => Handled::Pending,
+                    }
+                }
+                Err(code) => {
+                    self.status.record_refusal(code);
+                    Handled::Reply(Reply::Code(code).encode())
+                }
+            },
             Handler::Other(h) => {
                 let mut ctx = Context {
-                    bios: &mut self.bios,
+                    backend: &mut self.backend,
                     status: &mut self.status,
                     terminate: &mut self.terminate,
                 };
-                h(&mut ctx, request)
+                Handled::Reply(h(&mut ctx, &call).encode())
             }
         }
     }
-}
 
-fn six(v: &[f32]) -> [f64; 6] {
-    let mut out = [0.0; 6];
-    for (o, x) in out.iter_mut().zip(v) {
-        *o = *x as f64;
+    /// The pending reply, once the backend is idle (or its link failed: TROL_ERR_ROBOT).
+    pub fn poll(&mut self) -> Option<Vec<u8>> {
+        let pending = self.pending?;
+        let value = match self.backend.moving() {
+            Ok(true) => return None,
+            Ok(false) => pending.value,
+            Err(e) => {
+                self.status.record_refusal(e.code());
+                e.code()
+            }
+        };
+        self.pending = None;
+        Some(Reply::Code(value).encode())
     }
-    out
 }
 
-/// The handler of every built-in CAT1 command: decode (size, then ranges), look names up,
-/// call the BIOS.
-fn builtin_cat1<B: Bios>(bios: &mut B, bytes: &[u8]) -> Result<i16, i16> {
-    use trol_proto::application::errors::TROL_ERR_LOCATION;
-    let req = Request::decode(bytes).map_err(|e| e.code())?;
-    Ok(match req {
-        Request::Appro {
-            name,
-            disp,
-            straight,
-        } => {
-            let target = bios.location(&name).ok_or(TROL_ERR_LOCATION)?;
-            bios.appro(&target, six(&disp), straight)
+/// A decoded request as a handler gets it: the command's description and its checked
+/// arguments, with typed accessors. An accessor of the wrong kind answers TROL_ERR_ARG_RANGE
+/// (it cannot happen for arguments the description declares).
+#[derive(Clone, Copy, Debug)]
+pub struct Call<'a> {
+    /// The command.
+    pub def: &'a CommandDef,
+    /// Its arguments, in the description's order.
+    pub args: &'a [Value],
+}
+
+impl Call<'_> {
+    /// A whole number or a choice's wire value.
+    pub fn int(&self, i: usize) -> Result<u8, Code> {
+        match self.args.get(i) {
+            Some(Value::Int(b)) => Ok(*b),
+            _ => Err(TROL_ERR_ARG_RANGE),
         }
-        Request::ApproII {
-            target,
-            disp,
-            straight,
-        } => bios.appro(&target, six(&disp), straight),
-        Request::Close { force } => bios.close(force),
-        Request::Depart { disp, straight } => bios.depart(six(&disp), straight),
-        Request::Finish { mode } => bios.finish(mode),
-        Request::Grip { dist } => bios.grip(dist),
-        Request::Halt => bios.halt(),
-        Request::Home { axis } => bios.home(axis),
-        Request::Jog { disp, straight } => {
-            let d = six(&disp);
-            bios.jog([d[0], d[1], d[2]], straight)
+    }
+
+    /// The straight flag.
+    pub fn flag(&self, i: usize) -> Result<bool, Code> {
+        match self.args.get(i) {
+            Some(Value::Flag(b)) => Ok(*b),
+            _ => Err(TROL_ERR_ARG_RANGE),
         }
-        Request::Joint { joint, radians } => bios.joint(joint, radians as f64),
-        Request::Ma { joints } => bios.ma(six(&joints)),
-        Request::Mi { joints } => bios.mi(six(&joints)),
-        Request::Move { name, straight } => {
-            let target = bios.location(&name).ok_or(TROL_ERR_LOCATION)?;
-            bios.move_to(&target, straight)
+    }
+
+    /// A real number.
+    pub fn real(&self, i: usize) -> Result<f64, Code> {
+        match self.args.get(i) {
+            Some(Value::Real(x)) => Ok(*x),
+            _ => Err(TROL_ERR_ARG_RANGE),
         }
-        Request::MoveII { target, straight } => bios.move_to(&target, straight),
-        Request::Open { force } => bios.open(force),
-        Request::Ready => bios.ready(),
-        Request::SetToolTransform { tool } => bios.set_tool(six(&tool)),
-        Request::Speed { percent } => bios.speed(percent),
-        Request::GetPosition { .. } | Request::TerminatePcp | Request::GetStatus => {
-            return Err(TROL_ERR_UNKNOWN);
+    }
+
+    /// A location.
+    pub fn loc(&self, i: usize) -> Result<&Location, Code> {
+        match self.args.get(i) {
+            Some(Value::Loc(l)) => Ok(l),
+            _ => Err(TROL_ERR_ARG_RANGE),
         }
-    })
+    }
+
+    /// A location's six values, those not sent 0.
+    pub fn six(&self, i: usize) -> Result<[f64; 6], Code> {
+        self.loc(i).map(Location::to_array6)
+    }
+
+    /// A target: a name of the controller's table, or coordinates.
+    pub fn target(&self, i: usize) -> Result<Target, Code> {
+        match self.args.get(i) {
+            Some(Value::Name(n)) => Ok(Target::Name(*n)),
+            Some(Value::Loc(l)) => Ok(Target::Location(l.clone())),
+            _ => Err(TROL_ERR_ARG_RANGE),
+        }
+    }
+}
+
+/// The handler of every built-in CAT1 command: one BIOS call each, arguments as the table
+/// describes them.
+fn builtin_cat1<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<Executed, Code> {
+    use table::*;
+    let now = |r: Result<i16, crate::BackendError>| r.map(Executed::Now).map_err(Code::from);
+    match c.def.code {
+        TROL_APPRO => now(b.appro(&c.target(0)?, c.six(1)?, c.flag(2)?)),
+        TROL_APPRO_II => now(b.appro(&c.target(0)?, c.six(1)?, c.flag(2)?)),
+        TROL_CLOSE => now(b.close(c.int(0)?)),
+        TROL_DEPART => now(b.depart(c.six(0)?, c.flag(1)?)),
+        TROL_FINISH if c.int(0)? == FINISH_WAIT => Ok(Executed::WhenIdle(0)),
+        TROL_FINISH => b
+            .moving()
+            .map(|m| Executed::Now(i16::from(m)))
+            .map_err(Code::from),
+        TROL_GRIP => now(b.grip(c.int(0)?)),
+        TROL_HALT => now(b.halt()),
+        TROL_HOME => b
+            .home(c.int(0)?)
+            .map(Executed::WhenIdle)
+            .map_err(Code::from),
+        TROL_JOG => {
+            let d = c.six(0)?;
+            now(b.jog([d[0], d[1], d[2]], c.flag(1)?))
+        }
+        TROL_JOINT => now(b.joint(c.int(0)?, c.real(1)?)),
+        TROL_MA => now(b.ma(c.six(0)?)),
+        TROL_MI => now(b.mi(c.six(0)?)),
+        TROL_MOVE => now(b.move_to(&c.target(0)?, c.flag(1)?)),
+        TROL_MOVE_II => now(b.move_to(&c.target(0)?, c.flag(1)?)),
+        TROL_OPEN => now(b.open(c.int(0)?)),
+        TROL_READY => now(b.ready()),
+        TROL_SET_TOOL_TRANSFORM => now(b.set_tool(c.six(0)?)),
+        TROL_SPEED => now(b.speed(c.int(0)?)),
+        _ => Err(trol_proto::application::code::TROL_ERR_UNKNOWN),
+    }
 }
 
 /// The handler of the built-in CAT3 and CAT4 commands.
-fn builtin_other<B: Bios>(ctx: &mut Context<'_, B>, bytes: &[u8]) -> Vec<u8> {
-    let req = match Request::decode(bytes) {
-        Ok(r) => r,
-        Err(e) => return e.code().to_le_bytes().to_vec(),
-    };
-    match req {
-        Request::GetPosition { tag, mode } => {
-            Reply::Position(ctx.bios.position(tag, mode)).encode()
+fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
+    use table::*;
+    match c.def.code {
+        TROL_GET_POSITION => {
+            let (Ok(t), Ok(m)) = (c.int(0), c.int(1)) else {
+                return Reply::Code(TROL_ERR_ARG_RANGE);
+            };
+            let tag = Tag::from_u8(t).unwrap_or(Tag::Cart);
+            let mode = if m == POS_ACT {
+                PosMode::Actual
+            } else {
+                PosMode::Commanded
+            };
+            match ctx.backend.position(tag, mode) {
+                Ok(loc) => Reply::Position(loc),
+                Err(e) => Reply::Code(e.code()),
+            }
         }
-        Request::TerminatePcp => {
+        TROL_TERMINATE_PCP => {
             *ctx.terminate = true;
-            Reply::Code(0).encode()
+            Reply::Code(Code(0))
         }
-        Request::GetStatus => Reply::Status {
+        TROL_GET_STATUS => Reply::Status {
             bios_called: ctx.status.bios_called,
             last: ctx.status.last_error_code,
-        }
-        .encode(),
-        _ => TROL_ERR_UNKNOWN.to_le_bytes().to_vec(),
+        },
+        _ => Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN),
     }
 }

@@ -1,113 +1,106 @@
-//! Layer 4: every request and reply record, encoded and decoded; the refusals with the
-//! manual's codes; the `trol-record` vectors of docs/protocol.md.
+//! Layer 4: every request and reply record, encoded and decoded from the command table; the
+//! refusals with the manual's codes; the `trol-record` vectors of docs/protocol.md.
 
 use proptest::prelude::*;
-use trol_proto::application::codes::*;
-use trol_proto::application::errors::*;
+use trol_proto::application::code::*;
+use trol_proto::application::record::{self, Value};
+use trol_proto::application::table::*;
 use trol_proto::application::*;
 
-fn name(s: &str) -> LocName {
-    LocName::new(s).unwrap()
+fn name(s: &str) -> Value {
+    Value::Name(LocName::new(s).unwrap())
+}
+
+fn cart(v: &[f64]) -> Value {
+    Value::Loc(Location::Cart(v.to_vec()))
+}
+
+fn joints(v: &[f64]) -> Value {
+    Value::Loc(Location::Joint(v.to_vec()))
 }
 
 /// One request of every built-in command.
-fn one_of_each() -> Vec<Request> {
+fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
+    use Value::*;
     vec![
-        Request::Appro {
-            name: name("test_001"),
-            disp: vec![-90.0],
-            straight: true,
-        },
-        Request::ApproII {
-            target: Location::Prec(vec![1000, -2000, 3000, 0, 5, -6]),
-            disp: vec![-50.0, 0.0, 10.0],
-            straight: false,
-        },
-        Request::Close { force: 60 },
-        Request::Depart {
-            disp: vec![-90.0],
-            straight: true,
-        },
-        Request::Finish {
-            mode: FinishMode::Wait,
-        },
-        Request::Grip { dist: 25 },
-        Request::Halt,
-        Request::Home { axis: 0 },
-        Request::Jog {
-            disp: vec![10.0, 0.0, -5.0],
-            straight: true,
-        },
-        Request::Joint {
-            joint: 1,
-            radians: 0.5,
-        },
-        Request::Ma {
-            joints: vec![0.0, 0.5, 1.0, 0.0, 0.5, 0.0],
-        },
-        Request::Mi { joints: vec![0.1] },
-        Request::Move {
-            name: name("p1"),
-            straight: false,
-        },
-        Request::MoveII {
-            target: Location::Cart(vec![400.0, 0.0, 300.0, 0.0, 1.5, 0.0]),
-            straight: true,
-        },
-        Request::Open { force: 100 },
-        Request::Ready,
-        Request::SetToolTransform {
-            tool: vec![0.0, 0.0, 120.0, 0.0, 0.0, 0.0],
-        },
-        Request::Speed { percent: 150 },
-        Request::GetPosition {
-            tag: Tag::Cart,
-            mode: PosMode::Actual,
-        },
-        Request::TerminatePcp,
-        Request::GetStatus,
+        (&APPRO, vec![name("test_001"), cart(&[-90.0]), Flag(true)]),
+        (
+            &APPRO_II,
+            vec![
+                Loc(Location::Prec(vec![1000, -2000, 3000, 0, 5, -6])),
+                cart(&[-50.0, 0.0, 10.0]),
+                Flag(false),
+            ],
+        ),
+        (&CLOSE, vec![Int(60)]),
+        (&DEPART, vec![cart(&[-90.0]), Flag(true)]),
+        (&FINISH, vec![Int(FINISH_WAIT)]),
+        (&GRIP, vec![Int(25)]),
+        (&HALT, vec![]),
+        (&HOME, vec![Int(0)]),
+        (&JOG, vec![cart(&[10.0, 0.0, -5.0]), Flag(true)]),
+        (&JOINT, vec![Int(1), Real(0.5)]),
+        (&MA, vec![joints(&[0.0, 0.5, 1.0, 0.0, 0.5, 0.0])]),
+        (&MI, vec![joints(&[0.1f32 as f64])]),
+        (&MOVE, vec![name("p1"), Flag(false)]),
+        (
+            &MOVE_II,
+            vec![cart(&[400.0, 0.0, 300.0, 0.0, 1.5, 0.0]), Flag(true)],
+        ),
+        (&OPEN, vec![Int(100)]),
+        (&READY, vec![]),
+        (
+            &SET_TOOL_TRANSFORM,
+            vec![cart(&[0.0, 0.0, 120.0, 0.0, 0.0, 0.0])],
+        ),
+        (&SPEED, vec![Int(150)]),
+        (&GET_POSITION, vec![Int(Tag::Cart as u8), Int(POS_ACT)]),
+        (&TERMINATE_PCP, vec![]),
+        (&GET_STATUS, vec![]),
     ]
 }
 
 #[test]
 fn every_builtin_request_round_trips_and_starts_with_its_code() {
     let all = one_of_each();
-    assert_eq!(all.len(), Command::ALL.len());
-    for req in all {
-        let bytes = req.encode();
-        assert_eq!(bytes[0], req.command().code());
-        assert_eq!(Request::decode(&bytes).unwrap(), req);
+    assert_eq!(all.len(), BUILTIN.len());
+    let catalog = Catalog::builtin();
+    for (def, values) in all {
+        let bytes = record::encode(def, &values).unwrap();
+        assert_eq!(bytes[0], def.code);
+        let (back_def, back) = catalog.decode(&bytes).unwrap();
+        assert_eq!(back_def, def);
+        assert_eq!(back, values);
     }
 }
 
 #[test]
 fn depart_packs_num_dims_and_straight_into_one_byte_as_the_manual_does() {
-    let bytes = Request::Depart {
-        disp: vec![-90.0],
-        straight: true,
-    }
-    .encode();
+    let bytes = record::encode(&DEPART, &[cart(&[-90.0]), Value::Flag(true)]).unwrap();
     // code, numDims 1 / tag POS_CART / straight, then one little-endian float.
     assert_eq!(bytes, [TROL_DEPART, 0x15, 0x00, 0x00, 0xB4, 0xC2]);
 }
 
 #[test]
 fn a_request_of_the_wrong_size_is_bad_csize() {
-    for req in one_of_each() {
-        let bytes = req.encode();
+    let catalog = Catalog::builtin();
+    for (def, values) in one_of_each() {
+        let bytes = record::encode(def, &values).unwrap();
         let mut longer = bytes.clone();
         longer.push(0);
         assert_eq!(
-            Request::decode(&longer).unwrap_err().code(),
+            catalog.decode(&longer).unwrap_err().code(),
             TROL_ERR_BAD_CSIZE,
-            "{req:?}"
+            "{}",
+            def.name
         );
         if bytes.len() > 1 {
             let shorter = &bytes[..bytes.len() - 1];
             assert_eq!(
-                Request::decode(shorter).unwrap_err().code(),
+                catalog.decode(shorter).unwrap_err().code(),
                 TROL_ERR_BAD_CSIZE,
-                "{req:?}"
+                "{}",
+                def.name
             );
         }
     }
@@ -115,7 +108,8 @@ fn a_request_of_the_wrong_size_is_bad_csize() {
 
 #[test]
 fn unknown_codes_are_refused_with_trol_err_unknown() {
-    assert_eq!(Request::decode(&[]).unwrap_err().code(), TROL_ERR_UNKNOWN);
+    let catalog = Catalog::builtin();
+    assert_eq!(catalog.decode(&[]).unwrap_err().code(), TROL_ERR_UNKNOWN);
     for code in [
         LAST_CAT1_CODE + 1,
         63,
@@ -125,7 +119,7 @@ fn unknown_codes_are_refused_with_trol_err_unknown() {
         LAST_CAT4_CODE + 1,
         255,
     ] {
-        let e = Request::decode(&[code, 0, 0]).unwrap_err();
+        let e = catalog.decode(&[code, 0, 0]).unwrap_err();
         assert_eq!(e, RequestError::Unknown(Some(code)));
         assert_eq!(e.code(), TROL_ERR_UNKNOWN);
     }
@@ -133,73 +127,63 @@ fn unknown_codes_are_refused_with_trol_err_unknown() {
 
 #[test]
 fn out_of_range_fields_are_arg_range_on_both_sides() {
-    let bad = vec![
-        Request::Close { force: 0 },
-        Request::Open { force: 101 },
-        Request::Grip { dist: 51 },
-        Request::Speed { percent: 0 },
-        Request::Speed { percent: 151 },
-        Request::Home { axis: 7 },
-        Request::Joint {
-            joint: 0,
-            radians: 0.1,
-        },
-        Request::Joint {
-            joint: 7,
-            radians: 0.1,
-        },
-        Request::Joint {
-            joint: 1,
-            radians: f32::NAN,
-        },
-        Request::Jog {
-            disp: vec![1.0; 4],
-            straight: false,
-        },
-        Request::Depart {
-            disp: vec![],
-            straight: false,
-        },
-        Request::Ma {
-            joints: vec![0.0; 7],
-        },
-        Request::MoveII {
-            target: Location::Joint(vec![0.0; 6]),
-            straight: false,
-        },
-        Request::ApproII {
-            target: Location::Cart(vec![f32::INFINITY]),
-            disp: vec![1.0],
-            straight: false,
-        },
+    use Value::*;
+    let bad: Vec<(&CommandDef, Vec<Value>)> = vec![
+        (&CLOSE, vec![Int(0)]),
+        (&OPEN, vec![Int(101)]),
+        (&GRIP, vec![Int(51)]),
+        (&SPEED, vec![Int(0)]),
+        (&SPEED, vec![Int(151)]),
+        (&HOME, vec![Int(7)]),
+        (&JOINT, vec![Int(0), Real(0.1)]),
+        (&JOINT, vec![Int(7), Real(0.1)]),
+        (&JOINT, vec![Int(1), Real(f64::NAN)]),
+        (&JOINT, vec![Int(1), Real(1e39)]),
+        (&JOG, vec![cart(&[1.0; 4]), Flag(false)]),
+        (&DEPART, vec![cart(&[]), Flag(false)]),
+        (&MA, vec![joints(&[0.0; 7])]),
+        (&MOVE_II, vec![joints(&[0.0; 6]), Flag(false)]),
+        (
+            &APPRO_II,
+            vec![cart(&[f64::INFINITY]), cart(&[1.0]), Flag(false)],
+        ),
+        (&FINISH, vec![Int(2)]),
+        (&GET_POSITION, vec![Int(3), Int(0)]),
+        // Wrong kinds and counts.
+        (&HOME, vec![Flag(true)]),
+        (&HOME, vec![]),
     ];
-    for req in bad {
-        assert_eq!(
-            req.validate().unwrap_err().code(),
-            TROL_ERR_ARG_RANGE,
-            "{req:?}"
-        );
-        // The controller checks the same after decoding.
-        let e = Request::decode(&req.encode()).unwrap_err();
-        assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{req:?}: {e}");
+    for (def, values) in &bad {
+        let e = record::encode(def, values).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{}: {e}", def.name);
     }
-    // Fields only the wire can get wrong.
+    // The controller checks the same after decoding: build the bytes by hand.
     let cases: Vec<Vec<u8>> = vec![
+        vec![TROL_CLOSE, 0],
+        vec![TROL_SPEED, 151],
         vec![TROL_FINISH, 2],
         vec![TROL_GET_POSITION, 3, 0],
         vec![TROL_GET_POSITION, 2, 2],
         vec![TROL_MOVE, 2, b'p', b'1', b' ', b' ', b' ', b' ', b' ', b' '],
         vec![TROL_MOVE, 0, b'1', b'p', b' ', b' ', b' ', b' ', b' ', b' '],
+        vec![TROL_MOVE, 0, b'p', b'1', 0, b' ', b' ', b' ', b' ', b' '],
         // MA with the cartesian tag.
         vec![TROL_MA, 0x14, 0, 0, 0, 0],
         // MA with the straight bit.
         vec![TROL_MA, 0x13, 0, 0, 0, 0],
+        // MA with numDims 0 and 7.
+        vec![TROL_MA, 0x02],
+        // Joint with a NaN.
+        vec![TROL_JOINT, 1, 0, 0, 0xC0, 0x7F],
         // ApproII with a non-zero reserved byte.
-        vec![TROL_APPRO_II, 0x14, 0x10, 1, 0, 0, 0, 0, 0, 0, 0, 0],
+        vec![TROL_APPRO_II, 0x14, 0x14, 1, 0, 0, 0, 0, 0, 0, 0, 0],
+        // ApproII with the straight bit on the second location.
+        vec![TROL_APPRO_II, 0x14, 0x15, 0, 0, 0, 0, 0, 0, 0, 0, 0],
     ];
+    let catalog = Catalog::builtin();
     for bytes in cases {
         assert_eq!(
-            Request::decode(&bytes).unwrap_err().code(),
+            catalog.decode(&bytes).unwrap_err().code(),
             TROL_ERR_ARG_RANGE,
             "{bytes:02X?}"
         );
@@ -209,89 +193,86 @@ fn out_of_range_fields_are_arg_range_on_both_sides() {
 #[test]
 fn replies_round_trip_and_bad_sizes_are_bad_rsize() {
     let cases = vec![
-        (Command::Move, Reply::Code(0)),
-        (Command::Finish, Reply::Code(1)),
-        (Command::Joint, Reply::Code(-3)),
-        (Command::Move, Reply::Code(TROL_ERR_LOCATION)),
+        (&MOVE, Reply::Code(Code(0))),
+        (&FINISH, Reply::Code(Code(1))),
+        (&JOINT, Reply::Code(Code(-3))),
+        (&MOVE, Reply::Code(TROL_ERR_LOCATION)),
         (
-            Command::GetPosition,
-            Reply::Position(Location::Cart(vec![1.0, 2.0, 3.0, 0.1, 0.2, 0.3])),
+            &GET_POSITION,
+            Reply::Position(Location::Cart(vec![1.0, 2.0, 3.0, 0.5, 0.25, 0.125])),
         ),
         (
-            Command::GetPosition,
+            &GET_POSITION,
             Reply::Position(Location::Prec(vec![1, -2, 3, 4, 5, 6])),
         ),
-        (Command::GetPosition, Reply::Code(TROL_ERR_BAD_CSIZE)),
+        (&GET_POSITION, Reply::Code(TROL_ERR_BAD_CSIZE)),
         (
-            Command::GetStatus,
+            &GET_STATUS,
             Reply::Status {
                 bios_called: true,
-                last: -32700,
+                last: Code(-32700),
             },
         ),
-        (Command::TerminatePcp, Reply::Code(0)),
+        (&TERMINATE_PCP, Reply::Code(Code(0))),
     ];
-    for (cmd, reply) in cases {
+    for (def, reply) in cases {
         let bytes = reply.encode();
-        assert_eq!(Reply::decode(cmd, &bytes).unwrap(), reply);
+        assert_eq!(Reply::decode(def, &bytes).unwrap(), reply);
         let mut longer = bytes.clone();
         longer.push(0);
         assert_eq!(
-            Reply::decode(cmd, &longer).unwrap_err().code(),
+            Reply::decode(def, &longer).unwrap_err().code(),
             TROL_ERR_BAD_RSIZE
         );
         assert_eq!(
-            Reply::decode(cmd, &bytes[..1]).unwrap_err().code(),
+            Reply::decode(def, &bytes[..1]).unwrap_err().code(),
             TROL_ERR_BAD_RSIZE
         );
     }
-    // A CAT1 reply is one word; a GetStatus value other than 0/1 is not a status.
-    assert!(Reply::decode(Command::Move, &[0, 0, 0, 0]).is_err());
-    assert!(Reply::decode(Command::GetStatus, &[2, 0, 0, 0]).is_err());
+    // A CAT1 reply is one word; a GetStatus value other than 0/1 is not a status; a position
+    // has six values, no more and no fewer.
+    assert!(Reply::decode(&MOVE, &[0, 0, 0, 0]).is_err());
+    assert!(Reply::decode(&GET_STATUS, &[2, 0, 0, 0]).is_err());
+    for n in 0..=8u8 {
+        let mut bytes = vec![0, 0, Tag::Cart as u8, n];
+        bytes.resize(4 + 4 * n as usize, 0);
+        assert_eq!(Reply::decode(&GET_POSITION, &bytes).is_ok(), n == 6, "{n}");
+    }
 }
 
-fn arb_f32s(max: usize) -> impl Strategy<Value = Vec<f32>> {
-    prop::collection::vec(-1.0e4f32..1.0e4, 1..=max)
+fn arb_reals(max: usize) -> impl Strategy<Value = Vec<f64>> {
+    prop::collection::vec((-1.0e4f32..1.0e4).prop_map(f64::from), 1..=max)
 }
 
 fn arb_target() -> impl Strategy<Value = Location> {
     prop_oneof![
         prop::collection::vec(any::<i32>(), 1..=6).prop_map(Location::Prec),
-        arb_f32s(6).prop_map(Location::Cart),
+        arb_reals(6).prop_map(Location::Cart),
     ]
 }
 
-fn arb_request() -> impl Strategy<Value = Request> {
-    let name = "[a-zA-Z#][a-zA-Z0-9_]{0,7}".prop_map(|s| LocName::new(&s).unwrap());
+fn arb_request() -> impl Strategy<Value = (&'static CommandDef, Vec<Value>)> {
+    use Value::*;
+    let name = "[a-zA-Z#][a-zA-Z0-9_]{0,7}".prop_map(|s| Name(LocName::new(&s).unwrap()));
+    let c = |v: Vec<f64>| Loc(Location::Cart(v));
+    let j = |v: Vec<f64>| Loc(Location::Joint(v));
     prop_oneof![
-        (name.clone(), arb_f32s(6), any::<bool>()).prop_map(|(name, disp, straight)| {
-            Request::Appro {
-                name,
-                disp,
-                straight,
-            }
-        }),
-        (arb_target(), arb_f32s(6), any::<bool>()).prop_map(|(target, disp, straight)| {
-            Request::ApproII {
-                target,
-                disp,
-                straight,
-            }
-        }),
-        (1u8..=100).prop_map(|force| Request::Close { force }),
-        (arb_f32s(6), any::<bool>())
-            .prop_map(|(disp, straight)| Request::Depart { disp, straight }),
-        (arb_f32s(3), any::<bool>()).prop_map(|(disp, straight)| Request::Jog { disp, straight }),
-        (1u8..=6, -10.0f32..10.0).prop_map(|(joint, radians)| Request::Joint { joint, radians }),
-        arb_f32s(6).prop_map(|joints| Request::Ma { joints }),
-        arb_f32s(6).prop_map(|joints| Request::Mi { joints }),
-        (name, any::<bool>()).prop_map(|(name, straight)| Request::Move { name, straight }),
-        (arb_target(), any::<bool>())
-            .prop_map(|(target, straight)| Request::MoveII { target, straight }),
-        arb_f32s(6).prop_map(|tool| Request::SetToolTransform { tool }),
-        (1u8..=150).prop_map(|percent| Request::Speed { percent }),
-        (0u8..=50).prop_map(|dist| Request::Grip { dist }),
-        (0u8..=6).prop_map(|axis| Request::Home { axis }),
+        (name.clone(), arb_reals(6), any::<bool>())
+            .prop_map(move |(n, d, s)| (&APPRO, vec![n, c(d), Flag(s)])),
+        (arb_target(), arb_reals(6), any::<bool>())
+            .prop_map(move |(t, d, s)| (&APPRO_II, vec![Loc(t), c(d), Flag(s)])),
+        (1u8..=100).prop_map(|f| (&CLOSE, vec![Int(f)])),
+        (arb_reals(6), any::<bool>()).prop_map(move |(d, s)| (&DEPART, vec![c(d), Flag(s)])),
+        (arb_reals(3), any::<bool>()).prop_map(move |(d, s)| (&JOG, vec![c(d), Flag(s)])),
+        (1u8..=6, -10.0f32..10.0).prop_map(|(n, r)| (&JOINT, vec![Int(n), Real(r.into())])),
+        arb_reals(6).prop_map(move |q| (&MA, vec![j(q)])),
+        arb_reals(6).prop_map(move |q| (&MI, vec![j(q)])),
+        (name, any::<bool>()).prop_map(|(n, s)| (&MOVE, vec![n, Flag(s)])),
+        (arb_target(), any::<bool>()).prop_map(|(t, s)| (&MOVE_II, vec![Loc(t), Flag(s)])),
+        arb_reals(6).prop_map(move |t| (&SET_TOOL_TRANSFORM, vec![c(t)])),
+        (1u8..=150).prop_map(|p| (&SPEED, vec![Int(p)])),
+        (0u8..=50).prop_map(|d| (&GRIP, vec![Int(d)])),
+        (0u8..=6).prop_map(|a| (&HOME, vec![Int(a)])),
     ]
 }
 
@@ -299,20 +280,20 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 2000, failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
-    fn valid_requests_round_trip(req in arb_request()) {
-        prop_assert!(req.validate().is_ok());
-        let bytes = req.encode();
-        prop_assert_eq!(Request::decode(&bytes).unwrap(), req);
+    fn valid_requests_round_trip((def, values) in arb_request()) {
+        let bytes = record::encode(def, &values).unwrap();
+        prop_assert_eq!(record::decode(def, &bytes).unwrap(), values);
     }
 
     #[test]
     fn any_bytes_decode_to_a_request_or_a_code(bytes in prop::collection::vec(any::<u8>(), 0..64)) {
-        match Request::decode(&bytes) {
-            Ok(req) => prop_assert_eq!(req.encode(), bytes.clone()),
+        let catalog = Catalog::builtin();
+        match catalog.decode(&bytes) {
+            Ok((def, values)) => prop_assert_eq!(record::encode(def, &values).unwrap(), bytes.clone()),
             Err(e) => prop_assert!([TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, TROL_ERR_ARG_RANGE].contains(&e.code())),
         }
-        for &c in Command::ALL {
-            let _ = Reply::decode(c, &bytes);
+        for def in BUILTIN {
+            let _ = Reply::decode(def, &bytes);
         }
     }
 }
@@ -324,12 +305,13 @@ fn hex(s: &str) -> Vec<u8> {
 }
 
 /// The `trol-record` blocks of docs/protocol.md: `request:` or `reply-to:`/`reply:` bytes and
-/// the `decoded:` value they stand for. Each is decoded and compared, then encoded again and
-/// compared byte for byte.
+/// the text they stand for (the form the interpreter reads, the trace and the logs print).
+/// Each is decoded and compared, then encoded again and compared byte for byte.
 #[test]
 fn the_record_vectors_of_the_spec_hold() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/protocol.md");
     let doc = std::fs::read_to_string(path).expect("docs/protocol.md");
+    let catalog = Catalog::builtin();
     let mut seen = std::collections::HashSet::new();
     let mut count = 0;
     for block in doc.split("```trol-record").skip(1) {
@@ -341,21 +323,29 @@ fn the_record_vectors_of_the_spec_hold() {
         let decoded = field("decoded:").expect("decoded:");
         if let Some(req) = field("request:") {
             let bytes = hex(&req);
-            let r = Request::decode(&bytes).unwrap_or_else(|e| panic!("{req}: {e}"));
-            assert_eq!(format!("{r:?}"), decoded);
-            assert_eq!(r.encode(), bytes);
-            seen.insert(r.command());
+            let (def, values) = catalog
+                .decode(&bytes)
+                .unwrap_or_else(|e| panic!("{req}: {e}"));
+            assert_eq!(record::format_call(def, &values), decoded);
+            assert_eq!(record::encode(def, &values).unwrap(), bytes);
+            seen.insert(def.code);
         } else {
-            let cmd = Command::from_name(&field("reply-to:").expect("reply-to:")).unwrap();
+            let def = catalog
+                .find(&field("reply-to:").expect("reply-to:"))
+                .unwrap();
             let bytes = hex(&field("reply:").expect("reply:"));
-            let r = Reply::decode(cmd, &bytes).unwrap();
-            assert_eq!(format!("{r:?}"), decoded);
+            let r = Reply::decode(def, &bytes).unwrap();
+            assert_eq!(r.text(&[]), decoded);
             assert_eq!(r.encode(), bytes);
         }
         count += 1;
     }
     assert!(count > 0);
-    let missing: Vec<_> = Command::ALL.iter().filter(|c| !seen.contains(c)).collect();
+    let missing: Vec<_> = BUILTIN
+        .iter()
+        .filter(|d| !seen.contains(&d.code))
+        .map(|d| d.name)
+        .collect();
     assert!(
         missing.is_empty(),
         "commands without a request vector: {missing:?}"
@@ -371,10 +361,11 @@ fn print_record_vectors() {
             .collect::<Vec<_>>()
             .join(" ")
     };
-    for r in one_of_each() {
+    for (def, values) in one_of_each() {
         println!(
-            "```trol-record\nrequest: {}\ndecoded: {r:?}\n```\n",
-            hexs(&r.encode())
+            "```trol-record\nrequest: {}\ndecoded: {}\n```\n",
+            hexs(&record::encode(def, &values).unwrap()),
+            record::format_call(def, &values)
         );
     }
 }

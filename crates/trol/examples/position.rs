@@ -30,7 +30,7 @@ fn main() -> Result<(), trol::Error> {
         let (called, why) = robot.status()?;
         println!(
             "Move(nowhere): {e}; BIOS called {called}, reason {}",
-            trol::describe(why)
+            why.describe(robot.codes())
         );
     }
     Ok(())

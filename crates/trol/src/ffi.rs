@@ -22,12 +22,16 @@ use std::time::Duration;
 use trol_comm::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, FailureContext, Recovery, TimeoutAction,
 };
-use trol_proto::application::codes::Command;
-use trol_proto::application::errors::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
-use trol_proto::application::{FinishMode, LocName, Location, PosMode, Reply, Request, Tag};
+use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
+use trol_proto::application::record::Value;
+use trol_proto::application::table::{self, POS_ACT, POS_COMMANDED};
+use trol_proto::application::{Catalog, CommandDef, LocName, Location, Reply, Tag};
 
 use crate::config::Config;
 use crate::robot::{Error, Robot, timeout_policy};
+
+const ARG_RANGE: TINT = TROL_ERR_ARG_RANGE.0;
+const COMM: TINT = TROL_ERR_COMM.0;
 
 /// signed 32 bit.
 pub type TLONG = i32;
@@ -136,7 +140,10 @@ impl ErrorHandlers for CHandlers {
     }
     fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
         match self.0.app_timeout {
-            None => DefaultHandlers::app_timeout(Some(timeout_policy), ctx),
+            None => {
+                let policy = timeout_policy(Catalog::builtin());
+                DefaultHandlers::app_timeout(Some(&policy), ctx)
+            }
             Some(f) => {
                 let mut copy = ctx.request.to_vec();
                 let mut data = SInData {
@@ -157,48 +164,46 @@ fn guard<T>(fallback: T, f: impl FnOnce() -> T) -> T {
     catch_unwind(AssertUnwindSafe(f)).unwrap_or(fallback)
 }
 
-/// Run a built-in request; errors other than TROL_ERR_ARG_RANGE go through FatalError.
+/// Call a described command; errors other than TROL_ERR_ARG_RANGE go through FatalError.
+/// `read` gets the reply of a successful call.
 fn run(
-    command: Command,
-    build: impl FnOnce() -> Result<Request, TINT>,
-    ok: &[TINT],
+    def: &'static CommandDef,
+    build: impl FnOnce() -> Result<Vec<Value>, TINT>,
     read: impl FnOnce(Reply),
 ) -> TINT {
-    guard(TROL_ERR_COMM, || {
-        let req = match build() {
-            Ok(r) => r,
+    guard(COMM, || {
+        let args = match build() {
+            Ok(a) => a,
             Err(code) => return code,
         };
         let (result, fatal) = {
             let mut st = state();
             let fatal = st.callbacks.fatal;
             let Some(robot) = st.robot.as_mut() else {
-                return fatal_or(fatal, command, TROL_ERR_COMM);
+                return fatal_or(fatal, def.code, COMM);
             };
-            let r = robot.request(&req);
+            let r = robot.call(def, &args);
             if let Some(e) = robot.last_comm_error() {
                 LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
             }
             (r, fatal)
         };
         match result {
-            Ok(Reply::Code(v)) if v == 0 || ok.contains(&v) => v,
-            Ok(Reply::Code(v)) => fatal_or(fatal, command, v),
             Ok(reply) => {
-                let v = reply.value();
+                let v = reply.value().0;
                 read(reply);
                 v
             }
-            Err(Error::Argument(_)) => TROL_ERR_ARG_RANGE,
-            Err(e) => fatal_or(fatal, command, e.code()),
+            Err(Error::Argument(_)) => ARG_RANGE,
+            Err(e) => fatal_or(fatal, def.code, e.code().0),
         }
     })
 }
 
-fn fatal_or(fatal: FatalErrorFn, command: Command, code: TINT) -> TINT {
+fn fatal_or(fatal: FatalErrorFn, command: u8, code: TINT) -> TINT {
     match fatal {
         // SAFETY: the application's handler, called with plain values.
-        Some(f) => unsafe { f(command.code() as TUINT, code) },
+        Some(f) => unsafe { f(command as TUINT, code) },
         None => code,
     }
 }
@@ -206,36 +211,35 @@ fn fatal_or(fatal: FatalErrorFn, command: Command, code: TINT) -> TINT {
 /// Read a location from C, with the tags `allowed`.
 unsafe fn location(p: *const SLocData, allowed: &[Tag]) -> Result<Location, TINT> {
     if p.is_null() {
-        return Err(TROL_ERR_ARG_RANGE);
+        return Err(ARG_RANGE);
     }
     // SAFETY: the caller passes a valid SLocData; it is read unaligned (packed).
     let loc = unsafe { std::ptr::read_unaligned(p) };
     let tag = Tag::from_u8(loc.tag)
         .filter(|t| allowed.contains(t))
-        .ok_or(TROL_ERR_ARG_RANGE)?;
+        .ok_or(ARG_RANGE)?;
     let n = loc.numDims as usize;
     if !(1..=8).contains(&n) {
-        return Err(TROL_ERR_ARG_RANGE);
+        return Err(ARG_RANGE);
     }
     let data = loc.data;
     let words = &data[..n];
+    let real = |w: &u32| f64::from(f32::from_bits(*w));
     Ok(match tag {
         Tag::Prec => Location::Prec(words.iter().map(|w| *w as i32).collect()),
-        Tag::Joint => Location::Joint(words.iter().map(|w| f32::from_bits(*w)).collect()),
-        Tag::Cart => Location::Cart(words.iter().map(|w| f32::from_bits(*w)).collect()),
+        Tag::Joint => Location::Joint(words.iter().map(real).collect()),
+        Tag::Cart => Location::Cart(words.iter().map(real).collect()),
     })
 }
 
-unsafe fn cart(p: *const SLocData) -> Result<Vec<f32>, TINT> {
-    match unsafe { location(p, &[Tag::Cart]) }? {
-        Location::Cart(v) => Ok(v),
-        _ => Err(TROL_ERR_ARG_RANGE),
-    }
+/// A location argument: an SLocData of one of `allowed`'s tags.
+unsafe fn loc_arg(p: *const SLocData, allowed: &[Tag]) -> Result<Value, TINT> {
+    unsafe { location(p, allowed) }.map(Value::Loc)
 }
 
-unsafe fn name(p: *const TUCHAR) -> Result<LocName, TINT> {
+unsafe fn name(p: *const TUCHAR) -> Result<Value, TINT> {
     if p.is_null() {
-        return Err(TROL_ERR_ARG_RANGE);
+        return Err(ARG_RANGE);
     }
     let mut raw = Vec::with_capacity(8);
     for i in 0..8 {
@@ -246,12 +250,18 @@ unsafe fn name(p: *const TUCHAR) -> Result<LocName, TINT> {
         }
         raw.push(b);
     }
-    LocName::from_bytes(&raw).map_err(|_| TROL_ERR_ARG_RANGE)
+    LocName::from_bytes(&raw)
+        .map(Value::Name)
+        .map_err(|_| ARG_RANGE)
 }
 
-fn byte(v: TUINT) -> Result<u8, TINT> {
-    u8::try_from(v).map_err(|_| TROL_ERR_ARG_RANGE)
+fn byte(v: TUINT) -> Result<Value, TINT> {
+    u8::try_from(v).map(Value::Int).map_err(|_| ARG_RANGE)
 }
+
+const CART: &[Tag] = &[Tag::Cart];
+const TARGET: &[Tag] = &[Tag::Cart, Tag::Prec];
+const JOINT: &[Tag] = &[Tag::Joint];
 
 /// TROLAppro.
 #[unsafe(no_mangle)]
@@ -261,15 +271,14 @@ pub unsafe extern "C" fn TROLAppro(
     straight: TUINT,
 ) -> TINT {
     run(
-        Command::Appro,
+        &table::APPRO,
         || {
-            Ok(Request::Appro {
-                name: unsafe { name(locName) }?,
-                disp: unsafe { cart(pDisp) }?,
-                straight: straight != 0,
-            })
+            Ok(vec![
+                unsafe { name(locName) }?,
+                unsafe { loc_arg(pDisp, CART) }?,
+                Value::Flag(straight != 0),
+            ])
         },
-        &[],
         drop,
     )
 }
@@ -282,15 +291,14 @@ pub unsafe extern "C" fn TROLApproII(
     straight: TUINT,
 ) -> TINT {
     run(
-        Command::ApproII,
+        &table::APPRO_II,
         || {
-            Ok(Request::ApproII {
-                target: unsafe { location(pTarget, &[Tag::Cart, Tag::Prec]) }?,
-                disp: unsafe { cart(pDisp) }?,
-                straight: straight != 0,
-            })
+            Ok(vec![
+                unsafe { loc_arg(pTarget, TARGET) }?,
+                unsafe { loc_arg(pDisp, CART) }?,
+                Value::Flag(straight != 0),
+            ])
         },
-        &[],
         drop,
     )
 }
@@ -298,30 +306,20 @@ pub unsafe extern "C" fn TROLApproII(
 /// TROLClose.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLClose(perForce: TUINT) -> TINT {
-    run(
-        Command::Close,
-        || {
-            Ok(Request::Close {
-                force: byte(perForce)?,
-            })
-        },
-        &[],
-        drop,
-    )
+    run(&table::CLOSE, || Ok(vec![byte(perForce)?]), drop)
 }
 
 /// TROLDepart.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLDepart(pDisp: *const SLocData, straight: TUINT) -> TINT {
     run(
-        Command::Depart,
+        &table::DEPART,
         || {
-            Ok(Request::Depart {
-                disp: unsafe { cart(pDisp) }?,
-                straight: straight != 0,
-            })
+            Ok(vec![
+                unsafe { loc_arg(pDisp, CART) }?,
+                Value::Flag(straight != 0),
+            ])
         },
-        &[],
         drop,
     )
 }
@@ -329,62 +327,38 @@ pub unsafe extern "C" fn TROLDepart(pDisp: *const SLocData, straight: TUINT) -> 
 /// TROLFinish: FINISH_STATUS (0) returns 1 while moving, FINISH_WAIT (1) waits.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLFinish(mode: TUINT) -> TINT {
-    run(
-        Command::Finish,
-        || match mode {
-            0 => Ok(Request::Finish {
-                mode: FinishMode::Status,
-            }),
-            1 => Ok(Request::Finish {
-                mode: FinishMode::Wait,
-            }),
-            _ => Err(TROL_ERR_ARG_RANGE),
-        },
-        &[1],
-        drop,
-    )
+    run(&table::FINISH, || Ok(vec![byte(mode)?]), drop)
 }
 
 /// TROLGrip.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLGrip(dist: TUINT) -> TINT {
-    run(
-        Command::Grip,
-        || Ok(Request::Grip { dist: byte(dist)? }),
-        &[],
-        drop,
-    )
+    run(&table::GRIP, || Ok(vec![byte(dist)?]), drop)
 }
 
 /// TROLHalt.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLHalt() -> TINT {
-    run(Command::Halt, || Ok(Request::Halt), &[], drop)
+    run(&table::HALT, || Ok(vec![]), drop)
 }
 
 /// TROLHome.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLHome(axis: TUINT) -> TINT {
-    run(
-        Command::Home,
-        || Ok(Request::Home { axis: byte(axis)? }),
-        &[],
-        drop,
-    )
+    run(&table::HOME, || Ok(vec![byte(axis)?]), drop)
 }
 
 /// TROLJog.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLJog(pDisp: *const SLocData, straight: TUINT) -> TINT {
     run(
-        Command::Jog,
+        &table::JOG,
         || {
-            Ok(Request::Jog {
-                disp: unsafe { cart(pDisp) }?,
-                straight: straight != 0,
-            })
+            Ok(vec![
+                unsafe { loc_arg(pDisp, CART) }?,
+                Value::Flag(straight != 0),
+            ])
         },
-        &[],
         drop,
     )
 }
@@ -393,36 +367,18 @@ pub unsafe extern "C" fn TROLJog(pDisp: *const SLocData, straight: TUINT) -> TIN
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLJoint(jointNum: TUINT, radians: f32) -> TINT {
     run(
-        Command::Joint,
-        || {
-            Ok(Request::Joint {
-                joint: byte(jointNum)?,
-                radians,
-            })
-        },
-        &[],
+        &table::JOINT,
+        || Ok(vec![byte(jointNum)?, Value::Real(f64::from(radians))]),
         drop,
     )
-}
-
-unsafe fn joints(p: *const SLocData) -> Result<Vec<f32>, TINT> {
-    match unsafe { location(p, &[Tag::Joint]) }? {
-        Location::Joint(v) => Ok(v),
-        _ => Err(TROL_ERR_ARG_RANGE),
-    }
 }
 
 /// TROLMA.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLMA(pTarget: *const SLocData) -> TINT {
     run(
-        Command::Ma,
-        || {
-            Ok(Request::Ma {
-                joints: unsafe { joints(pTarget) }?,
-            })
-        },
-        &[],
+        &table::MA,
+        || Ok(vec![unsafe { loc_arg(pTarget, JOINT) }?]),
         drop,
     )
 }
@@ -431,13 +387,8 @@ pub unsafe extern "C" fn TROLMA(pTarget: *const SLocData) -> TINT {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLMI(pDisp: *const SLocData) -> TINT {
     run(
-        Command::Mi,
-        || {
-            Ok(Request::Mi {
-                joints: unsafe { joints(pDisp) }?,
-            })
-        },
-        &[],
+        &table::MI,
+        || Ok(vec![unsafe { loc_arg(pDisp, JOINT) }?]),
         drop,
     )
 }
@@ -446,14 +397,8 @@ pub unsafe extern "C" fn TROLMI(pDisp: *const SLocData) -> TINT {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLMove(locName: *const TUCHAR, straight: TUINT) -> TINT {
     run(
-        Command::Move,
-        || {
-            Ok(Request::Move {
-                name: unsafe { name(locName) }?,
-                straight: straight != 0,
-            })
-        },
-        &[],
+        &table::MOVE,
+        || Ok(vec![unsafe { name(locName) }?, Value::Flag(straight != 0)]),
         drop,
     )
 }
@@ -462,14 +407,13 @@ pub unsafe extern "C" fn TROLMove(locName: *const TUCHAR, straight: TUINT) -> TI
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLMoveII(pTarget: *const SLocData, straight: TUINT) -> TINT {
     run(
-        Command::MoveII,
+        &table::MOVE_II,
         || {
-            Ok(Request::MoveII {
-                target: unsafe { location(pTarget, &[Tag::Cart, Tag::Prec]) }?,
-                straight: straight != 0,
-            })
+            Ok(vec![
+                unsafe { loc_arg(pTarget, TARGET) }?,
+                Value::Flag(straight != 0),
+            ])
         },
-        &[],
         drop,
     )
 }
@@ -477,35 +421,21 @@ pub unsafe extern "C" fn TROLMoveII(pTarget: *const SLocData, straight: TUINT) -
 /// TROLOpen.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLOpen(perForce: TUINT) -> TINT {
-    run(
-        Command::Open,
-        || {
-            Ok(Request::Open {
-                force: byte(perForce)?,
-            })
-        },
-        &[],
-        drop,
-    )
+    run(&table::OPEN, || Ok(vec![byte(perForce)?]), drop)
 }
 
 /// TROLReady.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLReady() -> TINT {
-    run(Command::Ready, || Ok(Request::Ready), &[], drop)
+    run(&table::READY, || Ok(vec![]), drop)
 }
 
 /// TROLSetToolTransform.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLSetToolTransform(md: *const SLocData) -> TINT {
     run(
-        Command::SetToolTransform,
-        || {
-            Ok(Request::SetToolTransform {
-                tool: unsafe { cart(md) }?,
-            })
-        },
-        &[],
+        &table::SET_TOOL_TRANSFORM,
+        || Ok(vec![unsafe { loc_arg(md, CART) }?]),
         drop,
     )
 }
@@ -513,100 +443,92 @@ pub unsafe extern "C" fn TROLSetToolTransform(md: *const SLocData) -> TINT {
 /// TROLSpeed.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLSpeed(perMaxSpeed: TUINT) -> TINT {
-    run(
-        Command::Speed,
-        || {
-            Ok(Request::Speed {
-                percent: byte(perMaxSpeed)?,
-            })
-        },
-        &[],
-        drop,
-    )
+    run(&table::SPEED, || Ok(vec![byte(perMaxSpeed)?]), drop)
 }
 
 /// TROLGetPosition: the form is read from pos->tag; mode POS_COMMANDED (0) or POS_ACT (1).
+/// A reply in another form than asked for is TROL_ERR_BAD_RSIZE, and *pos is left alone.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLGetPosition(pos: *mut SLocData, mode: TINT) -> TINT {
     if pos.is_null() {
-        return TROL_ERR_ARG_RANGE;
+        return ARG_RANGE;
     }
     // SAFETY: a valid SLocData from the caller.
     let tag_byte = unsafe { std::ptr::read_unaligned(pos) }.tag;
     let mut out = None;
     let r = run(
-        Command::GetPosition,
+        &table::GET_POSITION,
         || {
-            let tag = Tag::from_u8(tag_byte).ok_or(TROL_ERR_ARG_RANGE)?;
             let mode = match mode {
-                0 => PosMode::Commanded,
-                1 => PosMode::Actual,
-                _ => return Err(TROL_ERR_ARG_RANGE),
+                0 => POS_COMMANDED,
+                1 => POS_ACT,
+                _ => return Err(ARG_RANGE),
             };
-            Ok(Request::GetPosition { tag, mode })
+            Ok(vec![Value::Int(tag_byte), Value::Int(mode)])
         },
-        &[],
         |reply| {
             if let Reply::Position(loc) = reply {
                 out = Some(loc);
             }
         },
     );
-    if let Some(loc) = out {
-        let mut data = [0u32; 8];
-        let n = loc.num_dims().min(8);
-        match &loc {
-            Location::Prec(v) => v
-                .iter()
-                .take(8)
-                .enumerate()
-                .for_each(|(i, x)| data[i] = *x as u32),
-            Location::Joint(v) | Location::Cart(v) => v
-                .iter()
-                .take(8)
-                .enumerate()
-                .for_each(|(i, x)| data[i] = x.to_bits()),
+    match out {
+        Some(loc) if loc.tag() as u8 == tag_byte => {
+            let mut data = [0u32; 8];
+            let n = loc.num_dims().min(8);
+            match &loc {
+                Location::Prec(v) => v
+                    .iter()
+                    .take(8)
+                    .enumerate()
+                    .for_each(|(i, x)| data[i] = *x as u32),
+                Location::Joint(v) | Location::Cart(v) => v
+                    .iter()
+                    .take(8)
+                    .enumerate()
+                    .for_each(|(i, x)| data[i] = (*x as f32).to_bits()),
+            }
+            let value = SLocData {
+                tag: loc.tag() as u8,
+                numDims: n as u8,
+                data,
+            };
+            // SAFETY: as above.
+            unsafe { std::ptr::write_unaligned(pos, value) };
+            r
         }
-        let value = SLocData {
-            tag: loc.tag() as u8,
-            numDims: n as u8,
-            data,
-        };
-        // SAFETY: as above.
-        unsafe { std::ptr::write_unaligned(pos, value) };
+        Some(_) => trol_proto::application::code::TROL_ERR_BAD_RSIZE.0,
+        None => r,
     }
-    r
 }
 
 /// TROLTerminatePCP.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLTerminatePCP() -> TINT {
-    run(
-        Command::TerminatePcp,
-        || Ok(Request::TerminatePcp),
-        &[],
-        drop,
-    )
+    run(&table::TERMINATE_PCP, || Ok(vec![]), drop)
 }
 
 /// TROLGetStatus: 1 if the last CAT1/CAT2 command called the BIOS (its value in
-/// *lastBIOSRetVal), 0 if not (the TROL code why in *lastBIOSRetVal).
+/// *lastBIOSRetVal), 0 if not (the TROL code why in *lastBIOSRetVal). NULL is
+/// TROL_ERR_ARG_RANGE, and nothing is sent.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TROLGetStatus(lastBIOSRetVal: *mut std::ffi::c_int) -> TINT {
+    if lastBIOSRetVal.is_null() {
+        return ARG_RANGE;
+    }
     let mut last = None;
     let r = run(
-        Command::GetStatus,
-        || Ok(Request::GetStatus),
-        &[1],
+        &table::GET_STATUS,
+        || Ok(vec![]),
         |reply| {
             if let Reply::Status { last: l, .. } = reply {
                 last = Some(l);
             }
         },
     );
-    if let (Some(l), false) = (last, lastBIOSRetVal.is_null()) {
+    if let Some(l) = last {
         // SAFETY: the caller's int.
-        unsafe { *lastBIOSRetVal = l as std::ffi::c_int };
+        unsafe { *lastBIOSRetVal = std::ffi::c_int::from(l.0) };
     }
     r
 }

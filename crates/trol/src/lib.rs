@@ -13,6 +13,9 @@
 //! robot.finish()?;
 //! let joints = robot.position(Tag::Joint, PosMode::Commanded)?;
 //! assert!((joints.to_array6()[0] - 0.5).abs() < 1e-6);
+//! // Every command is also reachable through its description, built-in or added:
+//! let reply = robot.call(&trol::table::GET_STATUS, &[])?;
+//! assert_eq!(reply.text(robot.codes()), "BIOSCalled 1, lastErrorCode 0 (success)");
 //! # Ok::<(), trol::Error>(())
 //! ```
 //!
@@ -26,22 +29,25 @@ pub mod ffi;
 mod robot;
 
 pub use config::{Config, ConfigError};
-pub use robot::{Error, Result, Robot, timeout_policy};
+pub use robot::{Error, PosMode, Result, Robot, SetupError, timeout_policy};
 pub use trol_controller::SimSettings;
-pub use trol_proto::application::codes::Command;
-pub use trol_proto::application::errors;
-pub use trol_proto::application::{FinishMode, LocName, Location, PosMode, Tag};
+pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
+pub use trol_proto::application::record::Value;
+pub use trol_proto::application::table;
+pub use trol_proto::application::{
+    Arg, ArgKind, Catalog, Choice, CommandDef, LocName, Location, Reply, ReplyKind, Tag, Wait,
+};
 
 use trol_a465::arm::{ArmSettings, parse_locations};
-use trol_proto::application::errors::trol_code_name;
 
 /// The settings of the embedded controller from trol.cfg.
 pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
     let locations = match &cfg.locations {
         Some(path) => {
             let text = std::fs::read_to_string(path)
-                .map_err(|e| Error::Setup(format!("{}: {e}", path.display())))?;
-            parse_locations(&text).map_err(|e| Error::Setup(format!("{}: {e}", path.display())))?
+                .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))?;
+            parse_locations(&text)
+                .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))?
         }
         None => Vec::new(),
     };
@@ -57,27 +63,21 @@ pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
     })
 }
 
-/// A return value with its name: `0 (success)`, `-32102 (TROL_ERR_LOCATION)`,
-/// `-1 (BIOS_NOT_HOMED)`.
+/// A return value with its name, BIOS codes named as the simulated A465 names them:
+/// `0 (success)`, `-32102 (TROL_ERR_LOCATION)`, `-1 (BIOS_NOT_HOMED)`. A [`Robot`] names
+/// them from its controller's table ([`Robot::codes`]).
 pub fn describe(value: i16) -> String {
-    if let Some(name) = trol_code_name(value) {
-        return format!("{value} ({name})");
-    }
-    match trol_a465::arm::code::describe(value) {
-        Some((name, _)) if value != 0 => format!("{value} ({name})"),
-        _ if value == 0 => "0 (success)".to_string(),
-        _ => format!("{value} (BIOS code)"),
-    }
+    Code(value).describe(trol_controller::SIM_CODES)
 }
 
 /// Check that the server answers (InitTROL(1)): one GetStatus transaction.
 pub fn check_server(robot: &mut Robot) -> Result<()> {
     robot.status().map(drop).map_err(|e| {
-        Error::Setup(format!(
+        Error::Setup(SetupError::NoServer(format!(
             "the controller's TROL server does not answer ({e}); check the cable and the port, \
              that the baud rate in trol.cfg matches the controller, and that `trol init` has \
              activated the server"
-        ))
+        )))
     })
 }
 
@@ -87,7 +87,7 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
 pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
     if check_server(robot).is_err() {
         let port = robot.transactor_mut().driver_mut().port_mut();
-        let io = |e: std::io::Error| Error::Setup(format!("port error: {e}"));
+        let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
         port.send(b"\x03\r").map_err(io)?;
         std::thread::sleep(std::time::Duration::from_millis(100));
         port.flush_input().map_err(io)?;
@@ -102,12 +102,12 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
         {
             let n = port.recv(&mut buf, deadline).map_err(io)?;
             if n == 0 {
-                return Err(Error::Setup(format!(
+                return Err(Error::Setup(SetupError::NoServer(format!(
                     "the controller did not answer the activation line `{}` (it answered {:?}); \
                      check the cable, the port and the baud rate in trol.cfg",
                     trol_controller::terminal::ACTIVATE,
                     String::from_utf8_lossy(&seen)
-                )));
+                ))));
             }
             seen.extend_from_slice(&buf[..n]);
         }

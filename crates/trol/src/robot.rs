@@ -1,56 +1,96 @@
-//! The Rust API: a connection to the controller and one method per TROL API function.
+//! The Rust API: a connection to the controller and one method per TROL API function, each
+//! a thin skin over [`Robot::call`], which works from the command's description.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use trol_comm::{DefaultHandlers, ErrorHandlers, ExtraWait, TransError, Transactor};
-use trol_controller::{Embedded, SimSettings};
+use trol_controller::{Embedded, SIM_CODES, SimSettings};
 use trol_port::{Port, PortSettings};
-use trol_proto::application::codes::Command;
-use trol_proto::application::errors::{TROL_ERR_ARG_RANGE, TROL_ERR_BAD_RSIZE, TROL_ERR_COMM};
-use trol_proto::application::request::long_wait;
+use trol_proto::application::code::{
+    Code, CodeTable, TROL_ERR_ARG_RANGE, TROL_ERR_BAD_RSIZE, TROL_ERR_COMM,
+};
+use trol_proto::application::record::{self, RequestError, Value};
+use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
 use trol_proto::application::{
-    FinishMode, LocName, Location, PosMode, Reply, ReplyError, Request, RequestError, Tag,
+    Catalog, CatalogError, CommandDef, LocName, Location, Reply, ReplyError, Tag,
 };
 use trol_proto::link::{LinkConfig, LinkError};
 
 use crate::config::Config;
 
+/// GetPosition's mode.
+pub use trol_controller::PosMode;
+
 /// Why an API call did not succeed. "The controller said no" ([`Error::Refused`]) is kept
 /// apart from "the link failed" ([`Error::Link`]); [`Error::code`] gives the manual's code.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// The controller answered with a non-zero value: a BIOS code (> -32000), or a TROL code
-    /// the controller detected (TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, TROL_ERR_LOCATION,
-    /// TROL_RETVAL_RANGE, TROL_ERR_ARG_RANGE).
+    /// The controller answered with a value that is not success for the command: a BIOS
+    /// code (> -32000), or a TROL code the controller detected (TROL_ERR_UNKNOWN,
+    /// TROL_ERR_BAD_CSIZE, TROL_ERR_LOCATION, TROL_RETVAL_RANGE, TROL_ERR_ARG_RANGE,
+    /// TROL_ERR_ROBOT).
+    #[error("{command} returned {}{}", .code.0, refusal_text(.name, .meaning))]
     Refused {
-        /// The command's code (a built-in one, or one an application added).
-        command: u8,
+        /// The command's name.
+        command: &'static str,
         /// The value.
-        code: i16,
+        code: Code,
+        /// The value's name, from TROL's codes or the backend's.
+        name: Option<&'static str>,
+        /// The value's meaning, from TROL's codes or the backend's.
+        meaning: Option<&'static str>,
     },
     /// An argument is out of range; nothing was sent (TROL_ERR_ARG_RANGE).
-    Argument(RequestError),
+    #[error("{0}")]
+    Argument(#[from] RequestError),
     /// The transaction failed and the error handler could not mend it (TROL_ERR_COMM).
+    #[error("TROL_ERR_COMM: {command}: {error}")]
     Link {
-        /// The command.
-        command: Option<Command>,
+        /// The command's name.
+        command: &'static str,
         /// What failed.
         error: TransError,
     },
     /// The reply did not fit the command (TROL_ERR_BAD_RSIZE).
+    #[error("TROL_ERR_BAD_RSIZE: a reply of {len} bytes does not fit {command}")]
     BadReply {
-        /// The command's code.
-        command: u8,
+        /// The command's name.
+        command: &'static str,
         /// The reply's length.
         len: usize,
     },
     /// The port could not be opened, or the configuration is wrong.
-    Setup(String),
+    #[error("{0}")]
+    Setup(#[from] SetupError),
+}
+
+/// Why a connection could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum SetupError {
+    /// The port could not be opened.
+    #[error("{0}")]
+    Port(#[from] trol_port::OpenError),
+    /// The configuration is wrong (trol.cfg, a location file).
+    #[error("{0}")]
+    Config(String),
+    /// The controller's server does not answer, or cannot be activated.
+    #[error("{0}")]
+    NoServer(String),
+    /// A command description could not be added.
+    #[error("{0}")]
+    Command(#[from] CatalogError),
+}
+
+fn refusal_text(name: &Option<&str>, meaning: &Option<&str>) -> String {
+    let name = name.map(|n| format!(" ({n})")).unwrap_or_default();
+    let meaning = meaning.map(|m| format!(": {m}")).unwrap_or_default();
+    format!("{name}{meaning}")
 }
 
 impl Error {
     /// The manual's return code of this error.
-    pub fn code(&self) -> i16 {
+    pub fn code(&self) -> Code {
         match self {
             Error::Refused { code, .. } => *code,
             Error::Argument(_) => TROL_ERR_ARG_RANGE,
@@ -65,45 +105,10 @@ impl Error {
     }
 }
 
-impl std::fmt::Display for Error {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Error::Refused { command, code } => {
-                write!(
-                    f,
-                    "{} returned {}",
-                    command_name(*command),
-                    crate::describe(*code)
-                )
-            }
-            Error::Argument(e) => write!(f, "{e}"),
-            Error::Link { command, error } => match command {
-                Some(c) => write!(f, "TROL_ERR_COMM: {c}: {error}"),
-                None => write!(f, "TROL_ERR_COMM: {error}"),
-            },
-            Error::BadReply { command, len } => write!(
-                f,
-                "TROL_ERR_BAD_RSIZE: a reply of {len} bytes does not fit {}",
-                command_name(*command)
-            ),
-            Error::Setup(why) => write!(f, "{why}"),
-        }
-    }
-}
-
-impl std::error::Error for Error {}
-
-fn command_name(code: u8) -> String {
-    match Command::from_code(code) {
-        Some(c) => c.to_string(),
-        None => format!("command {code}"),
-    }
-}
-
 impl From<ReplyError> for Error {
     fn from(e: ReplyError) -> Self {
         Error::BadReply {
-            command: e.command.code(),
+            command: e.command,
             len: e.len,
         }
     }
@@ -112,18 +117,24 @@ impl From<ReplyError> for Error {
 /// Results of the API.
 pub type Result<T> = std::result::Result<T, Error>;
 
-/// The manual's default ErrAppTimeOut policy: 90 s more for Home, no limit for
-/// Finish(FINISH_WAIT).
-pub fn timeout_policy(request: &[u8]) -> Option<ExtraWait> {
-    long_wait(request).map(|w| match w {
-        Some(d) => ExtraWait::Up(d),
-        None => ExtraWait::Unlimited,
+/// The host's ErrAppTimeOut policy from the commands' descriptions: 90 s more for Home, no
+/// limit for Finish(FINISH_WAIT), as the manual's default handler.
+pub fn timeout_policy(catalog: Catalog) -> trol_comm::TimeoutPolicy {
+    Arc::new(move |request: &[u8]| {
+        let def = catalog.get(*request.first()?)?;
+        match def.extra_wait(request) {
+            Some(d) if d.is_zero() => None,
+            Some(d) => Some(ExtraWait::Up(d)),
+            None => Some(ExtraWait::Unlimited),
+        }
     })
 }
 
 /// A connection to a TROL controller.
 pub struct Robot {
     transactor: Transactor<Box<dyn Port>>,
+    catalog: Catalog,
+    codes: &'static CodeTable,
     _embedded: Option<Embedded>,
 }
 
@@ -139,8 +150,7 @@ impl Robot {
             baud,
             ..PortSettings::default()
         };
-        let p = trol_port::open(port, &settings)
-            .map_err(|e| Error::Setup(format!("cannot open port {port}: {e}")))?;
+        let p = trol_port::open(port, &settings).map_err(SetupError::Port)?;
         Ok(Robot::over(
             p,
             LinkConfig::for_line(baud, Duration::ZERO),
@@ -158,7 +168,7 @@ impl Robot {
 
     /// Connect as ./trol.cfg (or $TROL_CONFIG) says.
     pub fn from_default_config() -> Result<Robot> {
-        let cfg = Config::load().map_err(|e| Error::Setup(e.to_string()))?;
+        let cfg = Config::load().map_err(|e| SetupError::Config(e.to_string()))?;
         Robot::from_config(&cfg)
     }
 
@@ -169,15 +179,49 @@ impl Robot {
         Robot::over(Box::new(line), cfg, Some(handle))
     }
 
-    /// Connect over a port that is already open (for tests and relays). `embedded` keeps an
-    /// in-process controller alive as long as the connection.
+    /// Connect over a port that is already open (for tests, relays, and controllers of the
+    /// application's own). `embedded` keeps an in-process controller alive as long as the
+    /// connection.
     pub fn over(port: Box<dyn Port>, cfg: LinkConfig, embedded: Option<Embedded>) -> Robot {
+        let catalog = Catalog::builtin();
         let mut transactor = Transactor::new(port, cfg);
-        transactor.set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy)));
+        transactor.set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
+            catalog.clone(),
+        ))));
         Robot {
             transactor,
+            catalog,
+            codes: SIM_CODES,
             _embedded: embedded,
         }
+    }
+
+    /// Know a command an application added (docs/extending.md): [`Robot::call`] takes it,
+    /// and the default ErrAppTimeOut waits for its reply as its description says. Call this
+    /// before [`Robot::set_handlers`] if you replace the handlers.
+    pub fn add_command(&mut self, def: CommandDef) -> Result<()> {
+        self.catalog.add(def).map_err(SetupError::from)?;
+        self.transactor
+            .set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
+                self.catalog.clone(),
+            ))));
+        Ok(())
+    }
+
+    /// The commands this connection knows: the built-in ones and those added.
+    pub fn catalog(&self) -> &Catalog {
+        &self.catalog
+    }
+
+    /// The BIOS codes of the controller's backend, with their names (for messages).
+    pub fn codes(&self) -> &'static CodeTable {
+        self.codes
+    }
+
+    /// Say which BIOS code table the controller's backend uses (the simulated A465's by
+    /// default).
+    pub fn set_codes(&mut self, codes: &'static CodeTable) {
+        self.codes = codes;
     }
 
     /// Replace the layer-3 error handlers (ErrOnSend, ErrOnReceive, ErrAppTimeOut).
@@ -205,23 +249,37 @@ impl Robot {
         &mut self.transactor
     }
 
-    /// Send raw request bytes and return the raw reply (for added commands).
-    pub fn transact_raw(&mut self, request: &[u8]) -> Result<Vec<u8>> {
-        self.transactor
-            .trans_sr(request)
-            .map_err(|error| Error::Link {
-                command: request.first().and_then(|c| Command::from_code(*c)),
-                error,
-            })
+    /// Give the port back, ending the connection (`trol link` activates the controller, then
+    /// relays over the same port). An embedded controller stops.
+    pub fn into_port(self) -> Box<dyn Port> {
+        self.transactor.into_port()
     }
 
-    /// The manual's Cat1Transaction: send a CAT1 request; its one-word reply is returned
-    /// (0 as `Ok`, anything else as [`Error::Refused`] unless `ok_values` lists it).
-    pub fn cat1_transaction(&mut self, request: &[u8], ok_values: &[i16]) -> Result<i16> {
-        let command = request.first().copied().unwrap_or_default();
+    fn name_of(&self, request: &[u8]) -> &'static str {
+        request
+            .first()
+            .and_then(|c| self.catalog.get(*c))
+            .map(|d| d.name)
+            .unwrap_or("TransSR")
+    }
+
+    /// TransSR (layer 3): send any request's bytes and return the reply's bytes, unchecked.
+    pub fn transact_raw(&mut self, request: &[u8]) -> Result<Vec<u8>> {
+        let command = self.name_of(request);
+        self.transactor
+            .trans_sr(request)
+            .map_err(|error| Error::Link { command, error })
+    }
+
+    /// The manual's Cat1Transaction: send a CAT1 request's bytes; its one-word reply is
+    /// returned if its command's description counts it as success (0 for a command this
+    /// connection has no description of), else [`Error::Refused`].
+    pub fn cat1_transaction(&mut self, request: &[u8]) -> Result<i16> {
+        let command = self.name_of(request);
+        let def = request.first().and_then(|c| self.catalog.get(*c)).copied();
         let reply = self.transact_raw(request)?;
         let value = match reply.as_slice() {
-            [a, b] => i16::from_le_bytes([*a, *b]),
+            [a, b] => Code(i16::from_le_bytes([*a, *b])),
             _ => {
                 return Err(Error::BadReply {
                     command,
@@ -229,202 +287,187 @@ impl Robot {
                 });
             }
         };
-        if value == 0 || ok_values.contains(&value) {
-            Ok(value)
+        if def.map_or(value.is_success(), |d| d.is_success(value.0)) {
+            Ok(value.0)
         } else {
-            Err(Error::Refused {
-                command,
-                code: value,
-            })
+            Err(self.refused(command, value))
         }
     }
 
-    /// Give the port back, ending the connection (`trol link` activates the controller, then
-    /// relays over the same port). An embedded controller stops.
-    pub fn into_port(self) -> Box<dyn Port> {
-        self.transactor.into_port()
-    }
-
-    /// Check, send and decode a built-in request.
-    pub fn request(&mut self, req: &Request) -> Result<Reply> {
-        req.validate().map_err(Error::Argument)?;
-        let command = req.command();
+    /// Call any described command: check the arguments against `def` (nothing is sent if one
+    /// is out of range), send, and decode the reply in the form `def` gives. A return value
+    /// that `def` does not count as success is [`Error::Refused`].
+    pub fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<Reply> {
+        let request = record::encode(def, args)?;
         let bytes = self
             .transactor
-            .trans_sr(&req.encode())
+            .trans_sr(&request)
             .map_err(|error| Error::Link {
-                command: Some(command),
+                command: def.name,
                 error,
             })?;
-        Ok(Reply::decode(command, &bytes)?)
+        let reply = Reply::decode(def, &bytes)?;
+        match reply {
+            // These carry data, not a return value: a refusal comes as a bare code.
+            Reply::Status { .. } | Reply::Position(_) => Ok(reply),
+            _ if def.is_success(reply.value().0) => Ok(reply),
+            _ => Err(self.refused(def.name, reply.value())),
+        }
     }
 
-    fn cat1(&mut self, req: Request, ok: &[i16]) -> Result<i16> {
-        let command = req.command();
-        match self.request(&req)? {
-            Reply::Code(v) if v == 0 || ok.contains(&v) => Ok(v),
-            Reply::Code(code) => Err(Error::Refused {
-                command: command.code(),
-                code,
-            }),
+    fn refused(&self, command: &'static str, code: Code) -> Error {
+        Error::Refused {
+            command,
+            code,
+            name: code.name(self.codes),
+            meaning: code.meaning(self.codes),
+        }
+    }
+
+    /// A CAT1 call: the return value (0, or another value the description counts as success).
+    fn cat1(&mut self, def: &CommandDef, args: &[Value]) -> Result<i16> {
+        match self.call(def, args)? {
+            Reply::Code(v) => Ok(v.0),
             other => Err(Error::BadReply {
-                command: command.code(),
+                command: def.name,
                 len: other.encode().len(),
             }),
         }
     }
 
-    fn cart6(v: &[f64], command: Command, max: usize) -> Result<Vec<f32>> {
-        if v.is_empty() || v.len() > max {
-            return Err(Error::Argument(RequestError::Range {
-                command,
-                what: format!("{} values given, allowed 1..{max}", v.len()),
-            }));
-        }
-        Ok(v.iter().map(|x| *x as f32).collect())
-    }
-
     /// TROLAppro: approach the named location, displaced by `disp` (x y z yaw pitch roll,
     /// 1..6 values) in its tool frame.
     pub fn appro(&mut self, name: &str, disp: &[f64], straight: bool) -> Result<()> {
-        let name = loc_name(name, Command::Appro)?;
-        let disp = Robot::cart6(disp, Command::Appro, 6)?;
-        self.cat1(
-            Request::Appro {
-                name,
-                disp,
-                straight,
-            },
-            &[],
-        )
-        .map(drop)
+        let args = [
+            loc_name(&table::APPRO, name)?,
+            cart(disp),
+            Value::Flag(straight),
+        ];
+        self.cat1(&table::APPRO, &args).map(drop)
     }
 
     /// TROLApproII: approach a given location (cartesian or precision point).
     pub fn appro_ii(&mut self, target: &Location, disp: &[f64], straight: bool) -> Result<()> {
-        let disp = Robot::cart6(disp, Command::ApproII, 6)?;
-        let req = Request::ApproII {
-            target: target.clone(),
-            disp,
-            straight,
-        };
-        self.cat1(req, &[]).map(drop)
+        let args = [
+            Value::Loc(target.clone()),
+            cart(disp),
+            Value::Flag(straight),
+        ];
+        self.cat1(&table::APPRO_II, &args).map(drop)
     }
 
     /// TROLClose: close the gripper with `force` percent (1..100).
     pub fn close(&mut self, force: u16) -> Result<()> {
-        let force = small(force, Command::Close)?;
-        self.cat1(Request::Close { force }, &[]).map(drop)
+        let args = [small(&table::CLOSE, force)?];
+        self.cat1(&table::CLOSE, &args).map(drop)
     }
 
     /// TROLDepart: move by `disp` in the tool frame from where the arm is.
     pub fn depart(&mut self, disp: &[f64], straight: bool) -> Result<()> {
-        let disp = Robot::cart6(disp, Command::Depart, 6)?;
-        self.cat1(Request::Depart { disp, straight }, &[]).map(drop)
+        self.cat1(&table::DEPART, &[cart(disp), Value::Flag(straight)])
+            .map(drop)
     }
 
     /// TROLFinish(FINISH_WAIT): wait until the arm and the gripper are done.
     pub fn finish(&mut self) -> Result<()> {
-        let mode = FinishMode::Wait;
-        self.cat1(Request::Finish { mode }, &[]).map(drop)
+        self.cat1(&table::FINISH, &[Value::Int(FINISH_WAIT)])
+            .map(drop)
     }
 
     /// TROLFinish(FINISH_STATUS): whether the arm or the gripper still moves.
     pub fn is_moving(&mut self) -> Result<bool> {
-        let mode = FinishMode::Status;
-        self.cat1(Request::Finish { mode }, &[1]).map(|v| v == 1)
+        self.cat1(&table::FINISH, &[Value::Int(FINISH_STATUS)])
+            .map(|v| v == 1)
     }
 
     /// TROLGrip: the fingers to `dist` mm (0..50).
     pub fn grip(&mut self, dist: u16) -> Result<()> {
-        let dist = small(dist, Command::Grip)?;
-        self.cat1(Request::Grip { dist }, &[]).map(drop)
+        let args = [small(&table::GRIP, dist)?];
+        self.cat1(&table::GRIP, &args).map(drop)
     }
 
     /// TROLHalt: stop all motion.
     pub fn halt(&mut self) -> Result<()> {
-        self.cat1(Request::Halt, &[]).map(drop)
+        self.cat1(&table::HALT, &[]).map(drop)
     }
 
-    /// TROLHome: home one axis (1..6) or all (0).
+    /// TROLHome: home one axis (1..6) or all (0); returns when homing is done.
     pub fn home(&mut self, axis: u16) -> Result<()> {
-        let axis = small(axis, Command::Home)?;
-        self.cat1(Request::Home { axis }, &[]).map(drop)
+        let args = [small(&table::HOME, axis)?];
+        self.cat1(&table::HOME, &args).map(drop)
     }
 
     /// TROLJog: move the tool by dx [dy [dz]] in the world frame, orientation kept.
     pub fn jog(&mut self, d: &[f64], straight: bool) -> Result<()> {
-        let disp = Robot::cart6(d, Command::Jog, 3)?;
-        self.cat1(Request::Jog { disp, straight }, &[]).map(drop)
+        self.cat1(&table::JOG, &[cart(d), Value::Flag(straight)])
+            .map(drop)
     }
 
     /// TROLJoint: move joint `joint` (1..6) by `radians`.
     pub fn joint(&mut self, joint: u16, radians: f64) -> Result<()> {
-        let joint = small(joint, Command::Joint)?;
-        let radians = radians as f32;
-        self.cat1(Request::Joint { joint, radians }, &[]).map(drop)
+        let args = [small(&table::JOINT, joint)?, Value::Real(radians)];
+        self.cat1(&table::JOINT, &args).map(drop)
     }
 
     /// TROLMA: all joints to absolute angles (1..6 values, the rest 0).
     pub fn ma(&mut self, joints: &[f64]) -> Result<()> {
-        let joints = Robot::cart6(joints, Command::Ma, 6)?;
-        self.cat1(Request::Ma { joints }, &[]).map(drop)
+        let args = [Value::Loc(Location::Joint(joints.to_vec()))];
+        self.cat1(&table::MA, &args).map(drop)
     }
 
     /// TROLMI: all joints by increments.
     pub fn mi(&mut self, joints: &[f64]) -> Result<()> {
-        let joints = Robot::cart6(joints, Command::Mi, 6)?;
-        self.cat1(Request::Mi { joints }, &[]).map(drop)
+        let args = [Value::Loc(Location::Joint(joints.to_vec()))];
+        self.cat1(&table::MI, &args).map(drop)
     }
 
     /// TROLMove: to the named location.
     pub fn move_to(&mut self, name: &str, straight: bool) -> Result<()> {
-        let name = loc_name(name, Command::Move)?;
-        self.cat1(Request::Move { name, straight }, &[]).map(drop)
+        let args = [loc_name(&table::MOVE, name)?, Value::Flag(straight)];
+        self.cat1(&table::MOVE, &args).map(drop)
     }
 
     /// TROLMoveII: to a given location (cartesian or precision point).
     pub fn move_ii(&mut self, target: &Location, straight: bool) -> Result<()> {
-        let req = Request::MoveII {
-            target: target.clone(),
-            straight,
-        };
-        self.cat1(req, &[]).map(drop)
+        let args = [Value::Loc(target.clone()), Value::Flag(straight)];
+        self.cat1(&table::MOVE_II, &args).map(drop)
     }
 
     /// TROLOpen: open the gripper with `force` percent (1..100).
     pub fn open_gripper(&mut self, force: u16) -> Result<()> {
-        let force = small(force, Command::Open)?;
-        self.cat1(Request::Open { force }, &[]).map(drop)
+        let args = [small(&table::OPEN, force)?];
+        self.cat1(&table::OPEN, &args).map(drop)
     }
 
     /// TROLReady: to the READY pose.
     pub fn ready(&mut self) -> Result<()> {
-        self.cat1(Request::Ready, &[]).map(drop)
+        self.cat1(&table::READY, &[]).map(drop)
     }
 
     /// TROLSetToolTransform: x y z yaw pitch roll of the tool tip in the tool frame.
     pub fn set_tool_transform(&mut self, tool: &[f64]) -> Result<()> {
-        let tool = Robot::cart6(tool, Command::SetToolTransform, 6)?;
-        self.cat1(Request::SetToolTransform { tool }, &[]).map(drop)
+        self.cat1(&table::SET_TOOL_TRANSFORM, &[cart(tool)])
+            .map(drop)
     }
 
     /// TROLSpeed: percent of the maximum speed (1..150).
     pub fn speed(&mut self, percent: u16) -> Result<()> {
-        let percent = small(percent, Command::Speed)?;
-        self.cat1(Request::Speed { percent }, &[]).map(drop)
+        let args = [small(&table::SPEED, percent)?];
+        self.cat1(&table::SPEED, &args).map(drop)
     }
 
-    /// TROLGetPosition: the position in the form `tag`, commanded or actual.
+    /// TROLGetPosition: the position in the form `tag`, commanded or actual. A reply in
+    /// another form than the one asked for is TROL_ERR_BAD_RSIZE.
     pub fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location> {
-        match self.request(&Request::GetPosition { tag, mode })? {
+        let mode = match mode {
+            PosMode::Commanded => table::POS_COMMANDED,
+            PosMode::Actual => table::POS_ACT,
+        };
+        let def = &table::GET_POSITION;
+        match self.call(def, &[Value::Int(tag as u8), Value::Int(mode)])? {
             Reply::Position(loc) if loc.tag() == tag => Ok(loc),
-            Reply::Code(code) => Err(Error::Refused {
-                command: Command::GetPosition.code(),
-                code,
-            }),
             other => Err(Error::BadReply {
-                command: Command::GetPosition.code(),
+                command: def.name,
                 len: other.encode().len(),
             }),
         }
@@ -432,39 +475,43 @@ impl Robot {
 
     /// TROLTerminatePCP: end server mode.
     pub fn terminate_pcp(&mut self) -> Result<()> {
-        self.cat1(Request::TerminatePcp, &[]).map(drop)
+        self.cat1(&table::TERMINATE_PCP, &[]).map(drop)
     }
 
     /// TROLGetStatus: whether the last CAT1/CAT2 command called the BIOS, and the BIOS's
     /// value or the TROL code that kept it from being called.
-    pub fn status(&mut self) -> Result<(bool, i16)> {
-        match self.request(&Request::GetStatus)? {
+    pub fn status(&mut self) -> Result<(bool, Code)> {
+        let def = &table::GET_STATUS;
+        match self.call(def, &[])? {
             Reply::Status { bios_called, last } => Ok((bios_called, last)),
-            Reply::Code(code) => Err(Error::Refused {
-                command: Command::GetStatus.code(),
-                code,
-            }),
             other => Err(Error::BadReply {
-                command: Command::GetStatus.code(),
+                command: def.name,
                 len: other.encode().len(),
             }),
         }
     }
 }
 
-fn small(v: u16, command: Command) -> Result<u8> {
-    u8::try_from(v).map_err(|_| {
+fn cart(v: &[f64]) -> Value {
+    Value::Loc(Location::Cart(v.to_vec()))
+}
+
+/// A small whole number for the byte the table gives it; its range is checked by the table.
+fn small(def: &CommandDef, v: u16) -> Result<Value> {
+    u8::try_from(v).map(Value::Int).map_err(|_| {
         Error::Argument(RequestError::Range {
-            command,
+            command: def.name,
+            arg: def.args.first().map_or("(argument)", |a| a.name),
             what: format!("{v} out of range"),
         })
     })
 }
 
-fn loc_name(name: &str, command: Command) -> Result<LocName> {
-    LocName::new(name).map_err(|e| {
+fn loc_name(def: &CommandDef, name: &str) -> Result<Value> {
+    LocName::new(name).map(Value::Name).map_err(|e| {
         Error::Argument(RequestError::Range {
-            command,
+            command: def.name,
+            arg: "locName",
             what: e.to_string(),
         })
     })

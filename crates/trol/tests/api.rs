@@ -7,11 +7,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use trol::errors::*;
-use trol::{Error, Location, PosMode, Robot, SimSettings, Tag};
+use trol::code::*;
+use trol::{Code, Error, Location, PosMode, Robot, SimSettings, Tag};
 use trol_a465::arm::Stored;
-use trol_controller::{Context, Handler, Pcp, SimBios};
+use trol_controller::{Call, Context, Executed, Handler, Pcp, SimBackend};
 use trol_port::Port;
+use trol_proto::application::{CommandDef, Reply, ReplyKind, Wait};
 use trol_proto::link::{LinkConfig, Timeouts};
 
 fn quick() -> LinkConfig {
@@ -81,7 +82,7 @@ struct Rig {
     deaf_after_eot: Arc<AtomicBool>,
 }
 
-fn rig_with(pcp: Pcp<SimBios>) -> Rig {
+fn rig_with(pcp: Pcp<SimBackend>) -> Rig {
     let (line, handle) = trol_controller::embedded_with(pcp, quick());
     let deaf = Arc::new(AtomicBool::new(false));
     let mute = Arc::new(AtomicBool::new(false));
@@ -103,7 +104,7 @@ fn rig_with(pcp: Pcp<SimBios>) -> Rig {
 }
 
 fn rig() -> Rig {
-    rig_with(Pcp::new(SimBios::new(settings())))
+    rig_with(Pcp::new(SimBackend::new(settings())))
 }
 
 fn joints(r: &mut Robot) -> [f64; 6] {
@@ -119,12 +120,15 @@ fn every_api_function_over_the_whole_stack() {
     // Motion before Home is refused by the BIOS, and GetStatus says it was called.
     let e = r.joint(1, 0.1).unwrap_err();
     assert!(e.is_refusal());
-    assert_eq!(e.code(), trol_a465::arm::code::NOT_HOMED);
-    assert_eq!(r.status().unwrap(), (true, trol_a465::arm::code::NOT_HOMED));
+    assert_eq!(e.code(), Code(trol_a465::arm::code::NOT_HOMED));
+    assert_eq!(
+        r.status().unwrap(),
+        (true, Code(trol_a465::arm::code::NOT_HOMED))
+    );
+    // Home returns when homing is done, as on the arm.
     r.home(0).unwrap();
-    assert!(r.is_moving().unwrap());
-    r.finish().unwrap();
     assert!(!r.is_moving().unwrap());
+    r.finish().unwrap();
     r.speed(150).unwrap();
     r.joint(1, 0.3).unwrap();
     r.finish().unwrap();
@@ -178,7 +182,7 @@ fn every_api_function_over_the_whole_stack() {
         50.0,
         250.0,
         0.0,
-        std::f32::consts::FRAC_PI_2,
+        std::f64::consts::FRAC_PI_2,
         0.0,
     ]);
     r.move_ii(&target, false).unwrap();
@@ -257,21 +261,21 @@ fn every_error_code_on_the_side_that_detects_it() {
     // Controller: TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, TROL_ERR_ARG_RANGE, TROL_ERR_LOCATION.
     assert_eq!(
         r.transact_raw(&[99]).unwrap(),
-        TROL_ERR_UNKNOWN.to_le_bytes()
+        TROL_ERR_UNKNOWN.0.to_le_bytes()
     );
     assert_eq!(r.status().unwrap(), (false, TROL_ERR_UNKNOWN));
     assert_eq!(
         r.transact_raw(&[200]).unwrap(),
-        TROL_ERR_UNKNOWN.to_le_bytes()
+        TROL_ERR_UNKNOWN.0.to_le_bytes()
     );
     assert_eq!(
         r.transact_raw(&[6, 0]).unwrap(),
-        TROL_ERR_BAD_CSIZE.to_le_bytes()
+        TROL_ERR_BAD_CSIZE.0.to_le_bytes()
     );
     assert_eq!(r.status().unwrap(), (false, TROL_ERR_BAD_CSIZE));
     assert_eq!(
         r.transact_raw(&[2, 0]).unwrap(),
-        TROL_ERR_ARG_RANGE.to_le_bytes()
+        TROL_ERR_ARG_RANGE.0.to_le_bytes()
     );
     let e = r.move_to("nowhere", false).unwrap_err();
     assert!(e.is_refusal());
@@ -282,16 +286,18 @@ fn every_error_code_on_the_side_that_detects_it() {
         TROL_ERR_LOCATION
     );
     // Controller: TROL_RETVAL_RANGE, the real value through GetStatus.
-    let e = r.cat1_transaction(&[ODD_BIOS], &[]).unwrap_err();
+    r.add_command(ODD_BIOS).unwrap();
+    r.add_command(BAD_REPLY).unwrap();
+    let e = r.cat1_transaction(&[ODD_BIOS.code]).unwrap_err();
     assert_eq!(e.code(), TROL_RETVAL_RANGE);
-    assert_eq!(r.status().unwrap(), (true, -32500));
+    assert_eq!(r.status().unwrap(), (true, Code(-32500)));
     // Host: TROL_ERR_BAD_RSIZE.
-    let e = r.cat1_transaction(&[BAD_REPLY], &[]).unwrap_err();
+    let e = r.cat1_transaction(&[BAD_REPLY.code]).unwrap_err();
     assert!(
         matches!(
             e,
             Error::BadReply {
-                command: BAD_REPLY,
+                command: "TROLBadReply",
                 len: 3
             }
         ),
@@ -325,7 +331,11 @@ fn exactly_once_when_the_reply_is_lost() {
         .driver_mut()
         .port_mut()
         .flush_input();
-    assert_eq!(rig.robot.status().unwrap(), (true, 0), "the Joint ran once");
+    assert_eq!(
+        rig.robot.status().unwrap(),
+        (true, SUCCESS),
+        "the Joint ran once"
+    );
     rig.robot.finish().unwrap();
     assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6);
 }
@@ -368,69 +378,101 @@ fn exactly_once_when_the_request_is_lost() {
 // next free one), a record, a handler in the dispatch table, and an API function.
 
 /// CAT1: a BIOS call that returns a value in TROL's range (record: the code alone).
-const ODD_BIOS: u8 = trol_proto::application::codes::LAST_CAT1_CODE + 1;
-/// CAT2: read the finger distance (record: the code; reply: i16 0, f32 mm).
-const GET_FINGERS: u8 = 64;
+const ODD_BIOS: CommandDef = CommandDef {
+    code: trol::table::LAST_CAT1_CODE + 1,
+    name: "TROLOddBios",
+    args: &[],
+    reply: ReplyKind::Code,
+    success: &[],
+    wait: Wait::Reply,
+    help: "a BIOS value in TROL's range",
+};
+/// CAT2: read the finger distance (reply: i16 0, f32 mm).
+const GET_FINGERS: CommandDef = CommandDef {
+    code: 64,
+    name: "TROLGetFingers",
+    args: &[],
+    reply: ReplyKind::Reals { min: 1, max: 1 },
+    success: &[],
+    wait: Wait::Reply,
+    help: "the finger distance, mm",
+};
 /// CAT2: a handler that answers with a reply of the wrong size.
-const BAD_REPLY: u8 = 65;
+const BAD_REPLY: CommandDef = CommandDef {
+    code: 65,
+    name: "TROLBadReply",
+    args: &[],
+    reply: ReplyKind::Code,
+    success: &[],
+    wait: Wait::Reply,
+    help: "answers three bytes",
+};
 
-fn odd_bios(_bios: &mut SimBios, bytes: &[u8]) -> Result<i16, i16> {
-    if bytes.len() != 1 {
-        return Err(TROL_ERR_BAD_CSIZE);
+fn odd_bios(_backend: &mut SimBackend, _call: &Call<'_>) -> Result<Executed, Code> {
+    Ok(Executed::Now(-32500))
+}
+
+fn get_fingers(ctx: &mut Context<'_, SimBackend>, _call: &Call<'_>) -> Reply {
+    let now = ctx.backend.now();
+    let mm = ctx.backend.arm().fingers(now);
+    Reply::Reals {
+        value: ctx.status.record_bios(0),
+        values: vec![mm],
     }
-    Ok(-32500)
 }
 
-fn get_fingers(ctx: &mut Context<'_, SimBios>, bytes: &[u8]) -> Vec<u8> {
-    if bytes.len() != 1 {
-        ctx.status.record_refusal(TROL_ERR_BAD_CSIZE);
-        return TROL_ERR_BAD_CSIZE.to_le_bytes().to_vec();
+fn bad_reply(_ctx: &mut Context<'_, SimBackend>, _call: &Call<'_>) -> Reply {
+    Reply::Bytes {
+        value: SUCCESS,
+        bytes: vec![0],
     }
-    let now = ctx.bios.now();
-    let mm = ctx.bios.arm().fingers(now) as f32;
-    let mut out = ctx.status.record_bios(0).to_le_bytes().to_vec();
-    out.extend_from_slice(&mm.to_le_bytes());
-    out
 }
 
-fn bad_reply(_ctx: &mut Context<'_, SimBios>, _bytes: &[u8]) -> Vec<u8> {
-    vec![0, 0, 0]
-}
-
-fn extended_pcp() -> Pcp<SimBios> {
-    let mut pcp = Pcp::new(SimBios::new(settings()));
+fn extended_pcp() -> Pcp<SimBackend> {
+    let mut pcp = Pcp::new(SimBackend::new(settings()));
     pcp.register(ODD_BIOS, Handler::Cat1(odd_bios)).unwrap();
     pcp.register(GET_FINGERS, Handler::Other(get_fingers))
         .unwrap();
     pcp.register(BAD_REPLY, Handler::Other(bad_reply)).unwrap();
-    // The table rejects gaps and handlers of the wrong class.
-    assert!(pcp.register(70, Handler::Other(bad_reply)).is_err());
-    assert!(pcp.register(66, Handler::Cat1(odd_bios)).is_err());
+    // The table rejects gaps, handlers of the wrong class, and names taken.
+    let gap = CommandDef {
+        code: 70,
+        name: "TROLGap",
+        ..BAD_REPLY
+    };
+    assert!(pcp.register(gap, Handler::Other(bad_reply)).is_err());
+    let wrong = CommandDef {
+        code: 66,
+        name: "TROLWrong",
+        ..BAD_REPLY
+    };
+    assert!(pcp.register(wrong, Handler::Cat1(odd_bios)).is_err());
+    let taken = CommandDef {
+        code: 66,
+        ..BAD_REPLY
+    };
+    assert!(pcp.register(taken, Handler::Other(bad_reply)).is_err());
     assert_eq!(pcp.last_code(trol_proto::application::Class::Cat2), 65);
     pcp
 }
 
-/// The added API function.
-fn get_fingers_api(robot: &mut Robot) -> trol::Result<f32> {
-    let reply = robot.transact_raw(&[GET_FINGERS])?;
-    match reply.as_slice() {
-        [0, 0, a, b, c, d] => Ok(f32::from_le_bytes([*a, *b, *c, *d])),
-        [a, b] => Err(Error::Refused {
-            command: GET_FINGERS,
-            code: i16::from_le_bytes([*a, *b]),
-        }),
-        _ => Err(Error::Setup("bad reply".into())),
+/// The added API function: a typed call through the command's description.
+fn get_fingers_api(robot: &mut Robot) -> trol::Result<f64> {
+    match robot.call(&GET_FINGERS, &[])? {
+        Reply::Reals { values, .. } => Ok(values[0]),
+        other => panic!("{other:?}"),
     }
 }
 
 #[test]
 fn a_command_added_only_in_the_tests_works_end_to_end() {
     let mut rig = rig_with(extended_pcp());
+    rig.robot.add_command(GET_FINGERS).unwrap();
     assert_eq!(get_fingers_api(&mut rig.robot).unwrap(), 50.0);
     rig.robot.grip(20).unwrap();
     rig.robot.finish().unwrap();
     assert_eq!(get_fingers_api(&mut rig.robot).unwrap(), 20.0);
-    assert_eq!(rig.robot.status().unwrap(), (true, 0));
+    assert_eq!(rig.robot.status().unwrap(), (true, SUCCESS));
     // The built-in commands are untouched.
     assert_eq!(
         rig.robot.move_to("nowhere", false).unwrap_err().code(),

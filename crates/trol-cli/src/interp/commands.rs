@@ -1,289 +1,49 @@
-//! The interpreter's commands: one per API function (named as in the manual, with or without
-//! the TROL prefix, any case), their arguments with ranges, and the parser from tokens to a
-//! request.
+//! The interpreter's commands: every command of the catalog (the built-in table and any
+//! described in a `--commands` file), named as in the manual (with or without the TROL
+//! prefix, any case), with the arguments and ranges of its description; and the parser from
+//! tokens to a call. Nothing here is written per command.
 
-use trol::Command;
-use trol::errors::TROL_ERR_ARG_RANGE;
-use trol_proto::application::request::Request;
-use trol_proto::application::{FinishMode, LocName, Location, PosMode, Tag};
+use trol::code::TROL_ERR_ARG_RANGE;
+use trol_proto::application::record::literal_prefix;
+use trol_proto::application::{ArgKind, Catalog, CommandDef, LocName, Location, Tag, Value};
 
 use super::scanner::{Kind, SyntaxError, Token};
 
-/// One argument of a command.
-#[derive(Clone, Copy, Debug)]
-pub enum Param {
-    /// A whole number in a range.
-    Int {
-        name: &'static str,
-        min: i64,
-        max: i64,
-    },
-    /// A real number.
-    Real { name: &'static str },
-    /// A location name in the controller's table.
-    Name,
-    /// A location literal of one of `tags` with `min..=max` values; a bare `( ... )` is
-    /// `bare`.
-    Loc {
-        name: &'static str,
-        tags: &'static [Tag],
-        bare: Tag,
-        min: usize,
-        max: usize,
-    },
-    /// The optional straight flag: 0/1, `straight` or `interpolated` (default 0).
-    Straight,
-    /// One word of a list (optional; the first is the default).
-    Choice {
-        name: &'static str,
-        options: &'static [(&'static str, &'static str)],
-    },
-}
-
-impl Param {
-    /// How `help` writes it.
-    pub fn usage(&self) -> String {
-        match self {
-            Param::Int { name, min, max } => format!("{name}:{min}..{max}"),
-            Param::Real { name } => format!("{name}:real"),
-            Param::Name => "NAME".into(),
-            Param::Loc {
-                name,
-                tags,
-                min,
-                max,
-                ..
-            } => {
-                let kinds: Vec<&str> = tags.iter().map(|t| literal_prefix(*t)).collect();
-                let n = if min == max {
-                    format!("{min}")
-                } else {
-                    format!("{min}..{max}")
-                };
-                format!("{name}:{}({n} values)", kinds.join("|"))
-            }
-            Param::Straight => "[straight:0|1]".into(),
-            Param::Choice { name, options } => {
-                let words: Vec<&str> = options.iter().map(|(w, _)| *w).collect();
-                format!("[{name}:{}]", words.join("|"))
-            }
+/// How `help` writes an argument.
+pub fn arg_usage(name: &str, kind: &ArgKind) -> String {
+    match kind {
+        ArgKind::Int { min, max } => format!("{name}:{min}..{max}"),
+        ArgKind::Real => format!("{name}:real"),
+        ArgKind::Name => format!("{name}:NAME"),
+        ArgKind::Loc { tags, min, max } => {
+            let kinds: Vec<&str> = tags.iter().map(|t| literal_prefix(*t)).collect();
+            let n = if min == max {
+                format!("{min}")
+            } else {
+                format!("{min}..{max}")
+            };
+            format!("{name}:{}({n} values)", kinds.join("|"))
+        }
+        ArgKind::Straight => "[straight:0|1]".into(),
+        ArgKind::Choice(options) => {
+            let words: Vec<&str> = options.iter().map(|c| c.word).collect();
+            format!("[{name}:{}]", words.join("|"))
         }
     }
 }
 
-/// A command of the interpreter.
-#[derive(Clone, Copy, Debug)]
-pub struct Spec {
-    pub command: Command,
-    pub params: &'static [Param],
-    pub summary: &'static str,
+/// The words that may follow a command (for completion): its choices and the straight flag.
+pub fn arg_words(def: &CommandDef) -> Vec<&'static str> {
+    let mut words = Vec::new();
+    for a in def.args {
+        match a.kind {
+            ArgKind::Choice(options) => words.extend(options.iter().map(|c| c.word)),
+            ArgKind::Straight => words.extend(["straight", "interpolated"]),
+            _ => {}
+        }
+    }
+    words
 }
-
-const CART: &[Tag] = &[Tag::Cart];
-const JOINT: &[Tag] = &[Tag::Joint];
-const TARGET: &[Tag] = &[Tag::Cart, Tag::Prec];
-const DISP: Param = Param::Loc {
-    name: "disp",
-    tags: CART,
-    bare: Tag::Cart,
-    min: 1,
-    max: 6,
-};
-const FORCE: Param = Param::Int {
-    name: "force",
-    min: 1,
-    max: 100,
-};
-
-/// Every API command, in code order.
-pub const SPECS: &[Spec] = &[
-    Spec {
-        command: Command::Appro,
-        params: &[Param::Name, DISP, Param::Straight],
-        summary: "approach a named location, displaced in its tool frame (mm, rad)",
-    },
-    Spec {
-        command: Command::ApproII,
-        params: &[
-            Param::Loc {
-                name: "target",
-                tags: TARGET,
-                bare: Tag::Cart,
-                min: 6,
-                max: 6,
-            },
-            DISP,
-            Param::Straight,
-        ],
-        summary: "approach a given location (cartesian or precision point)",
-    },
-    Spec {
-        command: Command::Close,
-        params: &[FORCE],
-        summary: "close the gripper with a percentage of the maximum force",
-    },
-    Spec {
-        command: Command::Depart,
-        params: &[DISP, Param::Straight],
-        summary: "move away from here, displaced in the tool frame",
-    },
-    Spec {
-        command: Command::Finish,
-        params: &[Param::Choice {
-            name: "mode",
-            options: &[("wait", "FINISH_WAIT"), ("status", "FINISH_STATUS")],
-        }],
-        summary: "wait until the arm and gripper stop (wait), or ask (status: 1 moving, 0 done)",
-    },
-    Spec {
-        command: Command::Grip,
-        params: &[Param::Int {
-            name: "dist",
-            min: 0,
-            max: 50,
-        }],
-        summary: "set the finger distance in mm, at full force",
-    },
-    Spec {
-        command: Command::Halt,
-        params: &[],
-        summary: "stop all motion",
-    },
-    Spec {
-        command: Command::Home,
-        params: &[Param::Int {
-            name: "axis",
-            min: 0,
-            max: 6,
-        }],
-        summary: "home one axis (1..6) or all (0); needed before any motion",
-    },
-    Spec {
-        command: Command::Jog,
-        params: &[
-            Param::Loc {
-                name: "delta",
-                tags: CART,
-                bare: Tag::Cart,
-                min: 1,
-                max: 3,
-            },
-            Param::Straight,
-        ],
-        summary: "move the tool by dx [dy [dz]] mm in the world frame, orientation kept",
-    },
-    Spec {
-        command: Command::Joint,
-        params: &[
-            Param::Int {
-                name: "joint",
-                min: 1,
-                max: 6,
-            },
-            Param::Real { name: "radians" },
-        ],
-        summary: "move one joint by an increment in radians",
-    },
-    Spec {
-        command: Command::Ma,
-        params: &[Param::Loc {
-            name: "joints",
-            tags: JOINT,
-            bare: Tag::Joint,
-            min: 1,
-            max: 6,
-        }],
-        summary: "move all joints to absolute angles (radians)",
-    },
-    Spec {
-        command: Command::Mi,
-        params: &[Param::Loc {
-            name: "joints",
-            tags: JOINT,
-            bare: Tag::Joint,
-            min: 1,
-            max: 6,
-        }],
-        summary: "move all joints by increments (radians)",
-    },
-    Spec {
-        command: Command::Move,
-        params: &[Param::Name, Param::Straight],
-        summary: "move to a named location of the controller's table",
-    },
-    Spec {
-        command: Command::MoveII,
-        params: &[
-            Param::Loc {
-                name: "target",
-                tags: TARGET,
-                bare: Tag::Cart,
-                min: 6,
-                max: 6,
-            },
-            Param::Straight,
-        ],
-        summary: "move to a given location (cartesian or precision point)",
-    },
-    Spec {
-        command: Command::Open,
-        params: &[FORCE],
-        summary: "open the gripper with a percentage of the maximum force",
-    },
-    Spec {
-        command: Command::Ready,
-        params: &[],
-        summary: "move to the READY pose",
-    },
-    Spec {
-        command: Command::SetToolTransform,
-        params: &[Param::Loc {
-            name: "tool",
-            tags: CART,
-            bare: Tag::Cart,
-            min: 1,
-            max: 6,
-        }],
-        summary: "set where the tool tip is in the tool frame (x y z mm, yaw pitch roll rad)",
-    },
-    Spec {
-        command: Command::Speed,
-        params: &[Param::Int {
-            name: "percent",
-            min: 1,
-            max: 150,
-        }],
-        summary: "set the speed of the following motions, percent of the maximum",
-    },
-    Spec {
-        command: Command::GetPosition,
-        params: &[
-            Param::Choice {
-                name: "form",
-                options: &[
-                    ("cart", "POS_CART"),
-                    ("joint", "POS_JOINT"),
-                    ("prec", "POS_PREC"),
-                ],
-            },
-            Param::Choice {
-                name: "mode",
-                options: &[("commanded", "POS_COMMANDED"), ("actual", "POS_ACT")],
-            },
-        ],
-        summary: "read the position: cartesian, joint or precision point; commanded or actual",
-    },
-    Spec {
-        command: Command::TerminatePcp,
-        params: &[],
-        summary: "end the controller's TROL server (back to terminal mode)",
-    },
-    Spec {
-        command: Command::GetStatus,
-        params: &[],
-        summary: "whether the last command called the BIOS, and its return value",
-    },
-];
 
 /// The interpreter's own commands.
 pub const OWN: &[(&str, &str, &str)] = &[
@@ -301,28 +61,14 @@ pub const OWN: &[(&str, &str, &str)] = &[
 pub enum Action {
     /// Nothing (a blank or comment line).
     Nothing,
-    /// An API call.
-    Call(Request),
+    /// An API call: the command and its arguments.
+    Call(CommandDef, Vec<Value>),
     /// help [command].
     Help(Option<String>),
     /// delay ms.
     Delay(u64),
     /// quit.
     Quit,
-}
-
-/// The spec of a command name (any case, with or without TROL).
-pub fn find(name: &str) -> Option<&'static Spec> {
-    let c = Command::from_name(name)?;
-    SPECS.iter().find(|s| s.command == c)
-}
-
-fn literal_prefix(tag: Tag) -> &'static str {
-    match tag {
-        Tag::Cart => "c",
-        Tag::Joint => "j",
-        Tag::Prec => "p",
-    }
 }
 
 fn kind_word(tag: Tag) -> &'static str {
@@ -343,17 +89,17 @@ fn literal_tag(word: &str) -> Option<Tag> {
 }
 
 /// The usage line of a command.
-pub fn usage(spec: &Spec) -> String {
-    let mut s = spec.command.short_name().to_string();
-    for p in spec.params {
+pub fn usage(def: &CommandDef) -> String {
+    let mut s = def.short_name().to_string();
+    for a in def.args {
         s.push(' ');
-        s.push_str(&p.usage());
+        s.push_str(&arg_usage(a.name, &a.kind));
     }
     s
 }
 
-/// Parse one line.
-pub fn parse(tokens: &[Token], line_len: usize) -> Result<Action, SyntaxError> {
+/// Parse one line against the commands of `catalog`.
+pub fn parse(tokens: &[Token], line_len: usize, catalog: &Catalog) -> Result<Action, SyntaxError> {
     let Some(first) = tokens.first() else {
         return Ok(Action::Nothing);
     };
@@ -393,8 +139,8 @@ pub fn parse(tokens: &[Token], line_len: usize) -> Result<Action, SyntaxError> {
         }
         _ => {}
     }
-    let Some(spec) = find(word) else {
-        let mut names: Vec<&str> = SPECS.iter().map(|s| s.command.short_name()).collect();
+    let Some(def) = catalog.find(word).copied() else {
+        let mut names: Vec<&str> = catalog.iter().map(|d| d.short_name()).collect();
         names.extend(OWN.iter().map(|o| o.0));
         let bare = lower.strip_prefix("trol").unwrap_or(&lower);
         let hint = names
@@ -409,13 +155,13 @@ pub fn parse(tokens: &[Token], line_len: usize) -> Result<Action, SyntaxError> {
             format!("unknown command `{word}`{hint} (`help` lists the commands)"),
         ));
     };
-    let name = spec.command.short_name();
+    let name = def.short_name();
     let mut values = Vec::new();
-    for p in spec.params {
-        values.push(cur.param(p, spec)?);
+    for a in def.args {
+        values.push(cur.arg(a.name, &a.kind, name)?);
     }
     cur.finish(name)?;
-    build(spec, values).map(Action::Call)
+    Ok(Action::Call(def, values))
 }
 
 /// Levenshtein distance, for "did you mean".
@@ -434,17 +180,6 @@ fn edit_distance(a: &str, b: &str) -> usize {
         }
     }
     row[b.len()]
-}
-
-/// A parsed argument.
-#[derive(Debug)]
-enum Value {
-    Int(i64),
-    Real(f64),
-    Name(LocName),
-    Loc(Location),
-    Flag(bool),
-    Choice(usize),
 }
 
 struct Cursor<'a> {
@@ -501,7 +236,7 @@ impl<'a> Cursor<'a> {
                         t,
                         format!(
                             "`{name}` {} is out of range {min}..{max} (TROL_ERR_ARG_RANGE, {})",
-                            t.text, TROL_ERR_ARG_RANGE
+                            t.text, TROL_ERR_ARG_RANGE.0
                         ),
                     ))
                 }
@@ -513,11 +248,12 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    fn param(&mut self, p: &Param, spec: &Spec) -> Result<Value, SyntaxError> {
-        let command = spec.command.short_name();
-        match *p {
-            Param::Int { name, min, max } => self.int(name, min, max, command).map(Value::Int),
-            Param::Real { name } => match self.next() {
+    fn arg(&mut self, name: &str, kind: &ArgKind, command: &str) -> Result<Value, SyntaxError> {
+        match *kind {
+            ArgKind::Int { min, max } => self
+                .int(name, min.into(), max.into(), command)
+                .map(|v| Value::Int(v as u8)),
+            ArgKind::Real => match self.next() {
                 Some(Token {
                     kind: Kind::Number(v),
                     ..
@@ -528,7 +264,7 @@ impl<'a> Cursor<'a> {
                 )),
                 None => Err(self.missing(format!("expected `{name}`, a number"))),
             },
-            Param::Name => match self.next() {
+            ArgKind::Name => match self.next() {
                 Some(
                     t @ Token {
                         kind: Kind::Word(w),
@@ -562,14 +298,10 @@ impl<'a> Cursor<'a> {
                 )),
                 None => Err(self.missing(format!("expected a location name after `{command}`"))),
             },
-            Param::Loc {
-                name,
-                tags,
-                bare,
-                min,
-                max,
-            } => self.location(name, tags, bare, min, max, command),
-            Param::Straight => match self.peek() {
+            ArgKind::Loc { tags, min, max } => {
+                self.location(name, tags, tags[0], min.into(), max.into(), command)
+            }
+            ArgKind::Straight => match self.peek() {
                 None => Ok(Value::Flag(false)),
                 Some(t) => {
                     let v = match &t.kind {
@@ -592,23 +324,25 @@ impl<'a> Cursor<'a> {
                     Ok(Value::Flag(v))
                 }
             },
-            Param::Choice { name, options } => match self.peek() {
-                None => Ok(Value::Choice(0)),
+            ArgKind::Choice(options) => match self.peek() {
+                None => Ok(Value::Int(options[0].value)),
                 Some(t) => {
                     let found = match &t.kind {
-                        Kind::Word(w) => options.iter().position(|(word, konst)| {
-                            w.eq_ignore_ascii_case(word) || w.eq_ignore_ascii_case(konst)
+                        Kind::Word(w) => options.iter().find(|c| {
+                            w.eq_ignore_ascii_case(c.word) || w.eq_ignore_ascii_case(c.constant)
                         }),
                         _ => None,
                     };
                     match found {
-                        Some(i) => {
+                        Some(c) => {
                             self.pos += 1;
-                            Ok(Value::Choice(i))
+                            Ok(Value::Int(c.value))
                         }
                         None => {
-                            let words: Vec<String> =
-                                options.iter().map(|(w, k)| format!("{w} ({k})")).collect();
+                            let words: Vec<String> = options
+                                .iter()
+                                .map(|c| format!("{} ({})", c.word, c.constant))
+                                .collect();
                             Err(SyntaxError::at(
                                 t,
                                 format!(
@@ -747,8 +481,8 @@ impl<'a> Cursor<'a> {
             ));
         }
         let loc = match tag {
-            Tag::Cart => Location::Cart(values.iter().map(|v| *v as f32).collect()),
-            Tag::Joint => Location::Joint(values.iter().map(|v| *v as f32).collect()),
+            Tag::Cart => Location::Cart(values),
+            Tag::Joint => Location::Joint(values),
             Tag::Prec => {
                 let mut counts = Vec::new();
                 for (v, t) in values.iter().zip(&self.tokens[self.pos - values.len()..]) {
@@ -764,215 +498,85 @@ impl<'a> Cursor<'a> {
     }
 }
 
-fn build(spec: &Spec, values: Vec<Value>) -> Result<Request, SyntaxError> {
-    use Value::*;
-    let floats = |l: &Location| -> Vec<f32> {
-        l.to_array6()[..l.num_dims()]
-            .iter()
-            .map(|v| *v as f32)
-            .collect()
-    };
-    let mut v = values.into_iter();
-    let mut take = || v.next().expect("one value per parameter");
-    let req = match spec.command {
-        Command::Appro => {
-            let (Name(name), Loc(d), Flag(straight)) = (take(), take(), take()) else {
-                unreachable!()
-            };
-            Request::Appro {
-                name,
-                disp: floats(&d),
-                straight,
-            }
-        }
-        Command::ApproII => {
-            let (Loc(target), Loc(d), Flag(straight)) = (take(), take(), take()) else {
-                unreachable!()
-            };
-            Request::ApproII {
-                target,
-                disp: floats(&d),
-                straight,
-            }
-        }
-        Command::Close => {
-            let Int(f) = take() else { unreachable!() };
-            Request::Close { force: f as u8 }
-        }
-        Command::Depart => {
-            let (Loc(d), Flag(straight)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::Depart {
-                disp: floats(&d),
-                straight,
-            }
-        }
-        Command::Finish => {
-            let Choice(i) = take() else { unreachable!() };
-            Request::Finish {
-                mode: if i == 0 {
-                    FinishMode::Wait
-                } else {
-                    FinishMode::Status
-                },
-            }
-        }
-        Command::Grip => {
-            let Int(d) = take() else { unreachable!() };
-            Request::Grip { dist: d as u8 }
-        }
-        Command::Halt => Request::Halt,
-        Command::Home => {
-            let Int(a) = take() else { unreachable!() };
-            Request::Home { axis: a as u8 }
-        }
-        Command::Jog => {
-            let (Loc(d), Flag(straight)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::Jog {
-                disp: floats(&d),
-                straight,
-            }
-        }
-        Command::Joint => {
-            let (Int(j), Real(r)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::Joint {
-                joint: j as u8,
-                radians: r as f32,
-            }
-        }
-        Command::Ma | Command::Mi => {
-            let Loc(q) = take() else { unreachable!() };
-            if spec.command == Command::Ma {
-                Request::Ma { joints: floats(&q) }
-            } else {
-                Request::Mi { joints: floats(&q) }
-            }
-        }
-        Command::Move => {
-            let (Name(name), Flag(straight)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::Move { name, straight }
-        }
-        Command::MoveII => {
-            let (Loc(target), Flag(straight)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::MoveII { target, straight }
-        }
-        Command::Open => {
-            let Int(f) = take() else { unreachable!() };
-            Request::Open { force: f as u8 }
-        }
-        Command::Ready => Request::Ready,
-        Command::SetToolTransform => {
-            let Loc(t) = take() else { unreachable!() };
-            Request::SetToolTransform { tool: floats(&t) }
-        }
-        Command::Speed => {
-            let Int(p) = take() else { unreachable!() };
-            Request::Speed { percent: p as u8 }
-        }
-        Command::GetPosition => {
-            let (Choice(form), Choice(mode)) = (take(), take()) else {
-                unreachable!()
-            };
-            Request::GetPosition {
-                tag: [Tag::Cart, Tag::Joint, Tag::Prec][form],
-                mode: [PosMode::Commanded, PosMode::Actual][mode],
-            }
-        }
-        Command::TerminatePcp => Request::TerminatePcp,
-        Command::GetStatus => Request::GetStatus,
-    };
-    Ok(req)
-}
-
-/// A location written the way the interpreter reads it: `c(400, 0, 150, 0, 1.5708, 0)`.
-pub fn format_location(loc: &Location) -> String {
-    let values: Vec<String> = match loc {
-        Location::Prec(c) => c.iter().map(|v| v.to_string()).collect(),
-        Location::Cart(v) => v
-            .iter()
-            .enumerate()
-            .map(|(i, x)| {
-                if i < 3 {
-                    format!("{x:.3}")
-                } else {
-                    format!("{x:.5}")
-                }
-            })
-            .collect(),
-        Location::Joint(v) => v.iter().map(|x| format!("{x:.5}")).collect(),
-    };
-    format!("{}({})", literal_prefix(loc.tag()), values.join(", "))
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::scanner::scan;
     use super::*;
+    use trol_proto::application::record::{format_call, format_location};
+    use trol_proto::application::table::*;
 
     fn p(line: &str) -> Result<Action, SyntaxError> {
-        parse(&scan(line).unwrap(), line.chars().count())
+        parse(
+            &scan(line).unwrap(),
+            line.chars().count(),
+            &Catalog::builtin(),
+        )
+    }
+
+    fn call(def: CommandDef, values: Vec<Value>) -> Action {
+        Action::Call(def, values)
     }
 
     #[test]
     fn every_command_parses_with_or_without_the_prefix() {
-        assert_eq!(
-            p("TROLHome 0").unwrap(),
-            Action::Call(Request::Home { axis: 0 })
-        );
+        assert_eq!(p("TROLHome 0").unwrap(), call(HOME, vec![Value::Int(0)]));
         assert_eq!(p("home 3").unwrap(), p("trolHOME 3").unwrap());
         assert_eq!(
             p("appro test_001 c(-90) straight").unwrap(),
-            Action::Call(Request::Appro {
-                name: LocName::new("test_001").unwrap(),
-                disp: vec![-90.0],
-                straight: true
-            })
+            call(
+                APPRO,
+                vec![
+                    Value::Name(LocName::new("test_001").unwrap()),
+                    Value::Loc(Location::Cart(vec![-90.0])),
+                    Value::Flag(true)
+                ]
+            )
         );
         assert_eq!(
             p("moveii p(1, 2, 3, 4, 5, 6)").unwrap(),
-            Action::Call(Request::MoveII {
-                target: Location::Prec(vec![1, 2, 3, 4, 5, 6]),
-                straight: false
-            })
+            call(
+                MOVE_II,
+                vec![
+                    Value::Loc(Location::Prec(vec![1, 2, 3, 4, 5, 6])),
+                    Value::Flag(false)
+                ]
+            )
         );
         assert_eq!(
             p("ma (0.1 0.2)").unwrap(),
-            Action::Call(Request::Ma {
-                joints: vec![0.1, 0.2]
-            })
+            call(MA, vec![Value::Loc(Location::Joint(vec![0.1, 0.2]))])
         );
         assert_eq!(
             p("getposition joint actual").unwrap(),
-            Action::Call(Request::GetPosition {
-                tag: Tag::Joint,
-                mode: PosMode::Actual
-            })
+            call(
+                GET_POSITION,
+                vec![Value::Int(Tag::Joint as u8), Value::Int(POS_ACT)]
+            )
         );
         assert_eq!(
             p("finish").unwrap(),
-            Action::Call(Request::Finish {
-                mode: FinishMode::Wait
-            })
+            call(FINISH, vec![Value::Int(FINISH_WAIT)])
         );
         assert_eq!(
             p("finish FINISH_STATUS").unwrap(),
-            Action::Call(Request::Finish {
-                mode: FinishMode::Status
-            })
+            call(FINISH, vec![Value::Int(FINISH_STATUS)])
         );
         assert_eq!(p("; only a comment").unwrap(), Action::Nothing);
-        for spec in SPECS {
-            // Every command is reachable by its manual name.
-            assert!(find(spec.command.api_name()).is_some());
+    }
+
+    #[test]
+    fn what_the_trace_prints_parses_back_to_the_same_call() {
+        for line in [
+            "TROLAppro test_001 c(-90) straight",
+            "TROLApproII p(1000, -2000, 3000, 0, 5, -6) c(-50, 0, 10)",
+            "TROLJoint 1 0.5",
+            "TROLGetPosition prec commanded",
+            "TROLMoveII c(400.12344, 0, 300, 0, 1.5, 0) straight",
+        ] {
+            let Action::Call(def, values) = p(line).unwrap() else {
+                panic!("{line}")
+            };
+            assert_eq!(format_call(&def, &values), line);
         }
     }
 
@@ -988,12 +592,8 @@ mod tests {
         let e = p("fly 3").unwrap_err();
         assert_eq!(e.col, 1);
         assert!(e.message.contains("unknown command `fly`"));
-        let e = p("moveii c(1, 2, 3) 1").unwrap_err();
-        assert!(
-            e.message.contains("needs 6 values, 3 given"),
-            "{}",
-            e.message
-        );
+        let e = p("jog c(1, 2, 3, 4) 1").unwrap_err();
+        assert!(e.message.contains("at most 3"), "{}", e.message);
         let e = p("moveii c(1, 2, 3").unwrap_err();
         assert!(e.message.contains("expected `)`"), "{}", e.message);
         assert_eq!(e.col, 17);
@@ -1020,9 +620,7 @@ mod tests {
         let loc = Location::Cart(vec![400.0, 0.0, 150.0, 0.0, 1.25, 0.0]);
         let line = format!("moveii {}", format_location(&loc));
         match p(&line).unwrap() {
-            Action::Call(Request::MoveII { target, .. }) => {
-                assert_eq!(target.to_array6()[..3], loc.to_array6()[..3]);
-            }
+            Action::Call(_, values) => assert_eq!(values[0], Value::Loc(loc)),
             other => panic!("{other:?}"),
         }
     }

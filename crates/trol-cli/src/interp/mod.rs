@@ -12,13 +12,11 @@ use std::time::Duration;
 
 use clap::Args;
 use trol::Robot;
-use trol_proto::application::FinishMode;
-use trol_proto::application::reply::Reply;
-use trol_proto::application::request::{Request, long_wait};
+use trol_proto::application::record::{self, Value};
+use trol_proto::application::{Catalog, CommandDef};
 
 use crate::common::{Conn, waiting};
-use crate::records;
-use commands::{Action, OWN, SPECS, usage};
+use commands::{Action, OWN, usage};
 
 #[derive(Args, Debug)]
 #[command(after_help = "\
@@ -41,6 +39,10 @@ pub struct InterpArgs {
     /// Go on after a failed command (the exit status still says that one failed).
     #[arg(short = 'k', long)]
     keep_going: bool,
+    /// Commands an application added, described in FILE (docs/extending.md): the
+    /// interpreter reads, checks, sends and shows them like the built-in ones.
+    #[arg(long, value_name = "FILE")]
+    commands: Option<PathBuf>,
     #[command(flatten)]
     conn: Conn,
 }
@@ -55,12 +57,18 @@ enum Outcome {
 struct Session {
     conn: Conn,
     robot: Option<Robot>,
+    catalog: Catalog,
 }
 
 impl Session {
     fn robot(&mut self) -> Result<&mut Robot, String> {
         if self.robot.is_none() {
-            let (robot, _) = self.conn.robot()?;
+            let (mut robot, _) = self.conn.robot()?;
+            for def in self.catalog.iter() {
+                if robot.catalog().get(def.code).is_none() {
+                    robot.add_command(*def).map_err(|e| e.to_string())?;
+                }
+            }
             self.robot = Some(robot);
         }
         Ok(self.robot.as_mut().expect("connected"))
@@ -68,8 +76,8 @@ impl Session {
 
     /// Run one line; print its result to stdout, or its error to stderr after `origin`.
     fn line(&mut self, line: &str, origin: &str, echo: bool) -> Outcome {
-        let parsed =
-            scanner::scan(line).and_then(|tokens| commands::parse(&tokens, line.chars().count()));
+        let parsed = scanner::scan(line)
+            .and_then(|tokens| commands::parse(&tokens, line.chars().count(), &self.catalog));
         let action = match parsed {
             Ok(a) => a,
             Err(e) => {
@@ -85,7 +93,7 @@ impl Session {
         match action {
             Action::Nothing => Outcome::Ok,
             Action::Quit => Outcome::Quit,
-            Action::Help(topic) => match help(topic.as_deref()) {
+            Action::Help(topic) => match help(&self.catalog, topic.as_deref()) {
                 Ok(text) => {
                     println!("{text}");
                     Outcome::Ok
@@ -102,7 +110,7 @@ impl Session {
                 }
                 Outcome::Ok
             }
-            Action::Call(req) => match self.call(&req) {
+            Action::Call(def, args) => match self.call(&def, &args) {
                 Ok(text) => {
                     if echo {
                         println!("{}  ->  {text}", line.trim());
@@ -115,11 +123,7 @@ impl Session {
                     if echo {
                         println!("{}  ->  {text}", line.trim());
                     }
-                    eprintln!(
-                        "{}error: {} failed: {text}",
-                        prefix(origin),
-                        req.command().api_name()
-                    );
+                    eprintln!("{}error: {} failed: {text}", prefix(origin), def.name);
                     Outcome::Failed
                 }
             },
@@ -127,37 +131,26 @@ impl Session {
     }
 
     /// One API call: Ok(result text) or Err(result text) when it failed.
-    fn call(&mut self, req: &Request) -> Result<String, String> {
+    fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<String, String> {
         let robot = self.robot()?;
-        let bytes = req.encode();
-        let reply = if long_wait(&bytes).is_some() {
-            waiting(&format!("{} ...", req.command().api_name()), || {
-                robot.request(req)
-            })
+        let long = record::encode(def, args)
+            .map(|bytes| def.extra_wait(&bytes) != Some(Duration::ZERO))
+            .unwrap_or(false);
+        let reply = if long {
+            waiting(&format!("{} ...", def.name), || robot.call(def, args))
         } else {
-            robot.request(req)
+            robot.call(def, args)
         };
         match reply {
-            Ok(Reply::Code(v)) => {
-                let status = matches!(
-                    req,
-                    Request::Finish {
-                        mode: FinishMode::Status
-                    }
-                );
-                if v == 0 || (status && v == 1) {
-                    Ok(trol::describe(v))
-                } else {
-                    let meaning = records::meaning(v);
-                    if meaning.is_empty() {
-                        Err(trol::describe(v))
-                    } else {
-                        Err(format!("{}: {meaning}", trol::describe(v)))
-                    }
-                }
+            Ok(r) => Ok(r.text(robot.codes())),
+            Err(trol::Error::Refused { code, meaning, .. }) => {
+                let text = code.describe(robot.codes());
+                Err(match meaning {
+                    Some(m) => format!("{text}: {m}"),
+                    None => text,
+                })
             }
-            Ok(other) => Ok(records::reply_text(&other)),
-            Err(e) => Err(format!("{}: {e}", trol::describe(e.code()))),
+            Err(e) => Err(format!("{}: {e}", e.code().describe(robot.codes()))),
         }
     }
 }
@@ -172,7 +165,7 @@ fn prefix(origin: &str) -> String {
 }
 
 /// The help text: every command, or one.
-fn help(topic: Option<&str>) -> Result<String, String> {
+fn help(catalog: &Catalog, topic: Option<&str>) -> Result<String, String> {
     let syntax = "\
 Arguments: whole numbers and reals (-90, 1.5708, 1e3); location names (test_001, #park);
 location literals c(x, y, z, yaw, pitch, roll) cartesian (mm, rad), j(q1, ..) joint (rad),
@@ -183,8 +176,8 @@ Results print as the value and its name (0 (success), -1 (BIOS_NOT_HOMED), ...).
     match topic {
         None => {
             let mut out = String::from("Commands (the TROL API):\n");
-            for s in SPECS {
-                out.push_str(&format!("  {:<58} {}\n", usage(s), s.summary));
+            for d in catalog.iter() {
+                out.push_str(&format!("  {:<58} {}\n", usage(d), d.help));
             }
             out.push_str("Interpreter:\n");
             for (name, args, what) in OWN {
@@ -194,12 +187,14 @@ Results print as the value and its name (0 (success), -1 (BIOS_NOT_HOMED), ...).
             Ok(out)
         }
         Some(t) => {
-            if let Some(s) = commands::find(t) {
+            if let Some(d) = catalog.find(t) {
                 return Ok(format!(
-                    "{}: {}\n  usage: {}\n{syntax}",
-                    s.command.api_name(),
-                    s.summary,
-                    usage(s)
+                    "{} ({}, code {}): {}\n  usage: {}\n{syntax}",
+                    d.name,
+                    d.class(),
+                    d.code,
+                    d.help,
+                    usage(d)
                 ));
             }
             OWN.iter()
@@ -214,6 +209,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     let mut session = Session {
         conn: a.conn.clone(),
         robot: None,
+        catalog: crate::described::catalog(a.commands.as_deref())?,
     };
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
     if interactive {
@@ -253,8 +249,10 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Completion of command names and keywords.
-struct Helper;
+/// Completion of command names, and of the words each command's arguments take.
+struct Helper {
+    catalog: Catalog,
+}
 
 impl rustyline::completion::Completer for Helper {
     type Candidate = String;
@@ -275,26 +273,17 @@ impl rustyline::completion::Completer for Helper {
         let mut words: Vec<String> = Vec::new();
         if first {
             words.extend(
-                SPECS
+                self.catalog
                     .iter()
-                    .map(|s| s.command.short_name().to_ascii_lowercase()),
+                    .map(|d| d.short_name().to_ascii_lowercase()),
             );
             words.extend(OWN.iter().map(|o| o.0.to_string()));
-        } else {
-            words.extend(
-                [
-                    "straight",
-                    "interpolated",
-                    "wait",
-                    "status",
-                    "cart",
-                    "joint",
-                    "prec",
-                    "commanded",
-                    "actual",
-                ]
-                .map(String::from),
-            );
+        } else if let Some(def) = head
+            .split_whitespace()
+            .next()
+            .and_then(|w| self.catalog.find(w))
+        {
+            words.extend(commands::arg_words(def).into_iter().map(String::from));
         }
         let bare = word.strip_prefix("trol").unwrap_or(&word).to_string();
         let found = words.into_iter().filter(|w| w.starts_with(&bare)).collect();
@@ -317,7 +306,9 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
     use rustyline::error::ReadlineError;
     let mut rl: rustyline::Editor<Helper, rustyline::history::DefaultHistory> =
         rustyline::Editor::new().map_err(|e| format!("cannot start line editing: {e}"))?;
-    rl.set_helper(Some(Helper));
+    rl.set_helper(Some(Helper {
+        catalog: session.catalog.clone(),
+    }));
     let hist = history_file();
     if let Some(h) = &hist {
         let _ = rl.load_history(h);

@@ -41,15 +41,17 @@ pub const ARM_DIMS: usize = 6;
 
 /// A location: the manual's SLocData, with numDims = the number of values.
 ///
-/// Only the given values travel; the controller sets the rest to 0.
+/// Only the given values travel; the controller sets the rest to 0. Values are kept as f64
+/// from the API to the robot backend; the wire carries the manual's 32-bit `float`, so a
+/// value is rounded once, when it is encoded, and a decoded value widens back exactly.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Location {
     /// POS_PREC: encoder counts.
     Prec(Vec<i32>),
     /// POS_JOINT: radians.
-    Joint(Vec<f32>),
+    Joint(Vec<f64>),
     /// POS_CART: mm and radians.
-    Cart(Vec<f32>),
+    Cart(Vec<f64>),
 }
 
 impl Location {
@@ -79,11 +81,9 @@ impl Location {
                 .take(6)
                 .enumerate()
                 .for_each(|(i, x)| out[i] = *x as f64),
-            Location::Joint(v) | Location::Cart(v) => v
-                .iter()
-                .take(6)
-                .enumerate()
-                .for_each(|(i, x)| out[i] = *x as f64),
+            Location::Joint(v) | Location::Cart(v) => {
+                v.iter().take(6).enumerate().for_each(|(i, x)| out[i] = *x)
+            }
         }
         out
     }
@@ -92,17 +92,42 @@ impl Location {
     pub fn from_array6(tag: Tag, v: [f64; 6]) -> Location {
         match tag {
             Tag::Prec => Location::Prec(v.iter().map(|x| x.round() as i32).collect()),
-            Tag::Joint => Location::Joint(v.iter().map(|x| *x as f32).collect()),
-            Tag::Cart => Location::Cart(v.iter().map(|x| *x as f32).collect()),
+            Tag::Joint => Location::Joint(v.to_vec()),
+            Tag::Cart => Location::Cart(v.to_vec()),
         }
     }
 
-    /// Whether every value is finite (no NaN or infinity).
+    /// Whether every value is finite (no NaN or infinity) and stays finite as the wire's
+    /// 32-bit float.
     pub fn is_finite(&self) -> bool {
         match self {
             Location::Prec(_) => true,
-            Location::Joint(v) | Location::Cart(v) => v.iter().all(|x| x.is_finite()),
+            Location::Joint(v) | Location::Cart(v) => v.iter().all(|x| (*x as f32).is_finite()),
         }
+    }
+
+    /// The values as f64 (counts converted), numDims of them.
+    pub fn values(&self) -> Vec<f64> {
+        match self {
+            Location::Prec(v) => v.iter().map(|x| *x as f64).collect(),
+            Location::Joint(v) | Location::Cart(v) => v.clone(),
+        }
+    }
+
+    /// A location of `tag` with these values; counts must be whole numbers in 32-bit range.
+    pub fn from_values(tag: Tag, v: &[f64]) -> Option<Location> {
+        Some(match tag {
+            Tag::Prec => Location::Prec(
+                v.iter()
+                    .map(|x| {
+                        (x.fract() == 0.0 && *x >= i32::MIN as f64 && *x <= i32::MAX as f64)
+                            .then_some(*x as i32)
+                    })
+                    .collect::<Option<Vec<i32>>>()?,
+            ),
+            Tag::Joint => Location::Joint(v.to_vec()),
+            Tag::Cart => Location::Cart(v.to_vec()),
+        })
     }
 }
 
@@ -131,8 +156,11 @@ impl std::fmt::Display for BadLocName {
 impl std::error::Error for BadLocName {}
 
 impl LocName {
-    /// A name from text (checked).
+    /// A name from text (checked; a NUL anywhere is refused, not taken as the end).
     pub fn new(name: &str) -> Result<LocName, BadLocName> {
+        if name.contains('\0') {
+            return Err(BadLocName(name.to_string()));
+        }
         LocName::from_bytes(name.as_bytes())
     }
 
@@ -217,5 +245,6 @@ mod tests {
             assert!(LocName::new(bad).is_err(), "{bad:?}");
         }
         assert!(LocName::from_bytes(b"ab  c   ").is_err());
+        assert!(LocName::new("ab\0cd").is_err());
     }
 }

@@ -2,23 +2,32 @@
 //! Anwendungs-Schicht", "Erweiterung von TROL um eigene Kommandos").
 //!
 //! Every API call becomes one request record; the controller answers with one reply record.
-//! Both are byte-exact and shared by the host and the controller:
+//! Both are byte-exact and shared by the host and the controller, and both follow from the
+//! command's description:
 //!
-//! - [`codes`]: command codes and transaction classes CAT1..CAT4;
-//! - [`location`]: locations (SLocData) and location names (TLocName);
-//! - [`request`]: the request records, their encoding, decoding and range checks;
+//! - [`command`]: what a command is ([`CommandDef`]: code and class, arguments and ranges,
+//!   reply form, success values, reply wait, help);
+//! - [`table`]: the built-in commands, each described once;
+//! - [`record`]: the one layout rule that turns a description and values into bytes and back,
+//!   with the range checks, and the text form of a call;
 //! - [`reply`]: the reply records;
-//! - [`errors`]: TROL's return codes.
+//! - [`catalog`]: the commands one side knows, built-in and added;
+//! - [`location`]: locations (SLocData) and location names (TLocName);
+//! - [`code`]: return values as a type, with TROL's names and meanings.
 //!
 //! The layouts are written out in docs/protocol.md ("Layer 4") with test vectors.
 
-pub mod codes;
-pub mod errors;
+pub mod catalog;
+pub mod code;
+pub mod command;
 pub mod location;
+pub mod record;
 pub mod reply;
-pub mod request;
+pub mod table;
 
-pub use codes::{Class, Command};
+pub use catalog::{Catalog, CatalogError};
+pub use code::{Code, CodeInfo, CodeTable};
+pub use command::{Arg, ArgKind, Choice, Class, CommandDef, ReplyKind, Wait};
 pub use location::{LocName, Location, Tag};
+pub use record::{RequestError, Value};
 pub use reply::{Reply, ReplyError};
-pub use request::{FinishMode, PosMode, Request, RequestError};

@@ -1,18 +1,27 @@
-//! Reply records: what the controller sends back.
+//! Reply records: what the controller sends back, in the form its command's
+//! [`ReplyKind`] gives.
 //!
 //! The first 16-bit word is always the return value. A reply of exactly that word with a
 //! TROL code (<= -32000) is valid for every command: it is how the controller refuses a
 //! request it could not decode (TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, ...).
 
-use super::codes::{Class, Command};
-use super::errors::{TROL_ERR_BAD_RSIZE, is_trol_code};
-use super::location::{Location, Tag};
+use super::code::{Code, CodeTable, TROL_ERR_BAD_RSIZE};
+use super::command::{CommandDef, ReplyKind};
+use super::location::{ARM_DIMS, Location, Tag};
+use super::record::{format_location, format_number, get_location, put_location};
 
-/// A reply of a built-in command, decoded.
+/// A reply, decoded.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Reply {
     /// CAT1 (and every refusal): the return value alone.
-    Code(i16),
+    Code(Code),
+    /// A CAT2 float vector: the return value and the values.
+    Reals {
+        /// The return value.
+        value: Code,
+        /// The values (f32 on the wire).
+        values: Vec<f64>,
+    },
     /// TROLGetPosition: 0 and the position, with numDims 6.
     Position(Location),
     /// TROLGetStatus: whether the BIOS was called (the return value, 0 or 1) and the last
@@ -21,91 +30,124 @@ pub enum Reply {
         /// BIOSCalled.
         bios_called: bool,
         /// lastErrorCode.
-        last: i16,
+        last: Code,
+    },
+    /// The return value and bytes the application reads itself.
+    Bytes {
+        /// The return value.
+        value: Code,
+        /// The rest of the reply.
+        bytes: Vec<u8>,
     },
 }
 
 impl Reply {
     /// The return value (the first word).
-    pub fn value(&self) -> i16 {
+    pub fn value(&self) -> Code {
         match self {
-            Reply::Code(v) => *v,
-            Reply::Position(_) => 0,
-            Reply::Status { bios_called, .. } => *bios_called as i16,
+            Reply::Code(v) | Reply::Reals { value: v, .. } | Reply::Bytes { value: v, .. } => *v,
+            Reply::Position(_) => Code(0),
+            Reply::Status { bios_called, .. } => Code(i16::from(*bios_called)),
         }
     }
 
     /// The record's bytes.
     pub fn encode(&self) -> Vec<u8> {
         let mut out = Vec::with_capacity(28);
-        out.extend_from_slice(&self.value().to_le_bytes());
+        out.extend_from_slice(&self.value().0.to_le_bytes());
         match self {
             Reply::Code(_) => {}
+            Reply::Reals { values, .. } => values
+                .iter()
+                .for_each(|x| out.extend_from_slice(&(*x as f32).to_le_bytes())),
             Reply::Position(loc) => {
                 out.push(loc.tag() as u8);
                 out.push(loc.num_dims() as u8);
-                match loc {
-                    Location::Prec(v) => v
-                        .iter()
-                        .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-                    Location::Joint(v) | Location::Cart(v) => v
-                        .iter()
-                        .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-                }
+                put_location(&mut out, loc);
             }
-            Reply::Status { last, .. } => out.extend_from_slice(&last.to_le_bytes()),
+            Reply::Status { last, .. } => out.extend_from_slice(&last.0.to_le_bytes()),
+            Reply::Bytes { bytes, .. } => out.extend_from_slice(bytes),
         }
         out
     }
 
-    /// Decode the reply to `command` as the PC does; a size that does not fit gives
-    /// TROL_ERR_BAD_RSIZE (as `Err`).
-    pub fn decode(command: Command, bytes: &[u8]) -> Result<Reply, ReplyError> {
+    /// Decode the reply to a request of `def` as the PC does: only the size and form the
+    /// command allows are accepted; anything else is TROL_ERR_BAD_RSIZE (as `Err`).
+    pub fn decode(def: &CommandDef, bytes: &[u8]) -> Result<Reply, ReplyError> {
         let bad = || ReplyError {
-            command,
+            command: def.name,
             len: bytes.len(),
         };
         if bytes.len() < 2 {
             return Err(bad());
         }
-        let value = i16::from_le_bytes([bytes[0], bytes[1]]);
-        if bytes.len() == 2 && is_trol_code(value) {
+        let value = Code(i16::from_le_bytes([bytes[0], bytes[1]]));
+        if bytes.len() == 2 && value.is_trol() {
             return Ok(Reply::Code(value));
         }
-        match command {
-            Command::GetPosition => {
-                if bytes.len() < 4 || value != 0 {
-                    return Err(bad());
-                }
-                let tag = Tag::from_u8(bytes[2]).ok_or_else(bad)?;
-                let n = bytes[3] as usize;
-                if n > super::location::MAX_DIMS || bytes.len() != 4 + 4 * n {
-                    return Err(bad());
-                }
-                let words = bytes[4..].chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]);
-                Ok(Reply::Position(match tag {
-                    Tag::Prec => Location::Prec(words.map(i32::from_le_bytes).collect()),
-                    Tag::Joint => Location::Joint(words.map(f32::from_le_bytes).collect()),
-                    Tag::Cart => Location::Cart(words.map(f32::from_le_bytes).collect()),
-                }))
+        let rest = &bytes[2..];
+        match def.reply {
+            ReplyKind::Code if rest.is_empty() => Ok(Reply::Code(value)),
+            ReplyKind::Code => Err(bad()),
+            // A CAT2 command that failed may answer with its value alone.
+            ReplyKind::Reals { .. } | ReplyKind::Bytes if rest.is_empty() && value.0 != 0 => {
+                Ok(Reply::Code(value))
             }
-            Command::GetStatus => {
-                if bytes.len() != 4 || !(value == 0 || value == 1) {
+            ReplyKind::Reals { min, max } => {
+                let n = rest.len() / 4;
+                if rest.len() % 4 != 0 || n < min as usize || n > max as usize {
+                    return Err(bad());
+                }
+                let values = rest
+                    .chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+                    .collect();
+                Ok(Reply::Reals { value, values })
+            }
+            ReplyKind::Bytes => Ok(Reply::Bytes {
+                value,
+                bytes: rest.to_vec(),
+            }),
+            ReplyKind::Position => {
+                let [tag, n, values @ ..] = rest else {
+                    return Err(bad());
+                };
+                let tag = Tag::from_u8(*tag).ok_or_else(bad)?;
+                if value.0 != 0 || *n as usize != ARM_DIMS || values.len() != 4 * ARM_DIMS {
+                    return Err(bad());
+                }
+                Ok(Reply::Position(get_location(tag, values)))
+            }
+            ReplyKind::Status => {
+                if rest.len() != 2 || !(value.0 == 0 || value.0 == 1) {
                     return Err(bad());
                 }
                 Ok(Reply::Status {
-                    bios_called: value == 1,
-                    last: i16::from_le_bytes([bytes[2], bytes[3]]),
+                    bios_called: value.0 == 1,
+                    last: Code(i16::from_le_bytes([rest[0], rest[1]])),
                 })
             }
-            c if c.class() == Class::Cat1 || c == Command::TerminatePcp => {
-                if bytes.len() == 2 {
-                    Ok(Reply::Code(value))
-                } else {
-                    Err(bad())
-                }
+        }
+    }
+
+    /// The reply in words: `0 (success)`, `c(400, 0, ...)`, `BIOSCalled 1, lastErrorCode 0
+    /// (success)`, `0 (success), 1.5 2`; BIOS codes named from `bios`.
+    pub fn text(&self, bios: &CodeTable) -> String {
+        match self {
+            Reply::Code(v) => v.describe(bios),
+            Reply::Position(loc) => format_location(loc),
+            Reply::Status { bios_called, last } => format!(
+                "BIOSCalled {}, lastErrorCode {}",
+                u8::from(*bios_called),
+                last.describe(bios)
+            ),
+            Reply::Reals { value, values } => {
+                let v: Vec<String> = values.iter().map(|x| format_number(*x)).collect();
+                format!("{}, values ({})", value.describe(bios), v.join(", "))
             }
-            _ => Err(bad()),
+            Reply::Bytes { value, bytes } => {
+                format!("{}, bytes {bytes:02x?}", value.describe(bios))
+            }
         }
     }
 }
@@ -114,14 +156,14 @@ impl Reply {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ReplyError {
     /// The command answered.
-    pub command: Command,
+    pub command: &'static str,
     /// The reply's length.
     pub len: usize,
 }
 
 impl ReplyError {
     /// TROL_ERR_BAD_RSIZE.
-    pub fn code(&self) -> i16 {
+    pub fn code(&self) -> Code {
         TROL_ERR_BAD_RSIZE
     }
 }

@@ -101,7 +101,12 @@ impl Responder {
         &self.request
     }
 
-    /// The PCI of the request being executed.
+    /// The reply being sent (what ErrOnSend is handed when sending it fails).
+    pub fn reply(&self) -> &[u8] {
+        &self.reply
+    }
+
+    /// The PCI of the request received.
     pub fn request_pci(&self) -> u16 {
         self.request_pci
     }

@@ -1,0 +1,113 @@
+//! The robot backend contract: what the PCP server asks of the robot's firmware (manual,
+//! "Erstellen von Kommando-Handlern"; "PCP\BIOSCALL.C", the C interface to the RAPL-BIOS).
+//!
+//! The manual's PCP ran on the C500 and called the RAPL-BIOS directly. Here the server runs on
+//! a PC, in front of a [`Backend`]: the simulated A465 ([`crate::SimBackend`]), or a backend
+//! that drives a real C500 over its own line. The contract is shaped for both:
+//!
+//! - every call can fail with a [`BackendError`] (the link to the robot can break), besides
+//!   returning a BIOS code (> -32000, 0 = success);
+//! - a target is a location name, passed through to a controller that keeps its own table, or
+//!   coordinates ([`Target`]);
+//! - values are f64 as decoded from the wire, never narrowed again;
+//! - the backend publishes the table of the BIOS codes it can return ([`Backend::codes`]),
+//!   which the server's log, the trace and the API's error texts use;
+//! - nothing blocks: motions start and return; the server waits for an idle arm
+//!   (Finish(FINISH_WAIT), Home) by polling [`Backend::moving`], between which it can serve
+//!   its line.
+
+use trol_proto::application::code::{Code, CodeTable, TROL_ERR_LOCATION, TROL_ERR_ROBOT};
+use trol_proto::application::{LocName, Location, Tag};
+
+/// The target of an absolute motion.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    /// A location of the controller's own table, by name (TROLMove, TROLAppro).
+    Name(LocName),
+    /// Coordinates: cartesian or a precision point (TROLMoveII, TROLApproII).
+    Location(Location),
+}
+
+/// GetPosition's mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PosMode {
+    /// POS_COMMANDED: where the firmware tells the arm to be.
+    Commanded,
+    /// POS_ACT: where the encoders say it is.
+    Actual,
+}
+
+/// A call the backend could not make.
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    /// The controller's table has no location of this name (TROL_ERR_LOCATION).
+    #[error("no location named {0} in the controller's table")]
+    UnknownLocation(LocName),
+    /// The link to the robot failed; whether the call took effect is not known
+    /// (TROL_ERR_ROBOT).
+    #[error("the link to the robot failed: {0}")]
+    Link(String),
+}
+
+impl BackendError {
+    /// The TROL code the server answers with.
+    pub fn code(&self) -> Code {
+        match self {
+            BackendError::UnknownLocation(_) => TROL_ERR_LOCATION,
+            BackendError::Link(_) => TROL_ERR_ROBOT,
+        }
+    }
+}
+
+impl From<BackendError> for Code {
+    fn from(e: BackendError) -> Code {
+        e.code()
+    }
+}
+
+/// A BIOS call's result: its return value, or why it could not be made.
+pub type BiosResult = Result<i16, BackendError>;
+
+/// The robot behind the PCP server: one method per RAPL-BIOS call. Coordinates arrive with
+/// all six values (the server has set the ones not sent to 0).
+pub trait Backend: Send {
+    /// What it is, for logs and for the host (`simulated A465`).
+    fn kind(&self) -> &'static str;
+    /// Name and meaning of every BIOS code it returns.
+    fn codes(&self) -> &'static CodeTable;
+    /// Approach `target` displaced by `disp` in its tool frame.
+    fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult;
+    /// Close the gripper with `force` percent.
+    fn close(&mut self, force: u8) -> BiosResult;
+    /// Move away from here by `disp` in the tool frame.
+    fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult;
+    /// Whether the arm or the gripper still moves, or homes (Finish(FINISH_STATUS)).
+    fn moving(&mut self) -> Result<bool, BackendError>;
+    /// Set the finger distance, mm.
+    fn grip(&mut self, dist: u8) -> BiosResult;
+    /// Stop all motion.
+    fn halt(&mut self) -> BiosResult;
+    /// Start homing one axis (1..6) or all (0); the server replies once [`Backend::moving`]
+    /// says it is done.
+    fn home(&mut self, axis: u8) -> BiosResult;
+    /// Move the tool by dx dy dz in the world frame.
+    fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult;
+    /// Move one joint (1..6) by an increment, radians.
+    fn joint(&mut self, joint: u8, radians: f64) -> BiosResult;
+    /// All joints to absolute angles.
+    fn ma(&mut self, q: [f64; 6]) -> BiosResult;
+    /// All joints by increments.
+    fn mi(&mut self, dq: [f64; 6]) -> BiosResult;
+    /// Move to `target`.
+    fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult;
+    /// Open the gripper with `force` percent.
+    fn open(&mut self, force: u8) -> BiosResult;
+    /// Go to the READY pose.
+    fn ready(&mut self) -> BiosResult;
+    /// Set the tool transform.
+    fn set_tool(&mut self, tool: [f64; 6]) -> BiosResult;
+    /// Set the speed, percent.
+    fn speed(&mut self, percent: u8) -> BiosResult;
+    /// Read the position in the form `tag`, commanded or actual (six values).
+    fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError>;
+}

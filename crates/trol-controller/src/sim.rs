@@ -1,0 +1,229 @@
+//! The simulated A465 as a robot backend, on a clock that may run faster than real time.
+
+use std::time::Instant;
+
+use trol_a465::arm::{self, Arm, ArmSettings, Stored, Which, code};
+use trol_a465::model::joints_to_counts;
+use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
+
+use crate::backend::{Backend, BackendError, BiosResult, PosMode, Target};
+
+/// Settings of the simulated controller.
+#[derive(Clone, Debug)]
+pub struct SimSettings {
+    /// The arm's settings (table height, object between the fingers, homed at start).
+    pub arm: ArmSettings,
+    /// How much faster than real time the simulation runs (1 = real time).
+    pub time_scale: f64,
+    /// Locations loaded at start.
+    pub locations: Vec<(String, Stored)>,
+    /// The tool transform at start.
+    pub tool: [f64; 6],
+}
+
+impl Default for SimSettings {
+    fn default() -> Self {
+        SimSettings {
+            arm: ArmSettings::default(),
+            time_scale: 1.0,
+            locations: Vec::new(),
+            tool: [0.0; 6],
+        }
+    }
+}
+
+/// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes").
+pub const SIM_CODES: &CodeTable = &[
+    CodeInfo {
+        value: code::MOVING,
+        name: "BIOS_MOVING",
+        meaning: "the arm or the gripper still moves",
+    },
+    CodeInfo {
+        value: code::NOT_HOMED,
+        name: "BIOS_NOT_HOMED",
+        meaning: "the arm must be homed first (TROLHome)",
+    },
+    CodeInfo {
+        value: code::OUT_OF_REACH,
+        name: "BIOS_OUT_OF_REACH",
+        meaning: "the target or path is out of reach",
+    },
+    CodeInfo {
+        value: code::JOINT_LIMIT,
+        name: "BIOS_JOINT_LIMIT",
+        meaning: "the target or path passes a joint limit",
+    },
+    CodeInfo {
+        value: code::BELOW_TABLE,
+        name: "BIOS_BELOW_TABLE",
+        meaning: "the tool tip would go below the table",
+    },
+    CodeInfo {
+        value: code::SINGULAR_PATH,
+        name: "BIOS_SINGULAR_PATH",
+        meaning: "the straight line passes a singularity and cannot be followed",
+    },
+    CodeInfo {
+        value: code::BAD_ARGUMENT,
+        name: "BIOS_BAD_ARGUMENT",
+        meaning: "an axis number out of range or a value that is not a number",
+    },
+];
+
+/// The simulated A465 as a backend.
+pub struct SimBackend {
+    arm: Arm,
+    epoch: Instant,
+    scale: f64,
+}
+
+impl SimBackend {
+    /// A simulated arm with `settings`.
+    pub fn new(settings: SimSettings) -> SimBackend {
+        let mut arm = Arm::new(settings.arm);
+        arm.set_tool(settings.tool);
+        for (name, loc) in settings.locations {
+            arm.set_location(&name, loc);
+        }
+        SimBackend {
+            arm,
+            epoch: Instant::now(),
+            scale: settings.time_scale.max(1e-3),
+        }
+    }
+
+    /// Simulation time now, s.
+    pub fn now(&self) -> f64 {
+        self.epoch.elapsed().as_secs_f64() * self.scale
+    }
+
+    /// The arm.
+    pub fn arm(&self) -> &Arm {
+        &self.arm
+    }
+
+    /// The arm, mutably.
+    pub fn arm_mut(&mut self) -> &mut Arm {
+        &mut self.arm
+    }
+
+    fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
+        Ok(match t {
+            Target::Name(name) => match self.arm.location(name.as_str()) {
+                Some(Stored::Cart(v)) => arm::Target::Cart(v),
+                Some(Stored::Prec(c)) => arm::Target::Prec(c.map(f64::from)),
+                None => return Err(BackendError::UnknownLocation(*name)),
+            },
+            Target::Location(loc @ Location::Cart(_)) => arm::Target::Cart(loc.to_array6()),
+            Target::Location(loc @ Location::Prec(_)) => arm::Target::Prec(loc.to_array6()),
+            Target::Location(loc @ Location::Joint(_)) => arm::Target::Joints(loc.to_array6()),
+        })
+    }
+}
+
+impl Backend for SimBackend {
+    fn kind(&self) -> &'static str {
+        "simulated A465"
+    }
+    fn codes(&self) -> &'static CodeTable {
+        SIM_CODES
+    }
+    fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
+        let t = self.target(target)?;
+        let now = self.now();
+        Ok(self.arm.appro(t, disp, straight, now))
+    }
+    fn close(&mut self, force: u8) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.close(force as f64, now))
+    }
+    fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.depart(disp, straight, now))
+    }
+    fn moving(&mut self) -> Result<bool, BackendError> {
+        let now = self.now();
+        Ok(self.arm.finish_status(now) == code::MOVING)
+    }
+    fn grip(&mut self, dist: u8) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.grip(dist as f64, now))
+    }
+    fn halt(&mut self) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.halt(now))
+    }
+    fn home(&mut self, axis: u8) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.home(axis, now))
+    }
+    fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.jog(d, straight, now))
+    }
+    fn joint(&mut self, joint: u8, radians: f64) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.joint(joint, radians, now))
+    }
+    fn ma(&mut self, q: [f64; 6]) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.ma(q, now))
+    }
+    fn mi(&mut self, dq: [f64; 6]) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.mi(dq, now))
+    }
+    fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
+        let t = self.target(target)?;
+        let now = self.now();
+        Ok(self.arm.move_to(t, straight, now))
+    }
+    fn open(&mut self, force: u8) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.open(force as f64, now))
+    }
+    fn ready(&mut self) -> BiosResult {
+        let now = self.now();
+        Ok(self.arm.ready(now))
+    }
+    fn set_tool(&mut self, tool: [f64; 6]) -> BiosResult {
+        Ok(self.arm.set_tool(tool))
+    }
+    fn speed(&mut self, percent: u8) -> BiosResult {
+        Ok(self.arm.set_speed(percent as f64))
+    }
+    fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
+        let now = self.now();
+        let which = match mode {
+            PosMode::Commanded => Which::Commanded,
+            PosMode::Actual => Which::Actual,
+        };
+        let q = self.arm.position(now, which);
+        Ok(match tag {
+            Tag::Joint => Location::from_array6(Tag::Joint, q),
+            Tag::Prec => Location::Prec(joints_to_counts(&q).to_vec()),
+            Tag::Cart => Location::from_array6(Tag::Cart, self.arm.kinematics().fk_xyzypr(&q)),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_code_table_names_every_code_the_arm_returns() {
+        for v in [
+            code::MOVING,
+            code::NOT_HOMED,
+            code::OUT_OF_REACH,
+            code::JOINT_LIMIT,
+            code::BELOW_TABLE,
+            code::SINGULAR_PATH,
+            code::BAD_ARGUMENT,
+        ] {
+            assert!(SIM_CODES.iter().any(|c| c.value == v), "{v}");
+        }
+    }
+}

@@ -1,0 +1,196 @@
+//! Return values of layer 4 (manual, "Rückgabewerte und Fehlercodes", "Fehlercodes der
+//! Schicht 4").
+//!
+//! The first 16-bit word of every reply is a return value, a [`Code`]. Values above -32000
+//! are the robot firmware's (the RAPL-BIOS's) own codes, 0 meaning success; values at or
+//! below -32000 are TROL's. A BIOS value that falls into TROL's range is replaced by
+//! [`TROL_RETVAL_RANGE`] on the controller, and the real value stays readable through
+//! GetStatus.
+//!
+//! TROL's codes have their names and meanings here ([`TROL_CODES`]). The BIOS codes belong
+//! to the robot backend behind the controller: each backend publishes a [`CodeTable`] of the
+//! codes it can return, and [`Code::describe`] looks a value up in TROL's table and then in
+//! the backend's.
+
+/// A return value: a BIOS code (> -32000, 0 = success) or a TROL code (<= -32000).
+#[derive(Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Code(pub i16);
+
+/// A code's name and the manual's (or the backend's) meaning.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CodeInfo {
+    /// The value.
+    pub value: i16,
+    /// Its name (`TROL_ERR_COMM`, `BIOS_NOT_HOMED`).
+    pub name: &'static str,
+    /// What it means, in a sentence without a full stop.
+    pub meaning: &'static str,
+}
+
+/// A list of codes with their names, as a backend publishes it.
+pub type CodeTable = [CodeInfo];
+
+/// 0: success.
+pub const SUCCESS: Code = Code(0);
+/// A communication error that the layer-3 error handler could not mend (host).
+pub const TROL_ERR_COMM: Code = Code(-32001);
+/// The reply has not the size (or form) the command expects (host).
+pub const TROL_ERR_BAD_RSIZE: Code = Code(-32002);
+/// An argument of an API call is out of its range (host; the controller also uses it for a
+/// request whose fields are out of range).
+pub const TROL_ERR_ARG_RANGE: Code = Code(-32003);
+/// The controller does not know the command code (controller).
+pub const TROL_ERR_UNKNOWN: Code = Code(-32051);
+/// The request has not the size its command expects (controller).
+pub const TROL_ERR_BAD_CSIZE: Code = Code(-32052);
+/// The controller lost its link to the robot's firmware during the call, so whether the
+/// command ran is not known (controller; not in the manual, whose PCP called the BIOS
+/// directly).
+pub const TROL_ERR_ROBOT: Code = Code(-32053);
+/// The BIOS returned a value in TROL's range; GetStatus has the real one (controller, CAT1/2).
+pub const TROL_RETVAL_RANGE: Code = Code(-32101);
+/// The named location does not exist (controller, Move and Appro).
+pub const TROL_ERR_LOCATION: Code = Code(-32102);
+
+/// The boundary: return values at or below it are TROL codes.
+pub const TROL_CODE_LIMIT: i16 = -32000;
+
+/// Every TROL code, with its name and the manual's meaning.
+pub const TROL_CODES: &CodeTable = &[
+    CodeInfo {
+        value: TROL_ERR_COMM.0,
+        name: "TROL_ERR_COMM",
+        meaning: "a communication error occurred and the error handler could not mend it",
+    },
+    CodeInfo {
+        value: TROL_ERR_BAD_RSIZE.0,
+        name: "TROL_ERR_BAD_RSIZE",
+        meaning: "the reply received by the PC has not the expected size",
+    },
+    CodeInfo {
+        value: TROL_ERR_ARG_RANGE.0,
+        name: "TROL_ERR_ARG_RANGE",
+        meaning: "an argument of the API call is out of range",
+    },
+    CodeInfo {
+        value: TROL_ERR_UNKNOWN.0,
+        name: "TROL_ERR_UNKNOWN",
+        meaning: "the controller does not know the command code",
+    },
+    CodeInfo {
+        value: TROL_ERR_BAD_CSIZE.0,
+        name: "TROL_ERR_BAD_CSIZE",
+        meaning: "the request received by the controller has not the expected size",
+    },
+    CodeInfo {
+        value: TROL_ERR_ROBOT.0,
+        name: "TROL_ERR_ROBOT",
+        meaning: "the controller lost its link to the robot during the call; GetStatus tells \
+                  whether the command ran",
+    },
+    CodeInfo {
+        value: TROL_RETVAL_RANGE.0,
+        name: "TROL_RETVAL_RANGE",
+        meaning: "the BIOS returned a value in TROL's range; GetStatus gives the real one",
+    },
+    CodeInfo {
+        value: TROL_ERR_LOCATION.0,
+        name: "TROL_ERR_LOCATION",
+        meaning: "the named location does not exist",
+    },
+];
+
+impl Code {
+    /// The value on the wire.
+    pub const fn value(self) -> i16 {
+        self.0
+    }
+
+    /// Whether it is one of TROL's codes rather than the BIOS's.
+    pub const fn is_trol(self) -> bool {
+        self.0 <= TROL_CODE_LIMIT
+    }
+
+    /// Whether it means success.
+    pub const fn is_success(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Its entry in TROL's table, then in `bios` (the backend's table).
+    pub fn info(self, bios: &CodeTable) -> Option<&CodeInfo> {
+        let table = if self.is_trol() { TROL_CODES } else { bios };
+        table.iter().find(|c| c.value == self.0)
+    }
+
+    /// Its name, if TROL's table or `bios` knows it.
+    pub fn name(self, bios: &CodeTable) -> Option<&'static str> {
+        self.info(bios).map(|c| c.name)
+    }
+
+    /// Its meaning, if TROL's table or `bios` knows it.
+    pub fn meaning(self, bios: &CodeTable) -> Option<&'static str> {
+        self.info(bios).map(|c| c.meaning)
+    }
+
+    /// The value with its name: `0 (success)`, `-32102 (TROL_ERR_LOCATION)`,
+    /// `-1 (BIOS_NOT_HOMED)`, `-77 (BIOS code)`.
+    pub fn describe(self, bios: &CodeTable) -> String {
+        match self.name(bios) {
+            _ if self.is_success() => "0 (success)".to_string(),
+            Some(name) => format!("{} ({name})", self.0),
+            None if self.is_trol() => format!("{} (TROL code)", self.0),
+            None => format!("{} (BIOS code)", self.0),
+        }
+    }
+}
+
+impl std::fmt::Display for Code {
+    /// The value with TROL's name, if it is a TROL code: `-32102 (TROL_ERR_LOCATION)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.describe(&[]))
+    }
+}
+
+impl std::fmt::Debug for Code {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Code({})", self)
+    }
+}
+
+impl From<i16> for Code {
+    fn from(v: i16) -> Code {
+        Code(v)
+    }
+}
+
+impl From<Code> for i16 {
+    fn from(c: Code) -> i16 {
+        c.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_name_themselves_from_trol_and_from_the_backend() {
+        const BIOS: &CodeTable = &[CodeInfo {
+            value: -1,
+            name: "BIOS_NOT_HOMED",
+            meaning: "home first",
+        }];
+        assert_eq!(TROL_ERR_LOCATION.to_string(), "-32102 (TROL_ERR_LOCATION)");
+        assert_eq!(Code(-1).describe(BIOS), "-1 (BIOS_NOT_HOMED)");
+        assert_eq!(Code(-1).describe(&[]), "-1 (BIOS code)");
+        assert_eq!(SUCCESS.describe(BIOS), "0 (success)");
+        assert_eq!(Code(-32500).describe(BIOS), "-32500 (TROL code)");
+        assert_eq!(Code(-1).meaning(BIOS), Some("home first"));
+        // A backend cannot rename TROL's codes.
+        assert_eq!(TROL_ERR_COMM.name(BIOS), Some("TROL_ERR_COMM"));
+        let mut values: Vec<i16> = TROL_CODES.iter().map(|c| c.value).collect();
+        values.dedup();
+        assert_eq!(values.len(), TROL_CODES.len());
+        assert!(TROL_CODES.iter().all(|c| Code(c.value).is_trol()));
+    }
+}

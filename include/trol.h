@@ -51,6 +51,7 @@ typedef uint8_t  TUCCHAR;
 #define TROL_ERR_ARG_RANGE (-32003)
 #define TROL_ERR_UNKNOWN   (-32051)
 #define TROL_ERR_BAD_CSIZE (-32052)
+#define TROL_ERR_ROBOT     (-32053) /* the controller lost its link to the robot (not in the manual) */
 #define TROL_RETVAL_RANGE  (-32101)
 #define TROL_ERR_LOCATION  (-32102)
 
@@ -165,7 +166,35 @@ void SetL3_TO_Intervall(TUINT TO_Intervall);
 void SetDelay(TUINT delay);           /* milliseconds between two bytes sent */
 TUINT GetLastCommErr(void);
 
-/* Error handlers (callback.c): install your own; NULL restores the default. */
+/* Adding commands ("Erweiterung von TROL um eigene Kommandos", docs/extending.md).
+ * Cat1Transaction (send.h): send a CAT1 request (its first byte the command code) and
+ *   return the reply's value as the API functions do (failures through FatalError).
+ * TransSR (layer 3): send any request and receive its reply; resp->data stays valid until
+ *   the next TransSR on this thread. Returns TRANS_SUCCESS or a TRANS_* code. */
+TINT Cat1Transaction(SInData *req);
+TUINT TransSR(SInData *req, SOutData *resp);
+
+/* Layers 2 and 1, for error handlers that mend a failure themselves ("Callback-Routinen"):
+ * inside a handler they work on the line of the failed transaction, elsewhere on the
+ * connection's. ReceiveData's out->data stays valid until the next ReceiveData on this
+ * thread. SendData and ReceiveData return 0 or the layer-2 code (0x00FF: the port failed;
+ * 0x0081 ERR_TIMEOUT_SOH from ReceiveData: no message started within the reply timeout). */
+TUINT SendData(SInData *in, TUINT PCI);
+TUINT ReceiveData(SOutData *out, TUINT *PCI);
+TBOOL BufferEmpty(void);              /* 1: no byte waits in the input */
+void FlushBuffer(void);
+
+/* Error handlers (callback.c), the manual's way: define any of these four in your program
+ * and TROL calls it (with libtrol.so and libtrol.a alike); leave it out and TROL's default
+ * runs. ErrOnReceive that returns RECOVERY_SUCCESS must point *out at the message it
+ * received (with ReceiveData) and set *PCI; ErrAppTimeOut may look with BufferEmpty() but
+ * must not take a byte. */
+TUINT ErrOnSend(SInData *in, TUINT *PCI);
+TUINT ErrOnReceive(SOutData *out, TUINT *PCI);
+TUINT ErrAppTimeOut(SInData *in);
+TINT FatalError(TUINT command, TINT errorCode);
+
+/* Or install handlers at run time (these take precedence); NULL restores the above. */
 typedef TUINT (*TROLErrOnSendFn)(SInData *in, TUINT *PCI);
 typedef TUINT (*TROLErrOnReceiveFn)(SOutData *out, TUINT *PCI);
 typedef TUINT (*TROLErrAppTimeOutFn)(SInData *in);

@@ -18,11 +18,23 @@ use std::time::Duration;
 
 use trol_proto::link::LinkError;
 
+use crate::channel::Channel;
+
 /// The manual's RECOVERY_SUCCESS / RECOVERY_FAIL.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Recovery {
-    /// RECOVERY_SUCCESS: try again.
+    /// RECOVERY_SUCCESS: try again (send again; after a receive failure, wait for the
+    /// message again).
     Success,
+    /// RECOVERY_SUCCESS after a receive failure, with the message the handler received
+    /// itself (the manual's ErrOnReceive filling `*out` and `*PCI`): layer 3 takes it as the
+    /// reply.
+    Received {
+        /// Its PCI.
+        pci: u16,
+        /// The message.
+        message: Vec<u8>,
+    },
     /// RECOVERY_FAIL: give up.
     Fail,
 }
@@ -82,6 +94,31 @@ pub trait ErrorHandlers: Send {
     fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
         let _ = ctx;
         TimeoutAction::Fail
+    }
+
+    /// ErrOnSend with the line at hand (SendData, ReceiveData, BufferEmpty, FlushBuffer);
+    /// by default [`ErrorHandlers::err_on_send`].
+    fn err_on_send_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
+        let _ = line;
+        self.err_on_send(ctx)
+    }
+
+    /// ErrOnReceive with the line at hand: it may receive the message itself and return
+    /// [`Recovery::Received`]; by default [`ErrorHandlers::err_on_receive`].
+    fn err_on_receive_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
+        let _ = line;
+        self.err_on_receive(ctx)
+    }
+
+    /// ErrAppTimeOut with the line at hand (it may look with BufferEmpty, but must not take
+    /// a byte); by default [`ErrorHandlers::err_app_timeout`].
+    fn err_app_timeout_on(
+        &mut self,
+        ctx: &AppTimeoutContext<'_>,
+        line: &mut dyn Channel,
+    ) -> TimeoutAction {
+        let _ = line;
+        self.err_app_timeout(ctx)
     }
 }
 

@@ -12,11 +12,13 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod channel;
 mod driver;
 mod handlers;
 mod server;
 mod transactor;
 
+pub use channel::{Channel, LineChannel, NOTHING_ARRIVED, PORT_FAILED};
 pub use driver::{Clock, Direction, Driver, TraceFn};
 pub use handlers::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, ExtraWait, FailureContext, Recovery,

@@ -57,6 +57,11 @@ impl<P: Port> Server<P> {
         self.handlers = handlers;
     }
 
+    /// Give the port back.
+    pub fn into_port(self) -> P {
+        self.driver.into_port()
+    }
+
     /// The driver.
     pub fn driver_mut(&mut self) -> &mut Driver<P> {
         &mut self.driver
@@ -160,7 +165,7 @@ impl<P: Port> Server<P> {
                     };
                     attempts += 1;
                     let decision = match recovery {
-                        Recovery::Success => Decision::Retry,
+                        Recovery::Success | Recovery::Received { .. } => Decision::Retry,
                         Recovery::Fail => Decision::GiveUp,
                     };
                     self.responder.decide(decision, now);

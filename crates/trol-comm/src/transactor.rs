@@ -7,6 +7,7 @@ use trol_port::Port;
 use trol_proto::link::{LinkConfig, LinkError};
 use trol_proto::transaction::{Decision, Failure, Initiator, InitiatorEvent, TransCode};
 
+use crate::channel::LineChannel;
 use crate::driver::Driver;
 use crate::handlers::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, FailureContext, Recovery, TimeoutAction,
@@ -162,7 +163,14 @@ impl<P: Port> Transactor<P> {
                     });
                 }
                 Some(InitiatorEvent::NeedDecision(failure)) => {
-                    let decision = self.ask(failure, attempts)?;
+                    let decision = match self.ask(failure, attempts)? {
+                        Asked::Decision(d) => d,
+                        Asked::Received(message) => {
+                            // The handler received the reply itself.
+                            self.initiator.abort();
+                            return Ok(message);
+                        }
+                    };
                     attempts += 1;
                     let now = self.driver.clock().now();
                     self.initiator.decide(decision, now);
@@ -172,7 +180,10 @@ impl<P: Port> Transactor<P> {
         }
     }
 
-    fn ask(&mut self, failure: Failure, attempts: u32) -> Result<Decision, TransError> {
+    fn ask(&mut self, failure: Failure, attempts: u32) -> Result<Asked, TransError> {
+        let cfg = *self.initiator.link().config();
+        let wait = self.initiator.reply_timeout();
+        let mut line = LineChannel::new(&mut self.driver, cfg, wait);
         let decision = match failure {
             Failure::Send(e) => {
                 let ctx = FailureContext {
@@ -181,7 +192,7 @@ impl<P: Port> Transactor<P> {
                     pci: self.initiator.current_pci(),
                     attempts,
                 };
-                recovery(self.handlers.err_on_send(&ctx))
+                recovery(self.handlers.err_on_send_on(&ctx, &mut line))
             }
             Failure::Receive(e) => {
                 let ctx = FailureContext {
@@ -190,29 +201,46 @@ impl<P: Port> Transactor<P> {
                     pci: self.initiator.current_pci(),
                     attempts,
                 };
-                recovery(self.handlers.err_on_receive(&ctx))
+                match self.handlers.err_on_receive_on(&ctx, &mut line) {
+                    Recovery::Received { message, .. } => return Ok(Asked::Received(message)),
+                    other => recovery(other),
+                }
             }
             Failure::Timeout { waited } => {
-                let input_pending = self.driver.port_mut().available().map_err(TransError::Io)? > 0;
+                let input_pending = !crate::Channel::buffer_empty(&mut line);
                 let ctx = AppTimeoutContext {
                     request: self.initiator.request(),
                     waited,
                     reply_timeout: self.initiator.reply_timeout(),
                     input_pending,
                 };
-                match self.handlers.err_app_timeout(&ctx) {
+                match self.handlers.err_app_timeout_on(&ctx, &mut line) {
                     TimeoutAction::Fail => Decision::GiveUp,
                     TimeoutAction::WaitMore(d) => Decision::WaitMore(d),
                 }
             }
         };
-        Ok(decision)
+        Ok(Asked::Decision(decision))
     }
+
+    /// Layer 1 and layer 2 of this transactor's line, outside a transaction (the manual's
+    /// SendData, ReceiveData, BufferEmpty and FlushBuffer called by the application).
+    pub fn channel(&mut self) -> LineChannel<'_, P> {
+        let cfg = *self.initiator.link().config();
+        let wait = self.initiator.reply_timeout();
+        LineChannel::new(&mut self.driver, cfg, wait)
+    }
+}
+
+/// What asking a handler gave.
+enum Asked {
+    Decision(Decision),
+    Received(Vec<u8>),
 }
 
 fn recovery(r: Recovery) -> Decision {
     match r {
-        Recovery::Success => Decision::Retry,
+        Recovery::Success | Recovery::Received { .. } => Decision::Retry,
         Recovery::Fail => Decision::GiveUp,
     }
 }

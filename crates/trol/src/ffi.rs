@@ -14,18 +14,21 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
+use std::cell::{Cell, RefCell};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU16, Ordering};
 use std::time::Duration;
 
 use trol_comm::{
-    AppTimeoutContext, DefaultHandlers, ErrorHandlers, FailureContext, Recovery, TimeoutAction,
+    AppTimeoutContext, Channel, DefaultHandlers, ErrorHandlers, FailureContext, Recovery,
+    TimeoutAction,
 };
 use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
 use trol_proto::application::record::Value;
 use trol_proto::application::table::{self, POS_ACT, POS_COMMANDED};
 use trol_proto::application::{Catalog, CommandDef, LocName, Location, Reply, Tag};
+use trol_proto::transaction::TransCode;
 
 use crate::config::Config;
 use crate::robot::{Error, Robot, timeout_policy};
@@ -112,46 +115,127 @@ fn state() -> std::sync::MutexGuard<'static, State> {
     STATE.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// The layer-3 handlers that call the application's C functions.
-struct CHandlers(Callbacks);
+unsafe extern "C" {
+    fn trol_weak_err_on_send() -> ErrOnFn;
+    fn trol_weak_err_on_receive() -> ErrOnFn;
+    fn trol_weak_err_app_timeout() -> ErrAppTimeOutFn;
+    fn trol_weak_fatal_error() -> FatalErrorFn;
+}
 
-fn call_on(f: ErrOnFn, ctx: &FailureContext<'_>) -> Recovery {
-    LAST_COMM_ERR.store(ctx.error.code(), Ordering::Relaxed);
-    let Some(f) = f else { return Recovery::Fail };
-    let mut copy = ctx.message.to_vec();
-    let mut data = SInData {
-        numBytes: copy.len() as TUINT,
-        data: copy.as_mut_ptr(),
-    };
-    let mut pci = ctx.pci;
-    // SAFETY: the application's handler gets pointers to live locals.
-    match unsafe { f(&mut data, &mut pci) } {
-        RECOVERY_SUCCESS => Recovery::Success,
-        _ => Recovery::Fail,
+impl Callbacks {
+    /// The handlers in force: one installed with a TROLSet* setter, else one the application
+    /// defines under the manual's name (csrc/callbacks.c), else none (TROL's default).
+    fn resolved(self) -> Callbacks {
+        // SAFETY: the C functions return the address of a weak symbol, or NULL.
+        unsafe {
+            Callbacks {
+                on_send: self.on_send.or_else(|| trol_weak_err_on_send()),
+                on_receive: self.on_receive.or_else(|| trol_weak_err_on_receive()),
+                app_timeout: self.app_timeout.or_else(|| trol_weak_err_app_timeout()),
+                fatal: self.fatal.or_else(|| trol_weak_fatal_error()),
+            }
+        }
     }
 }
 
+thread_local! {
+    /// The line of the transaction whose error handler runs on this thread, so that the
+    /// handler's SendData, ReceiveData, BufferEmpty and FlushBuffer use it.
+    static LINE: Cell<Option<*mut (dyn Channel + 'static)>> = const { Cell::new(None) };
+    /// What ReceiveData received last on this thread (`out->data` points here).
+    static RECEIVED: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+    /// What TransSR received last on this thread (`resp->data` points here).
+    static REPLY: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Run `f` (a C handler) with `line` reachable by the layer-1/2 functions.
+fn with_line<R>(line: &mut dyn Channel, f: impl FnOnce() -> R) -> R {
+    let ptr: *mut (dyn Channel + '_) = line;
+    // SAFETY: only the lifetime is erased; the pointer is set only while `f` runs on this
+    // thread, and `line` stays mutably borrowed by us (unused) all that time.
+    let ptr: *mut (dyn Channel + 'static) = unsafe { std::mem::transmute(ptr) };
+    let previous = LINE.replace(Some(ptr));
+    let r = f();
+    LINE.set(previous);
+    r
+}
+
+/// Use the line: the one of the handler running on this thread, else the connection's.
+fn on_line<R>(f: impl FnOnce(&mut dyn Channel) -> R) -> Option<R> {
+    if let Some(ptr) = LINE.get() {
+        // SAFETY: set by `with_line` for the duration of a handler call on this thread.
+        return Some(f(unsafe { &mut *ptr }));
+    }
+    let mut st = state();
+    let robot = st.robot.as_mut()?;
+    let mut line = robot.transactor_mut().channel();
+    Some(f(&mut line))
+}
+
+/// The layer-3 handlers that call the application's C functions.
+struct CHandlers(Callbacks);
+
+fn message_for_c(bytes: &[u8]) -> (Vec<u8>, SInData) {
+    let mut copy = bytes.to_vec();
+    let data = SInData {
+        numBytes: copy.len() as TUINT,
+        data: copy.as_mut_ptr(),
+    };
+    (copy, data)
+}
+
 impl ErrorHandlers for CHandlers {
-    fn err_on_send(&mut self, ctx: &FailureContext<'_>) -> Recovery {
-        call_on(self.0.on_send, ctx)
+    fn err_on_send_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
+        LAST_COMM_ERR.store(ctx.error.code(), Ordering::Relaxed);
+        let Some(f) = self.0.resolved().on_send else {
+            return Recovery::Fail;
+        };
+        let (_keep, mut data) = message_for_c(ctx.message);
+        let mut pci = ctx.pci;
+        // SAFETY: the application's handler gets pointers to live locals.
+        match with_line(line, || unsafe { f(&mut data, &mut pci) }) {
+            RECOVERY_SUCCESS => Recovery::Success,
+            _ => Recovery::Fail,
+        }
     }
-    fn err_on_receive(&mut self, ctx: &FailureContext<'_>) -> Recovery {
-        call_on(self.0.on_receive, ctx)
+    fn err_on_receive_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
+        LAST_COMM_ERR.store(ctx.error.code(), Ordering::Relaxed);
+        let Some(f) = self.0.resolved().on_receive else {
+            return Recovery::Fail;
+        };
+        let mut out = SInData {
+            numBytes: 0,
+            data: std::ptr::null_mut(),
+        };
+        let mut pci = ctx.pci;
+        // SAFETY: as above.
+        match with_line(line, || unsafe { f(&mut out, &mut pci) }) {
+            // The manual: with RECOVERY_SUCCESS, *out holds the message received.
+            RECOVERY_SUCCESS if !out.data.is_null() => {
+                // SAFETY: the handler points `out` at numBytes readable bytes (ReceiveData's
+                // buffer, or its own).
+                let message =
+                    unsafe { std::slice::from_raw_parts(out.data, out.numBytes as usize) }.to_vec();
+                Recovery::Received { pci, message }
+            }
+            RECOVERY_SUCCESS => Recovery::Success,
+            _ => Recovery::Fail,
+        }
     }
-    fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
-        match self.0.app_timeout {
+    fn err_app_timeout_on(
+        &mut self,
+        ctx: &AppTimeoutContext<'_>,
+        line: &mut dyn Channel,
+    ) -> TimeoutAction {
+        match self.0.resolved().app_timeout {
             None => {
                 let policy = timeout_policy(Catalog::builtin());
                 DefaultHandlers::app_timeout(Some(&policy), ctx)
             }
             Some(f) => {
-                let mut copy = ctx.request.to_vec();
-                let mut data = SInData {
-                    numBytes: copy.len() as TUINT,
-                    data: copy.as_mut_ptr(),
-                };
+                let (_keep, mut data) = message_for_c(ctx.request);
                 // SAFETY: as above.
-                match unsafe { f(&mut data) } {
+                match with_line(line, || unsafe { f(&mut data) }) {
                     RECOVERY_SUCCESS => TimeoutAction::WaitMore(ctx.reply_timeout),
                     _ => TimeoutAction::Fail,
                 }
@@ -178,7 +262,7 @@ fn run(
         };
         let (result, fatal) = {
             let mut st = state();
-            let fatal = st.callbacks.fatal;
+            let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
                 return fatal_or(fatal, def.code, COMM);
             };
@@ -615,6 +699,160 @@ pub extern "C" fn SetDelay(delay: TUINT) {
         if let Some(r) = st.robot.as_mut() {
             r.set_delay(Duration::from_millis(delay as u64));
         }
+    })
+}
+
+/// Bytes a C caller hands over in an SInData.
+unsafe fn bytes_of<'a>(p: *const SInData) -> Option<&'a [u8]> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: the caller's SInData.
+    let m = unsafe { &*p };
+    if m.data.is_null() {
+        return (m.numBytes == 0).then_some(&[]);
+    }
+    // SAFETY: numBytes readable bytes at data, as SInData promises.
+    Some(unsafe { std::slice::from_raw_parts(m.data, m.numBytes as usize) })
+}
+
+/// Point `out` at `bytes` kept in `cell` until the next call of the same kind on this thread.
+unsafe fn hand_out(
+    cell: &'static std::thread::LocalKey<RefCell<Vec<u8>>>,
+    bytes: Vec<u8>,
+    out: *mut SInData,
+) {
+    cell.with(|c| {
+        let mut buf = c.borrow_mut();
+        *buf = bytes;
+        // SAFETY: the caller's SInData.
+        unsafe {
+            (*out).numBytes = buf.len() as TUINT;
+            (*out).data = buf.as_mut_ptr();
+        }
+    });
+}
+
+/// TransSR (layer 3): send the request `*req` and receive the reply into `*resp` (its data
+/// stays valid until the next TransSR on this thread). Returns TRANS_SUCCESS, TRANS_ERR_SEND,
+/// TRANS_ERR_RECEIVE or TRANS_TIMEOUT, after the error handlers had their say; for any command,
+/// of any class, added or built in.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT {
+    guard(TransCode::ErrSend as TUINT, || {
+        let Some(request) = (unsafe { bytes_of(req) }) else {
+            return TransCode::ErrSend as TUINT;
+        };
+        if resp.is_null() {
+            return TransCode::ErrSend as TUINT;
+        }
+        let result = {
+            let mut st = state();
+            let Some(robot) = st.robot.as_mut() else {
+                return TransCode::ErrSend as TUINT;
+            };
+            let r = robot.transact_raw(request);
+            if let Some(e) = robot.last_comm_error() {
+                LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
+            }
+            r
+        };
+        match result {
+            Ok(reply) => {
+                unsafe { hand_out(&REPLY, reply, resp) };
+                TransCode::Success as TUINT
+            }
+            Err(Error::Link { error, .. }) => error.code() as TUINT,
+            Err(_) => TransCode::ErrSend as TUINT,
+        }
+    })
+}
+
+/// Cat1Transaction (send.h): send the CAT1 request `*req` and return its reply's value, as
+/// the built-in API functions do: errors, and values its description does not count as
+/// success, go through FatalError.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
+    guard(COMM, || {
+        let Some(request) = (unsafe { bytes_of(req) }) else {
+            return ARG_RANGE;
+        };
+        let Some(&code) = request.first() else {
+            return ARG_RANGE;
+        };
+        let (result, fatal) = {
+            let mut st = state();
+            let fatal = st.callbacks.resolved().fatal;
+            let Some(robot) = st.robot.as_mut() else {
+                return fatal_or(fatal, code, COMM);
+            };
+            let r = robot.cat1_transaction(request);
+            if let Some(e) = robot.last_comm_error() {
+                LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
+            }
+            (r, fatal)
+        };
+        match result {
+            Ok(v) => v,
+            Err(e) => fatal_or(fatal, code, e.code().0),
+        }
+    })
+}
+
+/// SendData (layer 2): send `*in` with `PCI`. 0, or the layer-2 code.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn SendData(in_: *mut SInData, PCI: TUINT) -> TUINT {
+    guard(trol_comm::PORT_FAILED, || {
+        let Some(message) = (unsafe { bytes_of(in_) }) else {
+            return trol_comm::PORT_FAILED;
+        };
+        let code = on_line(|l| l.send_data(message, PCI)).unwrap_or(trol_comm::PORT_FAILED);
+        if code != 0 {
+            LAST_COMM_ERR.store(code, Ordering::Relaxed);
+        }
+        code
+    })
+}
+
+/// ReceiveData (layer 2): receive a message into `*out` (its data stays valid until the next
+/// ReceiveData on this thread) and its PCI into `*PCI`. 0, or the layer-2 code.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ReceiveData(out: *mut SInData, PCI: *mut TUINT) -> TUINT {
+    guard(trol_comm::PORT_FAILED, || {
+        if out.is_null() {
+            return trol_comm::PORT_FAILED;
+        }
+        match on_line(|l| l.receive_data()).unwrap_or(Err(trol_comm::PORT_FAILED)) {
+            Ok((pci, message)) => {
+                unsafe { hand_out(&RECEIVED, message, out) };
+                if !PCI.is_null() {
+                    // SAFETY: the caller's TUINT.
+                    unsafe { *PCI = pci };
+                }
+                0
+            }
+            Err(code) => {
+                LAST_COMM_ERR.store(code, Ordering::Relaxed);
+                code
+            }
+        }
+    })
+}
+
+/// BufferEmpty (layer 1): 1 if no byte waits in the input, else 0. ErrAppTimeOut may look
+/// with it for a waiting ENQ; it takes no byte.
+#[unsafe(no_mangle)]
+pub extern "C" fn BufferEmpty() -> TUINT {
+    guard(1, || {
+        TUINT::from(on_line(|l| l.buffer_empty()).unwrap_or(true))
+    })
+}
+
+/// FlushBuffer (layer 1): drop the waiting input.
+#[unsafe(no_mangle)]
+pub extern "C" fn FlushBuffer() {
+    guard((), || {
+        on_line(|l| l.flush_buffer());
     })
 }
 

@@ -1,0 +1,48 @@
+//! A controller program of an application's own (docs/extending.md, step 2): the simulated
+//! A465 behind the PCP server, with the guide's commands registered, serving on a new
+//! pseudo-terminal (or the device named as the first argument) until it is stopped.
+//!
+//!     cargo run -p trol --example extending_controller
+//!     # prints: serving on /dev/pts/N
+
+mod extending;
+
+use std::sync::atomic::AtomicBool;
+
+use extending::commands::{FORWARD_KIN, JOINT_ABS, forward_kin, joint_abs};
+use trol_controller::{Controller, Handler, Mode, Pcp, SimBackend, SimSettings};
+use trol_proto::link::LinkConfig;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let settings = SimSettings {
+        time_scale: 20.0,
+        ..SimSettings::default()
+    };
+    let mut pcp = Pcp::new(SimBackend::new(settings));
+    pcp.register(JOINT_ABS, Handler::Cat1(joint_abs))?;
+    pcp.register(FORWARD_KIN, Handler::Other(forward_kin))?;
+
+    let (port, _keep, name): (
+        Box<dyn trol_port::Port>,
+        Option<Box<dyn trol_port::Port>>,
+        String,
+    ) = match std::env::args().nth(1) {
+        Some(device) => (trol_port::open(&device, &Default::default())?, None, device),
+        None => {
+            let (master, slave, path) = trol_port::serial::SerialLine::pty_pair()?;
+            (Box::new(master), Some(Box::new(slave)), path)
+        }
+    };
+    let mut controller = Controller::new(port, LinkConfig::default(), pcp, Mode::Server);
+    controller.set_log(Box::new(|catalog, req, reply, _| {
+        let codes = trol_controller::SIM_CODES;
+        println!(
+            "{} -> {}",
+            catalog.request_text(req),
+            catalog.reply_text(req, reply, codes)
+        );
+    }));
+    println!("serving on {name}");
+    controller.run(&AtomicBool::new(false))?;
+    Ok(())
+}

@@ -1,0 +1,132 @@
+//! The manual's callbacks, the manual's way: a C program that defines ErrOnSend,
+//! ErrOnReceive, ErrAppTimeOut and FatalError under those names (no setter) sees each called
+//! on the failure that should call it, linked against libtrol.a and against libtrol.so. A
+//! scripted controller on TCP provokes the failures.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use common::cbuild::{Link, compile, program, root};
+use trol_comm::{Driver, Server, receive_data, send_data};
+use trol_port::Port;
+use trol_port::tcp::TcpLine;
+use trol_proto::application::code::{SUCCESS, TROL_ERR_LOCATION};
+use trol_proto::application::{Reply, table};
+use trol_proto::link::{Link as L2, LinkConfig};
+
+/// Serve InitTROL's GetStatus properly, then misbehave once per step of callbacks.c.
+fn scripted_controller(line: TcpLine) {
+    let cfg = LinkConfig::default();
+    let mut server = Server::new(line, cfg);
+    // InitTROL(1): GetStatus.
+    server
+        .serve(Duration::from_secs(20), &mut |_| {
+            Reply::Status {
+                bios_called: false,
+                last: SUCCESS,
+            }
+            .encode()
+        })
+        .unwrap();
+    let mut driver = Driver::new(server.into_port());
+    let receive = |driver: &mut Driver<TcpLine>| {
+        let mut link = L2::new(cfg);
+        receive_data(driver, &mut link, Duration::from_secs(20)).expect("a request")
+    };
+    let reply = |driver: &mut Driver<TcpLine>, pci: u16, r: Reply| {
+        let mut link = L2::new(cfg);
+        send_data(driver, &mut link, &r.encode(), pci & 0xFF).expect("the reply goes out");
+    };
+    // 1: TROLHalt: ignore every ENQ until the host gives up (its ErrOnSend fails).
+    let quiet_until = Instant::now() + Duration::from_millis(2500);
+    let mut buf = [0u8; 64];
+    while Instant::now() < quiet_until {
+        let _ = driver
+            .port_mut()
+            .recv(&mut buf, Instant::now() + Duration::from_millis(50));
+    }
+    // 2: TROLReady: receive it, answer with a stray byte where ENQ belongs, then the reply.
+    let (pci, req) = receive(&mut driver);
+    assert_eq!(req, [table::TROL_READY]);
+    driver.port_mut().send(&[0x00]).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    reply(&mut driver, pci, Reply::Code(SUCCESS));
+    // 3: TROLGrip: the reply comes after 0.7 s, the reply timeout is 0.2 s.
+    let (pci, req) = receive(&mut driver);
+    assert_eq!(req[0], table::TROL_GRIP);
+    std::thread::sleep(Duration::from_millis(700));
+    reply(&mut driver, pci, Reply::Code(SUCCESS));
+    // 4: TROLMove: refused.
+    let (pci, req) = receive(&mut driver);
+    assert_eq!(req[0], table::TROL_MOVE);
+    reply(&mut driver, pci, Reply::Code(TROL_ERR_LOCATION));
+}
+
+fn run_with(link: Link) -> String {
+    let exe = compile(
+        &root().join("crates/trol/tests/c/callbacks.c"),
+        "callbacks",
+        link,
+    );
+    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(10)).unwrap();
+    let addr = line.local_addr().unwrap();
+    let dir = std::env::temp_dir().join(format!(
+        "trol-callbacks-dir-{link:?}-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n"),
+    )
+    .unwrap();
+    let controller = std::thread::spawn(move || scripted_controller(line));
+    let out = program(&exe).current_dir(&dir).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    controller
+        .join()
+        .expect("the scripted controller saw what it expected");
+    let _ = std::fs::remove_file(&exe);
+    text
+}
+
+fn check(out: &str) {
+    // 1: SendData failed: ErrOnSend got the request, then FatalError got TROL_ERR_COMM.
+    assert!(
+        out.contains("ErrOnSend: 1 bytes, command 6, GetLastCommErr 0x0003"),
+        "{out}"
+    );
+    assert!(out.contains("FatalError: command 6, code -32001"), "{out}");
+    assert!(out.contains("TROLHalt -> -32001"), "{out}");
+    // 2: ErrOnReceive was asked after ERR_BAD_ENQ and received the reply itself.
+    assert!(out.contains("ErrOnReceive: GetLastCommErr 0x0085"), "{out}");
+    assert!(out.contains("ErrOnReceive: received 2 bytes"), "{out}");
+    assert!(out.contains("TROLReady -> 0"), "{out}");
+    // 3: ErrAppTimeOut was asked with the command and waited on; nothing was waiting then.
+    assert!(out.contains("ErrAppTimeOut: command 5"), "{out}");
+    assert!(out.contains("TROLGrip -> 0"), "{out}");
+    // 4: FatalError got the controller's refusal.
+    assert!(out.contains("FatalError: command 12, code -32102"), "{out}");
+    assert!(out.contains("TROLMove -> -32102"), "{out}");
+    assert!(
+        out.contains("calls: send 1 receive 1 timeout ") && out.contains(" fatal 2;"),
+        "{out}"
+    );
+    assert!(out.contains("buffer empty at first timeout 1"), "{out}");
+}
+
+#[test]
+fn handlers_named_as_in_the_manual_are_called_with_the_static_library() {
+    check(&run_with(Link::Static));
+}
+
+#[test]
+fn handlers_named_as_in_the_manual_are_called_with_the_shared_library() {
+    check(&run_with(Link::Shared));
+}

@@ -1,114 +1,11 @@
 //! The built `trol` binary, each subcommand, and the utilities working together across
 //! processes over pseudo-terminals and TCP.
 
-use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-const TROL: &str = env!("CARGO_BIN_EXE_trol");
+use std::time::Duration;
 
-/// A scratch folder of this test's own, without a trol.cfg (so the port is `sim`).
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("trol-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn trol(dir: &Path, args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(TROL)
-        .args(args)
-        .current_dir(dir)
-        .env_remove("TROL_CONFIG")
-        .env_remove("RUST_LOG")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start trol");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(stdin.as_bytes())
-        .unwrap();
-    child.wait_with_output().unwrap()
-}
-
-fn text(o: &Output) -> (String, String) {
-    (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
-
-/// A background `trol` process, killed when dropped; its first line of output names where
-/// it serves (`... serving on NAME` / `... applications use NAME`).
-struct Background {
-    child: Child,
-    name: String,
-    lines: std::sync::mpsc::Receiver<String>,
-}
-
-impl Background {
-    fn start(dir: &Path, args: &[&str], marker: &str) -> Background {
-        let mut child = Command::new(TROL)
-            .args(args)
-            .current_dir(dir)
-            .env_remove("TROL_CONFIG")
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start trol");
-        let out = BufReader::new(child.stdout.take().unwrap());
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in out.lines() {
-                let Ok(line) = line else { break };
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        let deadline = Instant::now() + Duration::from_secs(20);
-        let name = loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            let Ok(line) = rx.recv_timeout(left) else {
-                break None;
-            };
-            if let Some(i) = line.find(marker) {
-                break line[i + marker.len()..]
-                    .split_whitespace()
-                    .next()
-                    .map(|n| n.trim_end_matches(')').to_string());
-            }
-        };
-        let Some(name) = name else {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("trol {args:?} did not say `{marker}`");
-        };
-        Background {
-            child,
-            name,
-            lines: rx,
-        }
-    }
-
-    /// The output lines so far.
-    fn output(&self) -> Vec<String> {
-        self.lines.try_iter().collect()
-    }
-}
-
-impl Drop for Background {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::{Background, scratch, text, trol};
 
 #[test]
 fn demo_runs_to_the_end_and_every_step_succeeds() {

@@ -138,10 +138,13 @@ impl<P: Port> Driver<P> {
         mut done: impl FnMut(&mut M) -> bool,
     ) -> io::Result<()> {
         loop {
-            self.transmit(m)?;
+            // The manual's reset: wait, flush, then retry. A reset that ends queues the
+            // deferred transfer's first byte (ENQ) and asks for the flush in one tick, so the
+            // flush goes first: else a fast peer's answer to that ENQ would be flushed away.
             if m.wants_flush() {
                 self.port.flush_input()?;
             }
+            self.transmit(m)?;
             if done(m) {
                 return Ok(());
             }

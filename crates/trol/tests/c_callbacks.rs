@@ -13,6 +13,9 @@ use trol_port::Port;
 use trol_port::tcp::TcpLine;
 use trol_proto::application::code::{SUCCESS, TROL_ERR_LOCATION};
 use trol_proto::application::{Reply, table};
+use trol_proto::link::codes::NakCode;
+use trol_proto::link::control::{ACK, ENQ, NAK};
+use trol_proto::link::frame::HEADER_LEN;
 use trol_proto::link::{Link as L2, LinkConfig};
 
 /// Serve InitTROL's GetStatus properly, then misbehave once per step of callbacks.c.
@@ -38,14 +41,29 @@ fn scripted_controller(line: TcpLine) {
         let mut link = L2::new(cfg);
         send_data(driver, &mut link, &r.encode(), pci & 0xFF).expect("the reply goes out");
     };
-    // 1: TROLHalt: ignore every ENQ until the host gives up (its ErrOnSend fails).
-    let quiet_until = Instant::now() + Duration::from_millis(2500);
+    // 1: TROLHalt: accept the ENQ, then refuse the header with a fatal NAK (ERR_TOO_LARGE):
+    // the host's SendData fails at once with ERR_NAK, and its ErrOnSend gives up.
+    let mut seen = Vec::new();
     let mut buf = [0u8; 64];
-    while Instant::now() < quiet_until {
-        let _ = driver
-            .port_mut()
-            .recv(&mut buf, Instant::now() + Duration::from_millis(50));
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !seen.contains(&ENQ) {
+        let n = driver.port_mut().recv(&mut buf, deadline).unwrap();
+        assert!(n > 0, "no ENQ for TROLHalt");
+        seen.extend_from_slice(&buf[..n]);
     }
+    driver.port_mut().send(&[ACK]).unwrap();
+    let at = seen.iter().position(|b| *b == ENQ).unwrap();
+    let mut header = seen[at + 1..].to_vec();
+    while header.len() < HEADER_LEN {
+        let n = driver.port_mut().recv(&mut buf, deadline).unwrap();
+        assert!(n > 0, "no header for TROLHalt");
+        header.extend_from_slice(&buf[..n]);
+    }
+    assert_eq!(header[5], table::TROL_HALT, "{header:02x?}");
+    driver
+        .port_mut()
+        .send(&[NAK, NakCode::TooLarge as u8])
+        .unwrap();
     // 2: TROLReady: receive it, answer with a stray byte where ENQ belongs, then the reply.
     let (pci, req) = receive(&mut driver);
     assert_eq!(req, [table::TROL_READY]);
@@ -99,7 +117,7 @@ fn run_with(link: Link) -> String {
 fn check(out: &str) {
     // 1: SendData failed: ErrOnSend got the request, then FatalError got TROL_ERR_COMM.
     assert!(
-        out.contains("ErrOnSend: 1 bytes, command 6, GetLastCommErr 0x0003"),
+        out.contains("ErrOnSend: 1 bytes, command 6, GetLastCommErr 0x0402"),
         "{out}"
     );
     assert!(out.contains("FatalError: command 6, code -32001"), "{out}");

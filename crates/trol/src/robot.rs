@@ -397,7 +397,7 @@ impl Robot {
         self.cat1(&table::HOME, &args).map(drop)
     }
 
-    /// TROLJog: move the tool by dx [dy [dz]] in the world frame, orientation kept.
+    /// TROLJog: move the tool by dx, dy, dz (1..3 values) in the world frame, orientation kept.
     pub fn jog(&mut self, d: &[f64], straight: bool) -> Result<()> {
         self.cat1(&table::JOG, &[cart(d), Value::Flag(straight)])
             .map(drop)

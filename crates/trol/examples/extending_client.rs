@@ -6,11 +6,8 @@
 
 mod extending;
 
-use extending::commands::{
-    FORWARD_KIN, JOINT_ABS, forward_kin, forward_kin_of, joint_abs, joint_abs_to,
-};
+use extending::commands::{FORWARD_KIN, JOINT_ABS, forward_kin_of, joint_abs_to, server};
 use trol::{PosMode, Robot, SimSettings, Tag};
-use trol_controller::{Handler, Pcp, SimBackend};
 use trol_proto::link::LinkConfig;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -21,10 +18,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 time_scale: 20.0,
                 ..SimSettings::default()
             };
-            let mut pcp = Pcp::new(SimBackend::new(settings));
-            pcp.register(JOINT_ABS, Handler::Cat1(joint_abs))?;
-            pcp.register(FORWARD_KIN, Handler::Other(forward_kin))?;
-            let (line, controller) = trol_controller::embedded_with(pcp, LinkConfig::default());
+            let (line, controller) =
+                trol_controller::embedded_with(server(settings)?, LinkConfig::default());
             Robot::over(Box::new(line), LinkConfig::default(), Some(controller))
         }
     };

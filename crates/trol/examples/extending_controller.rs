@@ -9,8 +9,8 @@ mod extending;
 
 use std::sync::atomic::AtomicBool;
 
-use extending::commands::{FORWARD_KIN, JOINT_ABS, forward_kin, joint_abs};
-use trol_controller::{Controller, Handler, Mode, Pcp, SimBackend, SimSettings};
+use extending::commands::server;
+use trol_controller::{Controller, Mode, SimSettings};
 use trol_proto::link::LinkConfig;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -18,9 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         time_scale: 20.0,
         ..SimSettings::default()
     };
-    let mut pcp = Pcp::new(SimBackend::new(settings));
-    pcp.register(JOINT_ABS, Handler::Cat1(joint_abs))?;
-    pcp.register(FORWARD_KIN, Handler::Other(forward_kin))?;
+    let pcp = server(settings)?;
 
     let (port, _keep, name): (
         Box<dyn trol_port::Port>,

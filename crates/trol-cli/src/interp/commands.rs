@@ -299,7 +299,8 @@ impl<'a> Cursor<'a> {
                 None => Err(self.missing(format!("expected a location name after `{command}`"))),
             },
             ArgKind::Loc { tags, min, max } => {
-                self.location(name, tags, tags[0], min.into(), max.into(), command)
+                let bare = tags.first().copied().unwrap_or(Tag::Cart);
+                self.location(name, tags, bare, min.into(), max.into(), command)
             }
             ArgKind::Straight => match self.peek() {
                 None => Ok(Value::Flag(false)),
@@ -324,9 +325,10 @@ impl<'a> Cursor<'a> {
                     Ok(Value::Flag(v))
                 }
             },
-            ArgKind::Choice(options) => match self.peek() {
-                None => Ok(Value::Int(options[0].value)),
-                Some(t) => {
+            ArgKind::Choice(options) => match (self.peek(), options.first()) {
+                (None, Some(default)) => Ok(Value::Int(default.value)),
+                (None, None) => Err(self.missing(format!("`{name}` has no words to choose"))),
+                (Some(t), _) => {
                     let found = match &t.kind {
                         Kind::Word(w) => options.iter().find(|c| {
                             w.eq_ignore_ascii_case(c.word) || w.eq_ignore_ascii_case(c.constant)

@@ -1,7 +1,9 @@
 //! The commands of docs/extending.md, described once and used by both sides.
 
 use trol::{Arg, ArgKind, Code, CommandDef, Location, Reply, ReplyKind, Robot, Tag, Value, Wait};
-use trol_controller::{Backend, Call, Context, Executed, PosMode, SimBackend};
+use trol_controller::{
+    Backend, Call, Context, Executed, Handler, Pcp, PosMode, RegisterError, SimBackend, SimSettings,
+};
 
 /// Step 1: the descriptions. CAT2 (code 64, the first of its class): the cartesian pose of
 /// given joint angles, a float vector, as the manual's CAT2 suggests.
@@ -64,6 +66,15 @@ pub fn forward_kin(ctx: &mut Context<'_, SimBackend>, call: &Call<'_>) -> Reply 
         value: ctx.status.record_bios(0),
         values: pose.to_vec(),
     }
+}
+
+/// Registration (the manual's `dispatchTableX[code - X*64] = handler`): the simulated arm's
+/// server with the guide's commands added.
+pub fn server(settings: SimSettings) -> Result<Pcp<SimBackend>, RegisterError> {
+    let mut pcp = Pcp::new(SimBackend::new(settings));
+    pcp.register(JOINT_ABS, Handler::Cat1(joint_abs))?;
+    pcp.register(FORWARD_KIN, Handler::Other(forward_kin))?;
+    Ok(pcp)
 }
 
 /// Step 3: the client's typed calls.

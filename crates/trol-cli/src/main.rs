@@ -4,7 +4,6 @@
 mod bench;
 mod common;
 mod demo;
-mod described;
 mod init;
 mod interp;
 mod link;

@@ -93,7 +93,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
     let pcp = Pcp::new(SimBackend::new(settings));
-    let described = crate::described::catalog(a.commands.as_deref())?;
+    let described = trol::described::catalog(a.commands.as_deref())?;
     let mode = if a.server {
         Mode::Server
     } else {

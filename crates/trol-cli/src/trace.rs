@@ -344,10 +344,10 @@ fn read(file: &PathBuf, catalog: Catalog) -> Result<(), String> {
 pub fn run(t: Trace) -> Result<(), String> {
     match t {
         Trace::Read { file, commands } => {
-            read(&file, crate::described::catalog(commands.as_deref())?)
+            read(&file, trol::described::catalog(commands.as_deref())?)
         }
         Trace::Spy(a) => {
-            let catalog = crate::described::catalog(a.commands.as_deref())?;
+            let catalog = trol::described::catalog(a.commands.as_deref())?;
             let mut ctl = open_side(&a.controller, a.baud, Side::Controller)?;
             let mut app = open_side(&a.application, a.baud, Side::Application)?;
             println!("trol trace: application on {}", app.name);

@@ -25,6 +25,7 @@
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod described;
 pub mod ffi;
 mod robot;
 

@@ -209,7 +209,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     let mut session = Session {
         conn: a.conn.clone(),
         robot: None,
-        catalog: crate::described::catalog(a.commands.as_deref())?,
+        catalog: trol::described::catalog(a.commands.as_deref())?,
     };
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
     if interactive {

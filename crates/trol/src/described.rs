@@ -1,5 +1,6 @@
-//! Command descriptions from a file (`--commands FILE`), so that the interpreter, the trace
-//! and the simulator's log know the commands an application added (docs/extending.md).
+//! Command descriptions from a file (`--commands FILE` of the utilities, `add_commands` in
+//! Python), so that every surface knows the commands an application added
+//! (docs/extending.md).
 //!
 //! The file is TOML, one `[[command]]` table per command, with the fields of a
 //! `CommandDef`:

@@ -1,0 +1,147 @@
+"""Fixtures: robots against the embedded simulator and against `trol sim` over a pty, and a
+scripted controller on TCP for the failures a simulator does not make."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+import trol
+
+ROOT = Path(__file__).resolve().parents[3]
+LOCATIONS = ROOT / "examples" / "locations.txt"
+
+
+def trol_binary() -> Path:
+    """The `trol` binary: $TROL_BIN, else target/debug/trol (built if missing)."""
+    given = os.environ.get("TROL_BIN")
+    if given:
+        return Path(given)
+    path = ROOT / "target" / "debug" / "trol"
+    if not path.exists():
+        subprocess.run(["cargo", "build", "-p", "trol-cli"], cwd=ROOT, check=True)
+    return path
+
+
+@pytest.fixture
+def sim_robot(tmp_path: Path) -> Iterator[trol.Robot]:
+    """The embedded simulator, with the example locations, 50 times real time."""
+    cfg = tmp_path / "trol.cfg"
+    cfg.write_text(f"9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = {LOCATIONS}\n")
+    with trol.Robot.from_config(cfg) as robot:
+        yield robot
+
+
+@pytest.fixture
+def pty_robot() -> Iterator[trol.Robot]:
+    """`trol sim` as its own process, serving on a pty, 50 times real time."""
+    proc = subprocess.Popen(
+        [str(trol_binary()), "sim", "--server", "--time-scale", "50", "--locations", str(LOCATIONS)],
+        stdout=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert "serving on " in line, line
+        port = line.split("serving on ", 1)[1].split()[0]
+        # Keep reading its log so that it never blocks on a full pipe.
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
+        with trol.Robot.open(port, baud=38400) as robot:
+            yield robot
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.fixture(params=["embedded", "pty"])
+def robot(request: pytest.FixtureRequest) -> trol.Robot:
+    """Each test that takes `robot` runs against both controllers."""
+    name = "sim_robot" if request.param == "embedded" else "pty_robot"
+    return request.getfixturevalue(name)
+
+
+# The link, just enough of it to answer one request with bytes of our choosing
+# (docs/protocol.md, "Layer 2").
+SOH, STX, ETX, EOT, ENQ, ACK = 0x1E, 0x2D, 0x4B, 0x87, 0x99, 0xB4
+
+
+def _read(conn: socket.socket, n: int) -> bytes:
+    data = b""
+    while len(data) < n:
+        chunk = conn.recv(n - len(data))
+        if not chunk:
+            raise ConnectionError("the host went away")
+        data += chunk
+    return data
+
+
+def _lrc(block: bytes) -> bytes:
+    return (sum(block) & 0xFFFF).to_bytes(2, "little")
+
+
+def _receive(conn: socket.socket) -> tuple[int, bytes]:
+    """ReceiveData of a message of at most 2 bytes (header only)."""
+    while _read(conn, 1)[0] != ENQ:
+        pass
+    conn.sendall(bytes([ACK]))
+    header = _read(conn, 10)
+    conn.sendall(bytes([ACK]))
+    n = int.from_bytes(header[1:3], "little")
+    pci = int.from_bytes(header[3:5], "little")
+    assert n <= 2, "the scripted controller takes only short requests"
+    assert _read(conn, 1)[0] == EOT
+    return pci, header[5 : 5 + n]
+
+
+def _send(conn: socket.socket, message: bytes, pci: int) -> None:
+    """SendData of a message of up to 2 + 256 bytes (one frame)."""
+    conn.sendall(bytes([ENQ]))
+    assert _read(conn, 1)[0] == ACK
+    first = (message[:2] + b"\0\0")[:2]
+    fields = len(message).to_bytes(2, "little") + pci.to_bytes(2, "little") + first
+    conn.sendall(bytes([SOH]) + fields + _lrc(fields) + bytes([ETX]))
+    assert _read(conn, 1)[0] == ACK
+    if len(message) > 2:
+        data = message[2:] + (0).to_bytes(2, "little")
+        conn.sendall(bytes([STX]) + data + _lrc(data) + bytes([ETX]))
+        assert _read(conn, 1)[0] == ACK
+    conn.sendall(bytes([EOT]))
+
+
+@pytest.fixture
+def scripted() -> Iterator[tuple[str, list[bytes]]]:
+    """A controller on TCP that answers each request with the next of the replies the test
+    puts in the list (an empty list: it never answers). Yields (port name, replies)."""
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(1)
+    replies: list[bytes] = []
+
+    def serve() -> None:
+        try:
+            conn, _ = listener.accept()
+        except OSError:
+            return
+        with conn:
+            try:
+                while True:
+                    if not replies:
+                        conn.recv(1024)
+                        continue
+                    pci, _ = _receive(conn)
+                    _send(conn, replies.pop(0), pci & 0xFF)
+            except (ConnectionError, OSError, AssertionError):
+                return
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    yield f"socket://127.0.0.1:{listener.getsockname()[1]}", replies
+    listener.close()

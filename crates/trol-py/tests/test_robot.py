@@ -1,0 +1,296 @@
+"""TROL for Python against the embedded simulator and `trol sim` over a pty: every method,
+every exception class with its code, threads, Ctrl-C, numpy and list inputs."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import trol
+
+ROOT = Path(__file__).resolve().parents[3]
+HALF_PI = math.pi / 2
+
+
+def test_every_method(robot: trol.Robot) -> None:
+    with pytest.raises(trol.RefusedError):
+        robot.ready()  # not homed yet
+    robot.home()
+    assert not robot.is_moving()  # Home returns when homing is done
+    robot.speed(100)
+    robot.ready()
+    robot.finish()
+    # A named location of the controller's table, and the approach to it.
+    robot.appro("test_001", [-150.0])
+    robot.appro("test_001", [-90.0], straight=True)
+    robot.move("test_001", straight=True)
+    robot.finish()
+    pose = robot.pose()
+    assert isinstance(pose, trol.Pose)
+    assert (pose.x, pose.y, pose.z) == pytest.approx((400.0, 0.0, 150.0), abs=1e-2)
+    robot.depart([-90.0], straight=True)
+    robot.finish()
+    assert robot.pose().z == pytest.approx(240.0, abs=1e-2)
+    # Given locations: a Pose (any sequence of up to 6 values) or a Precision.
+    robot.move(trol.Pose(420.0, 50.0, 250.0, 0.0, HALF_PI, 0.0))
+    robot.appro([420.0, 50.0, 250.0, 0.0, HALF_PI, 0.0], [-30.0])
+    robot.finish()
+    robot.jog([0.0, 0.0, 10.0], straight=True)
+    robot.joint(1, 0.1)
+    robot.mi([0.0, 0.05])
+    robot.finish()
+    robot.ma([0.1, 0.5, 1.0, 0.0, 0.5, 0.0])
+    robot.finish()
+    joints = robot.joints()
+    assert isinstance(joints, trol.Joints)
+    assert list(joints) == pytest.approx([0.1, 0.5, 1.0, 0.0, 0.5, 0.0], abs=1e-6)
+    actual = robot.joints(actual=True)
+    assert actual.j2 == pytest.approx(0.5, abs=1e-3)
+    counts = robot.precision()
+    assert isinstance(counts, trol.Precision) and all(isinstance(c, int) for c in counts)
+    robot.move(trol.Precision(*counts))
+    robot.finish()
+    assert robot.precision() == counts
+    robot.grip(20)
+    robot.open_gripper(60)
+    robot.close_gripper(40)
+    robot.finish()
+    robot.set_tool([0.0, 0.0, 100.0])
+    robot.set_tool([0.0] * 6)
+    robot.halt()
+    assert robot.status() == (True, 0)
+    # TransSR: GetStatus's bytes.
+    assert robot.transact(bytes([193])) == bytes([1, 0, 0, 0])
+    assert robot.call("getstatus") == (True, 0)
+    assert robot.call("TROLSpeed", 50) == 0
+
+
+def test_poses_and_joints_are_immutable_sequences_numpy_reads(sim_robot: trol.Robot) -> None:
+    sim_robot.home()
+    pose = sim_robot.pose()
+    assert len(pose) == 6 and pose[2] == pose.z
+    assert np.asarray(pose).shape == (6,)
+    with pytest.raises(AttributeError):
+        pose.x = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(
+    "joints",
+    [
+        [0.2, 0.4, 0.8],
+        (0.2, 0.4, 0.8),
+        np.array([0.2, 0.4, 0.8]),
+        np.array([0.2, 0.4, 0.8], dtype=np.float32),
+    ],
+)
+def test_lists_tuples_and_numpy_arrays_are_accepted(sim_robot: trol.Robot, joints: object) -> None:
+    sim_robot.home()
+    sim_robot.ma(joints)  # type: ignore[arg-type]
+    sim_robot.finish()
+    # Missing values are 0, as numDims allows.
+    assert list(sim_robot.joints()) == pytest.approx([0.2, 0.4, 0.8, 0, 0, 0], abs=1e-6)
+
+
+def test_refused_calls_raise_refused_error_with_the_code_and_its_name(robot: trol.Robot) -> None:
+    with pytest.raises(trol.RefusedError) as e:
+        robot.joint(1, 0.1)
+    assert (e.value.code, e.value.name, e.value.command) == (-1, "BIOS_NOT_HOMED", "TROLJoint")
+    assert isinstance(e.value, trol.TrolError)
+    robot.home()
+    with pytest.raises(trol.RefusedError) as e:
+        robot.move("nowhere")
+    assert (e.value.code, e.value.name) == (-32102, "TROL_ERR_LOCATION")
+    with pytest.raises(trol.RefusedError) as e:
+        robot.ma([0, 0, 0, 0, 0, 9.0])
+    assert (e.value.code, e.value.name) == (-3, "BIOS_JOINT_LIMIT")
+    assert robot.status() == (True, -3)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda r: r.close_gripper(0),
+        lambda r: r.open_gripper(101),
+        lambda r: r.speed(151),
+        lambda r: r.home(7),
+        lambda r: r.joint(7, 0.1),
+        lambda r: r.ma([0.0] * 7),
+        lambda r: r.ma([]),
+        lambda r: r.ma("abc"),
+        lambda r: r.ma([float("nan")]),
+        lambda r: r.jog([1.0, 2.0, 3.0, 4.0]),
+        lambda r: r.move("not a name"),
+        lambda r: r.move("ab\0cd"),
+        lambda r: r.call("TROLSpeed", 0),
+        lambda r: r.call("fly"),
+    ],
+)
+def test_bad_arguments_raise_argument_error_and_send_nothing(sim_robot: trol.Robot, call: object) -> None:
+    sim_robot.home()
+    before = sim_robot.status()
+    with pytest.raises(trol.ArgumentError) as e:
+        call(sim_robot)  # type: ignore[operator]
+    assert e.value.code == -32003
+    assert isinstance(e.value, ValueError)
+    # Nothing reached the controller: its status is still that of Home.
+    assert sim_robot.status() == before
+
+
+def test_a_silent_controller_raises_link_error(scripted: tuple[str, list[bytes]]) -> None:
+    port, _ = scripted
+    robot = trol.Robot.open(port)
+    with pytest.raises(trol.LinkError) as e:
+        robot.halt()
+    assert e.value.code == -32001
+    assert e.value.last_comm == 0x0003  # ERR_TIMEOUT_ENQ
+
+
+def test_a_reply_of_the_wrong_size_raises_bad_reply_error(scripted: tuple[str, list[bytes]]) -> None:
+    port, replies = scripted
+    replies.append(bytes([1, 0, 0, 0, 0]))  # GetStatus answered with 5 bytes, not 4
+    robot = trol.Robot.open(port)
+    with pytest.raises(trol.BadReplyError) as e:
+        robot.status()
+    assert e.value.code == -32002
+
+
+def test_setup_errors(tmp_path: Path, sim_robot: trol.Robot) -> None:
+    with pytest.raises(trol.SetupError):
+        trol.Robot.open("/dev/no-such-port")
+    with pytest.raises(trol.SetupError):
+        trol.Robot.from_config(tmp_path / "missing.cfg")
+    (tmp_path / "bad.cfg").write_text("9600\nsim\n1 2 3\n")
+    with pytest.raises(trol.SetupError) as e:
+        trol.Robot.from_config(tmp_path / "bad.cfg")
+    assert "bad.cfg:3" in str(e.value)
+    with pytest.raises(trol.ArgumentError):
+        trol.Robot.open("sim", time_scale=0)
+    sim_robot.close()
+    with pytest.raises(trol.SetupError):
+        sim_robot.home()
+
+
+def test_finish_times_out_while_the_arm_keeps_moving() -> None:
+    with trol.Robot.open("sim", time_scale=5) as robot:
+        robot.home()
+        robot.speed(5)
+        robot.joint(1, 1.0)
+        with pytest.raises(trol.TimeoutError) as e:
+            robot.finish(timeout=0.05)
+        assert isinstance(e.value, TimeoutError)
+        assert robot.is_moving()
+        robot.halt()
+        assert not robot.is_moving()
+
+
+def test_other_threads_run_while_one_waits_in_finish() -> None:
+    with trol.Robot.open("sim", time_scale=5) as robot:
+        robot.home()
+        robot.speed(20)
+        robot.joint(1, 1.0)
+        ticks = 0
+        stop = threading.Event()
+
+        def count() -> None:
+            nonlocal ticks
+            while not stop.is_set():
+                ticks += 1
+                time.sleep(0.001)
+
+        t = threading.Thread(target=count)
+        t.start()
+        robot.finish()
+        stop.set()
+        t.join()
+        assert ticks > 10, "the GIL was held while finish() waited"
+
+
+def test_halt_from_another_thread_stops_a_move_while_one_waits() -> None:
+    with trol.Robot.open("sim", time_scale=1) as robot:
+        robot.home()
+        robot.speed(10)
+        robot.joint(1, 2.0)  # several seconds at 10 %
+        timer = threading.Timer(0.3, robot.halt)
+        started = time.monotonic()
+        timer.start()
+        robot.finish(timeout=30)
+        took = time.monotonic() - started
+        timer.join()
+        assert not robot.is_moving()
+        assert robot.joints().j1 < 1.0, "the move ran to its end"
+        assert took < 5.0
+
+
+def test_ctrl_c_during_finish_halts_the_arm_and_raises_keyboard_interrupt() -> None:
+    script = textwrap.dedent(
+        """
+        import sys, trol
+        robot = trol.Robot.open("sim", time_scale=1)
+        robot.home()
+        robot.speed(10)
+        robot.joint(1, 2.0)
+        print("waiting", flush=True)
+        try:
+            robot.finish()
+            print("finished")
+        except KeyboardInterrupt:
+            print("interrupted; moving", robot.is_moving(), "j1", round(robot.joints().j1, 3))
+            sys.exit(3)
+        """
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    assert proc.stdout.readline().strip() == "waiting"
+    time.sleep(0.3)
+    os.kill(proc.pid, signal.SIGINT)
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 3, out
+    assert "interrupted; moving False" in out, out
+
+
+def test_describe_names_a_code() -> None:
+    assert trol.describe(-1) == "-1 (BIOS_NOT_HOMED): the arm must be homed first (TROLHome)"
+    assert trol.describe(-32102).startswith("-32102 (TROL_ERR_LOCATION)")
+    assert trol.describe(0) == "0 (success)"
+
+
+def test_added_commands_are_called_by_name() -> None:
+    """The guide's commands (docs/extending.md) against the guide's controller program."""
+    exe = ROOT / "target" / "debug" / "examples" / "extending_controller"
+    if not exe.exists():
+        subprocess.run(
+            ["cargo", "build", "-p", "trol", "--example", "extending_controller"], cwd=ROOT, check=True
+        )
+    proc = subprocess.Popen([str(exe)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None
+        port = proc.stdout.readline().split("serving on ", 1)[1].strip()
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
+        with trol.Robot.open(port) as robot:
+            assert robot.add_commands(ROOT / "examples" / "extending.toml") == [
+                "TROLJointAbs",
+                "TROLForwardKin",
+            ]
+            pose = robot.call("forwardkin", [0.0, 0.5, 1.0])
+            assert pose[0] == pytest.approx(551.51086, abs=1e-3)
+            robot.home()
+            assert robot.call("TROLJointAbs", 2, 0.25) == 0
+            robot.finish()
+            assert robot.joints().j2 == pytest.approx(0.25, abs=1e-6)
+            with pytest.raises(trol.ArgumentError):
+                robot.call("jointabs", 9, 0.0)
+            with pytest.raises(TypeError):
+                robot.call("jointabs", 2)
+    finally:
+        proc.kill()
+        proc.wait()

@@ -17,6 +17,7 @@ use crate::kinematics::{IkError, Joints, Kinematics, Pose, wrap};
 use crate::model::{
     self, READY, counts_to_joints, first_outside_limits, joints_to_counts, max_accels, max_speeds,
 };
+use crate::motion::{Path, Profile};
 
 /// The simulated BIOS's return values (ours; the real ones are in CRS's technical manual,
 /// which is not public).
@@ -97,84 +98,54 @@ pub const FINGER_MAX: f64 = 50.0;
 /// Finger speed, mm/s (assumption): a full stroke takes 1.25 s, within the 2 s the manual's
 /// example waits after TROLClose.
 pub const FINGER_SPEED: f64 = 40.0;
-/// How far the actual position lags the commanded one, s (a servo loop's lag; assumption).
+/// How far the actual position lags the commanded one, s: the following error of a servo
+/// loop, which grows with speed (about speed x lag) and acceleration (assumption).
 pub const SERVO_LAG: f64 = 0.01;
+/// The dither of the actual position around the commanded one, at rest and moving: 1 or 2
+/// encoder counts either way on every joint, changing every 5 ms (assumption). So the two are
+/// close but never identical, as the manual says ("TROLGetPosition").
+pub const DITHER_COUNTS: i32 = 2;
 /// How long homing an axis takes at least, s (assumption).
 pub const HOME_TIME: f64 = 2.0;
-/// Points checked along a path for the safety checks and used to follow a straight line.
+/// The speed setting homing runs at, percent (assumption).
+pub const HOME_SPEED: f64 = 20.0;
+/// The tool's maximum speed on a straight line at 100 %, mm/s (assumption: no public figure
+/// for the A465; an F3 on a C500C shows 1016 mm/s).
+pub const MAX_LINEAR_SPEED: f64 = 1000.0;
+/// The tool's maximum acceleration on a straight line at 100 %, mm/s² (assumption: the F3's
+/// figure, 2540 mm/s²).
+pub const MAX_LINEAR_ACCEL: f64 = 2540.0;
+/// Points checked along a joint-interpolated path for the table.
 const PATH_SAMPLES: usize = 64;
-/// The largest change of any joint between two neighbouring points of a straight line,
-/// radians (30°, while a smooth line of the arm's reach changes far less per 1/64 of it):
-/// more means the line crosses a singularity.
-const MAX_PATH_STEP: f64 = std::f64::consts::PI / 6.0;
+/// The largest change of any joint between two neighbouring samples of a straight line,
+/// radians (1°): where the inverse kinematics needs a bigger step however close the samples,
+/// the line jumps (a singularity), and it is refused.
+const LINE_STEP: f64 = std::f64::consts::PI / 180.0;
+/// Samples of a straight line closer than this in s are not split further.
+const LINE_MIN_H: f64 = 1e-7;
+/// How far the executed joint path may leave the straight line between samples: mm, and
+/// radians of orientation.
+const LINE_TOLERANCE_MM: f64 = 0.01;
+const LINE_TOLERANCE_RAD: f64 = 1e-4;
+/// Most samples a straight line may need.
+const LINE_MAX_SAMPLES: usize = 200_000;
 
-#[derive(Clone, Debug)]
-enum Path {
-    Joint {
-        from: Joints,
-        to: Joints,
-    },
-    Line {
-        kin: Box<Kinematics>,
-        from: Pose,
-        to: Pose,
-        q_from: DQuat,
-        q_to: DQuat,
-        samples: Vec<Joints>,
-    },
-}
-
+/// A motion: a path and its profile in time.
 #[derive(Clone, Debug)]
 struct Motion {
-    start: f64,
-    duration: f64,
-    accel_time: f64,
+    profile: Profile,
     path: Path,
-    end: Joints,
+    /// Axes (0-based) that count as homed once this motion has ended (Home).
+    homes: Option<Vec<usize>>,
 }
 
 impl Motion {
-    /// Path parameter 0..1 at `t` (trapezoidal velocity profile).
-    fn s(&self, t: f64) -> f64 {
-        let t = t - self.start;
-        let (tt, ta) = (self.duration, self.accel_time);
-        if t <= 0.0 || tt <= 0.0 {
-            return if t <= 0.0 { 0.0 } else { 1.0 };
-        }
-        if t >= tt {
-            return 1.0;
-        }
-        let v = 1.0 / (tt - ta);
-        if t < ta {
-            0.5 * v / ta * t * t
-        } else if t <= tt - ta {
-            v * (t - ta / 2.0)
-        } else {
-            1.0 - 0.5 * v / ta * (tt - t) * (tt - t)
-        }
+    fn joints_at(&self, t: f64) -> Joints {
+        self.path.at(self.profile.at(t).0)
     }
 
-    fn joints_at(&self, t: f64) -> Joints {
-        let s = self.s(t);
-        match &self.path {
-            Path::Joint { from, to } => std::array::from_fn(|i| from[i] + (to[i] - from[i]) * s),
-            Path::Line {
-                kin,
-                from,
-                to,
-                q_from,
-                q_to,
-                samples,
-            } => {
-                if s >= 1.0 {
-                    return self.end;
-                }
-                let pose = line_pose(from, to, q_from, q_to, s);
-                let idx =
-                    ((s * (samples.len() - 1) as f64).round() as usize).min(samples.len() - 1);
-                kin.ik_nearest(&pose, &samples[idx]).unwrap_or(samples[idx])
-            }
-        }
+    fn end(&self) -> Joints {
+        self.path.at(self.profile.s_end())
     }
 }
 
@@ -183,6 +154,45 @@ fn line_pose(from: &Pose, to: &Pose, q_from: &DQuat, q_to: &DQuat, s: f64) -> Po
         pos: from.pos.lerp(to.pos, s),
         rot: glam::DMat3::from_quat(q_from.slerp(*q_to, s)),
     }
+}
+
+/// The straight line of the tool from one pose to another.
+struct Line {
+    from: Pose,
+    to: Pose,
+    q_from: DQuat,
+    q_to: DQuat,
+}
+
+impl Line {
+    fn new(from: Pose, to: Pose) -> Line {
+        let (q_from, mut q_to) = (DQuat::from_mat3(&from.rot), DQuat::from_mat3(&to.rot));
+        // The shorter way round.
+        if q_from.dot(q_to) < 0.0 {
+            q_to = -q_to;
+        }
+        Line {
+            from,
+            to,
+            q_from,
+            q_to,
+        }
+    }
+
+    fn at(&self, s: f64) -> Pose {
+        line_pose(&self.from, &self.to, &self.q_from, &self.q_to, s)
+    }
+}
+
+/// How far a pose is from another: mm, and radians of orientation.
+fn pose_error(a: &Pose, b: &Pose) -> (f64, f64) {
+    let dp = (a.pos - b.pos).length();
+    let dq = DQuat::from_mat3(&a.rot).angle_between(DQuat::from_mat3(&b.rot));
+    (dp, dq)
+}
+
+fn max_step(a: &Joints, b: &Joints) -> f64 {
+    (0..6).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max)
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -206,6 +216,14 @@ impl Fingers {
     fn done_at(&self) -> f64 {
         self.start + (self.to - self.from).abs() / FINGER_SPEED
     }
+}
+
+/// The joints' speed and acceleration limits at `percent`: the published maxima scaled by the
+/// setting, never beyond them (above 100 % the arm runs at its maxima); accelerations scale
+/// like the speeds (assumption).
+pub fn joint_limits(percent: f64) -> ([f64; 6], [f64; 6]) {
+    let f = percent.clamp(1.0, 100.0) / 100.0;
+    (max_speeds().map(|v| v * f), max_accels().map(|a| a * f))
 }
 
 /// The simulated A465 with its gripper and the controller's location table.
@@ -283,24 +301,26 @@ impl Arm {
 
     fn retire(&mut self, now: f64) {
         while let Some(m) = self.motions.front() {
-            if m.start + m.duration <= now {
-                self.base = m.end;
-                self.motions.pop_front();
-            } else {
+            if m.profile.end() > now {
                 break;
+            }
+            let m = self.motions.pop_front().expect("a front motion");
+            self.base = m.end();
+            for a in m.homes.into_iter().flatten() {
+                self.homed[a] = true;
             }
         }
     }
 
     /// Where the arm will be once every accepted motion has ended.
     pub fn planned_end(&self) -> Joints {
-        self.motions.back().map(|m| m.end).unwrap_or(self.base)
+        self.motions.back().map(Motion::end).unwrap_or(self.base)
     }
 
     fn planned_start_time(&self, now: f64) -> f64 {
         self.motions
             .back()
-            .map(|m| (m.start + m.duration).max(now))
+            .map(|m| m.profile.end().max(now))
             .unwrap_or(now)
     }
 
@@ -313,23 +333,25 @@ impl Arm {
     fn commanded_at(&self, t: f64) -> Joints {
         let mut pos = self.base;
         for m in &self.motions {
-            if t < m.start {
+            if t < m.profile.start() {
                 return pos;
             }
-            if t < m.start + m.duration {
+            if t < m.profile.end() {
                 return m.joints_at(t);
             }
-            pos = m.end;
+            pos = m.end();
         }
         pos
     }
 
-    /// The actual joints at `now`: the commanded ones a servo lag ago, as the encoders read
-    /// them (whole counts).
+    /// The actual joints at `now`, as the encoders read them (whole counts): the commanded
+    /// ones a servo lag ago (the following error), with a dither of 1 or 2 counts.
     pub fn actual(&mut self, now: f64) -> Joints {
         self.retire(now - SERVO_LAG);
         let q = self.commanded_at(now - SERVO_LAG);
-        let counts = joints_to_counts(&q).map(|c| c as f64);
+        let slot = (now * 200.0).floor() as i64;
+        let counts: [f64; 6] =
+            std::array::from_fn(|i| (joints_to_counts(&q)[i] + dither(slot, i)) as f64);
         counts_to_joints(&counts)
     }
 
@@ -354,11 +376,7 @@ impl Arm {
     /// When everything accepted so far will have ended.
     pub fn done_at(&mut self, now: f64) -> f64 {
         self.retire(now);
-        let arm = self
-            .motions
-            .back()
-            .map(|m| m.start + m.duration)
-            .unwrap_or(now);
+        let arm = self.motions.back().map(|m| m.profile.end()).unwrap_or(now);
         arm.max(self.fingers.done_at()).max(now)
     }
 
@@ -371,11 +389,20 @@ impl Arm {
         }
     }
 
-    /// Halt: stop arm and fingers where they are now; the commanded position stays there.
+    /// Halt: the motion under way brakes at the limits along its own path (a straight line
+    /// stays on its line), queued motions are dropped, and the fingers stop. A homing that is
+    /// stopped leaves its axes unhomed.
     pub fn halt(&mut self, now: f64) -> i16 {
-        let here = self.commanded(now);
-        self.motions.clear();
-        self.base = here;
+        self.retire(now);
+        if let Some(m) = self.motions.front_mut() {
+            if m.profile.start() <= now {
+                m.profile.stop_at(now);
+                m.homes = None;
+                self.motions.truncate(1);
+            } else {
+                self.motions.clear();
+            }
+        }
         let f = self.fingers.at(now);
         self.fingers = Fingers {
             from: f,
@@ -397,13 +424,16 @@ impl Arm {
         code::OK
     }
 
-    /// Home one axis (1..6) or all (0). The arm drives the axes to their zero (the home
-    /// switches) and counts them as homed.
+    /// Home one axis (1..6) or all (0): the arm drives the axes to their zero (the home
+    /// switches) at the homing speed, at least HOME_TIME per axis. The axes count as homed
+    /// when homing ends; a Halt before then leaves them unhomed.
     pub fn home(&mut self, axis: u8, now: f64) -> i16 {
         if axis > 6 {
             return code::BAD_ARGUMENT;
         }
-        let mut to = self.planned_end();
+        self.retire(now);
+        let from = self.planned_end();
+        let mut to = from;
         let axes: Vec<usize> = if axis == 0 {
             (0..6).collect()
         } else {
@@ -412,19 +442,16 @@ impl Arm {
         for &a in &axes {
             to[a] = 0.0;
         }
-        let from = self.planned_end();
-        let (duration, accel_time) = joint_profile(&from, &to, 20.0);
+        let path = Path::Joint { from, to };
+        let (speeds, accels) = joint_limits(HOME_SPEED);
+        let (v, a) = path.bounds().limits(&speeds, &accels);
         let start = self.planned_start_time(now);
+        let profile = Profile::trapezoid(start, v, a, HOME_TIME * axes.len() as f64);
         self.motions.push_back(Motion {
-            start,
-            duration: duration.max(HOME_TIME * axes.len() as f64),
-            accel_time,
-            path: Path::Joint { from, to },
-            end: to,
+            profile,
+            path,
+            homes: Some(axes),
         });
-        for a in axes {
-            self.homed[a] = true;
-        }
         code::OK
     }
 
@@ -457,7 +484,8 @@ impl Arm {
         code::OK
     }
 
-    fn need_homed(&self) -> Result<(), i16> {
+    fn need_homed(&mut self, now: f64) -> Result<(), i16> {
+        self.retire(now);
         if self.homed.iter().all(|h| *h) {
             Ok(())
         } else {
@@ -489,7 +517,7 @@ impl Arm {
 
     /// Accept a motion to joints `to` (joint-interpolated) after the safety checks.
     fn move_joints(&mut self, to: Joints, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         if to.iter().any(|x| !x.is_finite()) {
@@ -506,22 +534,33 @@ impl Arm {
                 return code::BELOW_TABLE;
             }
         }
-        let (duration, accel_time) = joint_profile(&from, &to, self.speed);
-        let start = self.planned_start_time(now);
-        self.motions.push_back(Motion {
-            start,
-            duration,
-            accel_time,
-            path: Path::Joint { from, to },
-            end: to,
-        });
+        self.push(Path::Joint { from, to }, None, now);
         code::OK
     }
 
+    /// Queue a motion along `path`, timed by the joint limits at the speed setting (and, for
+    /// a straight line of `line_mm`, the tool's linear limits).
+    fn push(&mut self, path: Path, line_mm: Option<f64>, now: f64) {
+        let (speeds, accels) = joint_limits(self.speed);
+        let (mut v, mut a) = path.bounds().limits(&speeds, &accels);
+        if let Some(l) = line_mm.filter(|l| *l > 0.0) {
+            let f = self.speed.clamp(1.0, 100.0) / 100.0;
+            v = v.min(MAX_LINEAR_SPEED * f / l);
+            a = a.min(MAX_LINEAR_ACCEL * f / l);
+        }
+        let start = self.planned_start_time(now);
+        let profile = Profile::trapezoid(start, v, a, 0.0);
+        self.motions.push_back(Motion {
+            profile,
+            path,
+            homes: None,
+        });
+    }
+
     /// Accept a straight-line motion of the tool centre point to `to`, orientation
-    /// interpolated, after checking every point of the path.
+    /// interpolated, after checking the whole path (docs/a465.md, "Straight lines").
     fn move_line(&mut self, to: Pose, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         let q0 = self.planned_end();
@@ -531,85 +570,96 @@ impl Arm {
             return code::OUT_OF_REACH;
         }
         let from = self.kin.fk(&q0);
-        let (q_from, q_to) = (DQuat::from_mat3(&from.rot), DQuat::from_mat3(&to.rot));
-        let mut samples = Vec::with_capacity(PATH_SAMPLES + 1);
-        let mut prev = q0;
-        for k in 0..=PATH_SAMPLES {
-            let s = k as f64 / PATH_SAMPLES as f64;
-            let pose = line_pose(&from, &to, &q_from, &q_to, s);
-            if pose.pos.z < self.settings.table_z - 1e-9 {
-                return code::BELOW_TABLE;
-            }
-            let q = match self.follow(&pose, &prev) {
-                Ok(q) => q,
-                Err(c) => return c,
-            };
-            samples.push(q);
-            prev = q;
+        // The line is straight, so its ends bound its height.
+        if from.pos.z.min(to.pos.z) < self.settings.table_z - 1e-9 {
+            return code::BELOW_TABLE;
         }
-        // Cruise time: each stretch takes as long as its slowest joint needs.
-        let v = max_speeds().map(|v| v * self.speed / 100.0);
-        let cruise: f64 = samples
-            .windows(2)
-            .map(|w| {
-                (0..6)
-                    .map(|i| wrap(w[1][i] - w[0][i]).abs() / v[i])
-                    .fold(0.0, f64::max)
-            })
-            .sum();
-        let f = self.speed / 100.0;
-        let a = max_accels().map(|a| a * f * f);
-        let accel_time = (v[0] / a[0]).min(cruise.max(1e-3));
-        let duration = if cruise > 0.0 {
-            cruise + accel_time
-        } else {
-            0.0
+        let line = Line::new(from, to);
+        let path = match self.plan_line(&line, q0) {
+            Ok(p) => p,
+            Err(c) => return c,
         };
-        let end = *samples.last().expect("samples");
-        let start = self.planned_start_time(now);
-        self.motions.push_back(Motion {
-            start,
-            duration,
-            accel_time: accel_time.min(duration / 2.0),
-            path: Path::Line {
-                kin: Box::new(self.kin),
-                from,
-                to,
-                q_from,
-                q_to,
-                samples,
-            },
-            end,
-        });
+        let (lo, hi) = path.range();
+        if first_outside_limits(&lo).is_some() || first_outside_limits(&hi).is_some() {
+            return code::JOINT_LIMIT;
+        }
+        let length = (to.pos - from.pos).length();
+        self.push(path, Some(length), now);
         code::OK
     }
 
-    /// The next joints along a straight line: the solution nearest the previous point,
-    /// whatever its limits, so that the arm keeps its configuration as a real one does. If
-    /// that solution is beyond a limit the line leaves the limits (JOINT_LIMIT); if even the
-    /// nearest one is far away the line crosses a singularity (SINGULAR_PATH).
-    fn follow(&self, pose: &Pose, prev: &Joints) -> Result<Joints, i16> {
-        let all = self.kin.ik_all(pose, prev);
-        let step = |q: &Joints| -> f64 {
-            (0..6)
-                .map(|i| wrap(q[i] - prev[i]).abs())
-                .fold(0.0, f64::max)
+    /// The joints along `line` from `q0`: samples of the inverse kinematics, each the
+    /// solution nearest the one before (so the arm keeps its configuration), split until
+    /// neighbours differ by at most LINE_STEP in every joint, and until the spline through
+    /// them stays within LINE_TOLERANCE of the line between samples. A step that stays large
+    /// however close the samples is a jump: SINGULAR_PATH. A point out of reach:
+    /// OUT_OF_REACH.
+    fn plan_line(&self, line: &Line, q0: Joints) -> Result<Path, i16> {
+        let solve = |s: f64, near: &Joints| -> Result<Joints, i16> {
+            let all = self.kin.ik_all(&line.at(s), near);
+            let best = all
+                .as_slice()
+                .iter()
+                .min_by(|a, b| max_step(&a.q, near).total_cmp(&max_step(&b.q, near)))
+                .ok_or(code::OUT_OF_REACH)?;
+            // Continue each joint from the previous one, without a wrap.
+            Ok(std::array::from_fn(|i| near[i] + wrap(best.q[i] - near[i])))
         };
-        let next = all
-            .as_slice()
-            .iter()
-            .min_by(|a, b| step(&a.q).total_cmp(&step(&b.q)))
-            .ok_or(code::OUT_OF_REACH)?;
-        if step(&next.q) > MAX_PATH_STEP {
-            return Err(code::SINGULAR_PATH);
+        let mut s = vec![0.0];
+        let mut q = vec![q0];
+        // Walk the line, halving the step where the joints move too far.
+        let mut h: f64 = 1.0 / 32.0;
+        while *s.last().expect("a sample") < 1.0 {
+            let (s0, q_prev) = (*s.last().expect("a sample"), *q.last().expect("a sample"));
+            let s1 = (s0 + h).min(1.0);
+            let q1 = solve(s1, &q_prev)?;
+            if max_step(&q1, &q_prev) <= LINE_STEP && first_outside_limits(&q1).is_some() {
+                return Err(code::JOINT_LIMIT);
+            }
+            if max_step(&q1, &q_prev) > LINE_STEP {
+                h /= 2.0;
+                if h < LINE_MIN_H {
+                    return Err(code::SINGULAR_PATH);
+                }
+                continue;
+            }
+            s.push(s1);
+            q.push(q1);
+            if s.len() > LINE_MAX_SAMPLES {
+                return Err(code::SINGULAR_PATH);
+            }
+            h = (h * 2.0).min(1.0 / 32.0);
         }
-        // Continue each joint from the previous one (J4 and J6 may pass ±180° only where
-        // their limits allow it, which they do not: ±180° is their limit).
-        let q: Joints = std::array::from_fn(|i| prev[i] + wrap(next.q[i] - prev[i]));
-        if first_outside_limits(&q).is_some() {
-            return Err(code::JOINT_LIMIT);
+        // Between samples the spline must stay on the line: split where it does not.
+        loop {
+            let path = Path::spline(s.clone(), q.clone());
+            let mut split = Vec::new();
+            for k in 0..s.len() - 1 {
+                let mid = 0.5 * (s[k] + s[k + 1]);
+                let (dp, da) = pose_error(&self.kin.fk(&path.at(mid)), &line.at(mid));
+                if dp > LINE_TOLERANCE_MM || da > LINE_TOLERANCE_RAD {
+                    split.push(k);
+                }
+            }
+            if split.is_empty() {
+                return Ok(path);
+            }
+            for &k in split.iter().rev() {
+                let mid = 0.5 * (s[k] + s[k + 1]);
+                if s[k + 1] - s[k] < LINE_MIN_H {
+                    return Err(code::SINGULAR_PATH);
+                }
+                let qm = solve(mid, &q[k])?;
+                if max_step(&qm, &q[k]) > LINE_STEP || max_step(&qm, &q[k + 1]) > LINE_STEP {
+                    return Err(code::SINGULAR_PATH);
+                }
+                s.insert(k + 1, mid);
+                q.insert(k + 1, qm);
+            }
+            if s.len() > LINE_MAX_SAMPLES {
+                return Err(code::SINGULAR_PATH);
+            }
         }
-        Ok(q)
     }
 
     fn move_pose(&mut self, to: Pose, straight: bool, now: f64) -> i16 {
@@ -632,7 +682,7 @@ impl Arm {
 
     /// Move (and MoveII): to a target, joint-interpolated or in a straight line.
     pub fn move_to(&mut self, target: Target, straight: bool, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         if let Target::Cart(v) = target {
@@ -654,7 +704,7 @@ impl Arm {
 
     /// Appro (and ApproII): to the target displaced by `disp` in its tool frame.
     pub fn appro(&mut self, target: Target, disp: [f64; 6], straight: bool, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         let pose = match target {
@@ -669,7 +719,7 @@ impl Arm {
 
     /// Depart: from where the arm is (once its motions end), displaced in the tool frame.
     pub fn depart(&mut self, disp: [f64; 6], straight: bool, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         let to = self.planned_pose().then(&Pose::from_xyzypr(disp));
@@ -678,7 +728,7 @@ impl Arm {
 
     /// Jog: the tool centre point by dx dy dz in the world frame, orientation kept.
     pub fn jog(&mut self, d: [f64; 3], straight: bool, now: f64) -> i16 {
-        if let Err(c) = self.need_homed() {
+        if let Err(c) = self.need_homed(now) {
             return c;
         }
         let mut to = self.planned_pose();
@@ -720,32 +770,16 @@ fn ik_code(e: IkError) -> i16 {
     }
 }
 
-/// Duration and acceleration time of a joint-interpolated motion: every joint runs the same
-/// trapezoidal profile in time, set by the joint that needs longest at `percent` of the
-/// maximum speeds (and the square of it of the accelerations, so that half the speed takes
-/// twice the time).
-pub fn joint_profile(from: &Joints, to: &Joints, percent: f64) -> (f64, f64) {
-    let f = percent / 100.0;
-    let v = max_speeds().map(|v| v * f);
-    // Accelerations scale with the square, so that the speed setting scales time alone.
-    let a = max_accels().map(|a| a * f * f);
-    let mut best = (0.0, 0.0);
-    for i in 0..6 {
-        let d = (to[i] - from[i]).abs();
-        if d == 0.0 {
-            continue;
-        }
-        let (t, ta) = if d >= v[i] * v[i] / a[i] {
-            (d / v[i] + v[i] / a[i], v[i] / a[i])
-        } else {
-            let ta = (d / a[i]).sqrt();
-            (2.0 * ta, ta)
-        };
-        if t > best.0 {
-            best = (t, ta);
-        }
-    }
-    best
+/// A pseudo-random dither of the encoders: 1 or 2 counts either way, per joint and 5 ms
+/// slot (never 0, so actual and commanded never agree exactly).
+fn dither(slot: i64, joint: usize) -> i32 {
+    let mut x = (slot as u64) ^ ((joint as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+    x ^= x >> 33;
+    let magnitude = 1 + (x & 1) as i32;
+    let sign = if x & 2 == 0 { 1 } else { -1 };
+    (sign * magnitude).clamp(-DITHER_COUNTS, DITHER_COUNTS)
 }
 
 /// Read a location file: one location per line, `NAME v1 v2 v3 v4 v5 v6` (blanks or commas

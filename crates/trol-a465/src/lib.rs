@@ -16,5 +16,6 @@
 pub mod arm;
 pub mod kinematics;
 pub mod model;
+pub mod motion;
 
 pub use kinematics::{Config, IkError, Joints, Kinematics, Pose, Solution, Solutions};

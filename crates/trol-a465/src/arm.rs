@@ -43,6 +43,28 @@ pub mod code {
     pub const BAD_ARGUMENT: i16 = -6;
 }
 
+/// How close an object's position must be to the tool centre point for the closing fingers
+/// to take it, mm (assumption).
+pub const GRASP_DISTANCE: f64 = 10.0;
+
+/// An object of the simulated world: a point with a width, on the table or in the gripper.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldObject {
+    /// Its name (from the objects file).
+    pub name: String,
+    /// Where it is: x y z, mm (its reference point: the middle of its base).
+    pub pos: [f64; 3],
+    /// Its width between the fingers, mm.
+    pub width: f64,
+}
+
+/// An object in the gripper: which one, and where it sits in the tool frame.
+#[derive(Clone, Copy, Debug)]
+struct Held {
+    index: usize,
+    in_tool: glam::DVec3,
+}
+
 /// A location in the controller's table.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Stored {
@@ -77,8 +99,11 @@ pub enum Which {
 pub struct ArmSettings {
     /// The table plane: the tool tip may not go below this world z, mm (default 0).
     pub table_z: f64,
-    /// The width of an object between the fingers, mm: closing stops there. None: nothing.
+    /// The width of an object held between the fingers at start, mm (`object = W`): closing
+    /// stops there. None: nothing.
     pub object_width: Option<f64>,
+    /// Objects in the world at start (on the table, or wherever the file puts them).
+    pub objects: Vec<WorldObject>,
     /// Whether the arm counts as homed from the start (default false, as after power-up).
     pub homed: bool,
 }
@@ -88,6 +113,7 @@ impl Default for ArmSettings {
         ArmSettings {
             table_z: 0.0,
             object_width: None,
+            objects: Vec::new(),
             homed: false,
         }
     }
@@ -237,13 +263,15 @@ pub struct Arm {
     motions: VecDeque<Motion>,
     fingers: Fingers,
     locations: HashMap<String, Stored>,
+    objects: Vec<WorldObject>,
+    held: Option<Held>,
 }
 
 impl Arm {
     /// An arm at READY, not homed (unless the settings say so), speed 100 %, fingers open.
     pub fn new(settings: ArmSettings) -> Arm {
         let homed = [settings.homed; 6];
-        Arm {
+        let mut arm = Arm {
             settings,
             kin: Kinematics::default(),
             speed: 100.0,
@@ -256,7 +284,25 @@ impl Arm {
                 start: 0.0,
             },
             locations: HashMap::new(),
+            objects: Vec::new(),
+            held: None,
+        };
+        for o in arm.settings.objects.clone() {
+            arm.objects.push(o);
         }
+        if let Some(w) = arm.settings.object_width {
+            // An object already between the fingers: closed on it at start.
+            arm.objects.push(WorldObject {
+                name: "object".into(),
+                pos: arm.kin.fk(&READY).pos.to_array(),
+                width: w,
+            });
+            arm.held = Some(Held {
+                index: arm.objects.len() - 1,
+                in_tool: glam::DVec3::ZERO,
+            });
+        }
+        arm
     }
 
     /// The settings.
@@ -472,9 +518,35 @@ impl Arm {
 
     fn fingers_to(&mut self, target: f64, now: f64) -> i16 {
         let from = self.fingers.at(now);
-        let stop = match self.settings.object_width {
-            Some(w) if target < w && from >= w => w,
-            _ => target,
+        let q = self.commanded(now);
+        let tcp = self.kin.fk(&q);
+        // Opening past a held object's width lets it go: it drops onto the table.
+        if let Some(h) = self.held {
+            let width = self.objects[h.index].width;
+            if target >= width {
+                let at = tcp.pos + tcp.rot * h.in_tool;
+                self.objects[h.index].pos = [at.x, at.y, self.settings.table_z];
+                self.held = None;
+            }
+        }
+        // Closing on an object at the tool centre point takes it: the fingers stop at its
+        // width and it moves with the tool from now on.
+        if self.held.is_none() {
+            let grasped = self.objects.iter().position(|o| {
+                let d = (glam::DVec3::from_array(o.pos) - tcp.pos).length();
+                d <= GRASP_DISTANCE && target < o.width && from >= o.width
+            });
+            if let Some(index) = grasped {
+                let rel = glam::DVec3::from_array(self.objects[index].pos) - tcp.pos;
+                self.held = Some(Held {
+                    index,
+                    in_tool: tcp.rot.transpose() * rel,
+                });
+            }
+        }
+        let stop = match self.held {
+            Some(h) => target.max(self.objects[h.index].width),
+            None => target,
         };
         self.fingers = Fingers {
             from,
@@ -482,6 +554,23 @@ impl Arm {
             start: now,
         };
         code::OK
+    }
+
+    /// The objects of the world at `now`: a held one where the tool has carried it.
+    pub fn objects(&mut self, now: f64) -> Vec<WorldObject> {
+        let mut out = self.objects.clone();
+        if let Some(h) = self.held {
+            let q = self.commanded(now);
+            let tcp = self.kin.fk(&q);
+            let at = tcp.pos + tcp.rot * h.in_tool;
+            out[h.index].pos = at.to_array();
+        }
+        out
+    }
+
+    /// The name of the object in the gripper, if any.
+    pub fn held(&self) -> Option<&str> {
+        self.held.map(|h| self.objects[h.index].name.as_str())
     }
 
     fn need_homed(&mut self, now: f64) -> Result<(), i16> {
@@ -837,6 +926,48 @@ pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
             Stored::Cart(c)
         };
         out.push((name.to_string(), loc));
+    }
+    Ok(out)
+}
+
+/// Read an objects file: one object per line, `NAME x y z width` (mm; blanks or commas
+/// between). Blank lines and lines starting with `;` are ignored.
+pub fn parse_objects(text: &str) -> Result<Vec<WorldObject>, String> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with(';') {
+            continue;
+        }
+        let parts: Vec<&str> = line
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .collect();
+        let err = |why: String| {
+            format!(
+                "line {}: {why}; expected `NAME x y z width` (mm, a width of 0..{FINGER_MAX})",
+                n + 1
+            )
+        };
+        if parts.len() != 5 {
+            return Err(err(format!("{} fields", parts.len())));
+        }
+        let mut v = [0.0; 4];
+        for (i, p) in parts[1..].iter().enumerate() {
+            v[i] = p
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| err(format!("{p:?} is not a number")))?;
+        }
+        if !(v[3] > 0.0 && v[3] <= FINGER_MAX) {
+            return Err(err(format!("width {}", v[3])));
+        }
+        out.push(WorldObject {
+            name: parts[0].to_string(),
+            pos: [v[0], v[1], v[2]],
+            width: v[3],
+        });
     }
     Ok(out)
 }

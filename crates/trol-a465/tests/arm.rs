@@ -374,3 +374,63 @@ fn the_actual_position_lags_while_moving_and_dithers_at_rest() {
     }
     assert_eq!(arm.position(end + 1.0, Which::Commanded), target);
 }
+
+#[test]
+fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
+    use trol_a465::arm::{WorldObject, parse_objects};
+    let objects = parse_objects("; name x y z width\ncube 400 0 150 30\nfar 0 400 0 20\n").unwrap();
+    assert_eq!(objects[0].name, "cube");
+    let mut arm = Arm::new(ArmSettings {
+        homed: true,
+        objects,
+        ..ArmSettings::default()
+    });
+    let test_001 = [400.0, 0.0, 150.0, 0.0, DOWN, 0.0];
+    // The manual's pick example (TROLAppro): approach, move onto it, close, depart.
+    let mut t = settle_at(&mut arm, [400.0, 0.0, 300.0, 0.0, DOWN, 0.0], 0.0);
+    let appro = [400.0, 0.0, 240.0, 0.0, DOWN, 0.0];
+    assert_eq!(arm.move_to(Target::Cart(appro), true, t), code::OK);
+    assert_eq!(arm.move_to(Target::Cart(test_001), true, t), code::OK);
+    t = arm.done_at(t);
+    assert_eq!(arm.close(60.0, t), code::OK);
+    t = arm.done_at(t);
+    assert_eq!(arm.held(), Some("cube"));
+    assert_eq!(
+        arm.fingers(t),
+        30.0,
+        "the fingers stop at the object's width"
+    );
+    assert_eq!(
+        arm.depart([-90.0, 0.0, 0.0, 0.0, 0.0, 0.0], true, t),
+        code::OK
+    );
+    t = arm.done_at(t);
+    let at = &arm.objects(t)[0];
+    for (got, want) in at.pos.iter().zip([400.0, 0.0, 240.0]) {
+        assert!((got - want).abs() < 1e-6, "{at:?}");
+    }
+    // Open: it drops onto the table below the tool; the other object never moved.
+    assert_eq!(arm.open(50.0, t), code::OK);
+    assert_eq!(arm.held(), None);
+    let objects: Vec<WorldObject> = arm.objects(t + 1.0);
+    for (got, want) in objects[0].pos.iter().zip([400.0, 0.0, 0.0]) {
+        assert!((got - want).abs() < 1e-9, "{:?}", objects[0]);
+    }
+    assert_eq!(objects[1].pos, [0.0, 400.0, 0.0]);
+    // Closing where there is nothing takes nothing.
+    assert_eq!(arm.close(60.0, t + 2.0), code::OK);
+    assert_eq!(arm.held(), None);
+    assert_eq!(arm.fingers(t + 10.0), 0.0);
+    // Bad object files say where.
+    for bad in [
+        "cube 1 2 3",
+        "cube 1 2 3 x",
+        "cube 1 2 3 60",
+        "cube 1 2 3 0",
+    ] {
+        assert!(
+            parse_objects(bad).unwrap_err().starts_with("line 1:"),
+            "{bad}"
+        );
+    }
+}

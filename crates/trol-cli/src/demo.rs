@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::Args;
 use trol::{PosMode, Robot, Tag};
-use trol_a465::arm::Stored;
+use trol_a465::arm::{Stored, WorldObject};
 
 use crate::common::{Conn, waiting};
 
@@ -36,9 +36,21 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                 .locations
                 .push(("test_001".into(), Stored::Cart(TEST_001)));
         }
+        if settings.arm.objects.is_empty() && settings.arm.object_width.is_none() {
+            // Something to pick: a 30 mm cube at test_001.
+            settings.arm.objects.push(WorldObject {
+                name: "cube".into(),
+                pos: [TEST_001[0], TEST_001[1], TEST_001[2]],
+                width: 30.0,
+            });
+        }
         println!(
             "trol demo: the manual's pick example on the embedded simulator ({}x real time)",
             settings.time_scale
+        );
+        println!(
+            "  motion commands return as soon as the controller accepted them; the arm moves \
+             on while the program goes on, until TROLFinish(FINISH_WAIT) waits for it"
         );
         Robot::embedded(settings)
     } else {
@@ -73,23 +85,34 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         let result = waiting(name, || f(&mut robot));
         let outcome = match &result {
             Ok(()) => "0 (success)".to_string(),
-            Err(e) => {
-                failed += 1;
-                e.to_string()
-            }
+            Err(e) => e.to_string(),
         };
-        let at = robot
-            .position(Tag::Cart, PosMode::Commanded)
-            .map(|l| {
-                let v = l.to_array6();
-                format!("x {:7.1} y {:7.1} z {:7.1} mm", v[0], v[1], v[2])
-            })
-            .unwrap_or_else(|e| format!("position unknown: {e}"));
+        let moving = robot.is_moving().unwrap_or(false);
         println!(
-            "{:>2}/{} {name:<44} -> {outcome:<14} arm at {at}",
+            "{:>2}/{} {name:<44} -> {outcome:<14} arm at {}{}",
             i + 1,
-            steps.len()
+            steps.len(),
+            where_is(&mut robot),
+            if moving { ", moving" } else { "" }
         );
+        if result.is_err() {
+            failed += 1;
+            println!("trol demo: stopped at the failed step");
+            break;
+        }
+        // Show the arm moving after a command that returned before its motion ended.
+        if moving && !name.starts_with("TROLFinish") {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            println!(
+                "      {:<44}    {:<14} arm at {}",
+                "(0.1 s later, the program not waiting)",
+                "",
+                where_is(&mut robot)
+            );
+        }
+    }
+    if let Some(world) = robot.world() {
+        println!("trol demo: {world}");
     }
     if failed == 0 {
         println!("trol demo: all {} steps succeeded", steps.len());
@@ -98,4 +121,15 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         println!("trol demo: {failed} of {} steps failed", steps.len());
         Ok(ExitCode::FAILURE)
     }
+}
+
+/// Where the tool is, commanded.
+fn where_is(robot: &mut Robot) -> String {
+    robot
+        .position(Tag::Cart, PosMode::Commanded)
+        .map(|l| {
+            let v = l.to_array6();
+            format!("x {:7.1} y {:7.1} z {:7.1} mm", v[0], v[1], v[2])
+        })
+        .unwrap_or_else(|e| format!("position unknown: {e}"))
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use trol_a465::arm::{ArmSettings, parse_locations};
+use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
 use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp, SimBackend, SimSettings};
 use trol_proto::link::LinkConfig;
@@ -42,9 +42,14 @@ pub struct SimArgs {
     /// Start homed (a real arm must be homed after power-up).
     #[arg(long)]
     homed: bool,
-    /// Width of an object between the fingers, mm: closing stops there.
+    /// Width of an object held between the fingers at start, mm: closing stops there.
     #[arg(long, value_name = "MM")]
     object: Option<f64>,
+    /// Objects in the world, one per line `NAME x y z width` (mm): closing the gripper on
+    /// one at the tool centre point picks it up, opening drops it onto the table; the log
+    /// says where each one is.
+    #[arg(long, value_name = "FILE")]
+    objects: Option<PathBuf>,
     /// Start in server mode, as if `trol init` had run.
     #[arg(long)]
     server: bool,
@@ -66,10 +71,19 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         None => Vec::new(),
     };
     let n_locations = locations.len();
+    let objects = match &a.objects {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+            parse_objects(&text).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => Vec::new(),
+    };
     let settings = SimSettings {
         arm: ArmSettings {
             table_z: a.table_z,
             object_width: a.object,
+            objects,
             homed: a.homed,
         },
         time_scale: a.time_scale,
@@ -101,26 +115,36 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     };
     let mut controller = Controller::new(opened.port, cfg, pcp, mode);
     // The server's own catalog knows what it serves; the described commands name the rest.
-    controller.set_log(Box::new(move |served, req, reply, ev| {
-        let catalog = match req.first() {
-            Some(c) if served.get(*c).is_none() => &described,
-            _ => served,
+    let mut last_world = None;
+    controller.set_log(Box::new(move |e| {
+        let catalog = match e.request.first() {
+            Some(c) if e.catalog.get(*c).is_none() => &described,
+            _ => e.catalog,
         };
         let codes = trol_controller::SIM_CODES;
         let (req, reply) = (
-            catalog.request_text(req),
-            catalog.reply_text(req, reply, codes),
+            catalog.request_text(e.request),
+            catalog.reply_text(e.request, e.reply, codes),
         );
-        match ev {
+        match e.event {
             ServerEvent::Executed => println!("{req} -> {reply}"),
-            ServerEvent::ReplyFailed(e) => {
-                println!("{req} -> {reply} (the reply was lost: {e})")
+            ServerEvent::ReplyFailed(err) => {
+                println!("{req} -> {reply} (the reply was lost: {err})")
             }
             ServerEvent::ReplyTooLong { len } => {
                 println!("{req} -> a reply of {len} bytes, too long to send")
             }
-            ServerEvent::ReceiveFailed(e) => println!("a request could not be received: {e}"),
+            ServerEvent::ReceiveFailed(err) => {
+                println!("a request could not be received: {err}")
+            }
             ServerEvent::Idle | ServerEvent::Pending => {}
+        }
+        // Where the world's objects are, whenever that changed.
+        if e.world.is_some() && e.world != last_world {
+            if let Some(w) = &e.world {
+                println!("  world: {w}");
+            }
+            last_world = e.world.clone();
         }
     }));
     let mut last_mode = controller.mode();

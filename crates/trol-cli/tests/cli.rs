@@ -13,7 +13,10 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
     let o = trol(&dir, &["demo", "--time-scale", "50"], "");
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
-    let steps: Vec<&str> = out.lines().filter(|l| l.contains(" -> ")).collect();
+    let steps: Vec<&str> = out
+        .lines()
+        .filter(|l| l.contains(" -> ") && !l.trim_start().starts_with('('))
+        .collect();
     assert_eq!(steps.len(), 11, "{out}");
     for s in &steps {
         assert!(s.contains("-> 0 (success)"), "{s}");
@@ -25,6 +28,17 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
             .last()
             .unwrap()
             .contains("x   400.0 y     0.0 z   240.0 mm"),
+        "{out}"
+    );
+    // It says that motion commands return before the motion ends, shows the arm moving,
+    // and where the cube it picked up ended: in the gripper, 90 mm above test_001.
+    assert!(out.contains("motion commands return as soon as"), "{out}");
+    assert!(
+        out.contains("(0.1 s later, the program not waiting)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("trol demo: cube at x 400.0 y") && out.contains("z 240.0 mm, in the gripper"),
         "{out}"
     );
 }
@@ -263,6 +277,20 @@ fn benches_print_json() {
     assert!(o.status.success(), "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["payload_bytes"], 600);
+
+    let o = trol(&dir, &["bench", "moves", "--json"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let moves = v.as_array().unwrap();
+    assert!(moves.len() >= 8, "{out}");
+    for m in moves {
+        // No move is faster than the published speeds allow.
+        assert!(
+            m["seconds"].as_f64().unwrap() >= m["speed_bound_seconds"].as_f64().unwrap(),
+            "{m}"
+        );
+    }
 }
 
 #[test]
@@ -442,5 +470,49 @@ fn sim_options_set_the_table_and_the_homed_state() {
     assert!(
         err.contains("<stdin>:3: error: TROLJog failed: -4 (BIOS_BELOW_TABLE)"),
         "{out}\n{err}"
+    );
+}
+
+/// `trol sim --objects`: closing on an object picks it up, and the log says where it is.
+#[test]
+fn sim_objects_are_picked_up_and_the_log_says_where_they_are() {
+    let dir = scratch("simobjects");
+    std::fs::write(
+        dir.join("objects.txt"),
+        "; name x y z width\ncube 400 0 150 30\n",
+    )
+    .unwrap();
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--server",
+            "--homed",
+            "--time-scale",
+            "50",
+            "--objects",
+            "objects.txt",
+        ],
+        "serving on ",
+    );
+    let o = trol(
+        &dir,
+        &["interp", "--port", &sim.name],
+        "moveii c(400, 0, 300, 0, 1.5707963, 0)\nmoveii c(400, 0, 150, 0, 1.5707963, 0) straight\n\
+         finish\nclose 60\nfinish\ndepart c(-90) straight\nfinish\nopen 50\nfinish\n",
+    );
+    assert!(o.status.success(), "{:?}", text(&o));
+    std::thread::sleep(Duration::from_millis(300));
+    let log = sim.output().join("\n");
+    assert!(
+        log.contains("world: cube at x 400.0 y 0.0 z 150.0 mm, resting"),
+        "{log}"
+    );
+    assert!(log.contains("z 240.0 mm, in the gripper"), "{log}");
+    assert!(
+        log.contains("world: cube at x 400.0 y") && log.contains("z 0.0 mm, resting"),
+        "{log}"
     );
 }

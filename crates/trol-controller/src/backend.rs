@@ -110,4 +110,9 @@ pub trait Backend: Send {
     fn speed(&mut self, percent: u8) -> BiosResult;
     /// Read the position in the form `tag`, commanded or actual (six values).
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError>;
+    /// Where the world's objects are, in words, for logs (a simulator knows; a real
+    /// controller does not, and says nothing).
+    fn world(&mut self) -> Option<String> {
+        None
+    }
 }

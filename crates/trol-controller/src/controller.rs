@@ -22,10 +22,23 @@ pub enum Mode {
     Server,
 }
 
-/// A log hook: called after each request with the server's catalog (to put the request and
-/// reply in words by the commands it knows, added ones included), the request's bytes, the
-/// reply's bytes and how the transaction ended.
-pub type LogFn = Box<dyn FnMut(&Catalog, &[u8], &[u8], ServerEvent) + Send>;
+/// What the log hook is told after each transaction.
+#[derive(Debug)]
+pub struct LogEntry<'a> {
+    /// The server's commands (to put the request and reply in words, added ones included).
+    pub catalog: &'a Catalog,
+    /// The request's bytes.
+    pub request: &'a [u8],
+    /// The reply's bytes.
+    pub reply: &'a [u8],
+    /// How the transaction ended.
+    pub event: ServerEvent,
+    /// The backend's word on its world (a simulator's objects), if it has one.
+    pub world: Option<String>,
+}
+
+/// A log hook: called after each transaction.
+pub type LogFn = Box<dyn FnMut(&LogEntry<'_>) + Send>;
 
 /// How often a deferred reply (Finish(FINISH_WAIT), Home) asks the backend whether the arm
 /// is idle.
@@ -119,7 +132,14 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 };
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     if let Some(log) = self.log.as_mut() {
-                        log(self.pcp.catalog(), &self.last.0, &self.last.1, ev);
+                        let world = self.pcp.backend_mut().world();
+                        log(&LogEntry {
+                            catalog: self.pcp.catalog(),
+                            request: &self.last.0,
+                            reply: &self.last.1,
+                            event: ev,
+                            world,
+                        });
                     }
                 }
                 if self.pcp.take_terminate() {
@@ -147,13 +167,22 @@ impl<P: Port, B: Backend> Controller<P, B> {
 pub struct Embedded {
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
+    world: Arc<std::sync::Mutex<Option<String>>>,
 }
 
 impl Embedded {
-    /// Run `controller` on a thread of its own.
+    /// Run `controller` on a thread of its own. Its log hook is taken over to keep the
+    /// backend's last word on its world ([`Embedded::world`]).
     pub fn spawn<P: Port + 'static, B: Backend + 'static>(
         mut controller: Controller<P, B>,
     ) -> Embedded {
+        let world = Arc::new(std::sync::Mutex::new(None));
+        let keep = world.clone();
+        controller.set_log(Box::new(move |e| {
+            if let Ok(mut w) = keep.lock() {
+                w.clone_from(&e.world);
+            }
+        }));
         let stop = Arc::new(AtomicBool::new(false));
         let flag = stop.clone();
         let thread = std::thread::Builder::new()
@@ -166,7 +195,13 @@ impl Embedded {
         Embedded {
             stop,
             thread: Some(thread),
+            world,
         }
+    }
+
+    /// Where the backend's world objects were after the last transaction (a simulator's).
+    pub fn world(&self) -> Option<String> {
+        self.world.lock().ok().and_then(|w| w.clone())
     }
 }
 

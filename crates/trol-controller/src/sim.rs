@@ -193,6 +193,27 @@ impl Backend for SimBackend {
     fn speed(&mut self, percent: u8) -> BiosResult {
         Ok(self.arm.set_speed(percent as f64))
     }
+    fn world(&mut self) -> Option<String> {
+        let now = self.now();
+        let held = self.arm.held().map(str::to_string);
+        let objects = self.arm.objects(now);
+        if objects.is_empty() {
+            return None;
+        }
+        let words: Vec<String> = objects
+            .iter()
+            .map(|o| {
+                let [x, y, z] = o.pos;
+                let place = if held.as_deref() == Some(o.name.as_str()) {
+                    "in the gripper"
+                } else {
+                    "resting"
+                };
+                format!("{} at x {x:.1} y {y:.1} z {z:.1} mm, {place}", o.name)
+            })
+            .collect();
+        Some(words.join("; "))
+    }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let now = self.now();
         let which = match mode {

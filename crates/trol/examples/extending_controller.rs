@@ -32,12 +32,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let mut controller = Controller::new(port, LinkConfig::default(), pcp, Mode::Server);
-    controller.set_log(Box::new(|catalog, req, reply, _| {
+    controller.set_log(Box::new(|e| {
         let codes = trol_controller::SIM_CODES;
         println!(
             "{} -> {}",
-            catalog.request_text(req),
-            catalog.reply_text(req, reply, codes)
+            e.catalog.request_text(e.request),
+            e.catalog.reply_text(e.request, e.reply, codes)
         );
     }));
     println!("serving on {name}");

@@ -14,7 +14,8 @@
 //! | `locations` | a location file to load (relative to trol.cfg's folder) | none |
 //! | `table_z` | the table plane, mm | 0 |
 //! | `homed` | `yes`: the simulated arm starts homed | no |
-//! | `object` | width of an object between the fingers, mm | none |
+//! | `object` | width of an object held between the fingers at start, mm | none |
+//! | `objects` | a file of objects in the world, `NAME x y z width` per line (relative to trol.cfg's folder) | none |
 //!
 //! Blank lines and lines starting with `#` are skipped.
 
@@ -38,6 +39,8 @@ pub struct Config {
     pub time_scale: f64,
     /// Location file (port `sim`).
     pub locations: Option<PathBuf>,
+    /// The objects file of the simulated world.
+    pub objects: Option<PathBuf>,
     /// Table plane, mm (port `sim`).
     pub table_z: f64,
     /// The simulated arm starts homed.
@@ -54,6 +57,7 @@ impl Default for Config {
             tool: [0.0; 6],
             time_scale: 1.0,
             locations: None,
+            objects: None,
             table_z: 0.0,
             homed: false,
             object: None,
@@ -111,10 +115,10 @@ impl Config {
             line: Some(line),
             message,
         })?;
-        if let Some(loc) = &cfg.locations {
-            if loc.is_relative() {
-                let dir = path.parent().unwrap_or(Path::new("."));
-                cfg.locations = Some(dir.join(loc));
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for file in [&mut cfg.locations, &mut cfg.objects].into_iter().flatten() {
+            if file.is_relative() {
+                *file = dir.join(&*file);
             }
         }
         Ok(cfg)
@@ -196,6 +200,7 @@ impl Config {
                             }
                         }
                         "locations" => cfg.locations = Some(PathBuf::from(value)),
+                        "objects" => cfg.objects = Some(PathBuf::from(value)),
                         "table_z" => cfg.table_z = number("a height in mm")?,
                         "object" => cfg.object = Some(number("a width in mm")?),
                         "homed" => {
@@ -214,7 +219,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: time_scale, locations, table_z, homed, object"
+                                    "unknown setting {key:?}; known: time_scale, locations, objects, table_z, homed, object"
                                 ),
                             ));
                         }

@@ -39,23 +39,29 @@ pub use trol_proto::application::{
     Arg, ArgKind, Catalog, Choice, CommandDef, LocName, Location, Reply, ReplyKind, Tag, Wait,
 };
 
-use trol_a465::arm::{ArmSettings, parse_locations};
+use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
 
 /// The settings of the embedded controller from trol.cfg.
 pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
+    let read = |path: &std::path::Path| {
+        std::fs::read_to_string(path)
+            .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))
+    };
+    let bad =
+        |path: &std::path::Path, e: String| SetupError::Config(format!("{}: {e}", path.display()));
     let locations = match &cfg.locations {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))?;
-            parse_locations(&text)
-                .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))?
-        }
+        Some(path) => parse_locations(&read(path)?).map_err(|e| bad(path, e))?,
+        None => Vec::new(),
+    };
+    let objects = match &cfg.objects {
+        Some(path) => parse_objects(&read(path)?).map_err(|e| bad(path, e))?,
         None => Vec::new(),
     };
     Ok(SimSettings {
         arm: ArmSettings {
             table_z: cfg.table_z,
             object_width: cfg.object,
+            objects,
             homed: cfg.homed,
         },
         time_scale: cfg.time_scale,

@@ -213,6 +213,12 @@ impl Robot {
         &self.catalog
     }
 
+    /// Where the simulated world's objects are (after the last call), for a robot on the
+    /// embedded simulator; `None` for other controllers.
+    pub fn world(&self) -> Option<String> {
+        self._embedded.as_ref().and_then(Embedded::world)
+    }
+
     /// The BIOS codes of the controller's backend, with their names (for messages).
     pub fn codes(&self) -> &'static CodeTable {
         self.codes

@@ -510,9 +510,11 @@ fn robots_from_a_config_file() {
     let dir = std::env::temp_dir().join(format!("trol-cfg-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
+    std::fs::write(dir.join("objs.txt"), "cube 420 0 400 30\n").unwrap();
     std::fs::write(
         dir.join("trol.cfg"),
-        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locs.txt\nhomed = yes\n",
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locs.txt\nhomed = yes\n\
+         objects = objs.txt\n",
     )
     .unwrap();
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
@@ -524,6 +526,14 @@ fn robots_from_a_config_file() {
         .unwrap()
         .to_array6();
     assert!((c[0] - 420.0).abs() < 1e-2, "{c:?}");
+    // The objects file's cube is at p2: closing there picks it up.
+    r.close(50).unwrap();
+    r.finish().unwrap();
+    let world = r.world().unwrap();
+    assert!(
+        world.starts_with("cube at x 420.0") && world.ends_with("in the gripper"),
+        "{world}"
+    );
     std::fs::write(dir.join("bad.cfg"), "9600\nsim\n1 2 3\n").unwrap();
     let e = trol::Config::from_file(&dir.join("bad.cfg")).unwrap_err();
     assert_eq!(e.line, Some(3));

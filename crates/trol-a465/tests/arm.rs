@@ -66,9 +66,29 @@ fn a_joint_move_ends_together_and_the_slowest_joint_sets_the_time() {
 }
 
 #[test]
-fn halt_brakes_along_the_path_without_a_jump() {
+fn halt_brakes_along_the_path_without_a_jump_in_the_actual_position() {
+    use trol_a465::arm::DITHER_COUNTS;
+    use trol_a465::model::counts_per_radian;
+    // The actual position across the halt, sampled every millisecond: no step larger than
+    // the joint's speed allows, plus the dither.
     let mut arm = homed_arm();
     arm.ma([1.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0.0);
+    let mut probe = arm.clone();
+    probe.halt(0.3);
+    let (v, _) = joint_limits(100.0);
+    let dither = 2.0 * DITHER_COUNTS as f64 / counts_per_radian()[0];
+    let mut prev = probe.clone().position(0.25, Which::Actual);
+    for k in 1..400 {
+        let t = 0.25 + k as f64 * 1e-3;
+        let q = probe.clone().position(t, Which::Actual);
+        assert!(
+            (q[0] - prev[0]).abs() <= v[0] * 1e-3 * 1.0001 + dither,
+            "a jump of {} rad at {t}",
+            q[0] - prev[0]
+        );
+        prev = q;
+    }
+    // The commanded position.
     let at = arm.commanded(0.3);
     let before = arm.commanded(0.3 - 1e-4);
     arm.halt(0.3);

@@ -19,7 +19,8 @@ pub fn init(conn: &Conn) -> Result<(), String> {
         );
         return Ok(());
     }
-    let mut robot = Robot::open(&cfg.port, cfg.baud).map_err(|e| format!("{e}; {CHECK}"))?;
+    let mut robot =
+        Robot::open_with(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
     trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
     println!(
         "the TROL server on {} is active (baud {}, tool transform {:?})",
@@ -34,7 +35,8 @@ pub fn cleanup(conn: &Conn) -> Result<(), String> {
         println!("port sim: the embedded simulator ends with each program; nothing to end.");
         return Ok(());
     }
-    let mut robot = Robot::open(&cfg.port, cfg.baud).map_err(|e| format!("{e}; {CHECK}"))?;
+    let mut robot =
+        Robot::open_with(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
     robot.terminate_pcp().map_err(|e| {
         format!(
             "the controller did not take TerminatePCP: {e}. Is its TROL server active (`trol \

@@ -8,7 +8,7 @@ use clap::Args;
 use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
 use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp, SimBackend, SimSettings};
-use trol_proto::link::LinkConfig;
+use trol_proto::link::{BlockCheck, LinkConfig};
 
 use crate::common::positive;
 use crate::link::{Side, open_side};
@@ -53,6 +53,10 @@ pub struct SimArgs {
     /// Start in server mode, as if `trol init` had run.
     #[arg(long)]
     server: bool,
+    /// The block check in server mode until an activation line names one: crc16 (TROL's) or
+    /// lrc (the manual's).
+    #[arg(long, default_value = "crc16", value_parser = parse_check)]
+    check: BlockCheck,
     /// Commands an application added, described in FILE (docs/extending.md): the log shows
     /// them by name. `trol sim` has no handlers for them and answers TROL_ERR_UNKNOWN; a
     /// controller program of the application's own serves them.
@@ -105,7 +109,10 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if !a.server {
         println!("  activate it with: trol init --port {name}");
     }
-    let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
+    let cfg = LinkConfig {
+        check: a.check,
+        ..LinkConfig::for_line(a.baud, Duration::ZERO)
+    };
     let pcp = Pcp::new(SimBackend::new(settings));
     let described = trol::described::catalog(a.commands.as_deref())?;
     let mode = if a.server {
@@ -163,4 +170,8 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             );
         }
     }
+}
+
+fn parse_check(s: &str) -> Result<BlockCheck, String> {
+    BlockCheck::from_word(s).ok_or_else(|| format!("`{s}` is no block check: crc16 or lrc"))
 }

@@ -12,9 +12,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, Subcommand};
+use trol_proto::link::BlockCheck;
 use trol_proto::link::codes::NakCode;
 use trol_proto::link::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, accepts};
-use trol_proto::link::frame::{FRAME_SIZE, HEADER_LEN, frame_count, lrc};
+use trol_proto::link::frame::{self, FRAME_SIZE, HEADER_LEN, frame_count};
 
 use trol_proto::application::Catalog;
 
@@ -189,7 +190,8 @@ impl<W: Write> Decoder<W> {
             let len = u16::from_le_bytes([block[1], block[2]]) as usize;
             let pci = u16::from_le_bytes([block[3], block[4]]);
             let bcc = u16::from_le_bytes([block[7], block[8]]);
-            let ok = bcc == lrc(&block[1..7]) && accepts(block[9], ETX);
+            let check = check_of(bcc, |c| frame::bcc(c, &block[1..7]));
+            let ok = check.is_some() && accepts(block[9], ETX);
             let first: Vec<u8> = block[5..7.min(5 + len)].to_vec();
             self.line(
                 t,
@@ -199,7 +201,7 @@ impl<W: Write> Decoder<W> {
                      {:02x?}, BCC {bcc:#06x} {}",
                     pci & 0xFF,
                     &block[5..7],
-                    if ok { "ok" } else { "WRONG" }
+                    verdict(check)
                 ),
             );
             let s = self.stream(dir);
@@ -212,7 +214,10 @@ impl<W: Write> Decoder<W> {
             let fid = u16::from_le_bytes([block[1 + n], block[2 + n]]);
             let bcc = u16::from_le_bytes([block[3 + n], block[4 + n]]);
             let end = block[5 + n];
-            let ok = bcc == lrc(&block[1..3 + n]);
+            let check = check_of(bcc, |c| {
+                frame::frame_bcc(c, &block[1..1 + n], [block[1 + n], block[2 + n]])
+            });
+            let ok = check.is_some();
             let term = if accepts(end, ETX) {
                 "ETX"
             } else if accepts(end, ETB) {
@@ -225,7 +230,7 @@ impl<W: Write> Decoder<W> {
                 dir,
                 format!(
                     "FRAME id {fid}, {n} data bytes, BCC {bcc:#06x} {}, {term}",
-                    if ok { "ok" } else { "WRONG" }
+                    verdict(check)
                 ),
             );
             let s = self.stream(dir);
@@ -296,6 +301,22 @@ impl<W: Write> Decoder<W> {
                 self.line(t, dir, format!("REPLY   #{n}: {text}{after}"));
             }
         }
+    }
+}
+
+/// Which block check a BCC matches, if any (the trace reads either: the activation line
+/// agrees on one, and a capture may start after it).
+fn check_of(bcc: u16, of: impl Fn(BlockCheck) -> u16) -> Option<BlockCheck> {
+    [BlockCheck::Crc16, BlockCheck::Lrc]
+        .into_iter()
+        .find(|c| of(*c) == bcc)
+}
+
+fn verdict(check: Option<BlockCheck>) -> &'static str {
+    match check {
+        Some(BlockCheck::Crc16) => "ok (CRC16)",
+        Some(BlockCheck::Lrc) => "ok (LRC)",
+        None => "WRONG",
     }
 }
 
@@ -388,12 +409,16 @@ mod tests {
         let req = [7u8, 0];
         d.feed(0.0, Dir::Pc, &[ENQ]);
         d.feed(0.001, Dir::Ctl, &[ACK]);
-        d.feed(0.002, Dir::Pc, &Header::for_message(&req, 1).encode());
+        d.feed(
+            0.002,
+            Dir::Pc,
+            &Header::for_message(&req, 1).encode(BlockCheck::Lrc),
+        );
         d.feed(0.003, Dir::Ctl, &[ACK]);
         d.feed(0.004, Dir::Pc, &[EOT]);
         // The reply: -1 as a 2-byte message, in pieces.
         let reply = (-1i16).to_le_bytes();
-        let h = Header::for_message(&reply, 1).encode();
+        let h = Header::for_message(&reply, 1).encode(BlockCheck::Crc16);
         d.feed(0.010, Dir::Ctl, &[ENQ]);
         d.feed(0.011, Dir::Pc, &[ACK]);
         d.feed(0.012, Dir::Ctl, &h[..4]);
@@ -402,9 +427,13 @@ mod tests {
         d.feed(0.015, Dir::Ctl, &[EOT]);
         // A longer request with one frame: MoveII.
         let long: Vec<u8> = (0..40u8).collect();
-        d.feed(0.02, Dir::Pc, &Header::for_message(&long, 2).encode());
+        d.feed(
+            0.02,
+            Dir::Pc,
+            &Header::for_message(&long, 2).encode(BlockCheck::Crc16),
+        );
         let mut f = Vec::new();
-        encode_frame(&long, 0, &mut f);
+        encode_frame(&long, 0, BlockCheck::Crc16, &mut f);
         d.feed(0.021, Dir::Pc, &f);
         let text = String::from_utf8(out).unwrap();
         assert!(text.contains("PC  -> CTL  ENQ"), "{text}");
@@ -416,7 +445,8 @@ mod tests {
         assert!(text.contains("NAK ERR_BCC"), "{text}");
         assert!(text.contains("REPLY   #1: -1 (BIOS_NOT_HOMED)"), "{text}");
         assert!(text.contains("FRAME id 0, 38 data bytes, BCC"), "{text}");
-        assert!(text.contains("ok, ETX"), "{text}");
+        assert!(text.contains("ok (CRC16), ETX"), "{text}");
+        assert!(text.contains("ok (LRC)"), "{text}");
     }
 
     #[test]
@@ -426,7 +456,7 @@ mod tests {
         d.feed(0.0, Dir::Pc, b"PCP TROL\r");
         d.feed(0.05, Dir::Ctl, b"\r\n>>");
         d.feed(0.06, Dir::Pc, &[ENQ]);
-        let mut h = Header::for_message(&[7, 0], 1).encode();
+        let mut h = Header::for_message(&[7, 0], 1).encode(BlockCheck::Crc16);
         h[2] ^= 0x10;
         d.feed(0.1, Dir::Pc, &h);
         let text = String::from_utf8(out).unwrap();

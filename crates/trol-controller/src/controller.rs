@@ -95,8 +95,15 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 if !out.is_empty() {
                     port.send(&out)?;
                 }
-                if activated {
+                if let Some(check) = activated {
                     port.flush_input()?;
+                    // The block check the activation line agreed on.
+                    let link = self.server.responder_mut().link_mut();
+                    let cfg = LinkConfig {
+                        check,
+                        ..*link.config()
+                    };
+                    link.set_config(cfg);
                     self.mode = Mode::Server;
                 }
             }

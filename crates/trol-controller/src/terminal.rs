@@ -2,10 +2,23 @@
 //! speaks RAPL to a terminal), and the activation sequence that starts server mode
 //! (docs/protocol.md, "The controller's modes").
 
-/// The line that starts server mode.
+use trol_proto::link::BlockCheck;
+
+/// The line that starts server mode, followed by the block check's word (`PCP TROL CRC16`);
+/// bare, it means the manual's LRC.
 pub const ACTIVATE: &str = "PCP TROL";
-/// The controller's answer to it.
-pub const ACTIVATED: &str = "PCP TROL ACTIVE\r\n";
+/// The controller's answer to it, followed by the block check it agreed to.
+pub const ACTIVATED: &str = "PCP TROL ACTIVE";
+
+/// The activation line for `check`.
+pub fn activation_line(check: BlockCheck) -> String {
+    format!("{ACTIVATE} {}", check.word())
+}
+
+/// The controller's answer for `check`.
+pub fn activated_line(check: BlockCheck) -> String {
+    format!("{ACTIVATED} {}", check.word())
+}
 /// The prompt.
 pub const PROMPT: &str = "\r\n>>";
 
@@ -16,9 +29,9 @@ pub struct Terminal {
 }
 
 impl Terminal {
-    /// Take bytes from the line; append what to send back to `out`. Returns true when the
-    /// activation line arrived (the rest of `input` is dropped).
-    pub fn feed(&mut self, input: &[u8], out: &mut Vec<u8>) -> bool {
+    /// Take bytes from the line; append what to send back to `out`. Returns the block check
+    /// the activation line asked for, when it arrived (the rest of `input` is dropped).
+    pub fn feed(&mut self, input: &[u8], out: &mut Vec<u8>) -> Option<BlockCheck> {
         for &b in input {
             match b {
                 0x03 => {
@@ -30,10 +43,16 @@ impl Terminal {
                         .trim()
                         .to_ascii_uppercase();
                     self.line.clear();
-                    if line == ACTIVATE {
+                    let check = match line.strip_prefix(ACTIVATE).map(str::trim) {
+                        Some("") => Some(BlockCheck::Lrc),
+                        Some(word) => BlockCheck::from_word(word),
+                        None => None,
+                    };
+                    if let Some(check) = check {
                         out.extend_from_slice(b"\r\n");
-                        out.extend_from_slice(ACTIVATED.as_bytes());
-                        return true;
+                        out.extend_from_slice(activated_line(check).as_bytes());
+                        out.extend_from_slice(b"\r\n");
+                        return Some(check);
                     }
                     if b == b'\r' {
                         if line.is_empty() {
@@ -51,7 +70,7 @@ impl Terminal {
                 _ => {}
             }
         }
-        false
+        None
     }
 }
 
@@ -63,13 +82,23 @@ mod tests {
     fn activation_and_other_lines() {
         let mut t = Terminal::default();
         let mut out = Vec::new();
-        assert!(!t.feed(b"HELP\r", &mut out));
+        assert_eq!(t.feed(b"HELP\r", &mut out), None);
         assert!(String::from_utf8_lossy(&out).contains("012-COMMAND ERROR."));
         out.clear();
         // Protocol bytes (ENQ) are not echoed and do not activate.
-        assert!(!t.feed(&[0x99, 0x1E], &mut out));
+        assert_eq!(t.feed(&[0x99, 0x1E], &mut out), None);
         assert!(out.is_empty());
-        assert!(t.feed(b"\x03\rpcp trol\r", &mut out));
-        assert!(String::from_utf8_lossy(&out).ends_with(ACTIVATED));
+        assert_eq!(t.feed(b"\x03\rpcp trol\r", &mut out), Some(BlockCheck::Lrc));
+        assert!(String::from_utf8_lossy(&out).ends_with("PCP TROL ACTIVE LRC\r\n"));
+        out.clear();
+        assert_eq!(
+            t.feed(b"PCP TROL CRC16\r", &mut out),
+            Some(BlockCheck::Crc16)
+        );
+        assert!(String::from_utf8_lossy(&out).ends_with("PCP TROL ACTIVE CRC16\r\n"));
+        out.clear();
+        // An unknown check is an unknown line.
+        assert_eq!(t.feed(b"PCP TROL MD5\r", &mut out), None);
+        assert!(String::from_utf8_lossy(&out).contains("012-COMMAND ERROR."));
     }
 }

@@ -48,13 +48,13 @@ fn header_bytes(len: u16, pci: u16, first: [u8; 2]) -> Vec<u8> {
         pci,
         first_word: first,
     }
-    .encode()
+    .encode(cfg().check)
     .to_vec()
 }
 
 fn frame_bytes(message: &[u8], index: usize) -> Vec<u8> {
     let mut v = Vec::new();
-    frame::encode_frame(message, index, &mut v);
+    frame::encode_frame(message, index, cfg().check, &mut v);
     v
 }
 
@@ -363,7 +363,7 @@ fn receiver_aborts_on_a_wrong_frame_id() {
     // A well-formed frame with ID 1 where 0 is expected (BCC computed over the wrong ID).
     let data = &msg[2..];
     let fid = 1u16.to_le_bytes();
-    let bcc = lrc(data).wrapping_add(lrc(&fid)).to_le_bytes();
+    let bcc = frame::frame_bcc(cfg().check, data, fid).to_le_bytes();
     peer.to_send = [
         vec![STX],
         data.to_vec(),

@@ -11,7 +11,7 @@ use trol_port::faulty::{FaultConfig, FaultInjector};
 use trol_proto::Instant;
 use trol_proto::link::control::{ACK, ENQ};
 use trol_proto::link::frame::{self, FRAME_SIZE, Header};
-use trol_proto::link::{Link, LinkConfig, Outcome, Receiver};
+use trol_proto::link::{BlockCheck, Link, LinkConfig, Outcome, Receiver};
 
 fn transfer(
     wire: &mut Wire,
@@ -92,8 +92,11 @@ proptest! {
 }
 
 /// Feed one block (after ENQ) to a fresh receiver and report whether it was acknowledged.
-fn receiver_acks(before: &[u8], block: &[u8]) -> bool {
-    let mut r = Receiver::new(LinkConfig::default());
+fn receiver_acks(check: BlockCheck, before: &[u8], block: &[u8]) -> bool {
+    let mut r = Receiver::new(LinkConfig {
+        check,
+        ..LinkConfig::default()
+    });
     r.start();
     let now = Instant::ZERO;
     r.handle_input(&[ENQ], now);
@@ -106,25 +109,17 @@ fn receiver_acks(before: &[u8], block: &[u8]) -> bool {
     reply.first() == Some(&ACK)
 }
 
-/// The manual's LRC is a plain sum: two errors that cancel in the sum pass. Counts how many
-/// corrupted headers and frames are accepted on a very noisy line; the figure is written in
-/// docs/protocol.md ("What the LRC cannot see").
-#[test]
-fn the_lrc_misses_some_multi_bit_errors() {
-    let blocks: u32 = std::env::var("TROL_LRC_BLOCKS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(5_000);
-    let ber = 1e-3;
+/// Corrupted headers and frames a receiver accepts on a noisy line, with one block check.
+fn missed(check: BlockCheck, ber: f64, blocks: u32) -> (u32, u32, u32, u32) {
     let mut noise = FaultInjector::new(FaultConfig {
         seed: 465,
         bit_error_rate: ber,
         ..FaultConfig::default()
     });
     let message: Vec<u8> = (0..(2 + FRAME_SIZE)).map(|i| (i * 31 + 7) as u8).collect();
-    let header = Header::for_message(&message, 0).encode();
+    let header = Header::for_message(&message, 0).encode(check);
     let mut frame0 = Vec::new();
-    frame::encode_frame(&message, 0, &mut frame0);
+    frame::encode_frame(&message, 0, check, &mut frame0);
     let (mut hdr_corrupt, mut hdr_missed, mut frm_corrupt, mut frm_missed) =
         (0u32, 0u32, 0u32, 0u32);
     for _ in 0..blocks {
@@ -135,7 +130,7 @@ fn the_lrc_misses_some_multi_bit_errors() {
         let inner = |b: &[u8]| b[1..b.len() - 1].to_vec();
         if h.len() == header.len() && inner(&h) != inner(&header) {
             hdr_corrupt += 1;
-            if receiver_acks(&[], &h) {
+            if receiver_acks(check, &[], &h) {
                 hdr_missed += 1;
             }
         }
@@ -143,15 +138,28 @@ fn the_lrc_misses_some_multi_bit_errors() {
         noise.apply(&frame0, &mut f);
         if f.len() == frame0.len() && inner(&f) != inner(&frame0) {
             frm_corrupt += 1;
-            if receiver_acks(&header, &f) {
+            if receiver_acks(check, &header, &f) {
                 frm_missed += 1;
             }
         }
     }
     println!(
-        "BER {ber}: {blocks} headers, {hdr_corrupt} corrupted, {hdr_missed} accepted; \
+        "{check:?} at BER {ber}: {blocks} headers, {hdr_corrupt} corrupted, {hdr_missed} accepted; \
          {blocks} frames of {FRAME_SIZE} bytes, {frm_corrupt} corrupted, {frm_missed} accepted"
     );
+    (hdr_corrupt, hdr_missed, frm_corrupt, frm_missed)
+}
+
+/// The manual's LRC is a plain sum: two errors that cancel in the sum pass. CRC-16 catches
+/// every error of up to 3 bits: on the same noise it accepts no corrupted block. The counts
+/// are written in docs/protocol.md ("Block check").
+#[test]
+fn the_lrc_misses_some_multi_bit_errors_and_crc16_none() {
+    let blocks: u32 = std::env::var("TROL_LRC_BLOCKS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(5_000);
+    let (_, _, frm_corrupt, frm_missed) = missed(BlockCheck::Lrc, 1e-3, blocks);
     assert!(frm_corrupt > blocks / 2, "the noise must reach most frames");
     assert!(
         frm_missed > 0,
@@ -161,4 +169,8 @@ fn the_lrc_misses_some_multi_bit_errors() {
         frm_missed < frm_corrupt / 20,
         "but it catches the great majority"
     );
+    let (hdr_corrupt, hdr_missed, frm_corrupt, frm_missed) =
+        missed(BlockCheck::Crc16, 1e-3, blocks);
+    assert!(hdr_corrupt > 0 && frm_corrupt > blocks / 2);
+    assert_eq!((hdr_missed, frm_missed), (0, 0));
 }

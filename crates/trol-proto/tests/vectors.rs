@@ -1,13 +1,15 @@
 //! The test vectors of docs/protocol.md, replayed against the sender and the receiver.
 
 use trol_proto::Instant;
-use trol_proto::link::{LinkConfig, Receiver, Sender};
+use trol_proto::link::{BlockCheck, LinkConfig, Receiver, Sender};
 
 struct Vector {
     name: String,
     message: Vec<u8>,
     pci: u16,
     receiver_only: bool,
+    /// The block check: the manual's LRC unless the vector says `bcc: crc16`.
+    bcc: BlockCheck,
     result: Option<u16>,
     lines: Vec<(char, Vec<u8>)>,
 }
@@ -38,6 +40,7 @@ fn vectors() -> Vec<Vector> {
             message: Vec::new(),
             pci: 0,
             receiver_only: false,
+            bcc: BlockCheck::Lrc,
             result: None,
             lines: Vec::new(),
         };
@@ -54,6 +57,7 @@ fn vectors() -> Vec<Vector> {
                 "message" => v.message = bytes(val, &[]),
                 "pci" => v.pci = u16::from_str_radix(val, 16).unwrap(),
                 "check" => v.receiver_only = val == "receiver",
+                "bcc" => v.bcc = BlockCheck::from_word(val).expect("bcc: lrc or crc16"),
                 "result" => {
                     let hex = val
                         .split_whitespace()
@@ -85,7 +89,10 @@ fn the_document_holds_the_vectors() {
 #[test]
 fn the_receiver_answers_every_vector_byte_for_byte() {
     for v in vectors() {
-        let mut r = Receiver::new(LinkConfig::default());
+        let mut r = Receiver::new(LinkConfig {
+            check: v.bcc,
+            ..LinkConfig::default()
+        });
         r.start();
         let now = Instant::ZERO;
         for (who, b) in &v.lines {
@@ -127,7 +134,10 @@ fn the_receiver_answers_every_vector_byte_for_byte() {
 #[test]
 fn the_sender_produces_every_vector_byte_for_byte() {
     for v in vectors().into_iter().filter(|v| !v.receiver_only) {
-        let mut s = Sender::new(LinkConfig::default());
+        let mut s = Sender::new(LinkConfig {
+            check: v.bcc,
+            ..LinkConfig::default()
+        });
         let now = Instant::ZERO;
         s.start(&v.message, v.pci, now).unwrap();
         for (who, b) in &v.lines {

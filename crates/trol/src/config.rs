@@ -10,6 +10,7 @@
 //!
 //! | key | value | default |
 //! |---|---|---|
+//! | `check` | the link's block check: `crc16` or the manual's `lrc` (docs/protocol.md) | crc16 |
 //! | `time_scale` | how much faster than real time the simulation runs | 1 |
 //! | `locations` | a location file to load (relative to trol.cfg's folder) | none |
 //! | `table_z` | the table plane, mm | 0 |
@@ -41,6 +42,8 @@ pub struct Config {
     pub locations: Option<PathBuf>,
     /// The objects file of the simulated world.
     pub objects: Option<PathBuf>,
+    /// The link's block check.
+    pub check: trol_proto::link::BlockCheck,
     /// Table plane, mm (port `sim`).
     pub table_z: f64,
     /// The simulated arm starts homed.
@@ -58,6 +61,7 @@ impl Default for Config {
             time_scale: 1.0,
             locations: None,
             objects: None,
+            check: trol_proto::link::BlockCheck::default(),
             table_z: 0.0,
             homed: false,
             object: None,
@@ -201,6 +205,12 @@ impl Config {
                         }
                         "locations" => cfg.locations = Some(PathBuf::from(value)),
                         "objects" => cfg.objects = Some(PathBuf::from(value)),
+                        "check" => {
+                            cfg.check = trol_proto::link::BlockCheck::from_word(value).ok_or((
+                                n,
+                                format!("check: expected crc16 or lrc, found {value:?}"),
+                            ))?
+                        }
                         "table_z" => cfg.table_z = number("a height in mm")?,
                         "object" => cfg.object = Some(number("a width in mm")?),
                         "homed" => {
@@ -219,7 +229,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: time_scale, locations, objects, table_z, homed, object"
+                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object"
                                 ),
                             ));
                         }

@@ -93,26 +93,27 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
 /// SetToolTransform.
 pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
     if check_server(robot).is_err() {
+        // The block check this end uses: the activation line makes the controller use it too.
+        let check = robot.transactor_mut().initiator().link().config().check;
+        let line = trol_controller::terminal::activation_line(check);
+        let answer = trol_controller::terminal::activated_line(check);
         let port = robot.transactor_mut().driver_mut().port_mut();
         let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
         port.send(b"\x03\r").map_err(io)?;
         std::thread::sleep(std::time::Duration::from_millis(100));
         port.flush_input().map_err(io)?;
-        port.send(trol_controller::terminal::ACTIVATE.as_bytes())
-            .map_err(io)?;
+        port.send(line.as_bytes()).map_err(io)?;
         port.send(b"\r").map_err(io)?;
         let mut seen = Vec::new();
         let deadline = std::time::Instant::now() + std::time::Duration::from_secs(3);
         let mut buf = [0u8; 256];
-        while !String::from_utf8_lossy(&seen)
-            .contains(trol_controller::terminal::ACTIVATED.trim_end())
-        {
+        while !String::from_utf8_lossy(&seen).contains(&answer) {
             let n = port.recv(&mut buf, deadline).map_err(io)?;
             if n == 0 {
                 return Err(Error::Setup(SetupError::NoServer(format!(
-                    "the controller did not answer the activation line `{}` (it answered {:?}); \
-                     check the cable, the port and the baud rate in trol.cfg",
-                    trol_controller::terminal::ACTIVATE,
+                    "the controller did not answer the activation line `{line}` with `{answer}` \
+                     (it answered {:?}); check the cable, the port and the baud rate in \
+                     trol.cfg",
                     String::from_utf8_lossy(&seen)
                 ))));
             }

@@ -15,7 +15,7 @@ use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
 use trol_proto::application::{
     Catalog, CatalogError, CommandDef, LocName, Location, Reply, ReplyError, Tag,
 };
-use trol_proto::link::{LinkConfig, LinkError};
+use trol_proto::link::{BlockCheck, LinkConfig, LinkError};
 
 use crate::config::Config;
 
@@ -143,27 +143,36 @@ impl Robot {
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
     /// with default settings.
     pub fn open(port: &str, baud: u32) -> Result<Robot> {
+        Robot::open_with(port, baud, BlockCheck::default())
+    }
+
+    /// Like [`Robot::open`], with the link's block check (`check` in trol.cfg).
+    pub fn open_with(port: &str, baud: u32, check: BlockCheck) -> Result<Robot> {
+        let cfg = LinkConfig {
+            check,
+            ..LinkConfig::for_line(baud, Duration::ZERO)
+        };
         if port == "sim" {
-            return Ok(Robot::embedded(SimSettings::default()));
+            return Ok(Robot::embedded_on(SimSettings::default(), cfg));
         }
         let settings = PortSettings {
             baud,
             ..PortSettings::default()
         };
         let p = trol_port::open(port, &settings).map_err(SetupError::Port)?;
-        Ok(Robot::over(
-            p,
-            LinkConfig::for_line(baud, Duration::ZERO),
-            None,
-        ))
+        Ok(Robot::over(p, cfg, None))
     }
 
     /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings).
     pub fn from_config(cfg: &Config) -> Result<Robot> {
         if cfg.port == "sim" {
-            return Ok(Robot::embedded(crate::sim_settings(cfg)?));
+            let link = LinkConfig {
+                check: cfg.check,
+                ..LinkConfig::default()
+            };
+            return Ok(Robot::embedded_on(crate::sim_settings(cfg)?, link));
         }
-        Robot::open(&cfg.port, cfg.baud)
+        Robot::open_with(&cfg.port, cfg.baud, cfg.check)
     }
 
     /// Connect as ./trol.cfg (or $TROL_CONFIG) says.
@@ -174,7 +183,10 @@ impl Robot {
 
     /// Start an embedded controller (simulated A465) and connect to it.
     pub fn embedded(settings: SimSettings) -> Robot {
-        let cfg = LinkConfig::default();
+        Robot::embedded_on(settings, LinkConfig::default())
+    }
+
+    fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
         let (line, handle) = trol_controller::embedded(settings, cfg);
         Robot::over(Box::new(line), cfg, Some(handle))
     }

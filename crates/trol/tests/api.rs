@@ -539,3 +539,39 @@ fn robots_from_a_config_file() {
     assert_eq!(e.line, Some(3));
     assert!(e.to_string().contains("bad.cfg:3"));
 }
+
+/// The activation line agrees on the block check: a host with the manual's LRC activates a
+/// controller in terminal mode, which then speaks LRC; a host with CRC-16 gets nowhere with it.
+#[test]
+fn activation_agrees_on_the_block_check() {
+    use trol_controller::{Controller, Embedded, Mode};
+    use trol_proto::link::BlockCheck;
+    let (host, ctl) = trol_port::memory::pair(None);
+    let controller = Controller::new(
+        ctl,
+        quick(),
+        Pcp::new(SimBackend::new(settings())),
+        Mode::Terminal,
+    );
+    let handle = Embedded::spawn(controller);
+    let lrc = LinkConfig {
+        check: BlockCheck::Lrc,
+        ..quick()
+    };
+    let mut robot = Robot::over(Box::new(host), lrc, None);
+    trol::activate(&mut robot, &[0.0; 6]).unwrap();
+    assert_eq!(robot.status().unwrap(), (true, SUCCESS));
+    robot.home(0).unwrap();
+    // The same controller (still running), a host that computes CRC-16: its header is refused
+    // with NAK ERR_BCC until the retries run out.
+    let port = robot.into_port();
+    let mut other = Robot::over(port, quick(), None);
+    let e = other.status().unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    assert_eq!(
+        other.last_comm_error().map(|e| e.code()),
+        Some(0x0007),
+        "ERR_LIMIT_EXCEEDED after NAK ERR_BCC"
+    );
+    drop(handle);
+}

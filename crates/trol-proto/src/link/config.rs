@@ -49,7 +49,39 @@ impl Timeouts {
     }
 }
 
-/// Settings of one end of the link. Both ends must agree on `max_retries`.
+/// How the BCC of a block is computed. Both ends must agree; the activation line does
+/// (docs/protocol.md, "Block check").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BlockCheck {
+    /// The manual's LRC: the sum of the bytes modulo 2^16. Two errors in one bit column
+    /// cancel, so it misses many corrupted blocks on a noisy line.
+    Lrc,
+    /// CRC-16/CCITT (polynomial 0x1021, initial value 0xFFFF): every error of 1, 2 or 3 bits
+    /// and every burst of up to 16 bits in a block is caught. TROL's default.
+    #[default]
+    Crc16,
+}
+
+impl BlockCheck {
+    /// The word the activation line uses: `LRC`, `CRC16`.
+    pub fn word(self) -> &'static str {
+        match self {
+            BlockCheck::Lrc => "LRC",
+            BlockCheck::Crc16 => "CRC16",
+        }
+    }
+
+    /// The check with this word (any case).
+    pub fn from_word(word: &str) -> Option<BlockCheck> {
+        match word.to_ascii_uppercase().as_str() {
+            "LRC" => Some(BlockCheck::Lrc),
+            "CRC16" | "CRC" => Some(BlockCheck::Crc16),
+            _ => None,
+        }
+    }
+}
+
+/// Settings of one end of the link. Both ends must agree on `max_retries` and `check`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LinkConfig {
     /// The timeouts.
@@ -62,6 +94,8 @@ pub struct LinkConfig {
     /// Line time of one byte (10 bit times at the baud rate, plus the inter-character delay
     /// of the sender). Added to timeouts that run while bytes travel. Zero for an unpaced line.
     pub char_time: Duration,
+    /// The block check.
+    pub check: BlockCheck,
 }
 
 impl Default for LinkConfig {
@@ -71,6 +105,7 @@ impl Default for LinkConfig {
             max_retries: MAX_RETRIES,
             max_message: MAX_MESSAGE,
             char_time: Duration::ZERO,
+            check: BlockCheck::default(),
         }
     }
 }

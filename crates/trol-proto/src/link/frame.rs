@@ -6,9 +6,10 @@
 //! frame:  STX | data (1..FRAME_SIZE) | frame-ID (2) | BCC (2) | ETB or ETX   = 7..FRAME_SIZE+6
 //! ```
 //!
-//! The BCC is the manual's LRC: the sum of every byte of the block except the control codes
-//! (and except the BCC itself), taken modulo 2^16.
+//! The BCC covers every byte of the block except the control codes (and except the BCC
+//! itself): the manual's LRC (their sum modulo 2^16), or CRC-16/CCITT ([`BlockCheck`]).
 
+use super::config::BlockCheck;
 use super::control::{ETB, ETX, SOH, STX};
 
 /// Largest number of data bytes in one frame. The manual defines FRAME_SIZE in `protoc.h`
@@ -34,6 +35,22 @@ pub fn lrc(bytes: &[u8]) -> u16 {
     bytes
         .iter()
         .fold(0u16, |acc, &b| acc.wrapping_add(u16::from(b)))
+}
+
+const CCITT: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);
+
+/// CRC-16/CCITT (polynomial 0x1021, initial value 0xFFFF, no reflection, no final XOR).
+pub fn crc16(bytes: &[u8]) -> u16 {
+    CCITT.checksum(bytes)
+}
+
+/// The BCC of a block's checked bytes (header: the six between SOH and BCC; frame: the data
+/// and the frame-ID).
+pub fn bcc(check: BlockCheck, bytes: &[u8]) -> u16 {
+    match check {
+        BlockCheck::Lrc => lrc(bytes),
+        BlockCheck::Crc16 => crc16(bytes),
+    }
 }
 
 /// Number of frames that follow the header for a message of `len` bytes (the manual's
@@ -106,9 +123,9 @@ impl Header {
     }
 
     /// The header as it goes on the line.
-    pub fn encode(&self) -> [u8; HEADER_LEN] {
+    pub fn encode(&self, check: BlockCheck) -> [u8; HEADER_LEN] {
         let body = self.body();
-        let bcc = lrc(&body).to_le_bytes();
+        let bcc = bcc(check, &body).to_le_bytes();
         [
             SOH, body[0], body[1], body[2], body[3], body[4], body[5], bcc[0], bcc[1], ETX,
         ]
@@ -125,16 +142,50 @@ impl Header {
 }
 
 /// Append frame `index` of `message` to `out`, as it goes on the line.
-pub fn encode_frame(message: &[u8], index: usize, out: &mut Vec<u8>) {
+pub fn encode_frame(message: &[u8], index: usize, check: BlockCheck, out: &mut Vec<u8>) {
     let range = frame_range(message.len(), index);
     let last = range.end == message.len();
     let data = &message[range];
     let fid = (index as u16).to_le_bytes();
-    let bcc = lrc(data).wrapping_add(lrc(&fid)).to_le_bytes();
+    let bcc = frame_bcc(check, data, fid).to_le_bytes();
     out.reserve(data.len() + FRAME_OVERHEAD);
     out.push(STX);
     out.extend_from_slice(data);
     out.extend_from_slice(&fid);
     out.extend_from_slice(&bcc);
     out.push(if last { ETX } else { ETB });
+}
+
+/// The BCC of a frame: over its data and its frame-ID.
+pub fn frame_bcc(check: BlockCheck, data: &[u8], fid: [u8; 2]) -> u16 {
+    match check {
+        BlockCheck::Lrc => lrc(data).wrapping_add(lrc(&fid)),
+        BlockCheck::Crc16 => {
+            let mut d = CCITT.digest();
+            d.update(data);
+            d.update(&fid);
+            d.finalize()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc16_is_ccitt_and_catches_what_the_lrc_misses() {
+        // The standard check value of CRC-16/CCITT-FALSE (IBM-3740).
+        assert_eq!(crc16(b"123456789"), 0x29B1);
+        // Two flips in one bit column: the sum stays, the CRC does not.
+        let a = [0x10, 0x20, 0x30, 0x40];
+        let b = [0x11, 0x1F, 0x30, 0x40];
+        assert_eq!(lrc(&a), lrc(&b));
+        assert_ne!(crc16(&a), crc16(&b));
+        let data = [1u8, 2, 3];
+        assert_eq!(
+            frame_bcc(BlockCheck::Crc16, &data, [0, 0]),
+            crc16(&[1, 2, 3, 0, 0])
+        );
+    }
 }

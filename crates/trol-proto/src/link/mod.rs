@@ -19,7 +19,7 @@ mod receiver;
 mod sender;
 
 pub use codes::{LinkError, NakClass, NakCode, ReceiveError, SendError};
-pub use config::{LinkConfig, Timeouts};
+pub use config::{BlockCheck, LinkConfig, Timeouts};
 pub use receiver::{Received, Receiver};
 pub use sender::{MessageTooLong, Sender};
 

@@ -17,7 +17,7 @@
 use super::codes::{NakCode, ReceiveError};
 use super::config::LinkConfig;
 use super::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX};
-use super::frame::{self, HEADER_LEN, Header, lrc};
+use super::frame::{self, HEADER_LEN, Header};
 use crate::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -279,7 +279,11 @@ impl Receiver {
         }
         let n = b.len();
         let bcc = u16::from_le_bytes([b[n - 3], b[n - 2]]);
-        if lrc(&b[1..n - 3]) != bcc {
+        let computed = match block {
+            Block::Header => frame::bcc(self.cfg.check, &b[1..n - 3]),
+            Block::Frame(_) => frame::frame_bcc(self.cfg.check, &b[1..n - 5], [b[n - 5], b[n - 4]]),
+        };
+        if computed != bcc {
             return Check::Retry(NakCode::Bcc);
         }
         match block {

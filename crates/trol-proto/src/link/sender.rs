@@ -236,9 +236,9 @@ impl Sender {
         match block {
             Block::Header => {
                 let header = Header::for_message(&self.message, self.pci);
-                self.out.extend_from_slice(&header.encode());
+                self.out.extend_from_slice(&header.encode(self.cfg.check));
             }
-            Block::Frame(i) => frame::encode_frame(&self.message, i, &mut self.out),
+            Block::Frame(i) => frame::encode_frame(&self.message, i, self.cfg.check, &mut self.out),
         }
         let sent = self.out.len() - before;
         self.state = State::AwaitAck(block);

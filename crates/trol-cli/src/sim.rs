@@ -135,6 +135,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         );
         match e.event {
             ServerEvent::Executed => println!("{req} -> {reply}"),
+            ServerEvent::Repeated => {
+                println!("{req} -> {reply} (a repeat: answered from memory, not run again)")
+            }
             ServerEvent::ReplyFailed(err) => {
                 println!("{req} -> {reply} (the reply was lost: {err})")
             }

@@ -25,7 +25,7 @@ pub use handlers::{
     TimeoutAction, TimeoutPolicy,
 };
 pub use server::{Server, ServerEvent};
-pub use transactor::{TransError, Transactor};
+pub use transactor::{DEFAULT_REPEATS, TransError, Transactor};
 pub use trol_proto::Machine;
 
 use std::time::Duration;

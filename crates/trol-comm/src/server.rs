@@ -10,11 +10,18 @@ use trol_proto::transaction::{Decision, Failure, Responder, ResponderEvent};
 use crate::driver::Driver;
 use crate::handlers::{DefaultHandlers, ErrorHandlers, FailureContext, Recovery};
 
+/// What executes a request for [`Server::serve_deferrable`]: its bytes and PCI in, its
+/// reply out (or `None`: later, with [`Server::respond`]).
+pub type Execute<'a> = dyn FnMut(&[u8], u16) -> Option<Vec<u8>> + 'a;
+
 /// How one call of [`Server::serve`] ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ServerEvent {
     /// A request was executed and its reply sent.
     Executed,
+    /// A repeated request (the PC had lost the reply) was answered from memory, not executed
+    /// again.
+    Repeated,
     /// A request was executed but its reply could not be sent (TRANS_ERR_SEND).
     ReplyFailed(LinkError),
     /// A request was executed but its reply is longer than layer 2 can carry
@@ -102,18 +109,20 @@ impl<P: Port> Server<P> {
         idle: Duration,
         execute: &mut dyn FnMut(&[u8]) -> Vec<u8>,
     ) -> io::Result<ServerEvent> {
-        self.serve_deferrable(idle, &mut |req| Some(execute(req)))
+        self.serve_deferrable(idle, &mut |req, _| Some(execute(req)))
     }
 
-    /// Like [`Server::serve`], but `execute` may return `None` to defer the reply
+    /// Like [`Server::serve`], but `execute` also gets the request's PCI (its transaction
+    /// number in the low byte), and may return `None` to defer the reply
     /// ([`ServerEvent::Pending`]): the server then waits for [`Server::respond`].
     pub fn serve_deferrable(
         &mut self,
         idle: Duration,
-        execute: &mut dyn FnMut(&[u8]) -> Option<Vec<u8>>,
+        execute: &mut Execute<'_>,
     ) -> io::Result<ServerEvent> {
         let give_up = self.driver.clock().now() + idle;
         let mut attempts = 0u32;
+        let answered_before = self.responder.repeats_answered();
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -130,13 +139,19 @@ impl<P: Port> Server<P> {
                 None if self.responder.in_transaction() => continue,
                 None => return Ok(ServerEvent::Idle),
                 Some(ResponderEvent::Request) => {
-                    let Some(reply) = execute(self.responder.request()) else {
+                    let pci = self.responder.request_pci();
+                    let Some(reply) = execute(self.responder.request(), pci) else {
                         return Ok(ServerEvent::Pending);
                     };
                     // Executing may take long (Finish waits for the arm): time the reply
                     // from when it is ready, not from when the request arrived.
                     let ready = self.driver.clock().now();
                     self.responder.respond(&reply, ready);
+                }
+                Some(ResponderEvent::Done)
+                    if self.responder.repeats_answered() > answered_before =>
+                {
+                    return Ok(ServerEvent::Repeated);
                 }
                 Some(ResponderEvent::Done) => return Ok(ServerEvent::Executed),
                 Some(ResponderEvent::NeedDecision(failure)) => {

@@ -59,11 +59,15 @@ impl TransError {
     }
 }
 
+/// How often a transaction whose reply was lost is sent again (exactly once), by default.
+pub const DEFAULT_REPEATS: u8 = 2;
+
 /// The PC's end of layer 3: sends commands and returns their replies.
 pub struct Transactor<P> {
     driver: Driver<P>,
     initiator: Initiator,
     handlers: Box<dyn ErrorHandlers>,
+    repeats: u8,
 }
 
 impl<P: Port> Transactor<P> {
@@ -73,7 +77,21 @@ impl<P: Port> Transactor<P> {
             driver: Driver::new(port),
             initiator: Initiator::new(cfg),
             handlers: Box::new(DefaultHandlers::default()),
+            repeats: DEFAULT_REPEATS,
         }
+    }
+
+    /// Exactly once: how often a transaction that ended without its reply (a timeout, or a
+    /// failed receive) is sent again with its number and the REPEAT bit, so that a controller
+    /// that executed it answers from memory and one that did not executes it. 0 is the
+    /// manual's behaviour: the call fails, and the application asks GetStatus.
+    pub fn set_repeats(&mut self, repeats: u8) {
+        self.repeats = repeats;
+    }
+
+    /// The number of the current (or last) transaction (the PCI's low byte).
+    pub fn transaction_number(&self) -> u8 {
+        self.initiator.number()
     }
 
     /// Replace the error handlers.
@@ -141,6 +159,9 @@ impl<P: Port> Transactor<P> {
             .start(request, now)
             .map_err(|e| TransError::Request(e.to_string()))?;
         let mut attempts = 0u32;
+        let mut repeated = 0u8;
+        // The failure that started the repeats: what the caller hears if they fail too.
+        let mut first_failure = None;
         loop {
             let mut event = None;
             self.driver
@@ -157,8 +178,18 @@ impl<P: Port> Transactor<P> {
                     });
                 }
                 Some(InitiatorEvent::Failed(code)) => {
+                    // The reply did not come: send the request again, marked as a repeat.
+                    let lost_reply = matches!(code, TransCode::Timeout | TransCode::ErrReceive);
+                    if (lost_reply || first_failure.is_some()) && repeated < self.repeats {
+                        first_failure.get_or_insert(code);
+                        repeated += 1;
+                        let now = self.driver.clock().now();
+                        if self.initiator.repeat(now) {
+                            continue;
+                        }
+                    }
                     return Err(TransError::Failed {
-                        code,
+                        code: first_failure.unwrap_or(code),
                         last_comm: self.last_comm_error(),
                     });
                 }

@@ -83,6 +83,7 @@ fn a_reply_too_long_for_layer_2_is_reported_and_the_server_goes_on() {
     });
     let mut t = Transactor::new(a, quick_link());
     t.set_reply_timeout_tenths(5);
+    t.set_repeats(0);
     assert_eq!(t.trans_sr(b"huge").unwrap_err().code(), TransCode::Timeout);
     assert_eq!(t.trans_sr(b"ok").unwrap(), b"ok");
     let (first, second) = server.join().unwrap();

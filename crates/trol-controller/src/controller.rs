@@ -125,9 +125,10 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 } else {
                     let pcp = &mut self.pcp;
                     let last = &mut self.last;
-                    self.server.serve_deferrable(slice, &mut |req| {
+                    self.server.serve_deferrable(slice, &mut |req, pci| {
                         last.0 = req.to_vec();
                         last.1.clear();
+                        pcp.set_transaction(trol_proto::transaction::pci_number(pci));
                         match pcp.handle(req) {
                             Handled::Reply(reply) => {
                                 last.1 = reply.clone();

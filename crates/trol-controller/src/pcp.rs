@@ -24,12 +24,17 @@ pub struct Status {
     pub bios_called: bool,
     /// lastErrorCode.
     pub last_error_code: Code,
+    /// The transaction number of the request this status belongs to.
+    pub transaction: u8,
+    /// The transaction number of the request being handled.
+    pub current: u8,
 }
 
 impl Status {
     /// Record a BIOS call's value; returns what the reply carries (TROL_RETVAL_RANGE for a
     /// value in TROL's range, as CAT2 handlers must do themselves).
     pub fn record_bios(&mut self, value: i16) -> Code {
+        self.transaction = self.current;
         self.bios_called = true;
         self.last_error_code = Code(value);
         if Code(value).is_trol() {
@@ -41,6 +46,7 @@ impl Status {
 
     /// Record that the BIOS was not called, and why.
     pub fn record_refusal(&mut self, code: Code) {
+        self.transaction = self.current;
         self.bios_called = false;
         self.last_error_code = code;
     }
@@ -69,6 +75,8 @@ pub struct Context<'a, B> {
     pub status: &'a mut Status,
     /// Set to end server mode once the reply is sent (TerminatePCP).
     pub terminate: &'a mut bool,
+    /// The server's epoch.
+    pub epoch: u16,
 }
 
 /// A handler of CAT2..CAT4: gets the decoded arguments and builds its reply itself.
@@ -130,6 +138,7 @@ pub struct Pcp<B> {
     status: Status,
     terminate: bool,
     pending: Option<Pending>,
+    epoch: u16,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -151,6 +160,7 @@ impl<B: Backend> Pcp<B> {
             status: Status::default(),
             terminate: false,
             pending: None,
+            epoch: new_epoch(),
         };
         for def in table::BUILTIN {
             let handler = match def.class() {
@@ -218,6 +228,18 @@ impl<B: Backend> Pcp<B> {
         self.status
     }
 
+    /// The number the server drew when it started (GetStatus reports it, so a host notices a
+    /// restart).
+    pub fn epoch(&self) -> u16 {
+        self.epoch
+    }
+
+    /// The transaction number of the request about to be handled (the PCI's low byte), for
+    /// GetStatus's record.
+    pub fn set_transaction(&mut self, number: u8) {
+        self.status.current = number;
+    }
+
     /// Whether TerminatePCP asked to end server mode (reading clears it).
     pub fn take_terminate(&mut self) -> bool {
         std::mem::take(&mut self.terminate)
@@ -274,6 +296,7 @@ impl<B: Backend> Pcp<B> {
                     backend: &mut self.backend,
                     status: &mut self.status,
                     terminate: &mut self.terminate,
+                    epoch: self.epoch,
                 };
                 Handled::Reply(h(&mut ctx, &call).encode())
             }
@@ -419,7 +442,18 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
         TROL_GET_STATUS => Reply::Status {
             bios_called: ctx.status.bios_called,
             last: ctx.status.last_error_code,
+            transaction: ctx.status.transaction,
+            epoch: ctx.epoch,
         },
         _ => Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN),
     }
+}
+
+/// A number for this server's start: from the clock's nanoseconds, never 0.
+fn new_epoch() -> u16 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.subsec_nanos() ^ (d.as_secs() as u32))
+        .unwrap_or(1);
+    ((nanos ^ (nanos >> 16)) as u16).max(1)
 }

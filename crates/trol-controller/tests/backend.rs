@@ -189,27 +189,37 @@ fn a_stored_location_reaches_the_arm_in_full_f64() {
 fn backend_failures_are_refusals_and_getstatus_says_the_bios_was_not_called() {
     let mut pcp = server();
     let nowhere = LocName::new("nowhere").unwrap();
+    pcp.set_transaction(11);
     let r = reply(
         &mut pcp,
         &table::MOVE,
         &[Value::Name(nowhere), Value::Flag(false)],
     );
     assert_eq!(r, Reply::Code(TROL_ERR_LOCATION));
+    let epoch = pcp.epoch();
+    assert_ne!(epoch, 0);
+    pcp.set_transaction(12);
     assert_eq!(
         reply(&mut pcp, &table::GET_STATUS, &[]),
         Reply::Status {
             bios_called: false,
-            last: TROL_ERR_LOCATION
+            last: TROL_ERR_LOCATION,
+            transaction: 11,
+            epoch,
         }
     );
     pcp.backend_mut().broken = true;
+    pcp.set_transaction(13);
     let r = reply(&mut pcp, &table::JOINT, &[Value::Int(1), Value::Real(0.1)]);
     assert_eq!(r, Reply::Code(TROL_ERR_ROBOT));
+    pcp.set_transaction(14);
     assert_eq!(
         reply(&mut pcp, &table::GET_STATUS, &[]),
         Reply::Status {
             bios_called: false,
-            last: TROL_ERR_ROBOT
+            last: TROL_ERR_ROBOT,
+            transaction: 13,
+            epoch,
         }
     );
 }

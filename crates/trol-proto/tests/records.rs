@@ -211,6 +211,8 @@ fn replies_round_trip_and_bad_sizes_are_bad_rsize() {
             Reply::Status {
                 bios_called: true,
                 last: Code(-32700),
+                transaction: 7,
+                epoch: 0xBEEF,
             },
         ),
         (&TERMINATE_PCP, Reply::Code(Code(0))),
@@ -232,7 +234,9 @@ fn replies_round_trip_and_bad_sizes_are_bad_rsize() {
     // A CAT1 reply is one word; a GetStatus value other than 0/1 is not a status; a position
     // has six values, no more and no fewer.
     assert!(Reply::decode(&MOVE, &[0, 0, 0, 0]).is_err());
-    assert!(Reply::decode(&GET_STATUS, &[2, 0, 0, 0]).is_err());
+    assert!(Reply::decode(&GET_STATUS, &[2, 0, 0, 0, 0, 0, 0, 0]).is_err());
+    // The manual's 4-byte status (no transaction, no epoch) is not this protocol's.
+    assert!(Reply::decode(&GET_STATUS, &[1, 0, 0, 0]).is_err());
     for n in 0..=8u8 {
         let mut bytes = vec![0, 0, Tag::Cart as u8, n];
         bytes.resize(4 + 4 * n as usize, 0);

@@ -253,3 +253,84 @@ fn a_send_retried_after_err_on_send_reaches_the_controller_once() {
     assert_eq!(ev, Some(InitiatorEvent::Reply));
     assert_eq!(executed, 1);
 }
+
+/// Exactly once: the reply to an executed request is lost; the request goes out again with
+/// its number and the REPEAT bit, and the controller answers from memory without executing
+/// it again. A new request with a REPEAT bit but another number executes.
+#[test]
+fn a_repeated_request_is_answered_from_memory_and_not_executed_again() {
+    let (mut w, mut i, mut r) = pair();
+    i.set_reply_timeout(Duration::from_millis(500));
+    let mut executed = 0;
+    // The controller as a server: executes requests (answering "done" the first time), and
+    // gives up when its reply cannot be sent (the default ErrOnSend).
+    let serve = |r: &mut Responder, now: Instant, executed: &mut u32| match r.poll_event() {
+        Some(ResponderEvent::Request) => {
+            *executed += 1;
+            let answer: &[u8] = if *executed == 1 {
+                b"done"
+            } else {
+                b"done again"
+            };
+            r.respond(answer, now);
+        }
+        Some(ResponderEvent::NeedDecision(_)) => r.decide(Decision::GiveUp, now),
+        _ => {}
+    };
+    // First transaction: executed, its reply lost on the way (the PC hears nothing).
+    i.start(b"move", w.now).unwrap();
+    let mut ev = None;
+    w.run(&mut i, &mut r, Duration::from_secs(60), |_, r| {
+        serve(r, Instant::ZERO, &mut executed);
+        executed == 1
+    });
+    w.deaf_b_to_a = true;
+    w.run(&mut i, &mut r, Duration::from_secs(60), |i, r| {
+        serve(r, Instant::ZERO, &mut executed);
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(executed, 1);
+    assert!(matches!(
+        ev,
+        Some(InitiatorEvent::NeedDecision(Failure::Timeout { .. }))
+    ));
+    i.decide(Decision::GiveUp, w.now);
+    assert_eq!(
+        i.poll_event(),
+        Some(InitiatorEvent::Failed(TransCode::Timeout))
+    );
+    // The line heals; the PC sends the request again, as a repeat of the same number.
+    w.deaf_b_to_a = false;
+    w.run(&mut i, &mut r, Duration::from_secs(10), |_, r| {
+        serve(r, Instant::ZERO, &mut executed);
+        false
+    });
+    let number = i.number();
+    assert!(i.repeat(w.now));
+    assert_eq!(i.current_pci() & 0x00FF, u16::from(number));
+    assert_ne!(i.current_pci() & 0x0100, 0, "the REPEAT bit");
+    w.run(&mut i, &mut r, Duration::from_secs(60), |i, r| {
+        serve(r, Instant::ZERO, &mut executed);
+        ev = i.poll_event();
+        ev.is_some()
+    });
+    assert_eq!(ev, Some(InitiatorEvent::Reply));
+    assert_eq!(
+        i.take_reply().unwrap(),
+        b"done",
+        "the first reply, from memory"
+    );
+    assert_eq!(executed, 1, "executed once");
+    assert_eq!(r.repeats_answered(), 1);
+    // The next request is a new one and executes.
+    let (e, n) = transact(
+        &mut w,
+        &mut i,
+        &mut r,
+        b"next",
+        |_| b"ok".to_vec(),
+        |_| Decision::GiveUp,
+    );
+    assert_eq!((e, n), (InitiatorEvent::Reply, 1));
+}

@@ -242,7 +242,9 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
         Reply::Code(v) => v.0.into_pyobject(py)?.into_any(),
         Reply::Reals { values, .. } => values.into_pyobject(py)?.into_any(),
         Reply::Position(loc) => location_object(py, loc)?,
-        Reply::Status { bios_called, last } => (bios_called, last.0).into_pyobject(py)?.into_any(),
+        Reply::Status {
+            bios_called, last, ..
+        } => (bios_called, last.0).into_pyobject(py)?.into_any(),
         Reply::Bytes { value, bytes } => (value.0, PyBytes::new(py, &bytes))
             .into_pyobject(py)?
             .into_any(),

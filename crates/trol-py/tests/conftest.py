@@ -3,6 +3,7 @@ scripted controller on TCP for the failures a simulator does not make."""
 
 from __future__ import annotations
 
+import binascii
 import os
 import socket
 import subprocess
@@ -83,8 +84,9 @@ def _read(conn: socket.socket, n: int) -> bytes:
     return data
 
 
-def _lrc(block: bytes) -> bytes:
-    return (sum(block) & 0xFFFF).to_bytes(2, "little")
+def _bcc(block: bytes) -> bytes:
+    """The block check TROL uses by default: CRC-16/CCITT (poly 0x1021, init 0xFFFF)."""
+    return binascii.crc_hqx(block, 0xFFFF).to_bytes(2, "little")
 
 
 def _receive(conn: socket.socket) -> tuple[int, bytes]:
@@ -107,11 +109,11 @@ def _send(conn: socket.socket, message: bytes, pci: int) -> None:
     assert _read(conn, 1)[0] == ACK
     first = (message[:2] + b"\0\0")[:2]
     fields = len(message).to_bytes(2, "little") + pci.to_bytes(2, "little") + first
-    conn.sendall(bytes([SOH]) + fields + _lrc(fields) + bytes([ETX]))
+    conn.sendall(bytes([SOH]) + fields + _bcc(fields) + bytes([ETX]))
     assert _read(conn, 1)[0] == ACK
     if len(message) > 2:
         data = message[2:] + (0).to_bytes(2, "little")
-        conn.sendall(bytes([STX]) + data + _lrc(data) + bytes([ETX]))
+        conn.sendall(bytes([STX]) + data + _bcc(data) + bytes([ETX]))
         assert _read(conn, 1)[0] == ACK
     conn.sendall(bytes([EOT]))
 

@@ -69,8 +69,9 @@ def test_every_method(robot: trol.Robot) -> None:
     robot.set_tool([0.0] * 6)
     robot.halt()
     assert robot.status() == (True, 0)
-    # TransSR: GetStatus's bytes.
-    assert robot.transact(bytes([193])) == bytes([1, 0, 0, 0])
+    # TransSR: GetStatus's bytes (called, last, transaction, epoch).
+    raw = robot.transact(bytes([193]))
+    assert len(raw) == 8 and raw[:4] == bytes([1, 0, 0, 0])
     assert robot.call("getstatus") == (True, 0)
     assert robot.call("TROLSpeed", 50) == 0
 
@@ -157,7 +158,7 @@ def test_a_silent_controller_raises_link_error(scripted: tuple[str, list[bytes]]
 
 def test_a_reply_of_the_wrong_size_raises_bad_reply_error(scripted: tuple[str, list[bytes]]) -> None:
     port, replies = scripted
-    replies.append(bytes([1, 0, 0, 0, 0]))  # GetStatus answered with 5 bytes, not 4
+    replies.append(bytes([1, 0, 0, 0, 0]))  # GetStatus answered with 5 bytes, not 8
     robot = trol.Robot.open(port)
     with pytest.raises(trol.BadReplyError) as e:
         robot.status()

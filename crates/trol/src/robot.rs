@@ -117,6 +117,19 @@ impl From<ReplyError> for Error {
 /// Results of the API.
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// What GetStatus reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StatusRecord {
+    /// Whether the last CAT1/CAT2 command called the BIOS.
+    pub bios_called: bool,
+    /// Its BIOS value, or the TROL code that kept it from being called.
+    pub last: Code,
+    /// The transaction number of that command.
+    pub transaction: u8,
+    /// The controller's epoch.
+    pub epoch: u16,
+}
+
 /// The host's ErrAppTimeOut policy from the commands' descriptions: 90 s more for Home, no
 /// limit for Finish(FINISH_WAIT), as the manual's default handler.
 pub fn timeout_policy(catalog: Catalog) -> trol_comm::TimeoutPolicy {
@@ -499,14 +512,37 @@ impl Robot {
     /// TROLGetStatus: whether the last CAT1/CAT2 command called the BIOS, and the BIOS's
     /// value or the TROL code that kept it from being called.
     pub fn status(&mut self) -> Result<(bool, Code)> {
+        self.status_record().map(|s| (s.bios_called, s.last))
+    }
+
+    /// TROLGetStatus in full: also which transaction the status belongs to (compare with
+    /// [`Robot::last_transaction`] after a failed call) and the controller's epoch (it changes
+    /// when the controller restarts).
+    pub fn status_record(&mut self) -> Result<StatusRecord> {
         let def = &table::GET_STATUS;
         match self.call(def, &[])? {
-            Reply::Status { bios_called, last } => Ok((bios_called, last)),
+            Reply::Status {
+                bios_called,
+                last,
+                transaction,
+                epoch,
+            } => Ok(StatusRecord {
+                bios_called,
+                last,
+                transaction,
+                epoch,
+            }),
             other => Err(Error::BadReply {
                 command: def.name,
                 len: other.encode().len(),
             }),
         }
+    }
+
+    /// The transaction number of the last request sent (the PCI's low byte; GetStatus's
+    /// [`StatusRecord::transaction`] names the one its status belongs to).
+    pub fn last_transaction(&self) -> u8 {
+        self.transactor.transaction_number()
     }
 }
 

@@ -42,12 +42,18 @@ struct Switchable<P> {
     deaf: Arc<AtomicBool>,
     mute: Arc<AtomicBool>,
     deaf_after_eot: Arc<AtomicBool>,
+    drop_next_eot: Arc<AtomicBool>,
 }
 
 impl<P: Port> Port for Switchable<P> {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         if self.mute.load(Ordering::SeqCst) {
             return Ok(());
+        }
+        // Lose the request's EOT once: the controller never gets the request.
+        if bytes.contains(&0x87) && self.drop_next_eot.swap(false, Ordering::SeqCst) {
+            let kept: Vec<u8> = bytes.iter().copied().filter(|b| *b != 0x87).collect();
+            return self.inner.send(&kept);
         }
         self.inner.send(bytes)?;
         // The request's EOT went out: from now on lose what comes back (the reply).
@@ -80,6 +86,7 @@ struct Rig {
     deaf: Arc<AtomicBool>,
     mute: Arc<AtomicBool>,
     deaf_after_eot: Arc<AtomicBool>,
+    drop_next_eot: Arc<AtomicBool>,
 }
 
 fn rig_with(pcp: Pcp<SimBackend>) -> Rig {
@@ -87,11 +94,13 @@ fn rig_with(pcp: Pcp<SimBackend>) -> Rig {
     let deaf = Arc::new(AtomicBool::new(false));
     let mute = Arc::new(AtomicBool::new(false));
     let deaf_after_eot = Arc::new(AtomicBool::new(false));
+    let drop_next_eot = Arc::new(AtomicBool::new(false));
     let port = Switchable {
         inner: line,
         deaf: deaf.clone(),
         mute: mute.clone(),
         deaf_after_eot: deaf_after_eot.clone(),
+        drop_next_eot: drop_next_eot.clone(),
     };
     let mut robot = Robot::over(Box::new(port), quick(), Some(handle));
     robot.set_reply_timeout_tenths(10);
@@ -100,6 +109,7 @@ fn rig_with(pcp: Pcp<SimBackend>) -> Rig {
         deaf,
         mute,
         deaf_after_eot,
+        drop_next_eot,
     }
 }
 
@@ -330,7 +340,7 @@ fn every_error_code_on_the_side_that_detects_it() {
 /// A relative move whose reply is lost: GetStatus afterwards says the BIOS was called and
 /// with what result, so the application does not repeat it.
 #[test]
-fn exactly_once_when_the_reply_is_lost() {
+fn exactly_once_when_the_reply_is_lost_for_good() {
     let mut rig = rig();
     rig.robot.home(0).unwrap();
     rig.robot.finish().unwrap();
@@ -355,8 +365,46 @@ fn exactly_once_when_the_reply_is_lost() {
     assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6);
 }
 
-/// The request itself is lost: GetStatus still describes the command before, so the
-/// application knows the move did not run and sends it again.
+/// By default a lost reply costs nothing: the request goes out again marked as a repeat, the
+/// controller answers it from memory, and the relative move ran exactly once.
+#[test]
+fn a_lost_reply_is_repeated_and_the_move_runs_exactly_once() {
+    let mut rig = rig();
+    rig.robot.home(0).unwrap();
+    rig.robot.finish().unwrap();
+    rig.deaf_after_eot.store(true, Ordering::SeqCst);
+    let deaf = rig.deaf.clone();
+    // The reply is lost; the line is back before the repeat (reply timeout 1 s).
+    let heal = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(500));
+        deaf.store(false, Ordering::SeqCst);
+    });
+    rig.robot.joint(1, 0.25).unwrap();
+    heal.join().unwrap();
+    let joint = rig.robot.last_transaction();
+    // GetStatus says which transaction its status belongs to: the Joint's.
+    let status = rig.robot.status_record().unwrap();
+    assert_eq!((status.bios_called, status.last), (true, SUCCESS));
+    assert_eq!(status.transaction, joint);
+    rig.robot.finish().unwrap();
+    assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6, "ran once");
+}
+
+/// A request whose EOT is lost never reached the controller: the repeat runs it, once.
+#[test]
+fn a_lost_request_is_repeated_and_the_move_runs_exactly_once() {
+    let mut rig = rig();
+    rig.robot.home(0).unwrap();
+    rig.robot.finish().unwrap();
+    rig.drop_next_eot.store(true, Ordering::SeqCst);
+    rig.robot.joint(1, 0.25).unwrap();
+    rig.robot.finish().unwrap();
+    assert!((joints(&mut rig.robot)[0] - 0.25).abs() < 1e-6, "ran once");
+}
+
+/// With repeats off (the manual's behaviour) a lost request fails the call, and GetStatus
+/// still describes the command before, so the application knows the move did not run and
+/// sends it again.
 #[test]
 fn exactly_once_when_the_request_is_lost() {
     let mut rig = rig();
@@ -367,6 +415,7 @@ fn exactly_once_when_the_request_is_lost() {
         rig.robot.move_to("nowhere", false).unwrap_err().code(),
         TROL_ERR_LOCATION
     );
+    rig.robot.transactor_mut().set_repeats(0);
     rig.mute.store(true, Ordering::SeqCst);
     assert_eq!(rig.robot.joint(1, 0.25).unwrap_err().code(), TROL_ERR_COMM);
     rig.mute.store(false, Ordering::SeqCst);

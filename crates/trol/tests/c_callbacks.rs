@@ -28,6 +28,8 @@ fn scripted_controller(line: TcpLine) {
             Reply::Status {
                 bios_called: false,
                 last: SUCCESS,
+                transaction: 0,
+                epoch: 1,
             }
             .encode()
         })

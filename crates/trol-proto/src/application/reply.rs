@@ -25,12 +25,19 @@ pub enum Reply {
     /// TROLGetPosition: 0 and the position, with numDims 6.
     Position(Location),
     /// TROLGetStatus: whether the BIOS was called (the return value, 0 or 1) and the last
-    /// BIOS value or the TROL code that kept it from being called.
+    /// BIOS value or the TROL code that kept it from being called; which transaction that
+    /// status belongs to, and the controller's epoch (it changes when the controller
+    /// restarts).
     Status {
         /// BIOSCalled.
         bios_called: bool,
         /// lastErrorCode.
         last: Code,
+        /// The transaction number (the PCI's low byte) of the CAT1/CAT2 request the status
+        /// belongs to; 0 before the first.
+        transaction: u8,
+        /// The controller's epoch: a number it draws when it starts.
+        epoch: u16,
     },
     /// The return value and bytes the application reads itself.
     Bytes {
@@ -65,7 +72,16 @@ impl Reply {
                 out.push(loc.num_dims() as u8);
                 put_location(&mut out, loc);
             }
-            Reply::Status { last, .. } => out.extend_from_slice(&last.0.to_le_bytes()),
+            Reply::Status {
+                last,
+                transaction,
+                epoch,
+                ..
+            } => {
+                out.extend_from_slice(&last.0.to_le_bytes());
+                out.extend_from_slice(&u16::from(*transaction).to_le_bytes());
+                out.extend_from_slice(&epoch.to_le_bytes());
+            }
             Reply::Bytes { bytes, .. } => out.extend_from_slice(bytes),
         }
         out
@@ -119,12 +135,14 @@ impl Reply {
                 Ok(Reply::Position(get_location(tag, values)))
             }
             ReplyKind::Status => {
-                if rest.len() != 2 || !(value.0 == 0 || value.0 == 1) {
+                if rest.len() != 6 || !(value.0 == 0 || value.0 == 1) || rest[3] != 0 {
                     return Err(bad());
                 }
                 Ok(Reply::Status {
                     bios_called: value.0 == 1,
                     last: Code(i16::from_le_bytes([rest[0], rest[1]])),
+                    transaction: rest[2],
+                    epoch: u16::from_le_bytes([rest[4], rest[5]]),
                 })
             }
         }
@@ -136,8 +154,13 @@ impl Reply {
         match self {
             Reply::Code(v) => v.describe(bios),
             Reply::Position(loc) => format_location(loc),
-            Reply::Status { bios_called, last } => format!(
-                "BIOSCalled {}, lastErrorCode {}",
+            Reply::Status {
+                bios_called,
+                last,
+                transaction,
+                epoch,
+            } => format!(
+                "BIOSCalled {}, lastErrorCode {}, transaction {transaction}, epoch {epoch:#06x}",
                 u8::from(*bios_called),
                 last.describe(bios)
             ),

@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use super::{Decision, Failure, TransCode, pci, pci_number, reply_timeout_from_tenths};
+use super::{Decision, Failure, PCI_REPEAT, TransCode, pci, pci_number, reply_timeout_from_tenths};
 use crate::link::{Link, LinkConfig, LinkError, Outcome, StartError};
 use crate::time::Instant;
 
@@ -34,6 +34,8 @@ pub struct Initiator {
     number: u8,
     request: Vec<u8>,
     reply: Option<Vec<u8>>,
+    /// Whether the request goes out again (with the REPEAT bit).
+    repeat: bool,
     reply_timeout: Duration,
     sent_at: Instant,
     reply_deadline: Option<Instant>,
@@ -50,6 +52,7 @@ impl Initiator {
             number: 0,
             request: Vec::new(),
             reply: None,
+            repeat: false,
             reply_timeout: reply_timeout_from_tenths(super::DEFAULT_REPLY_TIMEOUT_TENTHS),
             sent_at: Instant::ZERO,
             reply_deadline: None,
@@ -95,7 +98,29 @@ impl Initiator {
 
     /// The PCI the current request carries.
     pub fn current_pci(&self) -> u16 {
-        pci(self.number)
+        if self.repeat {
+            pci(self.number) | PCI_REPEAT
+        } else {
+            pci(self.number)
+        }
+    }
+
+    /// The number of the current (or last) transaction.
+    pub fn number(&self) -> u8 {
+        self.number
+    }
+
+    /// Send the last request again, with its number and the REPEAT bit, after the transaction
+    /// failed without a reply: a controller that executed it answers from its memory, one
+    /// that did not executes it. Returns false if there is nothing to repeat.
+    pub fn repeat(&mut self, now: Instant) -> bool {
+        if self.is_busy() || self.request.is_empty() && self.number == 0 {
+            return false;
+        }
+        self.repeat = true;
+        self.reply = None;
+        self.event = None;
+        self.send_request(now).is_ok()
     }
 
     /// Whether a transaction is under way.
@@ -114,6 +139,7 @@ impl Initiator {
             )));
         }
         self.number = self.number.wrapping_add(1);
+        self.repeat = false;
         self.request.clear();
         self.request.extend_from_slice(request);
         self.reply = None;

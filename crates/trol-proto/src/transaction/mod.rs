@@ -13,10 +13,20 @@
 //! | bits  | meaning |
 //! |-------|---------|
 //! | 0..7  | transaction number, counted by the PC; a reply carries its request's number |
-//! | 8..15 | reserved, sent as 0, ignored |
+//! | 8     | REPEAT: the PC sends this request again, with the number it had |
+//! | 9..15 | reserved, sent as 0, ignored |
 //!
 //! A reply whose number is not that of the pending request is stale (from a transaction the
 //! PC gave up on) and is dropped.
+//!
+//! # Exactly once
+//!
+//! The controller remembers the number of the last request it executed and its reply. A
+//! request marked REPEAT with that number is answered from this memory and not executed
+//! again: so the PC may send a request again whenever it does not know whether the first one
+//! arrived (its reply was lost, or its EOT), and the command runs exactly once. A request
+//! not marked REPEAT is always executed, whatever its number (a PC that restarted counts from
+//! 1 again).
 //!
 //! # Delivery
 //!
@@ -76,9 +86,17 @@ pub fn reply_timeout_from_tenths(tenths: u16) -> Duration {
     Duration::from_millis(u64::from(tenths) * 100)
 }
 
+/// The PCI's REPEAT bit.
+pub const PCI_REPEAT: u16 = 0x0100;
+
 /// Build the PCI of transaction `number`.
 pub const fn pci(number: u8) -> u16 {
     number as u16
+}
+
+/// Whether a PCI marks a repeated request.
+pub const fn pci_is_repeat(pci: u16) -> bool {
+    pci & PCI_REPEAT != 0
 }
 
 /// The transaction number of a PCI.

@@ -1,6 +1,6 @@
 //! TransRS: the controller's side of a transaction.
 
-use super::{Decision, Failure, TransCode};
+use super::{Decision, Failure, TransCode, pci_is_repeat, pci_number};
 use crate::link::{Link, LinkConfig, LinkError, Outcome};
 use crate::time::Instant;
 
@@ -37,6 +37,10 @@ pub struct Responder {
     request: Vec<u8>,
     reply: Vec<u8>,
     event: Option<ResponderEvent>,
+    /// The number of the last request executed, and its reply (exactly once).
+    memory: Option<(u8, Vec<u8>)>,
+    /// Requests answered from memory.
+    repeats_answered: u64,
 }
 
 impl Responder {
@@ -49,7 +53,19 @@ impl Responder {
             request: Vec::new(),
             reply: Vec::new(),
             event: None,
+            memory: None,
+            repeats_answered: 0,
         }
+    }
+
+    /// How many repeated requests were answered from memory, not executed again.
+    pub fn repeats_answered(&self) -> u64 {
+        self.repeats_answered
+    }
+
+    /// Forget the last executed request (the manual's behaviour: every request executes).
+    pub fn forget(&mut self) {
+        self.memory = None;
     }
 
     /// The link underneath.
@@ -123,6 +139,7 @@ impl Responder {
         }
         self.reply.clear();
         self.reply.extend_from_slice(reply);
+        self.memory = Some((pci_number(self.request_pci), reply.to_vec()));
         self.send_reply(now);
     }
 
@@ -206,8 +223,18 @@ impl Responder {
                 };
                 self.request_pci = req_pci;
                 self.request = data;
-                self.state = State::Executing;
-                self.event = Some(ResponderEvent::Request);
+                match &self.memory {
+                    // A repeat of the request last executed: its reply again, nothing run.
+                    Some((n, reply)) if pci_is_repeat(req_pci) && *n == pci_number(req_pci) => {
+                        self.reply = reply.clone();
+                        self.repeats_answered += 1;
+                        self.send_reply(now);
+                    }
+                    _ => {
+                        self.state = State::Executing;
+                        self.event = Some(ResponderEvent::Request);
+                    }
+                }
             }
             (State::Listening, Outcome::Failed(LinkError::Receive(e))) => {
                 self.state = State::Deciding(Failure::Receive(e));

@@ -50,6 +50,8 @@ pub struct Wire {
     pub transcript: Vec<(Dir, Vec<u8>)>,
     pub carried: u64,
     pub flushes: u32,
+    /// Drop everything the B end sends (a line cut in one direction).
+    pub deaf_b_to_a: bool,
     scratch: Vec<u8>,
 }
 
@@ -71,6 +73,7 @@ impl Wire {
             transcript: Vec::new(),
             carried: 0,
             flushes: 0,
+            deaf_b_to_a: false,
             scratch: Vec::new(),
         }
     }
@@ -82,7 +85,7 @@ impl Wire {
     }
 
     fn push(&mut self, dir: Dir, bytes: Vec<u8>) {
-        if bytes.is_empty() {
+        if bytes.is_empty() || (dir == Dir::BtoA && self.deaf_b_to_a) {
             return;
         }
         let (q, free, fault) = match dir {

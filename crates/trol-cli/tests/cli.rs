@@ -516,3 +516,42 @@ fn sim_objects_are_picked_up_and_the_log_says_where_they_are() {
         "{log}"
     );
 }
+
+/// The controller process dies while a program waits for the arm: the wait ends with
+/// TROL_ERR_COMM within 3 s, over TCP and over a pty.
+#[test]
+fn a_controller_killed_during_a_wait_is_reported_within_three_seconds() {
+    for port in ["listen://127.0.0.1:0", "pty"] {
+        let dir = scratch("killed");
+        let sim = Background::start(
+            &dir,
+            &[
+                "sim",
+                "--port",
+                port,
+                "--server",
+                "--homed",
+                "--time-scale",
+                "1",
+            ],
+            "serving on ",
+        );
+        let mut robot = trol::Robot::open(&sim.name, 38400).unwrap();
+        robot.speed(10).unwrap();
+        robot.joint(1, 2.0).unwrap(); // over 6 s at 10 %
+        let killed = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(500));
+            drop(sim);
+            std::time::Instant::now()
+        });
+        let e = robot.finish().unwrap_err();
+        let ended = std::time::Instant::now();
+        let killed_at = killed.join().unwrap();
+        assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{port}: {e}");
+        let took = ended.saturating_duration_since(killed_at);
+        assert!(
+            took < Duration::from_secs(3),
+            "{port}: noticed after {took:?}"
+        );
+    }
+}

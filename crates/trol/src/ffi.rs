@@ -26,7 +26,7 @@ use trol_comm::{
 };
 use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
 use trol_proto::application::record::Value;
-use trol_proto::application::table::{self, POS_ACT, POS_COMMANDED};
+use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT, POS_ACT, POS_COMMANDED};
 use trol_proto::application::{Catalog, CommandDef, LocName, Location, Reply, Tag};
 use trol_proto::transaction::TransCode;
 
@@ -411,7 +411,23 @@ pub unsafe extern "C" fn TROLDepart(pDisp: *const SLocData, straight: TUINT) -> 
 /// TROLFinish: FINISH_STATUS (0) returns 1 while moving, FINISH_WAIT (1) waits.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLFinish(mode: TUINT) -> TINT {
+    if mode == TUINT::from(FINISH_WAIT) {
+        return wait_idle();
+    }
     run(&table::FINISH, || Ok(vec![byte(mode)?]), drop)
+}
+
+/// Wait until the arm is done by polling FINISH_STATUS, the connection free between two polls
+/// (another thread's TROLHalt gets through; a dead controller is noticed within a link
+/// timeout). Returns 0, or the failed poll's code.
+fn wait_idle() -> TINT {
+    loop {
+        let status = FINISH_STATUS;
+        match run(&table::FINISH, || Ok(vec![Value::Int(status)]), drop) {
+            1 => std::thread::sleep(crate::POLL),
+            code => return code,
+        }
+    }
 }
 
 /// TROLGrip.
@@ -429,7 +445,11 @@ pub extern "C" fn TROLHalt() -> TINT {
 /// TROLHome.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLHome(axis: TUINT) -> TINT {
-    run(&table::HOME, || Ok(vec![byte(axis)?]), drop)
+    // Returns when homing is done, waiting as TROLFinish(FINISH_WAIT) does.
+    match run(&table::HOME, || Ok(vec![byte(axis)?]), drop) {
+        0 => wait_idle(),
+        code => code,
+    }
 }
 
 /// TROLJog.

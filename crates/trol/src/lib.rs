@@ -30,7 +30,9 @@ pub mod ffi;
 mod robot;
 
 pub use config::{Config, ConfigError};
-pub use robot::{Error, PosMode, Result, Robot, SetupError, StatusRecord, timeout_policy};
+pub use robot::{
+    Error, POLL, PosMode, Result, Robot, SetupError, StatusRecord, timeout_policy, wait_idle,
+};
 pub use trol_controller::SimSettings;
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;

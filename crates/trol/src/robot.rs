@@ -117,6 +117,24 @@ impl From<ReplyError> for Error {
 /// Results of the API.
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// How often a wait for the arm asks whether it still moves.
+pub const POLL: Duration = Duration::from_millis(20);
+
+/// Wait until the arm is done, for a robot shared between threads: the lock is taken for each
+/// poll only, so another thread's `halt()` gets through between two polls.
+pub fn wait_idle(robot: &std::sync::Mutex<Robot>) -> Result<()> {
+    loop {
+        let idle = robot
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .poll_idle()?;
+        if idle {
+            return Ok(());
+        }
+        std::thread::sleep(POLL);
+    }
+}
+
 /// What GetStatus reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StatusRecord {
@@ -399,8 +417,26 @@ impl Robot {
             .map(drop)
     }
 
-    /// TROLFinish(FINISH_WAIT): wait until the arm and the gripper are done.
+    /// TROLFinish(FINISH_WAIT): wait until the arm and the gripper are done. The wait polls
+    /// FINISH_STATUS every 20 ms instead of holding the line, so a controller that dies is
+    /// noticed within a link timeout (about a second), not minutes later.
     pub fn finish(&mut self) -> Result<()> {
+        while self.is_moving()? {
+            std::thread::sleep(POLL);
+        }
+        Ok(())
+    }
+
+    /// One poll of a wait for the arm: whether it still moves. A program that shares the
+    /// robot between threads (a `Mutex<Robot>`) waits with [`wait_idle`], which takes the lock
+    /// only for each poll, so another thread's `halt()` gets through.
+    pub fn poll_idle(&mut self) -> Result<bool> {
+        self.is_moving().map(|moving| !moving)
+    }
+
+    /// TROLFinish(FINISH_WAIT) as one request on the line: the controller answers when the arm
+    /// is done, and the line is busy until then (the manual's way; [`Robot::finish`] polls).
+    pub fn finish_on_controller(&mut self) -> Result<()> {
         self.cat1(&table::FINISH, &[Value::Int(FINISH_WAIT)])
             .map(drop)
     }
@@ -422,10 +458,12 @@ impl Robot {
         self.cat1(&table::HALT, &[]).map(drop)
     }
 
-    /// TROLHome: home one axis (1..6) or all (0); returns when homing is done.
+    /// TROLHome: home one axis (1..6) or all (0); returns when homing is done (waiting as
+    /// [`Robot::finish`] does).
     pub fn home(&mut self, axis: u16) -> Result<()> {
         let args = [small(&table::HOME, axis)?];
-        self.cat1(&table::HOME, &args).map(drop)
+        self.cat1(&table::HOME, &args)?;
+        self.finish()
     }
 
     /// TROLJog: move the tool by dx, dy, dz (1..3 values) in the world frame, orientation kept.

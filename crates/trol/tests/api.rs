@@ -624,3 +624,29 @@ fn activation_agrees_on_the_block_check() {
     );
     drop(handle);
 }
+
+/// Halt from a second thread while the first waits for the arm: the wait polls with the
+/// robot's lock free between polls, so the Halt gets through and the arm stops short.
+#[test]
+fn halt_from_another_thread_stops_the_arm_while_one_waits() {
+    let mut sim = settings();
+    sim.time_scale = 1.0;
+    sim.arm.homed = true;
+    let robot = Arc::new(std::sync::Mutex::new(Robot::embedded(sim)));
+    let shared = robot.clone();
+    let waiter = std::thread::spawn(move || {
+        let mut r = shared.lock().unwrap();
+        r.speed(10).unwrap();
+        r.joint(1, 2.0).unwrap(); // over 6 s at 10 %
+        drop(r);
+        let started = Instant::now();
+        trol::wait_idle(&shared).unwrap();
+        started.elapsed()
+    });
+    std::thread::sleep(Duration::from_millis(500));
+    robot.lock().unwrap().halt().unwrap();
+    let waited = waiter.join().unwrap();
+    assert!(waited < Duration::from_secs(3), "waited {waited:?}");
+    let j1 = joints(&mut robot.lock().unwrap())[0];
+    assert!(j1 > 0.0 && j1 < 1.0, "{j1}");
+}

@@ -150,3 +150,41 @@ fn handlers_named_as_in_the_manual_are_called_with_the_static_library() {
 fn handlers_named_as_in_the_manual_are_called_with_the_shared_library() {
     check(&run_with(Link::Shared));
 }
+
+/// TROLHalt from a second thread while the first waits in TROLFinish(FINISH_WAIT).
+#[test]
+fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
+    let exe = compile(
+        &root().join("crates/trol/tests/c/halt_thread.c"),
+        "halt_thread",
+        Link::Static,
+    );
+    let dir = std::env::temp_dir().join(format!("trol-halt-thread-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n",
+    )
+    .unwrap();
+    let out = program(&exe).current_dir(&dir).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("TROLJoint -> 0") && text.contains("TROLHalt -> 0"),
+        "{text}"
+    );
+    assert!(text.contains("TROLFinish -> 0"), "{text}");
+    let waited: f64 = text
+        .split("waited ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(waited < 3.0, "{text}");
+    let j1: f64 = text.split("j1 ").nth(1).unwrap().trim().parse().unwrap();
+    assert!(j1 > 0.0 && j1 < 1.0, "{text}");
+    let _ = std::fs::remove_file(&exe);
+}

@@ -3,7 +3,7 @@
 
 mod common;
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use common::{Background, scratch, text, trol};
 
@@ -542,10 +542,10 @@ fn a_controller_killed_during_a_wait_is_reported_within_three_seconds() {
         let killed = std::thread::spawn(move || {
             std::thread::sleep(Duration::from_millis(500));
             drop(sim);
-            std::time::Instant::now()
+            Instant::now()
         });
         let e = robot.finish().unwrap_err();
-        let ended = std::time::Instant::now();
+        let ended = Instant::now();
         let killed_at = killed.join().unwrap();
         assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{port}: {e}");
         let took = ended.saturating_duration_since(killed_at);
@@ -554,4 +554,127 @@ fn a_controller_killed_during_a_wait_is_reported_within_three_seconds() {
             "{port}: noticed after {took:?}"
         );
     }
+}
+
+/// The controller restarts: the same Robot opens its port again on its next call and
+/// carries on, and GetStatus's epoch shows the restart.
+#[test]
+fn the_same_robot_carries_on_after_the_controller_restarts() {
+    let dir = scratch("restart");
+    let free = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = free.local_addr().unwrap();
+    drop(free);
+    let listen = format!("listen://{addr}");
+    let start = || {
+        Background::start(
+            &dir,
+            &[
+                "sim",
+                "--port",
+                &listen,
+                "--server",
+                "--homed",
+                "--time-scale",
+                "50",
+            ],
+            "serving on ",
+        )
+    };
+    let sim = start();
+    let mut robot = trol::Robot::open(&sim.name, 38400).unwrap();
+    robot.joint(1, 0.1).unwrap();
+    let before = robot.status_record().unwrap().epoch;
+    drop(sim);
+    std::thread::sleep(Duration::from_millis(200));
+    let e = robot.joint(1, 0.1).unwrap_err();
+    assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{e}");
+    let _sim = start();
+    // The next calls open the port again and work.
+    let mut ok = false;
+    for _ in 0..20 {
+        if robot.joint(1, 0.1).is_ok() {
+            ok = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(ok, "the robot did not carry on");
+    let after = robot.status_record().unwrap().epoch;
+    assert_ne!(before, after, "a restarted controller has a new epoch");
+}
+
+/// The interpreter's `init` activates a controller in terminal mode; after the controller
+/// restarts, `reconnect` opens the port again and activates it again, and the session
+/// carries on.
+#[test]
+fn interp_init_and_reconnect_carry_a_session_across_a_controller_restart() {
+    use std::io::{BufRead, BufReader, Write};
+    let dir = scratch("interp-restart");
+    let free = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = free.local_addr().unwrap();
+    drop(free);
+    let listen = format!("listen://{addr}");
+    // Terminal mode, as a controller is after power-on.
+    let start = || {
+        Background::start(
+            &dir,
+            &["sim", "--port", &listen, "--homed", "--time-scale", "50"],
+            "serving on ",
+        )
+    };
+    let sim = start();
+    let mut interp = std::process::Command::new(common::TROL)
+        .args(["interp", "-k", "--port", &format!("socket://{addr}")])
+        .current_dir(&dir)
+        .env_remove("TROL_CONFIG")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = interp.stdin.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    for stream in [
+        Box::new(interp.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
+        Box::new(interp.stderr.take().unwrap()),
+    ] {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stream).lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+    }
+    let mut said = |line: &str, expect: &str| {
+        writeln!(input, "{line}").unwrap();
+        let deadline = Instant::now() + Duration::from_secs(15);
+        let mut seen = Vec::new();
+        while let Ok(l) = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            let done = l.contains(expect);
+            seen.push(l);
+            if done {
+                return;
+            }
+        }
+        panic!("`{line}`: expected `{expect}`, saw {seen:?}");
+    };
+    said("init", "init  ->  the controller's TROL server answers");
+    said("joint 1 0.1", "joint 1 0.1  ->  0");
+    drop(sim);
+    std::thread::sleep(Duration::from_millis(200));
+    said("joint 1 0.1", "error");
+    let sim = start();
+    said(
+        "reconnect",
+        "reconnect  ->  the controller's TROL server answers",
+    );
+    said("joint 1 0.1", "joint 1 0.1  ->  0");
+    writeln!(input, "quit").unwrap();
+    let status = interp.wait().unwrap();
+    // -k: the failure while the controller was away is reported in the exit status.
+    assert_eq!(status.code(), Some(1), "{status:?}");
+    drop(sim);
 }

@@ -114,6 +114,15 @@ impl<P: Port> Transactor<P> {
         self.driver.into_port()
     }
 
+    /// Go on over a new port (the old one failed, and was opened again): the error
+    /// handlers, settings and transaction numbering stay; a transaction under way is dropped.
+    pub fn replace_port(&mut self, port: P) {
+        let delay = self.driver.delay();
+        self.initiator.abort();
+        self.driver = Driver::new(port);
+        self.driver.set_delay(delay);
+    }
+
     /// The state machine (link settings, counters).
     pub fn initiator(&self) -> &Initiator {
         &self.initiator

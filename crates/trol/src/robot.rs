@@ -167,6 +167,14 @@ pub struct Robot {
     catalog: Catalog,
     codes: &'static CodeTable,
     _embedded: Option<Embedded>,
+    /// Where the port came from, to open it again after it failed.
+    origin: Option<(String, PortSettings)>,
+    /// The port failed: open it again before the next call.
+    broken: bool,
+    /// Activate a controller found in terminal mode on reconnecting, with this tool.
+    reactivate: Option<[f64; 6]>,
+    /// The controller's epoch when last seen (GetStatus).
+    epoch: Option<u16>,
 }
 
 impl Robot {
@@ -191,7 +199,9 @@ impl Robot {
             ..PortSettings::default()
         };
         let p = trol_port::open(port, &settings).map_err(SetupError::Port)?;
-        Ok(Robot::over(p, cfg, None))
+        let mut robot = Robot::over(p, cfg, None);
+        robot.origin = Some((port.to_string(), settings));
+        Ok(robot)
     }
 
     /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings).
@@ -236,7 +246,67 @@ impl Robot {
             catalog,
             codes: SIM_CODES,
             _embedded: embedded,
+            origin: None,
+            broken: false,
+            reactivate: None,
+            epoch: None,
         }
+    }
+
+    /// On reconnecting after a port failure, activate a controller found in terminal mode
+    /// (as `trol init` does) with this tool transform; `None` (the default) leaves that to
+    /// the user.
+    pub fn set_reactivate(&mut self, tool: Option<[f64; 6]>) {
+        self.reactivate = tool;
+    }
+
+    /// The controller's epoch as last seen by GetStatus: it changes when the controller
+    /// restarts (its exactly-once memory is then gone).
+    pub fn controller_epoch(&self) -> Option<u16> {
+        self.epoch
+    }
+
+    /// Open the port again now (after a failure, or when the controller restarted), check the
+    /// server with GetStatus, and activate it if it is in terminal mode and
+    /// [`Robot::set_reactivate`] allows.
+    pub fn reconnect(&mut self) -> Result<()> {
+        let Some((name, settings)) = self.origin.clone() else {
+            return Err(SetupError::NoServer(
+                "this connection was not opened by a port name, so it cannot be opened again"
+                    .into(),
+            )
+            .into());
+        };
+        let port = trol_port::open(&name, &settings).map_err(SetupError::Port)?;
+        self.transactor.replace_port(port);
+        self.broken = false;
+        match self.status_record() {
+            Ok(_) => Ok(()),
+            Err(e) => match self.reactivate {
+                Some(tool) => crate::activate(self, &tool),
+                None => Err(e),
+            },
+        }
+    }
+
+    /// Before a call: a failed port is opened again.
+    fn mend(&mut self) -> Result<()> {
+        if self.broken {
+            self.reconnect()
+        } else {
+            Ok(())
+        }
+    }
+
+    /// TransSR with the reconnection bookkeeping: a port failure marks the connection broken.
+    fn trans(&mut self, command: &'static str, request: &[u8]) -> Result<Vec<u8>> {
+        self.mend()?;
+        self.transactor.trans_sr(request).map_err(|error| {
+            if matches!(error, TransError::Io(_)) && self.origin.is_some() {
+                self.broken = true;
+            }
+            Error::Link { command, error }
+        })
     }
 
     /// Know a command an application added (docs/extending.md): [`Robot::call`] takes it,
@@ -315,9 +385,7 @@ impl Robot {
     /// TransSR (layer 3): send any request's bytes and return the reply's bytes, unchecked.
     pub fn transact_raw(&mut self, request: &[u8]) -> Result<Vec<u8>> {
         let command = self.name_of(request);
-        self.transactor
-            .trans_sr(request)
-            .map_err(|error| Error::Link { command, error })
+        self.trans(command, request)
     }
 
     /// The manual's Cat1Transaction: send a CAT1 request's bytes; its one-word reply is
@@ -348,13 +416,7 @@ impl Robot {
     /// that `def` does not count as success is [`Error::Refused`].
     pub fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<Reply> {
         let request = record::encode(def, args)?;
-        let bytes = self
-            .transactor
-            .trans_sr(&request)
-            .map_err(|error| Error::Link {
-                command: def.name,
-                error,
-            })?;
+        let bytes = self.trans(def.name, &request)?;
         let reply = Reply::decode(def, &bytes)?;
         match reply {
             // These carry data, not a return value: a refusal comes as a bare code.
@@ -564,12 +626,15 @@ impl Robot {
                 last,
                 transaction,
                 epoch,
-            } => Ok(StatusRecord {
-                bios_called,
-                last,
-                transaction,
-                epoch,
-            }),
+            } => {
+                self.epoch = Some(epoch);
+                Ok(StatusRecord {
+                    bios_called,
+                    last,
+                    transaction,
+                    epoch,
+                })
+            }
             other => Err(Error::BadReply {
                 command: def.name,
                 len: other.encode().len(),

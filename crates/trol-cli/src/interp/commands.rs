@@ -53,6 +53,16 @@ pub const OWN: &[(&str, &str, &str)] = &[
         "ms:0..600000",
         "wait (the manual's delay(), e.g. for the gripper)",
     ),
+    (
+        "init",
+        "",
+        "activate the controller's TROL server (as trol init), with trol.cfg's tool",
+    ),
+    (
+        "reconnect",
+        "",
+        "open the port again and check the server (after the controller restarted)",
+    ),
     ("quit", "", "leave the interpreter (also exit, or Ctrl-D)"),
 ];
 
@@ -69,6 +79,10 @@ pub enum Action {
     Delay(u64),
     /// quit.
     Quit,
+    /// init: activate the controller.
+    Init,
+    /// reconnect: open the port again.
+    Reconnect,
 }
 
 fn kind_word(tag: Tag) -> &'static str {
@@ -131,6 +145,14 @@ pub fn parse(tokens: &[Token], line_len: usize, catalog: &Catalog) -> Result<Act
         "quit" | "exit" => {
             cur.finish(&lower)?;
             return Ok(Action::Quit);
+        }
+        "init" => {
+            cur.finish("init")?;
+            return Ok(Action::Init);
+        }
+        "reconnect" => {
+            cur.finish("reconnect")?;
+            return Ok(Action::Reconnect);
         }
         "delay" => {
             let ms = cur.int("ms", 0, 600_000, "delay")?;

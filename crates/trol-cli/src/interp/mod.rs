@@ -74,6 +74,38 @@ impl Session {
         Ok(self.robot.as_mut().expect("connected"))
     }
 
+    /// `init`: activate the controller's server with trol.cfg's tool, as
+    /// `trol init` does; the connection opened here is kept for what follows.
+    fn init(&mut self) -> Result<(), String> {
+        let cfg = self.conn.config()?;
+        if self.robot.is_none() {
+            let mut robot = Robot::from_config(&cfg).map_err(|e| e.to_string())?;
+            for def in self.catalog.iter() {
+                if robot.catalog().get(def.code).is_none() {
+                    robot.add_command(*def).map_err(|e| e.to_string())?;
+                }
+            }
+            self.robot = Some(robot);
+        }
+        let robot = self.robot.as_mut().expect("connected");
+        // From now on a reconnect activates a restarted controller again.
+        robot.set_reactivate(Some(cfg.tool));
+        match trol::activate(robot, &cfg.tool) {
+            Ok(()) => Ok(()),
+            // The port itself may be dead (the controller restarted): open it again.
+            Err(first) => robot.reconnect().map_err(|_| first.to_string()),
+        }
+    }
+
+    /// `reconnect`: open the port again and check the server.
+    fn reconnect(&mut self) -> Result<(), String> {
+        match self.robot.as_mut() {
+            Some(robot) => robot.reconnect().map_err(|e| e.to_string()),
+            // Not connected yet: connecting is the reconnect.
+            None => self.robot().map(|_| ()),
+        }
+    }
+
     /// Run one line; print its result to stdout, or its error to stderr after `origin`.
     fn line(&mut self, line: &str, origin: &str, echo: bool) -> Outcome {
         let parsed = scanner::scan(line)
@@ -93,6 +125,21 @@ impl Session {
         match action {
             Action::Nothing => Outcome::Ok,
             Action::Quit => Outcome::Quit,
+            Action::Init | Action::Reconnect => {
+                let init = matches!(action, Action::Init);
+                let result = if init { self.init() } else { self.reconnect() };
+                let what = if init { "init" } else { "reconnect" };
+                match result {
+                    Ok(()) => {
+                        println!("{what}  ->  the controller's TROL server answers");
+                        Outcome::Ok
+                    }
+                    Err(e) => {
+                        eprintln!("{}error: {what} failed: {e}", prefix(origin));
+                        Outcome::Failed
+                    }
+                }
+            }
             Action::Help(topic) => match help(&self.catalog, topic.as_deref()) {
                 Ok(text) => {
                     println!("{text}");

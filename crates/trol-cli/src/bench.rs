@@ -136,9 +136,9 @@ fn print_report<R: Serialize>(
 ) -> Result<(), String> {
     if json {
         let out = serde_json::to_string_pretty(r).map_err(|e| e.to_string())?;
-        println!("{out}");
+        say!("{out}");
     } else {
-        println!("{}", text(r));
+        say!("{}", text(r));
     }
     Ok(())
 }

@@ -3,6 +3,7 @@
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::Args;
@@ -116,4 +117,67 @@ pub fn waiting<T>(label: &str, f: impl FnOnce() -> T) -> T {
     let out = f();
     pb.finish_and_clear();
     out
+}
+
+/// Ctrl-C while the arm works: the first one asks the running wait to halt the arm and give
+/// the prompt back ([`interrupted`]); a second one, before the prompt is back, quits (status
+/// 130). Installed once by the subcommands that move the arm.
+static INTERRUPT: AtomicBool = AtomicBool::new(false);
+
+/// Catch Ctrl-C as [`INTERRUPT`] says. Without a handler (it could not be installed) Ctrl-C
+/// ends the process as usual.
+pub fn catch_interrupts() {
+    let installed = ctrlc::set_handler(|| {
+        if INTERRUPT.swap(true, Ordering::SeqCst) {
+            eprintln!("\ninterrupted twice: quitting");
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: halting the arm (Ctrl-C again quits)");
+    });
+    if let Err(e) = installed {
+        tracing::warn!("Ctrl-C will end the program without halting the arm: {e}");
+    }
+}
+
+/// The flag Ctrl-C sets, for [`trol::Robot::finish_unless`].
+pub fn interrupted() -> &'static AtomicBool {
+    &INTERRUPT
+}
+
+/// Forget a Ctrl-C (back at the prompt, or before the next step).
+pub fn clear_interrupt() {
+    INTERRUPT.store(false, Ordering::SeqCst);
+}
+
+/// Sleep `d`, cut short by Ctrl-C (true when it was).
+pub fn sleep_unless_interrupted(d: Duration) -> bool {
+    let end = std::time::Instant::now() + d;
+    loop {
+        if INTERRUPT.load(Ordering::SeqCst) {
+            return true;
+        }
+        let left = end.saturating_duration_since(std::time::Instant::now());
+        if left.is_zero() {
+            return false;
+        }
+        std::thread::sleep(left.min(trol::POLL));
+    }
+}
+
+/// Set when a write to stdout failed (the reader went away).
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// One line to stdout (the [`say!`] macro); a closed stdout is noted, not a panic.
+pub fn say(line: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
+        STDOUT_CLOSED.store(true, Ordering::SeqCst);
+    }
+}
+
+/// Whether nobody reads stdout any more: the demo and the interpreter then halt the arm and
+/// stop, rather than move it unwatched; the simulator goes on serving.
+pub fn stdout_closed() -> bool {
+    STDOUT_CLOSED.load(Ordering::SeqCst)
 }

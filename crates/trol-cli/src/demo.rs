@@ -7,7 +7,10 @@ use clap::Args;
 use trol::{PosMode, Robot, Tag};
 use trol_a465::arm::{Stored, WorldObject};
 
-use crate::common::{Conn, waiting};
+use trol_proto::application::record::Value;
+use trol_proto::application::table;
+
+use crate::common::{Conn, catch_interrupts, interrupted, stdout_closed, waiting};
 
 #[derive(Args, Debug)]
 #[command(after_help = "\
@@ -44,24 +47,28 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                 width: 30.0,
             });
         }
-        println!(
+        say!(
             "trol demo: the manual's pick example on the embedded simulator ({}x real time)",
             settings.time_scale
         );
-        println!(
+        say!(
             "  motion commands return as soon as the controller accepted them; the arm moves \
              on while the program goes on, until TROLFinish(FINISH_WAIT) waits for it"
         );
         Robot::embedded(settings)
     } else {
         let (robot, _) = a.conn.robot()?;
-        println!("trol demo: the manual's pick example on {}", cfg.port);
+        say!("trol demo: the manual's pick example on {}", cfg.port);
         robot
     };
     type Step = (&'static str, fn(&mut Robot) -> trol::Result<()>);
     let steps: &[Step] = &[
-        ("TROLHome(0)", |r| r.home(0)),
-        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLHome(0)", |r| {
+            // Home, waiting as TROLHome does, but so that Ctrl-C halts the arm.
+            r.call(&table::HOME, &[Value::Int(0)])?;
+            r.finish_unless(interrupted()).map(drop)
+        }),
+        ("TROLFinish(FINISH_WAIT)", finish),
         ("TROLOpen(50)", |r| r.open_gripper(50)),
         // From READY (upright) the tool must turn over to point down: a joint-interpolated
         // approach first, then the manual's straight one.
@@ -74,12 +81,13 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         ("TROLMove(\"test_001\", straight)", |r| {
             r.move_to("test_001", true)
         }),
-        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLFinish(FINISH_WAIT)", finish),
         ("TROLClose(60)", |r| r.close(60)),
-        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLFinish(FINISH_WAIT)", finish),
         ("TROLDepart(x -90, straight)", |r| r.depart(&[-90.0], true)),
-        ("TROLFinish(FINISH_WAIT)", |r| r.finish()),
+        ("TROLFinish(FINISH_WAIT)", finish),
     ];
+    catch_interrupts();
     let mut failed = 0;
     for (i, (name, f)) in steps.iter().enumerate() {
         let result = waiting(name, || f(&mut robot));
@@ -88,22 +96,33 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
             Err(e) => e.to_string(),
         };
         let moving = robot.is_moving().unwrap_or(false);
-        println!(
+        say!(
             "{:>2}/{} {name:<44} -> {outcome:<14} arm at {}{}",
             i + 1,
             steps.len(),
             where_is(&mut robot),
             if moving { ", moving" } else { "" }
         );
+        if stdout_closed() {
+            // Nobody watches any more: stop the arm rather than move it unseen.
+            let _ = robot.halt();
+            eprintln!("trol demo: stdout closed; Halt sent, stopping");
+            return Ok(ExitCode::FAILURE);
+        }
+        if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+            let _ = robot.finish_unless(interrupted());
+            say!("trol demo: interrupted: Halt sent, the arm has stopped");
+            return Ok(ExitCode::from(130));
+        }
         if result.is_err() {
             failed += 1;
-            println!("trol demo: stopped at the failed step");
+            say!("trol demo: stopped at the failed step");
             break;
         }
         // Show the arm moving after a command that returned before its motion ended.
         if moving && !name.starts_with("TROLFinish") {
             std::thread::sleep(std::time::Duration::from_millis(100));
-            println!(
+            say!(
                 "      {:<44}    {:<14} arm at {}",
                 "(0.1 s later, the program not waiting)",
                 "",
@@ -112,15 +131,20 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         }
     }
     if let Some(world) = robot.world() {
-        println!("trol demo: {world}");
+        say!("trol demo: {world}");
     }
     if failed == 0 {
-        println!("trol demo: all {} steps succeeded", steps.len());
+        say!("trol demo: all {} steps succeeded", steps.len());
         Ok(ExitCode::SUCCESS)
     } else {
-        println!("trol demo: {failed} of {} steps failed", steps.len());
+        say!("trol demo: {failed} of {} steps failed", steps.len());
         Ok(ExitCode::FAILURE)
     }
+}
+
+/// TROLFinish(FINISH_WAIT), polled; Ctrl-C halts the arm.
+fn finish(r: &mut Robot) -> trol::Result<()> {
+    r.finish_unless(interrupted()).map(drop)
 }
 
 /// Where the tool is, commanded.

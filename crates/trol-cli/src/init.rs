@@ -12,7 +12,7 @@ const CHECK: &str = "check that the controller is on and connected to this port,
 pub fn init(conn: &Conn) -> Result<(), String> {
     let cfg = conn.config()?;
     if cfg.port == "sim" {
-        println!(
+        say!(
             "port sim: the embedded simulator runs inside each program and starts active; \
              there is nothing to activate. Give --port (or set it in trol.cfg) to activate a \
              controller on a line."
@@ -22,9 +22,11 @@ pub fn init(conn: &Conn) -> Result<(), String> {
     let mut robot =
         Robot::open_with(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
     trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
-    println!(
+    say!(
         "the TROL server on {} is active (baud {}, tool transform {:?})",
-        cfg.port, cfg.baud, cfg.tool
+        cfg.port,
+        cfg.baud,
+        cfg.tool
     );
     Ok(())
 }
@@ -32,7 +34,7 @@ pub fn init(conn: &Conn) -> Result<(), String> {
 pub fn cleanup(conn: &Conn) -> Result<(), String> {
     let cfg = conn.config()?;
     if cfg.port == "sim" {
-        println!("port sim: the embedded simulator ends with each program; nothing to end.");
+        say!("port sim: the embedded simulator ends with each program; nothing to end.");
         return Ok(());
     }
     let mut robot =
@@ -43,7 +45,7 @@ pub fn cleanup(conn: &Conn) -> Result<(), String> {
              init`)? Also {CHECK}"
         )
     })?;
-    println!(
+    say!(
         "the TROL server on {} has ended; the controller is back in terminal mode",
         cfg.port
     );

@@ -132,13 +132,15 @@ pub fn run(a: LinkArgs) -> Result<(), String> {
         };
         let mut robot = Robot::over(ctl.port, LinkConfig::for_line(a.baud, Duration::ZERO), None);
         trol::activate(&mut robot, &tool).map_err(|e| format!("activating the controller: {e}"))?;
-        println!("trol link: the TROL server on {} is active", a.controller);
+        say!("trol link: the TROL server on {} is active", a.controller);
         ctl.port = robot.into_port();
     }
     let mut app = open_side(&a.application, a.baud, Side::Application)?;
-    println!(
+    say!(
         "trol link: relaying {} <-> {} (applications use {})",
-        a.controller, a.application, app.name
+        a.controller,
+        a.application,
+        app.name
     );
     relay(&mut ctl.port, &mut app.port, &mut |from_app, chunk| {
         tracing::debug!(

@@ -1,6 +1,14 @@
 //! `trol`: the TROL utilities in one binary (the manual's "Installation von TROL": inittrol,
 //! cluptrol, interp, link, protest), plus the simulator, a tracer, benchmarks and a demo.
 
+/// `println!` that does not panic when nobody reads stdout any more (`trol demo | head -1`):
+/// the line is dropped and [`common::stdout_closed`] says so from then on.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::common::say(format_args!($($arg)*))
+    };
+}
+
 mod bench;
 mod common;
 mod demo;
@@ -64,13 +72,13 @@ enum Command {
 fn ports() -> Result<(), String> {
     let list = trol_port::serial::list().map_err(|e| format!("cannot list the ports: {e}"))?;
     if list.is_empty() {
-        println!(
+        say!(
             "no serial ports found (a USB adapter shows up as /dev/ttyUSB0 or COMn once \
              plugged in; `trol sim` makes a pty to try things with)"
         );
     }
     for (name, what) in list {
-        println!("{name:<24} {what}");
+        say!("{name:<24} {what}");
     }
     Ok(())
 }

@@ -97,8 +97,8 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     // A new pty or a listening socket, like the application's side of a relay.
     let opened = open_side(&a.port, a.baud, Side::Application)?;
     let name = opened.name.clone();
-    println!("trol sim: serving on {name}");
-    println!(
+    say!("trol sim: serving on {name}");
+    say!(
         "  {} mode, time scale {}, table at z = {} mm, {} location(s), {}",
         if a.server { "server" } else { "terminal" },
         a.time_scale,
@@ -107,7 +107,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         if a.homed { "homed" } else { "not homed" }
     );
     if !a.server {
-        println!("  activate it with: trol init --port {name}");
+        say!("  activate it with: trol init --port {name}");
     }
     let cfg = LinkConfig {
         check: a.check,
@@ -134,25 +134,25 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             catalog.reply_text(e.request, e.reply, codes),
         );
         match e.event {
-            ServerEvent::Executed => println!("{req} -> {reply}"),
+            ServerEvent::Executed => say!("{req} -> {reply}"),
             ServerEvent::Repeated => {
-                println!("{req} -> {reply} (a repeat: answered from memory, not run again)")
+                say!("{req} -> {reply} (a repeat: answered from memory, not run again)")
             }
             ServerEvent::ReplyFailed(err) => {
-                println!("{req} -> {reply} (the reply was lost: {err})")
+                say!("{req} -> {reply} (the reply was lost: {err})")
             }
             ServerEvent::ReplyTooLong { len } => {
-                println!("{req} -> a reply of {len} bytes, too long to send")
+                say!("{req} -> a reply of {len} bytes, too long to send")
             }
             ServerEvent::ReceiveFailed(err) => {
-                println!("a request could not be received: {err}")
+                say!("a request could not be received: {err}")
             }
             ServerEvent::Idle | ServerEvent::Pending => {}
         }
         // Where the world's objects are, whenever that changed.
         if e.world.is_some() && e.world != last_world {
             if let Some(w) = &e.world {
-                println!("  world: {w}");
+                say!("  world: {w}");
             }
             last_world = e.world.clone();
         }
@@ -164,7 +164,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             .map_err(|e| format!("the line failed: {e}"))?;
         if controller.mode() != last_mode {
             last_mode = controller.mode();
-            println!(
+            say!(
                 "{}",
                 match last_mode {
                     Mode::Server => "activated: serving TROL",

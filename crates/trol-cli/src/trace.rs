@@ -371,7 +371,7 @@ pub fn run(t: Trace) -> Result<(), String> {
             let catalog = trol::described::catalog(a.commands.as_deref())?;
             let mut ctl = open_side(&a.controller, a.baud, Side::Controller)?;
             let mut app = open_side(&a.application, a.baud, Side::Application)?;
-            println!("trol trace: application on {}", app.name);
+            say!("trol trace: application on {}", app.name);
             let mut capture = match &a.capture {
                 Some(p) => Some(std::io::BufWriter::new(
                     std::fs::File::create(p)

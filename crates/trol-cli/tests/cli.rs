@@ -678,3 +678,140 @@ fn interp_init_and_reconnect_carry_a_session_across_a_controller_restart() {
     assert_eq!(status.code(), Some(1), "{status:?}");
     drop(sim);
 }
+
+/// Ctrl-C while a script waits in `finish`: the arm is halted short of its target, and the
+/// interpreter ends with status 130.
+#[test]
+fn ctrl_c_during_a_wait_halts_the_arm() {
+    let dir = scratch("ctrl-c");
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--server",
+            "--homed",
+        ],
+        "serving on ",
+    );
+    // A long move in real time (joint 1 by 2.5 rad at 20 % takes seconds), then the wait.
+    let mut interp = std::process::Command::new(common::TROL)
+        .args(["interp", "--port", &sim.name])
+        .current_dir(&dir)
+        .env_remove("TROL_CONFIG")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::Write;
+        let mut input = interp.stdin.take().unwrap();
+        input
+            .write_all(b"speed 20\njoint 1 2.5\nfinish wait\n")
+            .unwrap();
+    }
+    // Once the move was accepted (the interpreter is then in the wait, or about to be).
+    let mut stdout = std::io::BufReader::new(interp.stdout.take().unwrap());
+    let mut out = String::new();
+    while !out.contains("joint 1 2.5  ->") {
+        use std::io::BufRead;
+        let mut line = String::new();
+        if stdout.read_line(&mut line).unwrap() == 0 {
+            break;
+        }
+        out.push_str(&line);
+    }
+    assert!(out.contains("joint 1 2.5  ->  0"), "{out}");
+    std::thread::sleep(Duration::from_millis(300));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &interp.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = interp.wait_with_output().unwrap();
+    let (_, err) = text(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    // The arm stands still, short of the target.
+    let o = trol(
+        &dir,
+        &["interp", "--port", &sim.name],
+        "finish status\ngetposition joint actual\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("finish status  ->  0"), "not at rest: {out}");
+    let q1: f64 = out
+        .split("j(")
+        .nth(1)
+        .and_then(|s| s.split(',').next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no joint position in {out}"));
+    assert!(
+        q1 > 0.0 && q1 < 2.4,
+        "joint 1 at {q1}: not halted on the way"
+    );
+}
+
+/// `trol demo | head -1` and `trol sim --server | head -1`: no panic; the demo halts the arm
+/// and stops, the simulator goes on serving its client.
+#[test]
+fn a_closed_stdout_is_no_panic() {
+    use std::io::BufRead;
+    let dir = scratch("closed-stdout");
+    let first_line_then_close = |args: &[&str]| {
+        let mut child = std::process::Command::new(common::TROL)
+            .args(args)
+            .current_dir(&dir)
+            .env_remove("TROL_CONFIG")
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        std::io::BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut first)
+            .unwrap();
+        (child, first)
+    };
+    let (demo, first) = first_line_then_close(&["demo", "--time-scale", "50"]);
+    assert!(first.starts_with("trol demo:"), "{first}");
+    let o = demo.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("stdout closed"), "{err}");
+
+    let (mut sim, first) = first_line_then_close(&[
+        "sim",
+        "--port",
+        "listen://127.0.0.1:0",
+        "--server",
+        "--homed",
+    ]);
+    let port = first
+        .split_whitespace()
+        .find(|w| w.starts_with("socket://"))
+        .unwrap_or_else(|| panic!("no address in {first:?}"))
+        .to_string();
+    // Each call is logged on the closed stdout; the simulator serves them all.
+    let o = trol(
+        &dir,
+        &["interp", "--port", &port],
+        "getstatus\njoint 1 0.1\nfinish wait\ngetstatus\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        sim.try_wait().unwrap().is_none(),
+        "the simulator ended: {:?}",
+        sim.wait_with_output()
+    );
+    sim.kill().unwrap();
+    let o = sim.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}

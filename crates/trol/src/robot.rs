@@ -2,6 +2,7 @@
 //! a thin skin over [`Robot::call`], which works from the command's description.
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use trol_comm::{DefaultHandlers, ErrorHandlers, ExtraWait, TransError, Transactor};
@@ -112,6 +113,15 @@ impl From<ReplyError> for Error {
             len: e.len,
         }
     }
+}
+
+/// How [`Robot::finish_unless`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Waited {
+    /// The arm and the gripper came to rest.
+    Idle,
+    /// The wait was cancelled: Halt was sent and the arm has stopped.
+    Halted,
 }
 
 /// Results of the API.
@@ -487,6 +497,25 @@ impl Robot {
             std::thread::sleep(POLL);
         }
         Ok(())
+    }
+
+    /// [`Robot::finish`] that gives up when `cancel` becomes true (set from a Ctrl-C handler or
+    /// another thread): it then sends Halt, waits for the arm to brake to a stop, and returns
+    /// [`Waited::Halted`]. `cancel` is left as it is; the caller resets it.
+    pub fn finish_unless(&mut self, cancel: &AtomicBool) -> Result<Waited> {
+        loop {
+            if cancel.load(Ordering::SeqCst) {
+                self.halt()?;
+                while self.is_moving()? {
+                    std::thread::sleep(POLL);
+                }
+                return Ok(Waited::Halted);
+            }
+            if !self.is_moving()? {
+                return Ok(Waited::Idle);
+            }
+            std::thread::sleep(POLL);
+        }
     }
 
     /// One poll of a wait for the arm: whether it still moves. A program that shares the

@@ -11,11 +11,14 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
-use trol::Robot;
+use trol::{Robot, Waited};
 use trol_proto::application::record::{self, Value};
-use trol_proto::application::{Catalog, CommandDef};
+use trol_proto::application::{Catalog, CommandDef, table};
 
-use crate::common::{Conn, waiting};
+use crate::common::{
+    Conn, catch_interrupts, clear_interrupt, interrupted, sleep_unless_interrupted, stdout_closed,
+    waiting,
+};
 use commands::{Action, OWN, usage};
 
 #[derive(Args, Debug)]
@@ -131,7 +134,7 @@ impl Session {
                 let what = if init { "init" } else { "reconnect" };
                 match result {
                     Ok(()) => {
-                        println!("{what}  ->  the controller's TROL server answers");
+                        say!("{what}  ->  the controller's TROL server answers");
                         Outcome::Ok
                     }
                     Err(e) => {
@@ -142,7 +145,7 @@ impl Session {
             }
             Action::Help(topic) => match help(&self.catalog, topic.as_deref()) {
                 Ok(text) => {
-                    println!("{text}");
+                    say!("{text}");
                     Outcome::Ok
                 }
                 Err(text) => {
@@ -151,24 +154,29 @@ impl Session {
                 }
             },
             Action::Delay(ms) => {
-                waiting("delay", || std::thread::sleep(Duration::from_millis(ms)));
+                if waiting("delay", || {
+                    sleep_unless_interrupted(Duration::from_millis(ms))
+                }) {
+                    eprintln!("{}error: delay interrupted", prefix(origin));
+                    return Outcome::Failed;
+                }
                 if echo {
-                    println!("{}  ->  done", line.trim());
+                    say!("{}  ->  done", line.trim());
                 }
                 Outcome::Ok
             }
             Action::Call(def, args) => match self.call(&def, &args) {
                 Ok(text) => {
                     if echo {
-                        println!("{}  ->  {text}", line.trim());
+                        say!("{}  ->  {text}", line.trim());
                     } else {
-                        println!("{text}");
+                        say!("{text}");
                     }
                     Outcome::Ok
                 }
                 Err(text) => {
                     if echo {
-                        println!("{}  ->  {text}", line.trim());
+                        say!("{}  ->  {text}", line.trim());
                     }
                     eprintln!("{}error: {} failed: {text}", prefix(origin), def.name);
                     Outcome::Failed
@@ -180,6 +188,29 @@ impl Session {
     /// One API call: Ok(result text) or Err(result text) when it failed.
     fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<String, String> {
         let robot = self.robot()?;
+        // The waits: polled, and Ctrl-C halts the arm and gives the prompt back.
+        let wait = def.code == table::FINISH.code
+            && matches!(args.first(), Some(Value::Int(v)) if *v == table::FINISH_WAIT);
+        if wait || def.code == table::HOME.code {
+            let describe = |e: trol::Error, robot: &Robot| {
+                format!("{}: {e}", e.code().describe(robot.codes()))
+            };
+            if !wait {
+                // The controller answers Home at once; the wait for the homing follows.
+                if let Err(e) = robot.call(def, args) {
+                    return Err(match e {
+                        trol::Error::Refused { code, .. } => code.describe(robot.codes()),
+                        e => describe(e, robot),
+                    });
+                }
+            }
+            let label = format!("{} ... (Ctrl-C halts the arm)", def.name);
+            return match waiting(&label, || robot.finish_unless(interrupted())) {
+                Ok(Waited::Idle) => Ok(trol::Code(0).describe(robot.codes())),
+                Ok(Waited::Halted) => Err("interrupted: Halt sent, the arm has stopped".into()),
+                Err(e) => Err(describe(e, robot)),
+            };
+        }
         let long = record::encode(def, args)
             .map(|bytes| def.extra_wait(&bytes) != Some(Duration::ZERO))
             .unwrap_or(false);
@@ -258,6 +289,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
         robot: None,
         catalog: trol::described::catalog(a.commands.as_deref())?,
     };
+    catch_interrupts();
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
     if interactive {
         return repl(&mut session);
@@ -277,7 +309,26 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     for (n, line) in reader.lines().enumerate() {
         let line = line.map_err(|e| format!("{name}: {e}"))?;
         let origin = format!("{name}:{}:", n + 1);
-        match session.line(&line, &origin, true) {
+        let outcome = session.line(&line, &origin, true);
+        if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+            // Ctrl-C ends a script; the arm is halted whatever the line was doing.
+            if let Some(robot) = session.robot.as_mut() {
+                let _ = robot.finish_unless(interrupted());
+            }
+            eprintln!("{name}: interrupted at line {}", n + 1);
+            return Ok(ExitCode::from(130));
+        }
+        if stdout_closed() {
+            if let Some(robot) = session.robot.as_mut() {
+                let _ = robot.halt();
+            }
+            eprintln!(
+                "{name}: stdout closed at line {}; Halt sent, stopping",
+                n + 1
+            );
+            return Ok(ExitCode::FAILURE);
+        }
+        match outcome {
             Outcome::Ok => {}
             Outcome::Quit => break,
             Outcome::Failed => {
@@ -360,14 +411,22 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
     if let Some(h) = &hist {
         let _ = rl.load_history(h);
     }
-    println!("TROL command interpreter. `help` lists the commands, Ctrl-D leaves.");
+    say!("TROL command interpreter. `help` lists the commands, Ctrl-D leaves.");
     loop {
         match rl.readline("trol> ") {
             Ok(line) => {
+                clear_interrupt();
                 if !line.trim().is_empty() {
                     let _ = rl.add_history_entry(line.as_str());
                 }
-                if let Outcome::Quit = session.line(&line, "", false) {
+                let outcome = session.line(&line, "", false);
+                if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+                    // Whatever the line did, the arm stops (a wait has halted it already).
+                    if let Some(robot) = session.robot.as_mut() {
+                        let _ = robot.finish_unless(interrupted());
+                    }
+                }
+                if let Outcome::Quit = outcome {
                     break;
                 }
             }

@@ -41,7 +41,14 @@ pub mod code {
     /// An axis or joint number outside 0..6 (Home) or 1..6 (Joint), or a value that is not
     /// a finite number.
     pub const BAD_ARGUMENT: i16 = -6;
+    /// The motion queue is full ([`super::MOTION_QUEUE`] motions accepted and not yet done):
+    /// wait (TROLFinish) and send the motion again.
+    pub const QUEUE_FULL: i16 = -7;
 }
+
+/// How many accepted motions (the one under way included) the controller holds before it
+/// refuses the next with `QUEUE_FULL` (assumption: the C500's own depth is not public).
+pub const MOTION_QUEUE: usize = 16;
 
 /// How close an object's position must be to the tool centre point for the closing fingers
 /// to take it, mm (assumption).
@@ -478,6 +485,9 @@ impl Arm {
             return code::BAD_ARGUMENT;
         }
         self.retire(now);
+        if let Err(c) = self.need_room() {
+            return c;
+        }
         let from = self.planned_end();
         let mut to = from;
         let axes: Vec<usize> = if axis == 0 {
@@ -575,10 +585,19 @@ impl Arm {
 
     fn need_homed(&mut self, now: f64) -> Result<(), i16> {
         self.retire(now);
-        if self.homed.iter().all(|h| *h) {
-            Ok(())
-        } else {
+        if !self.homed.iter().all(|h| *h) {
             Err(code::NOT_HOMED)
+        } else {
+            self.need_room()
+        }
+    }
+
+    /// Room in the motion queue for one more.
+    fn need_room(&self) -> Result<(), i16> {
+        if self.motions.len() >= MOTION_QUEUE {
+            Err(code::QUEUE_FULL)
+        } else {
+            Ok(())
         }
     }
 

@@ -1,6 +1,6 @@
 //! The simulated arm in time.
 
-use trol_a465::arm::{Arm, ArmSettings, Target, Which, code, joint_limits};
+use trol_a465::arm::{Arm, ArmSettings, MOTION_QUEUE, Target, Which, code, joint_limits};
 
 fn homed_arm() -> Arm {
     Arm::new(ArmSettings {
@@ -453,4 +453,23 @@ fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
             "{bad}"
         );
     }
+}
+
+/// The motion queue is bounded: a motion beyond it is refused and changes nothing; once the
+/// arm has worked some off, motions are accepted again.
+#[test]
+fn a_full_motion_queue_refuses_the_next_motion_and_changes_nothing() {
+    let mut arm = homed_arm();
+    for _ in 0..MOTION_QUEUE {
+        assert_eq!(arm.joint(1, 0.01, 0.0), code::OK);
+    }
+    let planned = arm.planned_end();
+    let done = arm.done_at(0.0);
+    assert_eq!(arm.joint(1, 0.01, 0.0), code::QUEUE_FULL);
+    assert_eq!(arm.home(0, 0.0), code::QUEUE_FULL);
+    assert_eq!(arm.planned_end(), planned);
+    assert_eq!(arm.done_at(0.0), done);
+    // All done: the queue is empty again.
+    assert_eq!(arm.joint(1, 0.01, done), code::OK);
+    assert!((arm.planned_end()[0] - (MOTION_QUEUE as f64 + 1.0) * 0.01).abs() < 1e-9);
 }

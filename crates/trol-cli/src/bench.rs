@@ -32,6 +32,111 @@ pub enum Bench {
     ///
     /// Example: trol bench moves --speed 100 --json
     Moves(MovesArgs),
+    /// The whole stack over a damaged line (noise: bit errors both ways; cut: the line dead
+    /// at a random byte of each relative move; soak: mixed moves at time scale 1 for a
+    /// while), counting corrupted requests executed, corrupted replies accepted, lost and
+    /// repeated relative moves, and (soak) the memory used.
+    ///
+    /// Examples: trol bench faults --mode noise --ber 1e-3 --count 100000 --json
+    ///           trol bench faults --mode cut --side reply --count 1000 --recovery getstatus
+    ///           trol bench faults --mode soak --seconds 120
+    Faults(FaultsArgs),
+}
+
+#[derive(Args)]
+pub struct FaultsArgs {
+    /// What to do to the line.
+    #[arg(long, value_enum, default_value_t = crate::faults::FaultMode::Noise)]
+    mode: crate::faults::FaultMode,
+    /// Calls to make (noise, cut).
+    #[arg(long, default_value_t = 10_000)]
+    count: u64,
+    /// Bit error rate, each direction (noise).
+    #[arg(long, default_value_t = 1e-3, value_parser = ber)]
+    ber: f64,
+    /// Seed of the faults and the traffic: the same seed, the same run.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Which direction a cut hits (cut).
+    #[arg(long, value_enum, default_value_t = crate::faults::Side::Request)]
+    side: crate::faults::Side,
+    /// How the application recovers: the API's repeats, or the manual's GetStatus method.
+    #[arg(long, value_enum, default_value_t = crate::faults::Recovery::Api)]
+    recovery: crate::faults::Recovery,
+    /// The block check: crc16 (TROL's default) or lrc (the manual's).
+    #[arg(long, default_value = "crc16", value_parser = check)]
+    check: trol_proto::link::BlockCheck,
+    /// How long the line stays dead at each cut, ms (cut). The link's timeouts here are
+    /// 15 ms (a memory line): a cut up to about 60 ms is ridden through by the repeats, a
+    /// longer one ends in a clear failure.
+    #[arg(long, default_value_t = 60)]
+    cut_ms: u64,
+    /// How long to run, seconds (soak).
+    #[arg(long, default_value_t = 60.0, value_parser = crate::common::positive)]
+    seconds: f64,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+fn ber(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=0.1).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a bit error rate 0..0.1")),
+    }
+}
+
+fn check(s: &str) -> Result<trol_proto::link::BlockCheck, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "crc16" => Ok(trol_proto::link::BlockCheck::Crc16),
+        "lrc" => Ok(trol_proto::link::BlockCheck::Lrc),
+        _ => Err(format!("`{s}` is not a block check: crc16 or lrc")),
+    }
+}
+
+fn faults(a: FaultsArgs) -> Result<(), String> {
+    let plan = crate::faults::Plan {
+        mode: a.mode,
+        count: a.count,
+        ber: a.ber,
+        seed: a.seed,
+        side: a.side,
+        recovery: a.recovery,
+        check: a.check,
+        seconds: a.seconds,
+        cut_length: Duration::from_millis(a.cut_ms),
+    };
+    let r = crate::faults::run(&plan)?;
+    print_report(&r, a.json, |r| {
+        let mut t = format!(
+            "{} ({} check, recovery {}), seed {}: {} calls in {:.1} s, {} failed\n",
+            r.mode, r.check, r.recovery, r.seed, r.transactions, r.seconds, r.failed_calls
+        );
+        if r.mode == "soak" {
+            t += &format!(
+                "  memory: {} kB at the start, {} kB at the end",
+                r.rss_start_kb.map_or("?".into(), |v| v.to_string()),
+                r.rss_end_kb.map_or("?".into(), |v| v.to_string())
+            );
+            return t;
+        }
+        if r.mode == "noise" {
+            t += &format!("  BER {}: {} bits flipped\n", r.ber, r.flipped_bits);
+        } else {
+            t += &format!("  {} cuts of {} ms\n", r.cuts, r.cut_ms);
+        }
+        t += &format!(
+            "  corrupted requests executed: {}\n  corrupted replies accepted: {}\n  \
+             relative moves: {}, lost {}, repeated {}, failed but ran {}",
+            r.corrupted_requests_executed,
+            r.corrupted_replies_accepted,
+            r.relative_moves,
+            r.lost_moves,
+            r.repeated_moves,
+            r.failed_but_ran
+        );
+        t
+    })
 }
 
 #[derive(Args)]
@@ -149,6 +254,7 @@ pub fn run(b: Bench) -> Result<(), String> {
         Bench::Ik(a) => ik(a),
         Bench::Transact(a) => transact(a),
         Bench::Moves(a) => moves(a),
+        Bench::Faults(a) => faults(a),
     }
 }
 

@@ -12,6 +12,7 @@ macro_rules! say {
 mod bench;
 mod common;
 mod demo;
+mod faults;
 mod init;
 mod interp;
 mod link;

@@ -4,7 +4,7 @@ use std::io;
 use std::time::Duration;
 
 use trol_port::Port;
-use trol_proto::link::{LinkConfig, LinkError};
+use trol_proto::link::{LinkConfig, LinkError, SendError};
 use trol_proto::transaction::{Decision, Failure, Initiator, InitiatorEvent, TransCode};
 
 use crate::channel::LineChannel;
@@ -87,6 +87,11 @@ impl<P: Port> Transactor<P> {
     /// manual's behaviour: the call fails, and the application asks GetStatus.
     pub fn set_repeats(&mut self, repeats: u8) {
         self.repeats = repeats;
+    }
+
+    /// How often a failed request is sent again ([`Transactor::set_repeats`]).
+    pub fn repeats(&self) -> u8 {
+        self.repeats
     }
 
     /// The number of the current (or last) transaction (the PCI's low byte).
@@ -187,9 +192,15 @@ impl<P: Port> Transactor<P> {
                     });
                 }
                 Some(InitiatorEvent::Failed(code)) => {
-                    // The reply did not come: send the request again, marked as a repeat.
-                    let lost_reply = matches!(code, TransCode::Timeout | TransCode::ErrReceive);
-                    if (lost_reply || first_failure.is_some()) && repeated < self.repeats {
+                    // The request or the reply was lost: send the request again, marked as
+                    // a repeat. Safe either way: a controller that executed it answers the
+                    // repeat from memory, one that never got it executes it now. A request
+                    // the controller refused outright (a fatal NAK) is not sent again.
+                    let refused = matches!(
+                        self.last_comm_error(),
+                        Some(LinkError::Send(SendError::Nak(_)))
+                    );
+                    if !refused && repeated < self.repeats {
                         first_failure.get_or_insert(code);
                         repeated += 1;
                         let now = self.driver.clock().now();

@@ -212,6 +212,8 @@ impl ErrorHandlers for Counting {
 fn a_replaced_err_on_send_is_asked_and_can_retry() {
     let (a, _b) = memory::pair(None);
     let mut t = Transactor::new(a, quick_link());
+    // The manual's behaviour: no repeats, the handler alone decides.
+    t.set_repeats(0);
     let sends = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
     t.set_handlers(Box::new(Counting {
         sends: sends.clone(),
@@ -220,6 +222,12 @@ fn a_replaced_err_on_send_is_asked_and_can_retry() {
     assert_eq!(err.code(), TransCode::ErrSend);
     // Asked three times: two retries, then it gave up.
     assert_eq!(sends.load(std::sync::atomic::Ordering::SeqCst), 3);
+    // With TROL's repeats (the default) the request is sent again after it gave up, and
+    // the handler is asked about each new attempt.
+    t.set_repeats(2);
+    let before = sends.load(std::sync::atomic::Ordering::SeqCst);
+    assert_eq!(t.trans_sr(b"again").unwrap_err().code(), TransCode::ErrSend);
+    assert!(sends.load(std::sync::atomic::Ordering::SeqCst) - before > 3);
 }
 
 #[test]

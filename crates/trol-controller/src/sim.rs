@@ -69,6 +69,11 @@ pub const SIM_CODES: &CodeTable = &[
         name: "BIOS_BAD_ARGUMENT",
         meaning: "an axis number out of range or a value that is not a number",
     },
+    CodeInfo {
+        value: code::QUEUE_FULL,
+        name: "BIOS_QUEUE_FULL",
+        meaning: "the motion queue is full: wait with TROLFinish, then send the motion again",
+    },
 ];
 
 /// The simulated A465 as a backend.

@@ -82,7 +82,12 @@ pub fn describe(value: i16) -> String {
 
 /// Check that the server answers (InitTROL(1)): one GetStatus transaction.
 pub fn check_server(robot: &mut Robot) -> Result<()> {
-    robot.status().map(drop).map_err(|e| {
+    // A probe: one attempt, so that a controller in terminal mode is found out quickly.
+    let repeats = robot.transactor_mut().repeats();
+    robot.transactor_mut().set_repeats(0);
+    let status = robot.status();
+    robot.transactor_mut().set_repeats(repeats);
+    status.map(drop).map_err(|e| {
         Error::Setup(SetupError::NoServer(format!(
             "the controller's TROL server does not answer ({e}); check the cable and the port, \
              that the baud rate in trol.cfg matches the controller, and that `trol init` has \

@@ -290,7 +290,12 @@ impl Robot {
         let port = trol_port::open(&name, &settings).map_err(SetupError::Port)?;
         self.transactor.replace_port(port);
         self.broken = false;
-        match self.status_record() {
+        // A probe: one attempt, so that a controller in terminal mode is found out quickly.
+        let repeats = self.transactor.repeats();
+        self.transactor.set_repeats(0);
+        let probe = self.status_record();
+        self.transactor.set_repeats(repeats);
+        match probe {
             Ok(_) => Ok(()),
             Err(e) => match self.reactivate {
                 Some(tool) => crate::activate(self, &tool),

@@ -1,0 +1,87 @@
+//! Short, seeded runs of `trol bench faults` (the full runs and their figures are in
+//! docs/reliability.md): over a noisy line and a line cut at a random byte of every relative
+//! move, no corrupted request is executed, no corrupted reply is accepted, and no relative
+//! move is lost or runs twice, with the API's repeats and with the manual's GetStatus method.
+
+mod common;
+
+use common::{scratch, text, trol};
+
+fn run(args: &[&str]) -> serde_json::Value {
+    let dir = scratch("faults");
+    let mut all = vec!["bench", "faults", "--json"];
+    all.extend_from_slice(args);
+    let o = trol(&dir, &all, "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{args:?}: {out}\n{err}");
+    serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"))
+}
+
+fn n(r: &serde_json::Value, key: &str) -> u64 {
+    r[key].as_u64().unwrap_or_else(|| panic!("no {key} in {r}"))
+}
+
+fn assert_nothing_wrong(r: &serde_json::Value) {
+    for key in [
+        "corrupted_requests_executed",
+        "corrupted_replies_accepted",
+        "lost_moves",
+        "repeated_moves",
+    ] {
+        assert_eq!(n(r, key), 0, "{key}: {r:#}");
+    }
+    assert!(n(r, "relative_moves") > 0, "{r:#}");
+}
+
+#[test]
+fn a_noisy_line_neither_executes_nor_accepts_a_corrupted_block() {
+    let r = run(&[
+        "--mode", "noise", "--ber", "1e-3", "--count", "1500", "--seed", "7",
+    ]);
+    assert!(n(&r, "flipped_bits") > 100, "the line was noisy: {r:#}");
+    assert_nothing_wrong(&r);
+    let r = run(&[
+        "--mode", "noise", "--ber", "1e-2", "--count", "150", "--seed", "8",
+    ]);
+    assert!(n(&r, "flipped_bits") > 1000, "the line was noisy: {r:#}");
+    assert_nothing_wrong(&r);
+}
+
+#[test]
+fn cut_lines_lose_no_move_and_repeat_none() {
+    for side in ["request", "reply"] {
+        for recovery in ["api", "getstatus"] {
+            // 60 ms is ridden through by the repeats; 150 ms makes calls fail (and the
+            // GetStatus method then decides).
+            for cut in ["60", "150"] {
+                let r = run(&[
+                    "--mode",
+                    "cut",
+                    "--side",
+                    side,
+                    "--recovery",
+                    recovery,
+                    "--cut-ms",
+                    cut,
+                    "--count",
+                    "40",
+                    "--seed",
+                    "3",
+                ]);
+                assert!(n(&r, "cuts") > 10, "{r:#}");
+                // (How many calls fail depends on the machine's timing; the figures are
+                // in docs/reliability.md. What must never happen does not depend on it.)
+                assert_nothing_wrong(&r);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_soak_reports_the_memory_it_used() {
+    let r = run(&["--mode", "soak", "--seconds", "2"]);
+    assert!(n(&r, "transactions") > 100, "{r:#}");
+    if cfg!(target_os = "linux") {
+        assert!(n(&r, "rss_end_kb") > 0, "{r:#}");
+    }
+}

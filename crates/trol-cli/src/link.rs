@@ -13,7 +13,8 @@ use trol_proto::link::LinkConfig;
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol link /dev/ttyS0 listen://0.0.0.0:7000     # serial controller, applications over TCP
+  trol link /dev/ttyS0 listen://7000             # serial controller, applications on this machine over TCP
+  trol link /dev/ttyS0 listen://0.0.0.0:7000     # ... and from other machines (no authentication!)
   trol link /dev/ttyUSB0 /dev/ttyUSB1             # serial to serial
   trol link /dev/pts/3 pty                        # to a new pty (its path is printed)
 
@@ -24,13 +25,18 @@ pub struct LinkArgs {
     /// The application's side: a serial device, `pty` (a new pseudo-terminal), or
     /// listen://HOST:PORT.
     application: String,
-    /// Baud rate of serial devices.
-    #[arg(long, default_value_t = 9600)]
-    baud: u32,
+    /// The configuration file (default: $TROL_CONFIG, else ./trol.cfg, else the defaults):
+    /// its baud rate, tool transform and block check apply unless given here.
+    #[arg(long, value_name = "FILE")]
+    config: Option<std::path::PathBuf>,
+    /// Baud rate of serial devices (default: trol.cfg's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(300..=4_000_000))]
+    baud: Option<u32>,
     /// Do not activate the controller's TROL server first (it already is, or will be).
     #[arg(long)]
     no_init: bool,
-    /// With activation: the tool transform to set (x y z yaw pitch roll).
+    /// With activation: the tool transform to set (x y z yaw pitch roll; default:
+    /// trol.cfg's).
     #[arg(long, num_args = 6, value_name = "V", allow_negative_numbers = true)]
     tool: Option<Vec<f64>>,
 }
@@ -124,18 +130,28 @@ pub fn relay(
 }
 
 pub fn run(a: LinkArgs) -> Result<(), String> {
-    let mut ctl = open_side(&a.controller, a.baud, Side::Controller)?;
+    let cfg = crate::common::Conn {
+        config: a.config.clone(),
+        ..Default::default()
+    }
+    .config()?;
+    let baud = a.baud.unwrap_or(cfg.baud);
+    let mut ctl = open_side(&a.controller, baud, Side::Controller)?;
     if !a.no_init {
         let tool: [f64; 6] = match &a.tool {
             Some(v) => [v[0], v[1], v[2], v[3], v[4], v[5]],
-            None => [0.0; 6],
+            None => cfg.tool,
         };
-        let mut robot = Robot::over(ctl.port, LinkConfig::for_line(a.baud, Duration::ZERO), None);
+        let link = LinkConfig {
+            check: cfg.check,
+            ..LinkConfig::for_line(baud, Duration::ZERO)
+        };
+        let mut robot = Robot::over(ctl.port, link, None);
         trol::activate(&mut robot, &tool).map_err(|e| format!("activating the controller: {e}"))?;
         say!("trol link: the TROL server on {} is active", a.controller);
         ctl.port = robot.into_port();
     }
-    let mut app = open_side(&a.application, a.baud, Side::Application)?;
+    let mut app = open_side(&a.application, baud, Side::Application)?;
     say!(
         "trol link: relaying {} <-> {} (applications use {})",
         a.controller,

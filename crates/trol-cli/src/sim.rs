@@ -164,13 +164,13 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             .map_err(|e| format!("the line failed: {e}"))?;
         if controller.mode() != last_mode {
             last_mode = controller.mode();
-            say!(
-                "{}",
-                match last_mode {
-                    Mode::Server => "activated: serving TROL",
-                    Mode::Terminal => "TerminatePCP: back in terminal mode",
-                }
-            );
+            match last_mode {
+                Mode::Server => say!(
+                    "activated: serving TROL ({} block check)",
+                    controller.check().word()
+                ),
+                Mode::Terminal => say!("TerminatePCP: back in terminal mode"),
+            }
         }
     }
 }

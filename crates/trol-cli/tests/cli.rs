@@ -815,3 +815,59 @@ fn a_closed_stdout_is_no_panic() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// A simulator on TCP serves one application: a second one is told at once that the
+/// controller is busy, not to check its cable.
+#[test]
+fn a_second_application_hears_the_controller_is_busy() {
+    let dir = scratch("busy");
+    let sim = Background::start(
+        &dir,
+        &["sim", "--port", "listen://0", "--server", "--homed"],
+        "serving on ",
+    );
+    assert!(sim.name.starts_with("socket://127.0.0.1:"), "{}", sim.name);
+    let addr = sim.name.trim_start_matches("socket://").to_string();
+    let first = std::net::TcpStream::connect(&addr).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let started = Instant::now();
+    let o = trol(&dir, &["interp", "--port", &sim.name], "getstatus\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("busy"), "{err}");
+    assert!(!err.contains("baud"), "{err}");
+    assert!(started.elapsed() < Duration::from_secs(5), "told at once");
+    drop(first);
+}
+
+/// `trol link` reads trol.cfg like every subcommand: the controller is activated with the
+/// file's block check and tool transform, and an application with the same file works
+/// through the link.
+#[test]
+fn link_activates_the_controller_as_trol_cfg_says() {
+    let dir = scratch("link-cfg");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n10 0 0 0 0 0\ncheck = lrc\n",
+    )
+    .unwrap();
+    let sim = Background::start(&dir, &["sim", "--time-scale", "50"], "serving on ");
+    let link = Background::start(
+        &dir,
+        &["link", &sim.name, "listen://0"],
+        "applications use ",
+    );
+    let o = trol(&dir, &["interp", "--port", &link.name], "getstatus\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    std::thread::sleep(Duration::from_millis(300));
+    let log = sim.output().join("\n");
+    assert!(
+        log.contains("activated: serving TROL (LRC block check)"),
+        "{log}"
+    );
+    assert!(
+        log.contains("TROLSetToolTransform c(10, 0, 0, 0, 0, 0) -> 0"),
+        "{log}"
+    );
+}

@@ -78,6 +78,11 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.mode
     }
 
+    /// The block check the link uses now (the activation line may have changed it).
+    pub fn check(&mut self) -> trol_proto::link::BlockCheck {
+        self.server.responder_mut().link_mut().config().check
+    }
+
     /// The PCP server.
     pub fn pcp_mut(&mut self) -> &mut Pcp<B> {
         &mut self.pcp

@@ -88,11 +88,20 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
     let status = robot.status();
     robot.transactor_mut().set_repeats(repeats);
     status.map(drop).map_err(|e| {
-        Error::Setup(SetupError::NoServer(format!(
-            "the controller's TROL server does not answer ({e}); check the cable and the port, \
-             that the baud rate in trol.cfg matches the controller, and that `trol init` has \
-             activated the server"
-        )))
+        let busy = matches!(
+            &e,
+            Error::Link { error: trol_comm::TransError::Io(io), .. }
+                if io.kind() == std::io::ErrorKind::ConnectionRefused
+        );
+        Error::Setup(SetupError::NoServer(if busy {
+            format!("{e}; only one application at a time can drive the controller")
+        } else {
+            format!(
+                "the controller's TROL server does not answer ({e}); check the cable and the \
+                 port, that the baud rate in trol.cfg matches the controller, and that `trol \
+                 init` has activated the server"
+            )
+        }))
     })
 }
 

@@ -322,7 +322,9 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
         flipped: flipped.clone(),
     };
     let mut robot = Robot::over(Box::new(line), cfg, None);
-    robot.set_reply_timeout_tenths(3);
+    robot
+        .set_reply_timeout_tenths(3)
+        .map_err(|e| e.to_string())?;
     if plan.recovery == Recovery::Getstatus {
         robot.transactor_mut().set_repeats(0);
     }

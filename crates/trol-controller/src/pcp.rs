@@ -410,7 +410,7 @@ fn builtin_cat1<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<Executed, Code> {
         TROL_MOVE_II => now(b.move_to(&c.target(0)?, c.flag(1)?)),
         TROL_OPEN => now(b.open(c.int(0)?)),
         TROL_READY => now(b.ready()),
-        TROL_SET_TOOL_TRANSFORM => now(b.set_tool(c.six(0)?)),
+        TROL_SET_TOOL_TRANSFORM => now(b.set_tool(tool_in_reach(c.six(0)?)?)),
         TROL_SPEED => now(b.speed(c.int(0)?)),
         _ => Err(trol_proto::application::code::TROL_ERR_UNKNOWN),
     }
@@ -456,4 +456,20 @@ fn new_epoch() -> u16 {
         .map(|d| d.subsec_nanos() ^ (d.as_secs() as u32))
         .unwrap_or(1);
     ((nanos ^ (nanos >> 16)) as u16).max(1)
+}
+
+/// The longest tool the server accepts: the offset of the tool centre point from the flange,
+/// mm (assumption: twice the A465's reach of about 711 mm would put the tool centre point
+/// where no arm of the kind can take it).
+pub const MAX_TOOL_MM: f64 = 1000.0;
+
+/// A tool transform the arm can carry: a finite offset of at most [`MAX_TOOL_MM`], finite
+/// angles.
+pub fn tool_in_reach(tool: [f64; 6]) -> Result<[f64; 6], Code> {
+    let len = (tool[0] * tool[0] + tool[1] * tool[1] + tool[2] * tool[2]).sqrt();
+    if tool.iter().all(|v| v.is_finite()) && len <= MAX_TOOL_MM {
+        Ok(tool)
+    } else {
+        Err(TROL_ERR_ARG_RANGE)
+    }
 }

@@ -24,6 +24,10 @@ use std::path::{Path, PathBuf};
 
 /// The file name looked for in the current directory.
 pub const FILE_NAME: &str = "trol.cfg";
+/// The slowest baud rate trol.cfg takes.
+pub const MIN_BAUD: u32 = 300;
+/// The fastest baud rate trol.cfg takes (USB adapters reach a few Mbaud).
+pub const MAX_BAUD: u32 = 4_000_000;
 /// The environment variable that names another file.
 pub const ENV_VAR: &str = "TROL_CONFIG";
 
@@ -142,12 +146,17 @@ impl Config {
             }
             match entry {
                 0 => {
-                    cfg.baud = line.parse().ok().filter(|b| *b > 0).ok_or((
-                        n,
-                        format!(
-                            "expected the baud rate (a whole number such as 9600), found {line:?}"
-                        ),
-                    ))?;
+                    cfg.baud = line
+                        .parse()
+                        .ok()
+                        .filter(|b| (MIN_BAUD..=MAX_BAUD).contains(b))
+                        .ok_or((
+                            n,
+                            format!(
+                                "expected the baud rate (a whole number {MIN_BAUD}..{MAX_BAUD} \
+                                 such as 9600), found {line:?}"
+                            ),
+                        ))?;
                 }
                 1 => {
                     if line.contains(char::is_whitespace) {
@@ -171,7 +180,24 @@ impl Config {
                         .map(|s| s.parse::<f64>().ok().filter(|x| x.is_finite()))
                         .collect();
                     match values {
-                        Some(v) if v.len() == 6 => cfg.tool.copy_from_slice(&v),
+                        Some(v)
+                            if v.len() == 6
+                                && (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+                                    <= trol_controller::pcp::MAX_TOOL_MM =>
+                        {
+                            cfg.tool.copy_from_slice(&v)
+                        }
+                        Some(v) if v.len() == 6 => {
+                            return Err((
+                                n,
+                                format!(
+                                    "the tool transform's offset is {:.0} mm: a tool longer than \
+                                     {} mm is beyond what the arm can carry",
+                                    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt(),
+                                    trol_controller::pcp::MAX_TOOL_MM
+                                ),
+                            ));
+                        }
                         _ => {
                             return Err((
                                 n,
@@ -275,6 +301,13 @@ mod tests {
         assert!(e.1.contains("tool transform"), "{e:?}");
         let e = Config::parse("9600\nsim\n0 0 0 0 0 0\nspeed = 3\n").unwrap_err();
         assert_eq!(e.0, 4);
+        // A baud rate no port has, a tool no arm carries.
+        let e = Config::parse("3840019200\nsim\n0 0 0 0 0 0\n").unwrap_err();
+        assert_eq!(e.0, 1);
+        assert!(e.1.contains("300..4000000"), "{e:?}");
+        let e = Config::parse("9600\nsim\n0 0 1e30 0 0 0\n").unwrap_err();
+        assert_eq!(e.0, 3);
+        assert!(e.1.contains("beyond what the arm can carry"), "{e:?}");
     }
 
     #[test]

@@ -661,8 +661,9 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
             (st.callbacks, st.reply_tenths, st.delay)
         };
         robot.set_handlers(Box::new(CHandlers(callbacks)));
-        robot.set_reply_timeout_tenths(tenths);
-        robot.set_delay(delay);
+        // Both were checked when they were set.
+        let _ = robot.set_reply_timeout_tenths(tenths);
+        let _ = robot.set_delay(delay);
         let ok = if serOnly == 0 {
             crate::activate(&mut robot, &cfg.tool)
                 .map_err(|e| eprintln!("InitTROL: {e}"))
@@ -698,26 +699,38 @@ pub extern "C" fn CleanupTROL() -> TUINT {
     })
 }
 
-/// SetL3_TO_Intervall: the reply timeout in tenths of a second.
+/// SetL3_TO_Intervall: the reply timeout in tenths of a second, 1..6000. The manual's
+/// function returns nothing: a value out of range changes nothing and is reported on stderr.
 #[unsafe(no_mangle)]
 pub extern "C" fn SetL3_TO_Intervall(TO_Intervall: TUINT) {
     guard((), || {
+        let tenths = TO_Intervall;
+        if !(1..=crate::robot::MAX_REPLY_TENTHS).contains(&tenths) {
+            eprintln!("SetL3_TO_Intervall({TO_Intervall}): out of range 1..6000, ignored");
+            return;
+        }
         let mut st = state();
-        st.reply_tenths = TO_Intervall;
+        st.reply_tenths = tenths;
         if let Some(r) = st.robot.as_mut() {
-            r.set_reply_timeout_tenths(TO_Intervall);
+            let _ = r.set_reply_timeout_tenths(tenths);
         }
     })
 }
 
-/// SetDelay: a pause of `delay` milliseconds between two bytes sent.
+/// SetDelay: a pause of `delay` milliseconds between two bytes sent, 0..50; every timeout
+/// grows with it. A value out of range changes nothing and is reported on stderr.
 #[unsafe(no_mangle)]
 pub extern "C" fn SetDelay(delay: TUINT) {
     guard((), || {
+        if u64::from(delay) > crate::robot::MAX_DELAY_MS {
+            eprintln!("SetDelay({delay}): out of range 0..50 ms, ignored");
+            return;
+        }
         let mut st = state();
-        st.delay = Duration::from_millis(delay as u64);
+        let delay = Duration::from_millis(u64::from(delay));
+        st.delay = delay;
         if let Some(r) = st.robot.as_mut() {
-            r.set_delay(Duration::from_millis(delay as u64));
+            let _ = r.set_delay(delay);
         }
     })
 }

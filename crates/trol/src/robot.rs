@@ -115,6 +115,12 @@ impl From<ReplyError> for Error {
     }
 }
 
+/// The longest reply timeout SetL3_TO_Intervall takes, tenths of a second (10 min).
+pub const MAX_REPLY_TENTHS: u16 = 6000;
+
+/// The longest pause SetDelay takes between two bytes, ms.
+pub const MAX_DELAY_MS: u64 = 50;
+
 /// How [`Robot::finish_unless`] ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Waited {
@@ -364,13 +370,44 @@ impl Robot {
     }
 
     /// SetL3_TO_Intervall: the reply timeout in tenths of a second (default 150).
-    pub fn set_reply_timeout_tenths(&mut self, tenths: u16) {
+    pub fn set_reply_timeout_tenths(&mut self, tenths: u16) -> Result<()> {
+        if !(1..=MAX_REPLY_TENTHS).contains(&tenths) {
+            return Err(Error::Argument(RequestError::Range {
+                command: "SetL3_TO_Intervall",
+                arg: "TO_Intervall",
+                what: format!(
+                    "{tenths} tenths of a second: the reply timeout must be 1..{MAX_REPLY_TENTHS} \
+                     (0.1 s to 10 min)"
+                ),
+            }));
+        }
         self.transactor.set_reply_timeout_tenths(tenths);
+        Ok(())
     }
 
-    /// SetDelay: a pause between two bytes sent.
-    pub fn set_delay(&mut self, delay: Duration) {
+    /// SetDelay: a pause between two bytes sent (0..=[`MAX_DELAY_MS`] ms). Every timeout
+    /// that runs while bytes travel grows with it (docs/protocol.md, "Inter-character
+    /// delay").
+    pub fn set_delay(&mut self, delay: Duration) -> Result<()> {
+        if delay > Duration::from_millis(MAX_DELAY_MS) {
+            return Err(Error::Argument(RequestError::Range {
+                command: "SetDelay",
+                arg: "delay",
+                what: format!(
+                    "{} ms: at most {MAX_DELAY_MS} ms between two bytes (the manual used 5)",
+                    delay.as_millis()
+                ),
+            }));
+        }
+        let old = self.transactor.driver().delay();
+        let link = self.transactor.initiator_mut().link_mut();
+        let cfg = LinkConfig {
+            char_time: link.config().char_time.saturating_sub(old) + delay,
+            ..*link.config()
+        };
+        link.set_config(cfg);
         self.transactor.driver_mut().set_delay(delay);
+        Ok(())
     }
 
     /// GetLastCommErr: the last layer-2 failure.

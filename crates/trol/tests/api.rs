@@ -103,7 +103,7 @@ fn rig_with(pcp: Pcp<SimBackend>) -> Rig {
         drop_next_eot: drop_next_eot.clone(),
     };
     let mut robot = Robot::over(Box::new(port), quick(), Some(handle));
-    robot.set_reply_timeout_tenths(10);
+    robot.set_reply_timeout_tenths(10).unwrap();
     Rig {
         robot,
         deaf,
@@ -548,7 +548,7 @@ fn a_command_added_only_in_the_tests_works_end_to_end() {
 fn the_default_err_app_timeout_waits_for_a_long_finish() {
     // Reply timeout 0.1 s; a homing that takes 2 s (x 6 axes / 50) must not time out.
     let mut rig = rig();
-    rig.robot.set_reply_timeout_tenths(1);
+    rig.robot.set_reply_timeout_tenths(1).unwrap();
     rig.robot.home(0).unwrap();
     rig.robot.finish().unwrap();
     assert!(!rig.robot.is_moving().unwrap());
@@ -649,4 +649,30 @@ fn halt_from_another_thread_stops_the_arm_while_one_waits() {
     assert!(waited < Duration::from_secs(3), "waited {waited:?}");
     let j1 = joints(&mut robot.lock().unwrap())[0];
     assert!(j1 > 0.0 && j1 < 1.0, "{j1}");
+}
+
+/// Settings that cannot work are refused with TROL_ERR_ARG_RANGE and change nothing; the
+/// inter-character delay lengthens the link's timeouts.
+#[test]
+fn impossible_link_settings_are_refused_and_the_delay_counts_in_the_timeouts() {
+    let mut rig = rig();
+    let e = rig.robot.set_reply_timeout_tenths(0).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
+    let e = rig.robot.set_delay(Duration::from_secs(65)).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
+    assert!(e.to_string().contains("50 ms"), "{e}");
+    let char_time = |r: &mut Robot| r.transactor_mut().initiator().link().config().char_time;
+    let before = char_time(&mut rig.robot);
+    rig.robot.set_delay(Duration::from_millis(5)).unwrap();
+    assert_eq!(char_time(&mut rig.robot), before + Duration::from_millis(5));
+    rig.robot.set_delay(Duration::from_millis(2)).unwrap();
+    assert_eq!(char_time(&mut rig.robot), before + Duration::from_millis(2));
+    // The link still works.
+    rig.robot.status().unwrap();
+    // A tool no arm carries: the controller refuses it, and the old one stays.
+    let e = rig
+        .robot
+        .set_tool_transform(&[0.0, 0.0, 1e30, 0.0, 0.0, 0.0])
+        .unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
 }

@@ -1,7 +1,8 @@
 //! Short, seeded runs of `trol bench faults` (the full runs and their figures are in
-//! docs/reliability.md): over a noisy line and a line cut at a random byte of every relative
-//! move, no corrupted request is executed, no corrupted reply is accepted, and no relative
-//! move is lost or runs twice, with the API's repeats and with the manual's GetStatus method.
+//! docs/reliability.md): over a noisy line (BER 1e-3) and a line cut at a random byte of
+//! every relative move, no corrupted request is executed, no corrupted reply is accepted,
+//! and no relative move is lost or runs twice, with the API's repeats and with the manual's
+//! GetStatus method.
 
 mod common;
 
@@ -40,11 +41,8 @@ fn a_noisy_line_neither_executes_nor_accepts_a_corrupted_block() {
     ]);
     assert!(n(&r, "flipped_bits") > 100, "the line was noisy: {r:#}");
     assert_nothing_wrong(&r);
-    let r = run(&[
-        "--mode", "noise", "--ber", "1e-2", "--count", "150", "--seed", "8",
-    ]);
-    assert!(n(&r, "flipped_bits") > 1000, "the line was noisy: {r:#}");
-    assert_nothing_wrong(&r);
+    // (At BER 1e-2 a few damaged blocks in 100,000 calls still pass the CRC-16: see
+    // docs/reliability.md. A short run there would pass by luck, so it is not here.)
 }
 
 #[test]

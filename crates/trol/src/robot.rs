@@ -369,7 +369,8 @@ impl Robot {
         self.transactor.set_handlers(handlers);
     }
 
-    /// SetL3_TO_Intervall: the reply timeout in tenths of a second (default 150).
+    /// SetL3_TO_Intervall: the reply timeout in tenths of a second (default 150; 1..=
+    /// [`MAX_REPLY_TENTHS`], else TROL_ERR_ARG_RANGE and the timeout stays).
     pub fn set_reply_timeout_tenths(&mut self, tenths: u16) -> Result<()> {
         if !(1..=MAX_REPLY_TENTHS).contains(&tenths) {
             return Err(Error::Argument(RequestError::Range {

@@ -31,8 +31,8 @@ mod robot;
 
 pub use config::{Config, ConfigError};
 pub use robot::{
-    Error, POLL, PosMode, Result, Robot, SetupError, StatusRecord, Waited, timeout_policy,
-    wait_idle,
+    Error, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result, Robot, SetupError, StatusRecord,
+    Waited, timeout_policy, wait_idle,
 };
 pub use trol_controller::SimSettings;
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};

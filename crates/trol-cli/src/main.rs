@@ -13,6 +13,7 @@ mod bench;
 mod common;
 mod demo;
 mod faults;
+mod gateway;
 mod init;
 mod interp;
 mod link;
@@ -56,6 +57,8 @@ enum Command {
     Cleanup(common::Conn),
     /// The simulated controller (C500 with an A465) as its own process.
     Sim(sim::SimArgs),
+    /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md).
+    Gateway(gateway::GatewayArgs),
     /// Relay between the controller's port and an application's (the manual's link.exe).
     Link(link::LinkArgs),
     /// Show the traffic layer by layer, live between two ports or from a capture.
@@ -93,6 +96,7 @@ fn main() -> ExitCode {
         Command::Cleanup(c) => init::cleanup(&c).map(|()| ExitCode::SUCCESS),
         Command::Sim(a) => sim::run(a).map(|()| ExitCode::SUCCESS),
         Command::Link(a) => link::run(a).map(|()| ExitCode::SUCCESS),
+        Command::Gateway(a) => gateway::run(a).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
         Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),

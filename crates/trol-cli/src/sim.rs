@@ -62,6 +62,19 @@ pub struct SimArgs {
     /// controller program of the application's own serves them.
     #[arg(long, value_name = "FILE")]
     commands: Option<PathBuf>,
+    /// Be a C500 in RAPL-II mode instead (what `trol gateway` and `rapl:DEVICE` drive): ACI
+    /// mode at start, terminal mode after the 0x48 transfer, RAPL-II commands (docs/c500.md).
+    /// The line runs at the profile's baud rate; --baud, --server and --check do not apply.
+    #[arg(long)]
+    rapl: bool,
+    /// With --rapl: how the simulated C500 behaves on each open point (a RAPL-II profile,
+    /// docs/c500.md); default: the simulator's (mm, angles yaw pitch roll, MA/MI in degrees).
+    #[arg(long, value_name = "FILE", requires = "rapl")]
+    profile: Option<PathBuf>,
+    /// With --rapl: print the profile that describes this simulated C500 (give it to
+    /// `trol gateway --profile` or trol.cfg's rapl-profile) and exit.
+    #[arg(long, requires = "rapl")]
+    print_profile: bool,
 }
 
 /// Serve until the process is stopped (Ctrl-C) or the line fails.
@@ -94,6 +107,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         locations,
         tool: [0.0; 6],
     };
+    if a.rapl {
+        return run_rapl(&a, settings);
+    }
     // A new pty or a listening socket, like the application's side of a relay.
     let opened = open_side(&a.port, a.baud, Side::Application)?;
     let name = opened.name.clone();
@@ -120,7 +136,17 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     } else {
         Mode::Terminal
     };
-    let mut controller = Controller::new(opened.port, cfg, pcp, mode);
+    let controller = Controller::new(opened.port, cfg, pcp, mode);
+    serve(controller, described, trol_controller::SIM_CODES)
+}
+
+/// Serve TROL with `controller` until the line fails, logging each transaction (names of
+/// described commands from `described`, BIOS codes from `codes`).
+pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
+    mut controller: Controller<P, B>,
+    described: trol_proto::application::Catalog,
+    codes: &'static trol_proto::application::CodeTable,
+) -> Result<(), String> {
     // The server's own catalog knows what it serves; the described commands name the rest.
     let mut last_world = None;
     controller.set_log(Box::new(move |e| {
@@ -128,7 +154,6 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             Some(c) if e.catalog.get(*c).is_none() => &described,
             _ => e.catalog,
         };
-        let codes = trol_controller::SIM_CODES;
         let (req, reply) = (
             catalog.request_text(e.request),
             catalog.reply_text(e.request, e.reply, codes),
@@ -173,6 +198,45 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             }
         }
     }
+}
+
+/// `trol sim --rapl`: the simulated C500 in RAPL-II mode.
+fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
+    let profile = match &a.profile {
+        Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
+        None => trol_rapl::Profile::simulator(),
+    };
+    let mut arm = trol_a465::arm::Arm::new(settings.arm);
+    arm.set_tool(settings.tool);
+    let mut c500 = trol_rapl::C500::new(profile, arm, settings.locations);
+    if a.print_profile {
+        say!("{}", c500.describe().to_toml());
+        return Ok(());
+    }
+    let mut opened = open_side(&a.port, c500.describe().baud, Side::Application)?;
+    let name = opened.name.clone();
+    say!("trol sim: serving on {name}");
+    say!(
+        "  a C500 in RAPL-II mode ({} at start), {} baud, time scale {}, {}",
+        if c500.in_terminal_mode() {
+            "terminal mode"
+        } else {
+            "ACI mode"
+        },
+        c500.describe().baud,
+        a.time_scale,
+        if a.homed { "homed" } else { "not homed" }
+    );
+    say!("  drive it with: trol gateway --controller {name} --port pty");
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    trol_rapl::c500::serve(
+        opened.port.as_mut(),
+        &mut c500,
+        a.time_scale,
+        &stop,
+        &mut |line| say!("{line}"),
+    )
+    .map_err(|e| format!("the line failed: {e}"))
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {

@@ -16,7 +16,9 @@
 //!   (Finish(FINISH_WAIT), Home) by polling [`Backend::moving`], between which it can serve
 //!   its line.
 
-use trol_proto::application::code::{Code, CodeTable, TROL_ERR_LOCATION, TROL_ERR_ROBOT};
+use trol_proto::application::code::{
+    Code, CodeTable, TROL_ERR_LOCATION, TROL_ERR_ROBOT, TROL_ERR_ROBOT_UNSURE,
+};
 use trol_proto::application::{LocName, Location, Tag};
 
 /// The target of an absolute motion.
@@ -43,10 +45,18 @@ pub enum BackendError {
     /// The controller's table has no location of this name (TROL_ERR_LOCATION).
     #[error("no location named {0} in the controller's table")]
     UnknownLocation(LocName),
-    /// The link to the robot failed; whether the call took effect is not known
+    /// The link to the robot failed before the command reached it: it did not run
     /// (TROL_ERR_ROBOT).
     #[error("the link to the robot failed: {0}")]
     Link(String),
+    /// The link to the robot failed after the command was sent: it may have run
+    /// (TROL_ERR_ROBOT_UNSURE; GetStatus reports the BIOS as called).
+    #[error("the link to the robot failed after the command was sent: {0}")]
+    Unsure(String),
+    /// The backend refused the call with one of its BIOS codes (for calls whose answer is
+    /// not a code, such as GetPosition).
+    #[error("refused with BIOS code {0}")]
+    Refused(i16),
 }
 
 impl BackendError {
@@ -55,6 +65,8 @@ impl BackendError {
         match self {
             BackendError::UnknownLocation(_) => TROL_ERR_LOCATION,
             BackendError::Link(_) => TROL_ERR_ROBOT,
+            BackendError::Unsure(_) => TROL_ERR_ROBOT_UNSURE,
+            BackendError::Refused(v) => Code(*v),
         }
     }
 }

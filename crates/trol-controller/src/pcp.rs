@@ -9,7 +9,9 @@
 //! reply waits until the arm is idle; [`Pcp::poll`] then asks the backend and gives the reply
 //! when it is due. [`crate::Controller`] runs it behind layer 3.
 
-use trol_proto::application::code::{Code, TROL_ERR_ARG_RANGE, TROL_RETVAL_RANGE};
+use trol_proto::application::code::{
+    Code, TROL_ERR_ARG_RANGE, TROL_ERR_ROBOT_UNSURE, TROL_RETVAL_RANGE,
+};
 use trol_proto::application::record::Value;
 use trol_proto::application::table;
 use trol_proto::application::{Catalog, CatalogError, Class, CommandDef, Location, Reply, Tag};
@@ -44,10 +46,11 @@ impl Status {
         }
     }
 
-    /// Record that the BIOS was not called, and why.
+    /// Record that the BIOS was not called, and why. TROL_ERR_ROBOT_UNSURE says the call
+    /// went out before the link failed: it counts as called.
     pub fn record_refusal(&mut self, code: Code) {
         self.transaction = self.current;
-        self.bios_called = false;
+        self.bios_called = code == TROL_ERR_ROBOT_UNSURE;
         self.last_error_code = code;
     }
 }

@@ -17,6 +17,7 @@
 //! | `homed` | `yes`: the simulated arm starts homed | no |
 //! | `object` | width of an object held between the fingers at start, mm | none |
 //! | `objects` | a file of objects in the world, `NAME x y z width` per line (relative to trol.cfg's folder) | none |
+//! | `rapl-profile` | port `rapl:DEVICE`: the RAPL-II profile of the C500 on DEVICE (docs/c500.md; relative to trol.cfg's folder) | the safe default |
 //!
 //! Blank lines and lines starting with `#` are skipped.
 
@@ -52,6 +53,8 @@ pub struct Config {
     pub table_z: f64,
     /// The simulated arm starts homed.
     pub homed: bool,
+    /// The RAPL-II profile (port `rapl:DEVICE`).
+    pub rapl_profile: Option<PathBuf>,
     /// Object width between the fingers, mm.
     pub object: Option<f64>,
 }
@@ -69,6 +72,7 @@ impl Default for Config {
             table_z: 0.0,
             homed: false,
             object: None,
+            rapl_profile: None,
         }
     }
 }
@@ -124,7 +128,10 @@ impl Config {
             message,
         })?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        for file in [&mut cfg.locations, &mut cfg.objects].into_iter().flatten() {
+        for file in [&mut cfg.locations, &mut cfg.objects, &mut cfg.rapl_profile]
+            .into_iter()
+            .flatten()
+        {
             if file.is_relative() {
                 *file = dir.join(&*file);
             }
@@ -164,7 +171,7 @@ impl Config {
                             n,
                             format!(
                                 "expected the port (a device such as /dev/ttyUSB0 or COM1, \
-                                 socket://HOST:PORT, or sim), found {line:?}"
+                                 socket://HOST:PORT, rapl:DEVICE, or sim), found {line:?}"
                             ),
                         ));
                     }
@@ -231,6 +238,9 @@ impl Config {
                         }
                         "locations" => cfg.locations = Some(PathBuf::from(value)),
                         "objects" => cfg.objects = Some(PathBuf::from(value)),
+                        "rapl-profile" | "rapl_profile" => {
+                            cfg.rapl_profile = Some(PathBuf::from(value))
+                        }
                         "check" => {
                             cfg.check = trol_proto::link::BlockCheck::from_word(value).ok_or((
                                 n,
@@ -255,7 +265,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object"
+                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile"
                                 ),
                             ));
                         }

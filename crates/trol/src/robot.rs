@@ -193,6 +193,9 @@ pub struct Robot {
     epoch: Option<u16>,
 }
 
+/// The port prefix that embeds the controller with the RAPL-II backend (`rapl:/dev/ttyUSB0`).
+pub const RAPL_PREFIX: &str = "rapl:";
+
 impl Robot {
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
@@ -210,6 +213,9 @@ impl Robot {
         if port == "sim" {
             return Ok(Robot::embedded_on(SimSettings::default(), cfg));
         }
+        if let Some(device) = port.strip_prefix(RAPL_PREFIX) {
+            return Robot::rapl(device, trol_rapl::Profile::default(), cfg);
+        }
         let settings = PortSettings {
             baud,
             ..PortSettings::default()
@@ -220,8 +226,22 @@ impl Robot {
         Ok(robot)
     }
 
-    /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings).
+    /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings;
+    /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
+    /// `rapl-profile`).
     pub fn from_config(cfg: &Config) -> Result<Robot> {
+        if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
+            let profile = match &cfg.rapl_profile {
+                Some(path) => trol_rapl::Profile::from_file(path)
+                    .map_err(|e| SetupError::Config(e.to_string()))?,
+                None => trol_rapl::Profile::default(),
+            };
+            let link = LinkConfig {
+                check: cfg.check,
+                ..LinkConfig::default()
+            };
+            return Robot::rapl(device, profile, link);
+        }
         if cfg.port == "sim" {
             let link = LinkConfig {
                 check: cfg.check,
@@ -236,6 +256,24 @@ impl Robot {
     pub fn from_default_config() -> Result<Robot> {
         let cfg = Config::load().map_err(|e| SetupError::Config(e.to_string()))?;
         Robot::from_config(&cfg)
+    }
+
+    /// Embed the controller with the RAPL-II backend: open DEVICE (a serial device, or
+    /// `socket://HOST:PORT`) at the profile's baud rate, open the RAPL-II session, and serve
+    /// TROL to this process over an in-memory line (docs/c500.md).
+    pub fn rapl(device: &str, profile: trol_rapl::Profile, link: LinkConfig) -> Result<Robot> {
+        let settings = PortSettings {
+            baud: profile.baud,
+            ..PortSettings::default()
+        };
+        let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let backend = trol_rapl::RaplBackend::connect(port, profile)
+            .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.codes = trol_rapl::RAPL_CODES;
+        Ok(robot)
     }
 
     /// Start an embedded controller (simulated A465) and connect to it.

@@ -43,10 +43,12 @@ pub const TROL_ERR_ARG_RANGE: Code = Code(-32003);
 pub const TROL_ERR_UNKNOWN: Code = Code(-32051);
 /// The request has not the size its command expects (controller).
 pub const TROL_ERR_BAD_CSIZE: Code = Code(-32052);
-/// The controller lost its link to the robot's firmware during the call, so whether the
-/// command ran is not known (controller; not in the manual, whose PCP called the BIOS
-/// directly).
+/// The controller lost its link to the robot's firmware before the command reached it: it
+/// did not run (controller; not in the manual, whose PCP called the BIOS directly).
 pub const TROL_ERR_ROBOT: Code = Code(-32053);
+/// The controller lost its link to the robot's firmware after the command was sent: it may
+/// have run, and GetStatus reports the BIOS as called (controller; not in the manual).
+pub const TROL_ERR_ROBOT_UNSURE: Code = Code(-32054);
 /// The BIOS returned a value in TROL's range; GetStatus has the real one (controller, CAT1/2).
 pub const TROL_RETVAL_RANGE: Code = Code(-32101);
 /// The named location does not exist (controller, Move and Appro).
@@ -85,8 +87,14 @@ pub const TROL_CODES: &CodeTable = &[
     CodeInfo {
         value: TROL_ERR_ROBOT.0,
         name: "TROL_ERR_ROBOT",
-        meaning: "the controller lost its link to the robot during the call; GetStatus tells \
-                  whether the command ran",
+        meaning: "the controller lost its link to the robot before the command reached it: \
+                  it did not run",
+    },
+    CodeInfo {
+        value: TROL_ERR_ROBOT_UNSURE.0,
+        name: "TROL_ERR_ROBOT_UNSURE",
+        meaning: "the controller lost its link to the robot after the command was sent: it \
+                  may have run (GetStatus reports the BIOS as called); check the position",
     },
     CodeInfo {
         value: TROL_RETVAL_RANGE.0,

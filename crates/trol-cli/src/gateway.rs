@@ -1,0 +1,97 @@
+//! `trol gateway`: TROL's controller side on this PC, driving a real C500 in RAPL-II over a
+//! second line (docs/c500.md). A program that speaks TROL's wire protocol (a 1998 TROL
+//! application, or a second PC) uses it as it would a PCP server; `trol init` and
+//! `trol cleanup` work against it as against `trol sim`.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::Args;
+use trol_controller::{Controller, Mode, Pcp};
+use trol_proto::link::{BlockCheck, LinkConfig};
+
+use crate::link::{Side, open_side};
+
+#[derive(Args, Debug)]
+#[command(after_help = "\
+Examples:
+  trol gateway --controller /dev/ttyUSB0 --profile c500.toml            # TROL on a new pty
+  trol gateway --controller /dev/ttyUSB0 --port listen://127.0.0.1:7000
+  trol sim --rapl &                                                      # a simulated C500 ...
+  trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
+
+The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
+Activate the server there with `trol init --port NAME`.")]
+pub struct GatewayArgs {
+    /// The C500's host port: a serial device (or socket://HOST:PORT to a networked one),
+    /// opened at the profile's baud rate.
+    #[arg(long, value_name = "DEVICE")]
+    controller: String,
+    /// Where to serve TROL: `pty` (a new pseudo-terminal), a serial device, or
+    /// listen://HOST:PORT.
+    #[arg(long, default_value = "pty")]
+    port: String,
+    /// Baud rate of the TROL side, when it is a serial device.
+    #[arg(long, default_value_t = 9600)]
+    baud: u32,
+    /// The C500's RAPL-II profile (docs/c500.md); default: the safe one, which refuses
+    /// cartesian commands and MA/MI until their conventions are set.
+    #[arg(long, value_name = "FILE")]
+    profile: Option<PathBuf>,
+    /// The block check until an activation line names one: crc16 (TROL's) or lrc.
+    #[arg(long, default_value = "crc16", value_parser = parse_check)]
+    check: BlockCheck,
+    /// Start in server mode, as if `trol init` had run.
+    #[arg(long)]
+    server: bool,
+}
+
+fn parse_check(s: &str) -> Result<BlockCheck, String> {
+    BlockCheck::from_word(s).ok_or_else(|| format!("`{s}` is no block check: crc16 or lrc"))
+}
+
+/// Open the C500's session, then serve TROL until the line fails.
+pub fn run(a: GatewayArgs) -> Result<(), String> {
+    let profile = match &a.profile {
+        Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
+        None => trol_rapl::Profile::default(),
+    };
+    let settings = trol_port::PortSettings {
+        baud: profile.baud,
+        ..Default::default()
+    };
+    let port = trol_port::open(&a.controller, &settings).map_err(|e| e.to_string())?;
+    let backend = trol_rapl::RaplBackend::connect_with(
+        port,
+        profile,
+        Some(Box::new(|line: &str| say!("  c500: {line}"))),
+        false,
+    )
+    .map_err(|e| e.to_string())?;
+    let opened = open_side(&a.port, a.baud, Side::Application)?;
+    let name = opened.name.clone();
+    say!("trol gateway: serving on {name}");
+    say!(
+        "  driving the C500 on {}; {} mode",
+        a.controller,
+        if a.server { "server" } else { "terminal" }
+    );
+    if !a.server {
+        say!("  activate it with: trol init --port {name}");
+    }
+    let cfg = LinkConfig {
+        check: a.check,
+        ..LinkConfig::for_line(a.baud, Duration::ZERO)
+    };
+    let mode = if a.server {
+        Mode::Server
+    } else {
+        Mode::Terminal
+    };
+    let controller = Controller::new(opened.port, cfg, Pcp::new(backend), mode);
+    crate::sim::serve(
+        controller,
+        trol_proto::application::Catalog::builtin(),
+        trol_rapl::RAPL_CODES,
+    )
+}

@@ -1,0 +1,462 @@
+//! The profile: everything the public sources leave open about a C500's RAPL-II host port
+//! (../shared/reference/c500-rapl.md, "What is unknown"), one TOML file per controller.
+//!
+//! The gateway reads it to talk to a real controller; the simulated C500 (`trol sim --rapl`)
+//! reads the same format to decide how it behaves, so each variant can be tested, and
+//! `trol sim --rapl --print-profile` prints the one that matches it.
+//!
+//! The default is safe: the two settings whose wrong guess turns into a large or wrong
+//! motion, the order and signs of POINT's angles and the units of MA and MI, are empty, and
+//! every command that needs them is refused with a message saying what to set
+//! (`trol rapl probe --poses N` fits them from readings of a pendant-moved arm).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+/// Software flow control on the host port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Flow {
+    /// None.
+    None,
+    /// XON/XOFF (both public drivers; the default).
+    Xonxoff,
+}
+
+/// How a session is entered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Entry {
+    /// The ACI transfer 0x48 reading one data byte, source id 0xFF (CRS's sample code, RW).
+    Aci,
+    /// The ACI transfer 0x48 with no data, source id 0x21 (the G3000 driver).
+    AciEmpty,
+    /// The port is in terminal mode already: Ctrl-C and the prompt.
+    Terminal,
+}
+
+/// The line terminator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Terminator {
+    /// CR, 0x0D (RW, G3K).
+    Cr,
+    /// LF, 0x0A (XARM).
+    Lf,
+}
+
+impl Terminator {
+    /// The byte.
+    pub fn byte(self) -> u8 {
+        match self {
+            Terminator::Cr => b'\r',
+            Terminator::Lf => b'\n',
+        }
+    }
+}
+
+/// Whether a successful command is answered with ACK (0x06).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Ack {
+    /// Accept a reply with or without it (the default).
+    Auto,
+    /// A reply without ACK or error line is a failure (RW's controller).
+    Required,
+    /// The controller sends none (the simulated C500 then sends none).
+    Never,
+}
+
+/// Length units of cartesian values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Units {
+    /// As STATUS says (`METRIC UNITS.`); cartesian commands are refused when it says nothing.
+    Auto,
+    /// Millimetres.
+    Mm,
+    /// Inches (RW's controller).
+    Inch,
+}
+
+impl Units {
+    /// Millimetres per unit (None for `auto`).
+    pub fn mm(self) -> Option<f64> {
+        match self {
+            Units::Auto => None,
+            Units::Mm => Some(1.0),
+            Units::Inch => Some(25.4),
+        }
+    }
+}
+
+/// Units of MA and MI.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum JointUnits {
+    /// Degrees.
+    Degrees,
+    /// Radians (the RAPL-II manual's transcription for MA).
+    Radians,
+}
+
+/// How the end of a motion is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Completion {
+    /// Poll STATUS: the DONE row all Y (the default; the line stays free for a halt).
+    Status,
+    /// Poll W5: all joint velocities 0.
+    W5,
+    /// Send FINISH and wait for its answer (holds the line for the whole motion).
+    Finish,
+}
+
+/// How a motion is stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Halt {
+    /// The HALT command.
+    Halt,
+    /// Ctrl-C.
+    CtrlC,
+    /// The ABORT command.
+    Abort,
+}
+
+/// One of POINT's three angles: which of TROL's yaw, pitch, roll it is, and its sign.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Angle {
+    /// 0 yaw, 1 pitch, 2 roll.
+    pub which: usize,
+    /// +1 or -1.
+    pub sign: f64,
+}
+
+const ANGLE_NAMES: [&str; 3] = ["yaw", "pitch", "roll"];
+
+/// Parse `angles`: three of `yaw`, `pitch`, `roll`, each once, each optionally with `-`, in
+/// the order the controller writes them after x y z; empty: None (cartesian commands are
+/// refused).
+pub fn parse_angles(s: &str) -> Result<Option<[Angle; 3]>, String> {
+    let words: Vec<&str> = s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|w| !w.is_empty())
+        .collect();
+    if words.is_empty() {
+        return Ok(None);
+    }
+    let bad = || {
+        format!(
+            "`angles = \"{s}\"`: expected the three angles in the controller's order, each of \
+             yaw, pitch, roll once, with - for an opposite sign (\"yaw pitch roll\", \
+             \"roll -pitch yaw\"), or \"\" to refuse cartesian commands"
+        )
+    };
+    if words.len() != 3 {
+        return Err(bad());
+    }
+    let mut out = [Angle {
+        which: 0,
+        sign: 1.0,
+    }; 3];
+    let mut seen = [false; 3];
+    for (i, w) in words.iter().enumerate() {
+        let (sign, name) = match w.strip_prefix('-') {
+            Some(n) => (-1.0, n),
+            None => (1.0, w.strip_prefix('+').unwrap_or(w)),
+        };
+        let which = ANGLE_NAMES
+            .iter()
+            .position(|n| n.eq_ignore_ascii_case(name))
+            .ok_or_else(bad)?;
+        if seen[which] {
+            return Err(bad());
+        }
+        seen[which] = true;
+        out[i] = Angle { which, sign };
+    }
+    Ok(Some(out))
+}
+
+/// The names of the BIOS codes an error line may map to (docs/c500.md, "Errors").
+pub const ERROR_TARGETS: &[&str] = &[
+    "BIOS_NOT_HOMED",
+    "BIOS_OUT_OF_REACH",
+    "BIOS_JOINT_LIMIT",
+    "BIOS_BELOW_TABLE",
+    "BIOS_SINGULAR_PATH",
+    "BIOS_BAD_ARGUMENT",
+    "BIOS_QUEUE_FULL",
+    "BIOS_ARM_POWER",
+    "BIOS_RAPL_ERROR",
+    "TROL_ERR_LOCATION",
+];
+
+/// The error lines of the simulated C500 and what they mean. Only 012 is seen in public
+/// sources (G3K); the other numbers are the simulator's own (assumption) until a real
+/// controller's list is known; a profile maps a real controller's numbers in `[errors]`.
+pub const SIM_ERRORS: &[(u16, &str, &str)] = &[
+    (12, "COMMAND ERROR", "BIOS_BAD_ARGUMENT"),
+    (30, "ROBOT NOT HOMED", "BIOS_NOT_HOMED"),
+    (31, "LOCATION OUT OF REACH", "BIOS_OUT_OF_REACH"),
+    (32, "JOINT LIMIT", "BIOS_JOINT_LIMIT"),
+    (33, "BELOW WORK SURFACE", "BIOS_BELOW_TABLE"),
+    (34, "PATH THROUGH SINGULARITY", "BIOS_SINGULAR_PATH"),
+    (35, "LOCATION NOT DEFINED", "TROL_ERR_LOCATION"),
+    (36, "MOTION QUEUE FULL", "BIOS_QUEUE_FULL"),
+    (37, "ARM POWER OFF", "BIOS_ARM_POWER"),
+];
+
+/// A profile (the keys of the TOML file; docs/c500.md, "The profile").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Profile {
+    /// Baud rate of the host port.
+    pub baud: u32,
+    /// Software flow control.
+    pub flow: Flow,
+    /// How the session is entered.
+    pub entry: Entry,
+    /// The controller's ACI slave number, 1..127.
+    pub slave: u8,
+    /// The line terminator.
+    pub terminator: Terminator,
+    /// Bytes the controller sends after echoing the first character of a number (0..4;
+    /// RW's controller sent 4). The reader tolerates up to this many.
+    pub extra_after_digit: u8,
+    /// Whether a successful command is answered with ACK.
+    pub ack: Ack,
+    /// Length units of cartesian values.
+    pub units: Units,
+    /// The order and signs of the three angles after x y z in POINT, W0/W2's WORLD row and
+    /// LISTL: a permutation of `yaw pitch roll` with optional `-` (TROL's convention:
+    /// R = Rz(yaw)·Ry(pitch)·Rx(roll)). Empty: cartesian commands are refused.
+    pub angles: String,
+    /// Units of MA and MI: `degrees` or `radians`. Empty: MA and MI are refused.
+    pub joint_units: String,
+    /// How the end of a motion is found.
+    pub completion: Completion,
+    /// How a motion is stopped.
+    pub halt: Halt,
+    /// The prompt the controller writes after each command (`>>`; G3K also saw `O>`). The
+    /// reader accepts both.
+    pub prompt: String,
+    /// HELP mode (keyword completion) on at the start of a session (the simulated C500's
+    /// power-up state).
+    pub help_at_start: bool,
+    /// How long the echo of one byte may take, ms.
+    pub echo_timeout_ms: u64,
+    /// How long the answer to a command that does not move may take, ms.
+    pub reply_timeout_ms: u64,
+    /// The longest a motion may take before its end is given up for lost, s.
+    pub motion_timeout_s: u64,
+    /// How often the end of a motion is polled, ms.
+    pub poll_ms: u64,
+    /// Error numbers (three digits) and the code each means (one of [`ERROR_TARGETS`]);
+    /// numbers not listed give BIOS_RAPL_ERROR, and their text is logged.
+    pub errors: BTreeMap<String, String>,
+}
+
+impl Default for Profile {
+    fn default() -> Self {
+        Profile {
+            baud: 38400,
+            flow: Flow::Xonxoff,
+            entry: Entry::Aci,
+            slave: 1,
+            terminator: Terminator::Cr,
+            extra_after_digit: 4,
+            ack: Ack::Auto,
+            units: Units::Auto,
+            angles: String::new(),
+            joint_units: String::new(),
+            completion: Completion::Status,
+            halt: Halt::Halt,
+            prompt: ">>".into(),
+            help_at_start: true,
+            echo_timeout_ms: 500,
+            reply_timeout_ms: 3000,
+            motion_timeout_s: 120,
+            poll_ms: 50,
+            errors: SIM_ERRORS
+                .iter()
+                .map(|(n, _, to)| (format!("{n:03}"), to.to_string()))
+                .collect(),
+        }
+    }
+}
+
+/// A profile file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[error("RAPL-II profile {file}: {message}")]
+pub struct ProfileError {
+    /// The file (or `<text>`).
+    pub file: String,
+    /// What is wrong, and what is expected.
+    pub message: String,
+}
+
+impl Profile {
+    /// The profile of the simulated C500 as it starts by default: every open point decided
+    /// (mm, `yaw pitch roll`, MA/MI in degrees; assumptions of the simulator, not facts
+    /// about a real controller).
+    pub fn simulator() -> Profile {
+        Profile {
+            units: Units::Mm,
+            angles: "yaw pitch roll".into(),
+            joint_units: "degrees".into(),
+            ..Profile::default()
+        }
+    }
+
+    /// Read a profile file.
+    pub fn from_file(path: &Path) -> Result<Profile, ProfileError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
+            file: file.clone(),
+            message: format!(
+                "cannot read it ({e}); `trol sim --rapl --print-profile` prints one to start from"
+            ),
+        })?;
+        Profile::parse(&text).map_err(|message| ProfileError { file, message })
+    }
+
+    /// Parse a profile's text; keys not given keep their defaults.
+    pub fn parse(text: &str) -> Result<Profile, String> {
+        let p: Profile = toml::from_str(text).map_err(|e| e.to_string().trim().to_string())?;
+        p.check()?;
+        Ok(p)
+    }
+
+    /// Check the values the types cannot.
+    pub fn check(&self) -> Result<(), String> {
+        if !(300..=4_000_000).contains(&self.baud) {
+            return Err(format!("`baud = {}`: expected 300 to 4000000", self.baud));
+        }
+        if !(1..=127).contains(&self.slave) {
+            return Err(format!("`slave = {}`: expected 1 to 127", self.slave));
+        }
+        if self.extra_after_digit > 4 {
+            return Err(format!(
+                "`extra_after_digit = {}`: expected 0 to 4",
+                self.extra_after_digit
+            ));
+        }
+        parse_angles(&self.angles)?;
+        self.joint_units()?;
+        if self.prompt.len() != 2 || !self.prompt.is_ascii() {
+            return Err(format!(
+                "`prompt = \"{}\"`: expected two characters, \">>\" or \"O>\"",
+                self.prompt
+            ));
+        }
+        if self.echo_timeout_ms == 0 || self.reply_timeout_ms == 0 || self.poll_ms == 0 {
+            return Err("timeouts and `poll_ms` must be above 0".into());
+        }
+        if !(1..=3600).contains(&self.motion_timeout_s) {
+            return Err(format!(
+                "`motion_timeout_s = {}`: expected 1 to 3600",
+                self.motion_timeout_s
+            ));
+        }
+        for (k, v) in &self.errors {
+            if k.len() != 3 || !k.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(format!(
+                    "[errors] key \"{k}\": expected a three-digit error number (\"012\")"
+                ));
+            }
+            if !ERROR_TARGETS.contains(&v.as_str()) {
+                return Err(format!(
+                    "[errors] \"{k}\" = \"{v}\": expected one of {}",
+                    ERROR_TARGETS.join(", ")
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The angles, when set.
+    pub fn angles(&self) -> Option<[Angle; 3]> {
+        parse_angles(&self.angles).ok().flatten()
+    }
+
+    /// The units of MA and MI, when set.
+    pub fn joint_units(&self) -> Result<Option<JointUnits>, String> {
+        match self.joint_units.trim().to_ascii_lowercase().as_str() {
+            "" => Ok(None),
+            "degrees" | "deg" => Ok(Some(JointUnits::Degrees)),
+            "radians" | "rad" => Ok(Some(JointUnits::Radians)),
+            other => Err(format!(
+                "`joint_units = \"{other}\"`: expected \"degrees\", \"radians\", or \"\" to refuse MA and MI"
+            )),
+        }
+    }
+
+    /// The TOML text of this profile, with a line of explanation per key.
+    pub fn to_toml(&self) -> String {
+        let body = toml::to_string(self).unwrap_or_default();
+        let mut out = String::from(
+            "# A RAPL-II profile for TROL (docs/c500.md, \"The profile\").\n\
+             # Keys left out keep their defaults; angles = \"\" refuses cartesian commands,\n\
+             # joint_units = \"\" refuses MA and MI.\n",
+        );
+        out.push_str(&body);
+        out
+    }
+
+    /// One byte's time on the line (10 bits: 8N1).
+    pub fn char_time(&self) -> Duration {
+        Duration::from_nanos(10_000_000_000 / u64::from(self.baud.max(1)))
+    }
+
+    /// The error number's meaning, by name, if the profile maps it.
+    pub fn error_target(&self, number: u16) -> Option<&str> {
+        self.errors.get(&format!("{number:03}")).map(String::as_str)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_is_safe_and_round_trips() {
+        let p = Profile::default();
+        assert_eq!(p.angles(), None);
+        assert_eq!(p.joint_units(), Ok(None));
+        let again = Profile::parse(&p.to_toml()).unwrap();
+        assert_eq!(again, p);
+        let s = Profile::simulator();
+        assert_eq!(Profile::parse(&s.to_toml()).unwrap(), s);
+    }
+
+    #[test]
+    fn bad_values_say_what_is_expected() {
+        let e = Profile::parse("angles = \"yaw yaw roll\"").unwrap_err();
+        assert!(e.contains("each of yaw, pitch, roll once"), "{e}");
+        let e = Profile::parse("joint_units = \"grad\"").unwrap_err();
+        assert!(e.contains("\"degrees\", \"radians\""), "{e}");
+        let e = Profile::parse("units = \"furlong\"").unwrap_err();
+        assert!(e.contains("units"), "{e}");
+        let e = Profile::parse("slave = 200").unwrap_err();
+        assert!(e.contains("1 to 127"), "{e}");
+        let e = Profile::parse("speed = 3").unwrap_err();
+        assert!(e.contains("speed"), "{e}");
+        let e = Profile::parse("[errors]\n\"12\" = \"BIOS_NOT_HOMED\"").unwrap_err();
+        assert!(e.contains("three-digit"), "{e}");
+    }
+
+    #[test]
+    fn angles_parse_with_signs() {
+        let a = parse_angles("roll -pitch yaw").unwrap().unwrap();
+        assert_eq!(a[0].which, 2);
+        assert_eq!(a[1].which, 1);
+        assert_eq!(a[1].sign, -1.0);
+        assert_eq!(a[2].which, 0);
+        assert_eq!(parse_angles("").unwrap(), None);
+    }
+}

@@ -575,26 +575,27 @@ impl RaplBackend {
         }
     }
 
-    /// The pose of a location of the controller's table, or None when it has none of the
-    /// name.
-    fn listed(&mut self, name: &LocName) -> Result<Result<Option<Pose>, i16>, BackendError> {
+    /// A location of the controller's table, or None when it has none of the name.
+    fn listed(&mut self, name: &LocName) -> Result<Option<Listed>, BackendError> {
         let upper = name.as_str().to_ascii_uppercase();
         let t = self.reply_timeout();
         let r = self.exchange(&format!("LISTL {upper}"), t)?;
         if r.error.is_some() {
-            return Ok(Ok(None));
+            return Ok(None);
         }
         let rows = text::read_listl(&r.text).map_err(BackendError::Link)?;
-        let Some((_, l)) = rows.into_iter().find(|(n, _)| *n == upper) else {
-            return Ok(Ok(None));
-        };
-        Ok(Ok(Some(match l {
+        Ok(rows.into_iter().find(|(n, _)| *n == upper).map(|(_, l)| l))
+    }
+
+    /// The pose of a listed location (a cartesian one needs the profile's conventions).
+    fn pose_of(&mut self, l: Listed) -> Result<Pose, i16> {
+        Ok(match l {
             Listed::Cart(v) => match self.frames.from_rapl(v) {
                 Ok(t) => Pose::from_xyzypr(t),
-                Err(u) => return Ok(Err(self.unsettled(u))),
+                Err(u) => return Err(self.unsettled(u)),
             },
             Listed::Prec(p) => self.kin().fk(&counts_to_joints(&p.map(|x| x as f64))),
-        })))
+        })
     }
 
     fn kin(&self) -> Kinematics {
@@ -621,11 +622,41 @@ impl RaplBackend {
             PosMode::Actual => "W2",
         };
         let t = self.reply_timeout();
-        let r = self.exchange(cmd, t)?;
-        text::read_position(&r.text).map_err(|e| {
-            self.note(format!("{cmd}: {e}: {:?}", r.text));
-            BackendError::Link(format!("the reply to {cmd} could not be read: {e}"))
-        })
+        let mut why = String::new();
+        for _ in 0..3 {
+            let r = self.exchange(cmd, t)?;
+            match text::read_position(&r.text).and_then(|p| self.consistent(p)) {
+                Ok(p) => return Ok(p),
+                Err(e) => {
+                    self.note(format!("{cmd} read again: {e}: {:?}", r.text));
+                    why = e;
+                }
+            }
+        }
+        Err(BackendError::Link(format!(
+            "the reply to {cmd} could not be read three times: {why}"
+        )))
+    }
+
+    /// A reading whose PULSES and JOINTS rows agree (within 0.01 degrees), when the profile
+    /// asks for the check.
+    fn consistent(&self, p: text::Position) -> Result<text::Position, String> {
+        if !self.profile.cross_check {
+            return Ok(p);
+        }
+        let q = counts_to_joints(&p.pulses.map(|x| x as f64));
+        for i in 0..6 {
+            let d = (q[i].to_degrees() - p.joints[i]).abs();
+            if d > 0.01 {
+                return Err(format!(
+                    "joint {} reads {:.4} deg but its pulses say {:.4} deg",
+                    i + 1,
+                    p.joints[i],
+                    q[i].to_degrees()
+                ));
+            }
+        }
+        Ok(p)
     }
 
     fn here(&mut self) -> Result<Result<Pose, i16>, BackendError> {
@@ -684,9 +715,11 @@ impl Backend for RaplBackend {
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let pose = match target {
             Target::Name(n) => match self.listed(n)? {
-                Ok(Some(p)) => p,
-                Ok(None) => return Err(BackendError::UnknownLocation(*n)),
-                Err(c) => return Ok(c),
+                Some(l) => match self.pose_of(l) {
+                    Ok(p) => p,
+                    Err(c) => return Ok(c),
+                },
+                None => return Err(BackendError::UnknownLocation(*n)),
             },
             Target::Location(l @ Location::Cart(_)) => Pose::from_xyzypr(l.to_array6()),
             Target::Location(l @ Location::Prec(_)) => {
@@ -815,12 +848,11 @@ impl Backend for RaplBackend {
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
         match target {
             Target::Name(n) => match self.listed(n)? {
-                Ok(Some(_)) => {
+                Some(_) => {
                     let upper = n.as_str().to_ascii_uppercase();
                     self.motion(&format!("{} {upper}", mv(straight)), Some(*n))
                 }
-                Ok(None) => Err(BackendError::UnknownLocation(*n)),
-                Err(c) => Ok(c),
+                None => Err(BackendError::UnknownLocation(*n)),
             },
             Target::Location(l) => match self.point("T1", l)? {
                 Ok(name) => self.motion(&format!("{} {name}", mv(straight)), None),

@@ -256,6 +256,10 @@ pub struct Profile {
     pub motion_timeout_s: u64,
     /// How often the end of a motion is polled, ms.
     pub poll_ms: u64,
+    /// Check each W0/W2 reading against itself (PULSES against JOINTS through the A465's
+    /// counts per radian) and read again when they disagree, so a damaged digit is never
+    /// reported as the position. Turn off if a controller's pulses do not follow the model.
+    pub cross_check: bool,
     /// Error numbers (three digits) and the code each means (one of [`ERROR_TARGETS`]);
     /// numbers not listed give BIOS_RAPL_ERROR, and their text is logged.
     pub errors: BTreeMap<String, String>,
@@ -282,6 +286,7 @@ impl Default for Profile {
             reply_timeout_ms: 3000,
             motion_timeout_s: 120,
             poll_ms: 50,
+            cross_check: true,
             errors: SIM_ERRORS
                 .iter()
                 .map(|(n, _, to)| (format!("{n:03}"), to.to_string()))

@@ -141,12 +141,19 @@ pub enum SessionError {
 }
 
 impl SessionError {
-    /// Whether the command surely did not run (it was cancelled before its terminator).
+    /// Whether the command surely did not run (it was cancelled before its terminator). An
+    /// echo that came back as a line end is not sure: the controller may have taken a
+    /// damaged byte for the terminator and run the line so far.
     pub fn surely_not_run(&self) -> bool {
-        matches!(
-            self,
-            SessionError::Echo { .. } | SessionError::EchoTimeout { .. } | SessionError::Busy
-        )
+        match self {
+            SessionError::Echo { line, at, got, .. } => {
+                *at < line.len() && *got != b'\r' && *got != b'\n'
+            }
+            // The terminator's echo lost: the controller may have the line.
+            SessionError::EchoTimeout { line, at, .. } => *at < line.len(),
+            SessionError::Busy => true,
+            _ => false,
+        }
     }
 }
 

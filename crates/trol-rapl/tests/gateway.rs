@@ -1,0 +1,341 @@
+//! The RAPL-II backend against the simulated C500 over an in-memory line paced at the
+//! profile's baud rate: the profile's variants configured alike and mismatched, the safe
+//! default, and faults on the line.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use trol_a465::arm::{Arm, ArmSettings, Stored};
+use trol_controller::backend::{Backend, BackendError, PosMode, Target};
+use trol_port::Port;
+use trol_port::faulty::{FaultConfig, Faulty};
+use trol_port::memory;
+use trol_proto::application::{LocName, Location, Tag};
+use trol_rapl::backend::{NO_ANGLES, NO_JOINT_UNITS};
+use trol_rapl::profile::{Ack, Entry, Units};
+use trol_rapl::{C500, Profile, RaplBackend};
+
+/// A simulated C500 on a thread; stops when dropped. `lines` has every command line it ran.
+struct Sim {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    lines: Arc<Mutex<Vec<String>>>,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Sim {
+    fn ran(&self) -> Vec<String> {
+        self.lines.lock().unwrap().clone()
+    }
+}
+
+fn start(profile: Profile, faults: Option<FaultConfig>) -> (Box<dyn Port>, Sim) {
+    let (host, ctl) = memory::pair(Some(profile.baud));
+    let stop = Arc::new(AtomicBool::new(false));
+    let lines = Arc::new(Mutex::new(Vec::new()));
+    let (flag, keep) = (stop.clone(), lines.clone());
+    let thread = std::thread::spawn(move || {
+        let arm = Arm::new(ArmSettings {
+            homed: true,
+            ..Default::default()
+        });
+        let locations = vec![(
+            "test_001".to_string(),
+            Stored::Cart([400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]),
+        )];
+        let mut c = C500::new(profile, arm, locations);
+        let mut port: Box<dyn Port> = match faults {
+            Some(f) => Box::new(Faulty::new(ctl, f)),
+            None => Box::new(ctl),
+        };
+        let _ = trol_rapl::c500::serve(port.as_mut(), &mut c, 20.0, &flag, &mut |l| {
+            keep.lock().unwrap().push(l.to_string())
+        });
+    });
+    (
+        Box::new(host),
+        Sim {
+            stop,
+            thread: Some(thread),
+            lines,
+        },
+    )
+}
+
+fn wait_idle(b: &mut RaplBackend) {
+    for _ in 0..2000 {
+        if !b.moving().unwrap() {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    panic!("the arm did not stop");
+}
+
+fn name(s: &str) -> LocName {
+    LocName::new(s).unwrap()
+}
+
+/// What a user checks: a move by name arrives, a cartesian move arrives where asked, the
+/// position reads back in every form.
+fn drive(b: &mut RaplBackend) {
+    assert_eq!(b.speed(50).unwrap(), 0);
+    assert_eq!(
+        b.move_to(&Target::Name(name("test_001")), false).unwrap(),
+        0
+    );
+    wait_idle(b);
+    let c = b
+        .position(Tag::Cart, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    assert!(
+        (c[0] - 400.0).abs() < 1e-3 && (c[2] - 150.0).abs() < 1e-3,
+        "{c:?}"
+    );
+    let target = [380.0, 20.0, 200.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+    let loc = Location::from_array6(Tag::Cart, target);
+    assert_eq!(b.move_to(&Target::Location(loc), true).unwrap(), 0);
+    wait_idle(b);
+    let c = b.position(Tag::Cart, PosMode::Actual).unwrap().to_array6();
+    for i in 0..3 {
+        assert!((c[i] - target[i]).abs() < 0.1, "{c:?}");
+    }
+    let j = b
+        .position(Tag::Joint, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    let p = b
+        .position(Tag::Prec, PosMode::Commanded)
+        .unwrap()
+        .to_array6();
+    let from_counts = trol_a465::model::counts_to_joints(&p);
+    for i in 0..6 {
+        assert!(
+            (j[i] - from_counts[i]).abs() < 1e-3,
+            "{j:?} {from_counts:?}"
+        );
+    }
+    assert_eq!(
+        b.move_to(&Target::Name(name("nowhere")), false)
+            .unwrap_err()
+            .to_string(),
+        BackendError::UnknownLocation(name("nowhere")).to_string()
+    );
+}
+
+#[test]
+fn every_variant_configured_alike_drives_the_arm() {
+    let mut variants = Vec::new();
+    for entry in [Entry::Aci, Entry::AciEmpty, Entry::Terminal] {
+        variants.push(Profile {
+            entry,
+            ..Profile::simulator()
+        });
+    }
+    for ack in [Ack::Required, Ack::Never] {
+        variants.push(Profile {
+            ack,
+            ..Profile::simulator()
+        });
+    }
+    variants.push(Profile {
+        extra_after_digit: 0,
+        help_at_start: false,
+        ..Profile::simulator()
+    });
+    variants.push(Profile {
+        units: Units::Inch,
+        angles: "roll -pitch yaw".into(),
+        joint_units: "radians".into(),
+        baud: 9600,
+        ..Profile::simulator()
+    });
+    for sim in variants {
+        let described = {
+            let arm = Arm::new(ArmSettings::default());
+            C500::new(sim.clone(), arm, Vec::new()).describe()
+        };
+        let (port, _sim) = start(sim.clone(), None);
+        let mut b =
+            RaplBackend::connect(port, described).unwrap_or_else(|e| panic!("{sim:?}: {e}"));
+        drive(&mut b);
+    }
+}
+
+#[test]
+fn the_reader_tolerates_what_it_is_meant_to() {
+    // The gateway allows four extra bytes, the controller sends none; the gateway accepts
+    // an ACK or none, the controller sends none; units auto, STATUS says inches.
+    let sim = Profile {
+        extra_after_digit: 0,
+        ack: Ack::Never,
+        units: Units::Inch,
+        ..Profile::simulator()
+    };
+    let (port, _sim) = start(sim, None);
+    let gw = Profile {
+        units: Units::Auto,
+        ..Profile::simulator()
+    };
+    let mut b = RaplBackend::connect(port, gw).unwrap();
+    drive(&mut b);
+}
+
+#[test]
+fn mismatched_profiles_fail_clearly_and_move_nothing() {
+    // An ACK required, none sent: the session does not open.
+    let (port, sim) = start(
+        Profile {
+            ack: Ack::Never,
+            ..Profile::simulator()
+        },
+        None,
+    );
+    let gw = Profile {
+        ack: Ack::Required,
+        ..Profile::simulator()
+    };
+    let e = RaplBackend::connect(port, gw).err().unwrap().to_string();
+    assert!(e.contains("ack = \"auto\""), "{e}");
+    assert!(!sim.ran().iter().any(|l| l.starts_with("MOVE")));
+
+    // Extra bytes the gateway does not expect: the line is cancelled before it runs.
+    let (port, sim) = start(Profile::simulator(), None);
+    let gw = Profile {
+        extra_after_digit: 0,
+        ..Profile::simulator()
+    };
+    let mut b = RaplBackend::connect(port, gw).unwrap();
+    let e = b.joint(1, 0.5).unwrap_err();
+    assert!(matches!(e, BackendError::Link(_)), "{e}");
+    assert!(e.to_string().contains("raise extra_after_digit"), "{e}");
+    assert!(
+        !sim.ran().iter().any(|l| l.starts_with("JOINT")),
+        "{:?}",
+        sim.ran()
+    );
+    // The session is back at the prompt: a command without digits works.
+    assert_eq!(b.ready().unwrap(), 0);
+
+    // Other units than the controller's: refused at the opening.
+    let (port, _sim) = start(Profile::simulator(), None);
+    let gw = Profile {
+        units: Units::Inch,
+        ..Profile::simulator()
+    };
+    let e = RaplBackend::connect(port, gw).err().unwrap().to_string();
+    assert!(e.contains("STATUS says METRIC UNITS"), "{e}");
+}
+
+#[test]
+fn the_safe_default_refuses_what_a_wrong_guess_would_turn_into_a_wrong_motion() {
+    let (port, sim) = start(Profile::simulator(), None);
+    let mut b = RaplBackend::connect(port, Profile::default()).unwrap();
+    let before = b.position(Tag::Joint, PosMode::Commanded).unwrap();
+    let loc = Location::from_array6(Tag::Cart, [380.0, 20.0, 200.0, 0.0, 1.5, 0.0]);
+    assert_eq!(b.move_to(&Target::Location(loc), false).unwrap(), NO_ANGLES);
+    assert_eq!(b.ma([0.1; 6]).unwrap(), NO_JOINT_UNITS);
+    assert_eq!(b.mi([0.1; 6]).unwrap(), NO_JOINT_UNITS);
+    assert_eq!(
+        b.set_tool([0.0, 0.0, 100.0, 0.0, 0.0, 0.0]).unwrap(),
+        NO_ANGLES
+    );
+    let meaning = |v: i16| {
+        trol_rapl::RAPL_CODES
+            .iter()
+            .find(|c| c.value == v)
+            .unwrap()
+            .meaning
+    };
+    assert!(meaning(NO_ANGLES).contains("set `angles`"));
+    assert!(meaning(NO_JOINT_UNITS).contains("set `joint_units`"));
+    assert!(b.log_lines().iter().any(|l| l.contains("set angles")));
+    // Nothing moved, nothing was sent that could.
+    let after = b.position(Tag::Joint, PosMode::Commanded).unwrap();
+    assert_eq!(before, after);
+    assert!(
+        !sim.ran()
+            .iter()
+            .any(|l| l.starts_with("MOVE") || l.starts_with("MA")),
+        "{:?}",
+        sim.ran()
+    );
+    // What needs no convention works: a named location, a joint in degrees.
+    assert_eq!(
+        b.move_to(&Target::Name(name("test_001")), false).unwrap(),
+        0
+    );
+}
+
+#[test]
+fn a_noisy_line_never_runs_a_damaged_command_and_says_what_ran() {
+    // Bit errors and dropped, doubled bytes both ways; each JOINT line is unique, so the
+    // controller's log tells which ran.
+    let faults = |seed| FaultConfig {
+        bit_error_rate: 2e-4,
+        drop_rate: 5e-4,
+        duplicate_rate: 5e-4,
+        ..FaultConfig::seeded(seed)
+    };
+    let (port, sim) = start(Profile::simulator(), Some(faults(7)));
+    let port: Box<dyn Port> = Box::new(Faulty::new(port, faults(8)));
+    let mut b = match RaplBackend::connect(port, Profile::simulator()) {
+        Ok(b) => b,
+        Err(e) => panic!("{e}"),
+    };
+    let (mut ok, mut not_run, mut unsure) = (0, 0, 0);
+    for i in 0..60u32 {
+        let deg = 0.01 * f64::from(i + 1);
+        let line = format!("JOINT 6,{}", trol_rapl::text::num(deg));
+        let r = b.joint(6, deg.to_radians());
+        let ran = sim.ran().iter().filter(|l| **l == line).count();
+        match r {
+            Ok(0) => {
+                ok += 1;
+                assert_eq!(ran, 1, "{line} answered success");
+            }
+            Ok(c) => panic!("{line}: {c}"),
+            Err(BackendError::Link(e)) => {
+                not_run += 1;
+                assert_eq!(ran, 0, "{line} said not run: {e}");
+            }
+            Err(BackendError::Unsure(_)) => unsure += 1,
+            Err(e) => panic!("{e}"),
+        }
+        // No line ran that was not typed: every JOINT the controller ran is one we sent.
+        for l in sim.ran() {
+            if let Some(v) = l.strip_prefix("JOINT 6,") {
+                let v: f64 = v.parse().unwrap_or(-1.0);
+                assert!(
+                    (v * 100.0 - (v * 100.0).round()).abs() < 1e-6 && v > 0.0 && v < 0.62,
+                    "a damaged line ran: {l}"
+                );
+            }
+        }
+    }
+    assert!(ok > 30, "ok {ok}, not run {not_run}, unsure {unsure}");
+    assert!(not_run + unsure > 0, "the faults did nothing");
+}
+
+#[test]
+fn a_controller_that_goes_silent_mid_motion_ends_the_wait_with_a_link_error() {
+    let (port, sim) = start(Profile::simulator(), None);
+    let mut b = RaplBackend::connect(port, Profile::simulator()).unwrap();
+    assert_eq!(b.joint(1, 1.5).unwrap(), 0);
+    drop(sim);
+    let e = b.moving().unwrap_err();
+    assert!(
+        matches!(e, BackendError::Link(_) | BackendError::Unsure(_)),
+        "{e}"
+    );
+}

@@ -645,14 +645,12 @@ impl RaplBackend {
             return Ok(p);
         }
         let q = counts_to_joints(&p.pulses.map(|x| x as f64));
-        for i in 0..6 {
-            let d = (q[i].to_degrees() - p.joints[i]).abs();
-            if d > 0.01 {
+        for (i, (from_pulses, read)) in q.iter().zip(&p.joints).enumerate() {
+            if (from_pulses.to_degrees() - read).abs() > 0.01 {
                 return Err(format!(
-                    "joint {} reads {:.4} deg but its pulses say {:.4} deg",
+                    "joint {} reads {read:.4} deg but its pulses say {:.4} deg",
                     i + 1,
-                    p.joints[i],
-                    q[i].to_degrees()
+                    from_pulses.to_degrees()
                 ));
             }
         }

@@ -56,7 +56,7 @@ pub static RAPL_CODES: &CodeTable = &{
             value: NO_ANGLES,
             name: "BIOS_NO_ANGLES",
             meaning: "cartesian commands need the controller's angle order: set `angles` in the \
-                      RAPL-II profile (trol rapl probe --poses 4 fits it; docs/c500.md)",
+                      RAPL-II profile (docs/c500.md, section Settle the conventions)",
         },
         CodeInfo {
             value: RAPL_ERROR,
@@ -73,7 +73,7 @@ pub static RAPL_CODES: &CodeTable = &{
             value: NO_JOINT_UNITS,
             name: "BIOS_NO_JOINT_UNITS",
             meaning: "MA and MI need their units: set `joint_units` (degrees or radians) in the \
-                      RAPL-II profile (trol rapl probe --poses 4 fits it; docs/c500.md)",
+                      RAPL-II profile (docs/c500.md, section Settle the conventions)",
         },
         CodeInfo {
             value: NO_UNITS,
@@ -131,7 +131,7 @@ pub enum Dir {
     FromController,
 }
 
-/// Every byte of a session with its time, for `trol rapl probe` and golden files.
+/// Every byte of a session with its time (a first contact with a controller, golden files).
 #[derive(Clone, Debug, Default)]
 pub struct Transcript {
     /// (seconds since the session began, direction, bytes).

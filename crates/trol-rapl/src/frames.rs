@@ -16,7 +16,7 @@ pub enum Unsettled {
     /// The order and signs of the angles.
     #[error(
         "the order and signs of the controller's angles are not known: set angles in the RAPL-II profile \
-         (trol rapl probe --poses 4 fits it; docs/c500.md)"
+         (docs/c500.md, section Settle the conventions)"
     )]
     Angles,
 }

@@ -8,7 +8,7 @@
 //! The default is safe: the two settings whose wrong guess turns into a large or wrong
 //! motion, the order and signs of POINT's angles and the units of MA and MI, are empty, and
 //! every command that needs them is refused with a message saying what to set
-//! (`trol rapl probe --poses N` fits them from readings of a pendant-moved arm).
+//! (docs/c500.md, "Settle the conventions", fits them from readings of a pendant-moved arm).
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -18,7 +18,7 @@
 use std::collections::{BTreeMap, VecDeque};
 
 use trol_a465::arm::{self, Arm, Stored, Which, code};
-use trol_a465::model::{counts_to_joints, joints_to_counts};
+use trol_a465::model::joints_to_counts;
 
 use crate::aci::Slave;
 use crate::frames::Frames;
@@ -664,11 +664,6 @@ impl C500 {
     pub fn power_off(&mut self, now: f64) {
         self.limp = true;
         self.arm.halt(now);
-    }
-
-    /// Joint values of a precision point, for tests.
-    pub fn joints_of(counts: [i32; 6]) -> [f64; 6] {
-        counts_to_joints(&counts.map(f64::from))
     }
 }
 

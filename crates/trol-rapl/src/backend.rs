@@ -187,7 +187,6 @@ pub struct RaplBackend {
     epoch: std::time::Instant,
     tool: [f64; 6],
     last_poll: Option<(std::time::Instant, bool)>,
-    moving_hint: bool,
     log: VecDeque<String>,
     log_fn: Option<LogFn>,
     transcript: Option<Transcript>,
@@ -224,7 +223,6 @@ impl RaplBackend {
             epoch: std::time::Instant::now(),
             tool: [0.0; 6],
             last_poll: None,
-            moving_hint: false,
             log: VecDeque::new(),
             log_fn,
             transcript: record.then(Transcript::default),
@@ -412,7 +410,6 @@ impl RaplBackend {
         let timeout = self.motion_timeout();
         let r = self.command(line, timeout, name)?;
         if r == 0 {
-            self.moving_hint = true;
             self.last_poll = None;
         }
         Ok(r)
@@ -731,7 +728,7 @@ impl Backend for RaplBackend {
         let t = self.reply_timeout();
         let r = self.command(&format!("CLOSE {force}"), t, None)?;
         if r == 0 {
-            self.moving_hint = true;
+            self.last_poll = None;
         }
         Ok(r)
     }
@@ -766,7 +763,6 @@ impl Backend for RaplBackend {
             }
         };
         self.last_poll = Some((std::time::Instant::now(), m));
-        self.moving_hint = m;
         Ok(m)
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
@@ -777,7 +773,6 @@ impl Backend for RaplBackend {
         let t = self.reply_timeout();
         let r = self.command(&format!("GRIP {}", text::num(d)), t, None)?;
         if r == 0 {
-            self.moving_hint = true;
             self.last_poll = None;
         }
         Ok(r)
@@ -862,7 +857,7 @@ impl Backend for RaplBackend {
         let t = self.reply_timeout();
         let r = self.command(&format!("OPEN {force}"), t, None)?;
         if r == 0 {
-            self.moving_hint = true;
+            self.last_poll = None;
         }
         Ok(r)
     }

@@ -17,6 +17,7 @@ mod gateway;
 mod init;
 mod interp;
 mod link;
+mod rapl;
 mod sim;
 mod trace;
 
@@ -59,6 +60,9 @@ enum Command {
     Sim(sim::SimArgs),
     /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md).
     Gateway(gateway::GatewayArgs),
+    /// A real C500 in RAPL-II: first contact (probe) and a plain terminal (term).
+    #[command(subcommand)]
+    Rapl(rapl::Rapl),
     /// Relay between the controller's port and an application's (the manual's link.exe).
     Link(link::LinkArgs),
     /// Show the traffic layer by layer, live between two ports or from a capture.
@@ -97,6 +101,7 @@ fn main() -> ExitCode {
         Command::Sim(a) => sim::run(a).map(|()| ExitCode::SUCCESS),
         Command::Link(a) => link::run(a).map(|()| ExitCode::SUCCESS),
         Command::Gateway(a) => gateway::run(a).map(|()| ExitCode::SUCCESS),
+        Command::Rapl(r) => rapl::run(r).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
         Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),

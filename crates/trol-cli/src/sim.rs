@@ -75,6 +75,11 @@ pub struct SimArgs {
     /// `trol gateway --profile` or trol.cfg's rapl-profile) and exit.
     #[arg(long, requires = "rapl")]
     print_profile: bool,
+    /// With --rapl: a teach pendant on standard input. Each line `J1 J2 J3 J4 J5 J6`
+    /// (degrees) moves the arm there as an operator would by hand, whatever the host port
+    /// does; the log says `pendant: at ...` once it stands (for `trol rapl probe --poses`).
+    #[arg(long, requires = "rapl")]
+    pendant: bool,
 }
 
 /// Serve until the process is stopped (Ctrl-C) or the line fails.
@@ -229,14 +234,58 @@ fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
     );
     say!("  drive it with: trol gateway --controller {name} --port pty");
     let stop = std::sync::atomic::AtomicBool::new(false);
-    trol_rapl::c500::serve(
+    let pendant = a.pendant.then(|| {
+        say!("  pendant: type J1..J6 in degrees, one pose per line");
+        let (tx, rx) = std::sync::mpsc::channel::<String>();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::stdin().lock().lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        rx
+    });
+    let mut going: Option<[f64; 6]> = None;
+    trol_rapl::c500::serve_with(
         opened.port.as_mut(),
         &mut c500,
         a.time_scale,
         &stop,
         &mut |line| say!("{line}"),
+        &mut |c, now| {
+            if let Some(rx) = &pendant {
+                if let Ok(line) = rx.try_recv() {
+                    match parse_pose(&line) {
+                        Ok(q) => match c.pendant(q.map(f64::to_radians), now) {
+                            0 => going = Some(q),
+                            code => say!("pendant: refused ({code}): {}", line.trim()),
+                        },
+                        Err(e) => say!("pendant: {e}"),
+                    }
+                }
+            }
+            if let Some(q) = going {
+                if !c.arm_moving(now) {
+                    going = None;
+                    say!("pendant: at {q:?}");
+                }
+            }
+        },
     )
     .map_err(|e| format!("the line failed: {e}"))
+}
+
+/// Six joint values in degrees, separated by blanks or commas.
+fn parse_pose(line: &str) -> Result<[f64; 6], String> {
+    let v: Vec<f64> = line
+        .split([' ', ',', '\t'])
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| format!("`{}` is not six numbers (degrees)", line.trim()))?;
+    <[f64; 6]>::try_from(v).map_err(|_| format!("`{}` is not six numbers (degrees)", line.trim()))
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {

@@ -143,3 +143,158 @@ fn halt_reaches_the_arm_while_the_application_waits_for_the_motion() {
     let said = sim.output().join("\n");
     assert!(said.contains("HALT"), "{said}");
 }
+
+/// The conventions of a C500 that are not the simulator's defaults: inches, other angles.
+fn other_controller(dir: &Path) -> std::path::PathBuf {
+    let p = dir.join("controller.toml");
+    let profile = trol_rapl::Profile {
+        units: trol_rapl::profile::Units::Inch,
+        angles: "roll -pitch yaw".into(),
+        ..trol_rapl::Profile::simulator()
+    };
+    std::fs::write(&p, profile.to_toml()).unwrap();
+    p
+}
+
+#[test]
+fn probe_records_first_contact_and_fits_the_conventions_of_pendant_poses() {
+    use std::io::{BufRead, Write};
+    let dir = scratch("rapl-probe");
+    let controller = other_controller(&dir);
+    let mut sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--pendant",
+            "--homed",
+            "--time-scale",
+            "20",
+            "--profile",
+            controller.to_str().unwrap(),
+        ],
+        "serving on ",
+    );
+    let mut probe = std::process::Command::new(common::TROL)
+        .args([
+            "rapl",
+            "probe",
+            "--controller",
+            &sim.name,
+            "--out",
+            "first.txt",
+            "--poses",
+            "2",
+            "--profile-out",
+            "fitted.toml",
+        ])
+        .current_dir(&dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut answer = probe.stdin.take().unwrap();
+    let mut said = std::io::BufReader::new(probe.stdout.take().unwrap()).lines();
+    let mut out = Vec::new();
+    for (k, pose) in ["10 20 40 30 50 -20", "-35 5 70 -60 30 45"]
+        .iter()
+        .enumerate()
+    {
+        let ask = format!("pose {} of 2", k + 1);
+        loop {
+            let line = said.next().expect("the probe ended early").unwrap();
+            let hit = line.starts_with(&ask);
+            out.push(line);
+            if hit {
+                break;
+            }
+        }
+        sim.type_line(pose);
+        sim.wait_for("pendant: at", 20);
+        writeln!(answer,).unwrap();
+    }
+    out.extend(said.map_while(Result::ok));
+    assert!(probe.wait().unwrap().success(), "{out:?}");
+    let out = out.join("\n");
+    assert!(out.contains("ENGLISH UNITS."), "{out}");
+    assert!(
+        out.contains("fitted: units = \"inch\", angles = \"roll -pitch yaw\""),
+        "{out}"
+    );
+    let fitted = trol_rapl::Profile::from_file(&dir.join("fitted.toml")).unwrap();
+    assert_eq!(fitted.angles, "roll -pitch yaw");
+    assert_eq!(fitted.units, trol_rapl::profile::Units::Inch);
+    assert_eq!(fitted.joint_units, "degrees");
+    let transcript = std::fs::read_to_string(dir.join("first.txt")).unwrap();
+    assert!(
+        transcript.contains(" H 52 21 05"),
+        "the ACI entry: {transcript}"
+    );
+    assert!(transcript.contains("WORLD"), "{transcript}");
+    // Only commands that cannot move the arm reached the controller.
+    let ran: Vec<String> = sim
+        .output()
+        .into_iter()
+        .filter(|l| !l.starts_with(' ') && !l.starts_with("pendant"))
+        .collect();
+    for line in &ran {
+        let word = line.split_whitespace().next().unwrap_or("");
+        assert!(
+            trol_rapl::probe::READ_ONLY.contains(&word) || ["NOHELP", "HELP"].contains(&word),
+            "the probe ran {line}"
+        );
+    }
+
+    // A second probe does not overwrite the fitted profile.
+    let again = trol(
+        &dir,
+        &[
+            "rapl",
+            "probe",
+            "--controller",
+            &sim.name,
+            "--out",
+            "second.txt",
+            "--poses",
+            "2",
+            "--profile-out",
+            "fitted.toml",
+        ],
+        "",
+    );
+    let (_, err) = text(&again);
+    assert!(
+        !again.status.success() && err.contains("fitted.toml exists"),
+        "{err}"
+    );
+
+    // The plain terminal: lines typed, replies printed, refusals as the controller says
+    // them, the session closed.
+    let term = trol(
+        &dir,
+        &[
+            "rapl",
+            "term",
+            "--controller",
+            &sim.name,
+            "--profile",
+            controller.to_str().unwrap(),
+            "--out",
+            "term.txt",
+        ],
+        "status\nw2\njoint 1,5\nbogus\n",
+    );
+    let (out, err) = text(&term);
+    assert!(term.status.success(), "{out}\n{err}");
+    assert!(out.contains("ENGLISH UNITS."), "{out}");
+    assert!(out.contains("WORLD"), "{out}");
+    assert!(out.contains("012-COMMAND ERROR."), "{out}");
+    assert!(out.contains("session closed"), "{out}");
+    sim.wait_for("JOINT 1,5", 10);
+    sim.wait_for("BOGUS", 10);
+    assert!(
+        std::fs::read_to_string(dir.join("term.txt"))
+            .unwrap()
+            .contains(" H ")
+    );
+}

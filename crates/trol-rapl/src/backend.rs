@@ -191,6 +191,7 @@ pub struct RaplBackend {
     log_fn: Option<LogFn>,
     transcript: Option<Transcript>,
     status: Option<text::Status>,
+    closed: bool,
 }
 
 const LOG_KEEP: usize = 200;
@@ -227,6 +228,7 @@ impl RaplBackend {
             log_fn,
             transcript: record.then(Transcript::default),
             status: None,
+            closed: false,
         };
         b.open()?;
         Ok(b)
@@ -250,6 +252,36 @@ impl RaplBackend {
     /// The transcript, when recording.
     pub fn transcript(&self) -> Option<&Transcript> {
         self.transcript.as_ref()
+    }
+
+    /// The profile the session was opened with.
+    pub fn profile(&self) -> &Profile {
+        &self.profile
+    }
+
+    /// Type a line that cannot move the arm (its keyword is one of
+    /// [`crate::probe::READ_ONLY`]) and read its reply; any other line is refused unsent.
+    pub fn read_only(&mut self, line: &str) -> Result<Reply, BackendError> {
+        let word = line.split_whitespace().next().unwrap_or("");
+        if !crate::probe::READ_ONLY
+            .iter()
+            .any(|k| k.eq_ignore_ascii_case(word))
+        {
+            return Err(BackendError::Link(format!(
+                "`{line}` is not one of the commands that cannot move the arm ({}); not sent",
+                crate::probe::READ_ONLY.join(", ")
+            )));
+        }
+        let t = self.reply_timeout();
+        self.exchange(line, t)
+    }
+
+    /// Type any line, as a terminal would (`trol rapl term`), and read its reply within
+    /// `timeout`. The line is checked like every other: typed byte by byte, each echo
+    /// checked, and cancelled with Ctrl-C before its terminator if an echo differs.
+    pub fn type_line(&mut self, line: &str, timeout: Duration) -> Result<Reply, BackendError> {
+        self.last_poll = None;
+        self.exchange(line, timeout)
     }
 
     /// STATUS as read at the opening.
@@ -349,6 +381,11 @@ impl RaplBackend {
 
     /// Type a line and read its reply.
     fn exchange(&mut self, line: &str, timeout: Duration) -> Result<Reply, BackendError> {
+        if self.closed {
+            return Err(BackendError::Link(format!(
+                "`{line}` not sent: the RAPL-II session is closed"
+            )));
+        }
         self.settle()?;
         let now = self.now();
         self.session
@@ -522,11 +559,16 @@ impl RaplBackend {
         }
     }
 
-    /// End the session: HELP back on, then two Ctrl-Z to ACI mode.
+    /// End the session: HELP back on, then two Ctrl-Z to ACI mode. Once: later calls, and
+    /// dropping the backend, send nothing more.
     pub fn close(&mut self) {
+        if self.closed {
+            return;
+        }
         let t = self.reply_timeout();
         let _ = self.exchange("HELP", t);
         let _ = self.send(&[CTRL_Z, CTRL_Z]);
+        self.closed = true;
     }
 
     fn unsettled(&mut self, u: Unsettled) -> i16 {

@@ -660,6 +660,17 @@ impl C500 {
         }
     }
 
+    /// The teach pendant: move the arm to `joints` (radians) as an operator would by hand,
+    /// whatever the host port is doing. Returns the arm's code (0, or why it refused).
+    pub fn pendant(&mut self, joints: [f64; 6], now: f64) -> i16 {
+        self.arm.ma(joints, now)
+    }
+
+    /// Whether the arm moves at `now`.
+    pub fn arm_moving(&mut self, now: f64) -> bool {
+        self.arm.is_moving(now)
+    }
+
     /// Cut the arm's power now (a fault: an e-stop), as LIMP does.
     pub fn power_off(&mut self, now: f64) {
         self.limp = true;
@@ -676,6 +687,20 @@ pub fn serve(
     time_scale: f64,
     stop: &std::sync::atomic::AtomicBool,
     log: &mut dyn FnMut(&str),
+) -> std::io::Result<()> {
+    serve_with(port, c, time_scale, stop, log, &mut |_, _| {})
+}
+
+/// Like [`serve`], calling `each` with the controller and the simulation time on every turn
+/// of the loop (at least every 2 ms): the teach pendant of `trol sim --rapl --pendant`, and
+/// measurements that watch the arm.
+pub fn serve_with(
+    port: &mut dyn trol_port::Port,
+    c: &mut C500,
+    time_scale: f64,
+    stop: &std::sync::atomic::AtomicBool,
+    log: &mut dyn FnMut(&str),
+    each: &mut dyn FnMut(&mut C500, f64),
 ) -> std::io::Result<()> {
     use std::time::{Duration, Instant};
     let epoch = Instant::now();
@@ -695,6 +720,7 @@ pub fn serve(
             c.feed(&buf[..n], now);
         }
         c.tick(now);
+        each(c, now);
         for line in c.take_log() {
             log(&line);
         }

@@ -11,6 +11,8 @@
 //! - [`text`]: numbers, and the text of W0/W2/W5, STATUS and LISTL;
 //! - [`frames`]: TROL's units and angles against the controller's;
 //! - [`backend`]: the robot backend on the PCP server's contract, over a port;
+//! - [`probe`]: first contact: the commands that cannot move the arm, and the fit of the
+//!   conventions from readings at poses set by pendant;
 //! - [`c500`]: the simulated C500 in RAPL-II mode, backed by the simulated A465.
 
 #![forbid(unsafe_code)]
@@ -20,6 +22,7 @@ pub mod aci;
 pub mod backend;
 pub mod c500;
 pub mod frames;
+pub mod probe;
 pub mod profile;
 pub mod session;
 pub mod text;

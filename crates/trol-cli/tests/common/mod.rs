@@ -50,6 +50,7 @@ pub struct Background {
     child: Child,
     pub name: String,
     lines: std::sync::mpsc::Receiver<String>,
+    input: Option<std::process::ChildStdin>,
 }
 
 impl Background {
@@ -68,11 +69,12 @@ impl Background {
             .args(args)
             .current_dir(dir)
             .env_remove("TROL_CONFIG")
-            .stdin(Stdio::null())
+            .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()
             .expect("start the program");
+        let input = child.stdin.take();
         let out = BufReader::new(child.stdout.take().unwrap());
         let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
@@ -105,12 +107,40 @@ impl Background {
             child,
             name,
             lines: rx,
+            input,
         }
     }
 
     /// The output lines so far.
     pub fn output(&self) -> Vec<String> {
         self.lines.try_iter().collect()
+    }
+
+    /// Write `line` to the program's standard input.
+    pub fn type_line(&mut self, line: &str) {
+        let input = self.input.as_mut().expect("standard input open");
+        writeln!(input, "{line}").expect("write to the program");
+        input.flush().unwrap();
+    }
+
+    /// The output lines up to and including the first that contains `marker` (panics after
+    /// `secs` seconds without it).
+    pub fn wait_for(&self, marker: &str, secs: u64) -> Vec<String> {
+        let deadline = Instant::now() + Duration::from_secs(secs);
+        let mut seen = Vec::new();
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    let hit = line.contains(marker);
+                    seen.push(line);
+                    if hit {
+                        return seen;
+                    }
+                }
+                Err(_) => panic!("no `{marker}` within {secs} s; output: {seen:?}"),
+            }
+        }
     }
 }
 

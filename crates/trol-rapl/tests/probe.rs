@@ -1,0 +1,165 @@
+//! First contact against the simulated C500: only commands that cannot move the arm are
+//! sent, every byte is recorded, and the conventions are fitted from W2 readings at poses an
+//! operator sets by pendant.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+
+use trol_a465::arm::{Arm, ArmSettings};
+use trol_port::Port;
+use trol_port::memory;
+use trol_rapl::probe::{self, READ_ONLY};
+use trol_rapl::profile::Units;
+use trol_rapl::{C500, Profile, RaplBackend};
+
+/// A simulated C500 on a thread with a pendant: each joint target sent on the channel is
+/// moved to, and the reply channel hears once the arm stands there.
+struct Sim {
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    lines: Arc<Mutex<Vec<String>>>,
+    pendant: mpsc::Sender<[f64; 6]>,
+    arrived: mpsc::Receiver<i16>,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn start(profile: Profile) -> (Box<dyn Port>, Sim) {
+    let (host, mut ctl) = memory::pair(Some(profile.baud));
+    let stop = Arc::new(AtomicBool::new(false));
+    let lines = Arc::new(Mutex::new(Vec::new()));
+    let (pendant, targets) = mpsc::channel::<[f64; 6]>();
+    let (arrived_tx, arrived) = mpsc::channel();
+    let (flag, keep) = (stop.clone(), lines.clone());
+    let thread = std::thread::spawn(move || {
+        let arm = Arm::new(ArmSettings {
+            homed: true,
+            ..Default::default()
+        });
+        let mut c = C500::new(profile, arm, Vec::new());
+        let mut going = false;
+        let _ = trol_rapl::c500::serve_with(
+            &mut ctl,
+            &mut c,
+            20.0,
+            &flag,
+            &mut |l| keep.lock().unwrap().push(l.to_string()),
+            &mut |c, now| {
+                if let Ok(q) = targets.try_recv() {
+                    let code = c.pendant(q, now);
+                    if code != 0 {
+                        let _ = arrived_tx.send(code);
+                    } else {
+                        going = true;
+                    }
+                }
+                if going && !c.arm_moving(now) {
+                    going = false;
+                    let _ = arrived_tx.send(0);
+                }
+            },
+        );
+    });
+    (
+        Box::new(host),
+        Sim {
+            stop,
+            thread: Some(thread),
+            lines,
+            pendant,
+            arrived,
+        },
+    )
+}
+
+const POSES_DEG: [[f64; 6]; 3] = [
+    [10.0, 20.0, 40.0, 30.0, 50.0, -20.0],
+    [-35.0, 5.0, 70.0, -60.0, 30.0, 45.0],
+    [60.0, -15.0, 30.0, 15.0, -40.0, 100.0],
+];
+
+#[test]
+fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
+    let controller = Profile {
+        units: Units::Inch,
+        angles: "roll -pitch yaw".into(),
+        ..Profile::simulator()
+    };
+    let (port, sim) = start(controller);
+    // The safe default profile: nothing settled but what opening a session needs.
+    let mut b = RaplBackend::connect_with(port, Profile::default(), None, true).unwrap();
+    let mut asked = Vec::new();
+    let contact = probe::first_contact(&mut b, POSES_DEG.len(), &mut |k, n| {
+        asked.push((k, n));
+        sim.pendant
+            .send(POSES_DEG[k - 1].map(f64::to_radians))
+            .unwrap();
+        let code = sim
+            .arrived
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .unwrap();
+        assert_eq!(code, 0, "the pendant could not reach pose {k}");
+        Ok(true)
+    });
+    b.close();
+    assert_eq!(asked, vec![(1, 3), (2, 3), (3, 3)]);
+    for (line, r) in &contact.replies {
+        assert!(r.is_ok(), "{line}: {r:?}");
+    }
+    assert!(
+        contact.replies[0]
+            .1
+            .as_ref()
+            .unwrap()
+            .contains("ENGLISH UNITS")
+    );
+    assert_eq!(contact.readings.len(), 1 + POSES_DEG.len());
+    let fit = contact.fit.unwrap().unwrap();
+    assert_eq!(fit.units, Units::Inch);
+    assert_eq!(fit.angles, "roll -pitch yaw");
+    assert_eq!(fit.joint_units, "degrees");
+    let written = fit.apply(&Profile::default());
+    assert_eq!(written.angles, "roll -pitch yaw");
+    assert_eq!(Profile::parse(&written.to_toml()).unwrap(), written);
+
+    // Nothing ran that could move the arm or change a setting.
+    let ran = sim.lines.lock().unwrap().clone();
+    assert!(!ran.is_empty());
+    for line in &ran {
+        let word = line.split_whitespace().next().unwrap_or("");
+        assert!(
+            READ_ONLY.contains(&word) || ["NOH", "NOHELP", "HELP"].contains(&word),
+            "the probe sent {line}"
+        );
+    }
+    assert_eq!(
+        ran.last().map(String::as_str),
+        Some("HELP"),
+        "closed with HELP"
+    );
+    // Every byte both ways is in the transcript, the close included.
+    let text = b.transcript().unwrap().to_text();
+    assert!(text.contains(" H 57  W\n"), "W typed:\n{text}");
+    assert!(text.contains(" C ") && text.contains("WORLD"));
+    assert!(text.trim_end().ends_with("1a 1a  .."), "closed:\n{text}");
+}
+
+#[test]
+fn an_operator_who_stops_early_gets_a_fit_that_says_what_is_missing() {
+    let (port, _sim) = start(Profile::simulator());
+    let mut b = RaplBackend::connect(port, Profile::default()).unwrap();
+    let contact = probe::first_contact(&mut b, 4, &mut |_, _| Ok(false));
+    let e = contact.fit.unwrap().unwrap_err();
+    assert!(e.contains("at least two poses"), "{e}");
+    // A line that could move the arm is refused before it is sent.
+    let e = b.read_only("MOVE T1").unwrap_err().to_string();
+    assert!(e.contains("not sent"), "{e}");
+}

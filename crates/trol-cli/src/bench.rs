@@ -41,6 +41,65 @@ pub enum Bench {
     ///           trol bench faults --mode cut --side reply --count 1000 --recovery getstatus
     ///           trol bench faults --mode soak --seconds 120
     Faults(FaultsArgs),
+    /// The whole path to a C500, on lines paced at a baud rate: an application's Robot, TROL's
+    /// link, the PCP server with the RAPL-II backend, the RAPL-II line, and the simulated
+    /// C500 in real time. Times a small command's round trip (TROLSpeed), GetPosition, and
+    /// how long after the end of a motion Finish(FINISH_WAIT) returns, for each way the
+    /// backend can find the end of a motion.
+    ///
+    /// Example: trol bench gateway --count 50 --moves 20 --json
+    Gateway(GatewayArgs),
+}
+
+#[derive(Args)]
+pub struct GatewayArgs {
+    /// Baud rate of both lines (TROL's and RAPL-II's).
+    #[arg(long, default_value_t = 38400, value_parser = clap::value_parser!(u32).range(1200..=4_000_000))]
+    baud: u32,
+    /// Round trips to time for each small command.
+    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    count: u32,
+    /// Motions whose Finish to time, for each completion.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    moves: u32,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct Spread {
+    median_ms: f64,
+    mean_ms: f64,
+    max_ms: f64,
+}
+
+impl Spread {
+    fn of(mut v: Vec<f64>) -> Spread {
+        v.sort_by(f64::total_cmp);
+        let n = v.len().max(1) as f64;
+        Spread {
+            median_ms: v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
+            mean_ms: v.iter().sum::<f64>() / n,
+            max_ms: v.last().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct FinishReport {
+    completion: String,
+    moves: u32,
+    /// From the end of the motion (the simulated arm stands) to Finish's return.
+    after_motion_end: Spread,
+}
+
+#[derive(Serialize)]
+struct GatewayReport {
+    baud: u32,
+    speed_round_trip: Spread,
+    get_position_cart_actual: Spread,
+    finish: Vec<FinishReport>,
 }
 
 #[derive(Args)]
@@ -255,6 +314,7 @@ pub fn run(b: Bench) -> Result<(), String> {
         Bench::Transact(a) => transact(a),
         Bench::Moves(a) => moves(a),
         Bench::Faults(a) => faults(a),
+        Bench::Gateway(a) => gateway(a),
     }
 }
 
@@ -519,5 +579,161 @@ fn transact(a: TransactArgs) -> Result<(), String> {
             "{} transactions on {}: {:.1} us each, {:.0} per second",
             r.transactions, r.port, r.us_per_transaction, r.transactions_per_second
         )
+    })
+}
+
+/// The whole path: Robot -> TROL line -> PCP server + RAPL-II backend -> RAPL-II line ->
+/// simulated C500 (time scale 1). The C500's loop notes when the arm comes to a stand.
+struct GatewayPath {
+    robot: trol::Robot,
+    stopped_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    c500: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for GatewayPath {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(t) = self.c500.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn gateway_path(
+    baud: u32,
+    completion: trol_rapl::profile::Completion,
+) -> Result<GatewayPath, String> {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::{Arc, Mutex};
+    let profile = trol_rapl::Profile {
+        baud,
+        completion,
+        ..trol_rapl::Profile::simulator()
+    };
+    let (rapl_host, mut rapl_ctl) = memory::pair(Some(baud));
+    let stop = Arc::new(AtomicBool::new(false));
+    let stopped_at = Arc::new(Mutex::new(None));
+    let (flag, noted) = (stop.clone(), stopped_at.clone());
+    let c500_profile = profile.clone();
+    let c500 = std::thread::spawn(move || {
+        let arm = trol_a465::arm::Arm::new(trol_a465::arm::ArmSettings {
+            homed: true,
+            ..Default::default()
+        });
+        let mut c = trol_rapl::C500::new(c500_profile, arm, Vec::new());
+        let mut was_moving = false;
+        let _ = trol_rapl::c500::serve_with(
+            &mut rapl_ctl,
+            &mut c,
+            1.0,
+            &flag,
+            &mut |_| {},
+            &mut |c, now| {
+                let moving = c.arm_moving(now);
+                if was_moving && !moving {
+                    *noted.lock().unwrap() = Some(Instant::now());
+                }
+                was_moving = moving;
+            },
+        );
+    });
+    let backend = trol_rapl::RaplBackend::connect(Box::new(rapl_host), profile)
+        .map_err(|e| format!("the gateway could not open the simulated C500: {e}"))?;
+    let (trol_host, trol_ctl) = memory::pair(Some(baud));
+    let cfg = LinkConfig::for_line(baud, Duration::ZERO);
+    let controller = trol_controller::Controller::new(
+        trol_ctl,
+        cfg,
+        trol_controller::Pcp::new(backend),
+        trol_controller::Mode::Server,
+    );
+    let handle = trol_controller::Embedded::spawn(controller);
+    let mut robot = trol::Robot::over(Box::new(trol_host), cfg, Some(handle));
+    robot.set_codes(trol_rapl::RAPL_CODES);
+    Ok(GatewayPath {
+        robot,
+        stopped_at,
+        stop,
+        c500: Some(c500),
+    })
+}
+
+fn gateway(a: GatewayArgs) -> Result<(), String> {
+    use trol_rapl::profile::Completion;
+    let err = |e: trol::Error| e.to_string();
+    let mut path = gateway_path(a.baud, Completion::Status)?;
+    let robot = &mut path.robot;
+    robot.speed(100).map_err(err)?;
+    let mut speed = Vec::new();
+    let mut position = Vec::new();
+    for _ in 0..a.count {
+        let t = Instant::now();
+        robot.speed(100).map_err(err)?;
+        speed.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        robot
+            .position(trol::Tag::Cart, trol::PosMode::Actual)
+            .map_err(err)?;
+        position.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    drop(path);
+
+    let mut finish = Vec::new();
+    for completion in [Completion::Status, Completion::W5] {
+        let mut path = gateway_path(a.baud, completion)?;
+        let mut after = Vec::new();
+        for i in 0..a.moves {
+            // Joint 6 by 0.3 rad, back and forth: about a quarter of a second at full speed.
+            let step = if i % 2 == 0 { 0.3 } else { -0.3 };
+            *path.stopped_at.lock().unwrap() = None;
+            path.robot.joint(6, step).map_err(err)?;
+            path.robot.finish().map_err(err)?;
+            let returned = Instant::now();
+            let Some(stood) = *path.stopped_at.lock().unwrap() else {
+                return Err(format!(
+                    "Finish returned before the arm stood (completion {completion:?})"
+                ));
+            };
+            after.push(returned.duration_since(stood).as_secs_f64() * 1e3);
+        }
+        finish.push(FinishReport {
+            completion: format!("{completion:?}").to_ascii_lowercase(),
+            moves: a.moves,
+            after_motion_end: Spread::of(after),
+        });
+    }
+    let r = GatewayReport {
+        baud: a.baud,
+        speed_round_trip: Spread::of(speed),
+        get_position_cart_actual: Spread::of(position),
+        finish,
+    };
+    print_report(&r, a.json, |r| {
+        let line = |what: &str, s: &Spread| {
+            format!(
+                "  {what}: median {:.1} ms, mean {:.1} ms, max {:.1} ms\n",
+                s.median_ms, s.mean_ms, s.max_ms
+            )
+        };
+        let mut t = format!(
+            "the whole path to a simulated C500, both lines at {} baud:\n",
+            r.baud
+        );
+        t += &line("TROLSpeed round trip", &r.speed_round_trip);
+        t += &line(
+            "TROLGetPosition (cart, actual)",
+            &r.get_position_cart_actual,
+        );
+        for f in &r.finish {
+            t += &line(
+                &format!(
+                    "Finish(FINISH_WAIT) after the motion's end, completion = {} ({} moves)",
+                    f.completion, f.moves
+                ),
+                &f.after_motion_end,
+            );
+        }
+        t.trim_end().to_string()
     })
 }

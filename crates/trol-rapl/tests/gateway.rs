@@ -339,3 +339,139 @@ fn a_controller_that_goes_silent_mid_motion_ends_the_wait_with_a_link_error() {
         "{e}"
     );
 }
+
+/// A port that, once armed, loses the next byte it sends (a byte lost on the line).
+struct LoseNextByte {
+    inner: Box<dyn Port>,
+    armed: Arc<AtomicBool>,
+}
+
+impl Port for LoseNextByte {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        match bytes.split_first() {
+            Some((_, rest)) if self.armed.swap(false, Ordering::SeqCst) => self.inner.send(rest),
+            _ => self.inner.send(bytes),
+        }
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
+        self.inner.recv(buf, deadline)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}
+
+#[test]
+fn faults_on_the_rapl_line_end_in_defined_codes_and_get_status_tells_what_ran() {
+    use trol_proto::application::code::{TROL_ERR_ROBOT, TROL_ERR_ROBOT_UNSURE};
+    // Short waits, so a lost prompt is given up for lost within a second.
+    let profile = Profile {
+        reply_timeout_ms: 500,
+        motion_timeout_s: 1,
+        ..Profile::simulator()
+    };
+    let (port, sim) = start(profile.clone(), None);
+    let lose_prompt = Arc::new(AtomicBool::new(false));
+    let lose_byte = Arc::new(AtomicBool::new(false));
+    let port = Box::new(LoseNextByte {
+        inner: port,
+        armed: lose_byte.clone(),
+    });
+    let port = Box::new(Incoming {
+        inner: port,
+        prompt: lose_prompt.clone(),
+        dropped: 0,
+    });
+    let backend = RaplBackend::connect(port, profile).unwrap();
+    let cfg = trol_proto::link::LinkConfig::default();
+    let (line, handle) = trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+    let mut robot = trol::Robot::over(Box::new(line), cfg, Some(handle));
+    robot.set_codes(trol_rapl::RAPL_CODES);
+    let ran = |line: &str| sim.ran().iter().filter(|l| *l == line).count();
+
+    // An error line: refused with the controller's meaning; the BIOS was called.
+    let e = robot.joint(1, 3.3).unwrap_err();
+    assert_eq!(e.code().0, trol_a465::arm::code::JOINT_LIMIT, "{e}");
+    assert_eq!(
+        robot.status().unwrap(),
+        (
+            true,
+            trol_proto::application::Code(trol_a465::arm::code::JOINT_LIMIT)
+        )
+    );
+
+    // A lost prompt after a motion was typed whole: it ran, nobody can be sure, so the call
+    // says TROL_ERR_ROBOT_UNSURE and GetStatus says the BIOS was called.
+    lose_prompt.store(true, Ordering::SeqCst);
+    let e = robot.joint(6, 0.11).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ROBOT_UNSURE, "{e}");
+    assert_eq!(ran("JOINT 6,6.3025"), 1, "{:?}", sim.ran());
+    assert_eq!(robot.status().unwrap(), (true, TROL_ERR_ROBOT_UNSURE));
+    // The session resynchronised: the next call works.
+    robot.finish().unwrap();
+    robot.speed(40).unwrap();
+
+    // A byte of a command lost on its way out: the echo never comes, the line is cancelled
+    // before its terminator, so it surely did not run, and GetStatus says so.
+    lose_byte.store(true, Ordering::SeqCst);
+    let e = robot.joint(6, 0.12).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ROBOT, "{e}");
+    assert!(
+        !sim.ran().iter().any(|l| l.starts_with("JOINT 6,6.87")),
+        "{:?}",
+        sim.ran()
+    );
+    assert_eq!(robot.status().unwrap(), (false, TROL_ERR_ROBOT));
+    robot.joint(6, 0.12).unwrap();
+    robot.finish().unwrap();
+    assert_eq!(ran("JOINT 6,6.8755"), 1, "{:?}", sim.ran());
+}
+
+/// A port whose incoming `>` bytes vanish while armed (two of them: one prompt).
+struct Incoming {
+    inner: Box<dyn Port>,
+    prompt: Arc<AtomicBool>,
+    dropped: u8,
+}
+
+impl Port for Incoming {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        if !self.prompt.load(Ordering::SeqCst) {
+            return Ok(n);
+        }
+        let mut kept = 0;
+        for i in 0..n {
+            let b = buf[i];
+            if b == b'>' && self.prompt.load(Ordering::SeqCst) {
+                self.dropped += 1;
+                if self.dropped == 2 {
+                    self.dropped = 0;
+                    self.prompt.store(false, Ordering::SeqCst);
+                }
+                continue;
+            }
+            buf[kept] = b;
+            kept += 1;
+        }
+        Ok(kept)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}

@@ -224,13 +224,14 @@ fn interp_help_lists_every_command_with_arguments_and_ranges() {
 fn subcommands_have_help_with_examples() {
     let dir = scratch("helps");
     for sub in [
-        "interp", "init", "cleanup", "sim", "link", "trace", "ports", "bench", "demo",
+        "interp", "init", "cleanup", "sim", "link", "trace", "ports", "bench", "demo", "gateway",
+        "rapl",
     ] {
         let o = trol(&dir, &[sub, "--help"], "");
         let (out, _) = text(&o);
         assert!(o.status.success(), "{sub}");
         assert!(out.contains("Usage: trol"), "{sub}: {out}");
-        if !["trace", "ports", "bench"].contains(&sub) {
+        if !["trace", "ports", "bench", "rapl"].contains(&sub) {
             assert!(
                 out.contains("Example"),
                 "{sub} --help has no example:\n{out}"
@@ -277,6 +278,28 @@ fn benches_print_json() {
     assert!(o.status.success(), "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["payload_bytes"], 600);
+
+    // The whole path to a C500: every figure there, and Finish never before the arm stands
+    // (the bench fails if it does).
+    let o = trol(
+        &dir,
+        &[
+            "bench", "gateway", "--count", "3", "--moves", "2", "--baud", "115200", "--json",
+        ],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["get_position_cart_actual"]["median_ms"].as_f64().unwrap() > 0.0);
+    let finish = v["finish"].as_array().unwrap();
+    assert_eq!(finish.len(), 2, "{out}");
+    for f in finish {
+        assert!(
+            f["after_motion_end"]["max_ms"].as_f64().unwrap() >= 0.0,
+            "{f}"
+        );
+    }
 
     let o = trol(&dir, &["bench", "moves", "--json"], "");
     let (out, err) = text(&o);

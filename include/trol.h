@@ -110,7 +110,9 @@ typedef uint8_t  TUCCHAR;
 #define LAST_CAT3_CODE 128
 #define TROL_TERMINATE_PCP 192
 #define TROL_GET_STATUS 193
-#define LAST_CAT4_CODE 193
+#define TROL_GET_VERSION 194
+#define TROL_SET_WATCHDOG 195
+#define LAST_CAT4_CODE 195
 
 /* The manual requires structure alignment off or 16 bit. */
 #pragma pack(push, 2)
@@ -159,6 +161,14 @@ TINT TROLGetPosition(SLocData *pos, TINT mode);
 /* CAT4 */
 TINT TROLTerminatePCP(void);
 TINT TROLGetStatus(int *lastBIOSRetVal);
+/* Added (docs/protocol.md "Version and kind", "Watchdog"). TROLGetVersion: the protocol
+ * version the controller speaks (TROL_PROTOCOL_VERSION on both ends) and, in kind (kindSize
+ * bytes, NUL-terminated, cut if longer), what drives its arm; InitTROL checks it.
+ * TROLSetWatchdog: the controller halts the arm when no call arrives for tenths/10 s
+ * (1..250; 0 turns it off). */
+#define TROL_PROTOCOL_VERSION 3
+TINT TROLGetVersion(TUINT *protocol, char *kind, TUINT kindSize);
+TINT TROLSetWatchdog(TUINT tenths);
 
 /* Other functions */
 TUINT InitTROL(TUINT serOnly);

@@ -192,6 +192,16 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
         controller
             .step(Duration::from_millis(50))
             .map_err(|e| format!("the line failed: {e}"))?;
+        if let Some(trip) = controller.take_watchdog_trip() {
+            say!(
+                "watchdog: no call for {:.1} s: the arm was halted ({})",
+                trip.after.as_secs_f64(),
+                match trip.halt {
+                    Ok(v) => trol_proto::application::Code(v).describe(codes),
+                    Err(e) => format!("the halt failed: {e}"),
+                }
+            );
+        }
         if controller.mode() != last_mode {
             last_mode = controller.mode();
             match last_mode {

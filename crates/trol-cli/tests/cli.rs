@@ -894,3 +894,19 @@ fn link_activates_the_controller_as_trol_cfg_says() {
         "{log}"
     );
 }
+
+#[test]
+fn the_watchdog_of_a_simulator_process_halts_the_arm_when_its_client_falls_silent() {
+    let dir = scratch("watchdog");
+    let sim = Background::start(&dir, &["sim", "--homed", "--server"], "serving on ");
+    let o = trol(
+        &dir,
+        &["interp", "--port", &sim.name],
+        "getversion\nspeed 10\nsetwatchdog 5\njoint 1 1.0\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("simulated A465"), "{out}");
+    let said = sim.wait_for("watchdog: no call for 0.5 s: the arm was halted", 20);
+    assert!(said.iter().any(|l| l.contains("TROLJoint")), "{said:?}");
+}

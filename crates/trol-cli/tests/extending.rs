@@ -187,6 +187,8 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
         TROL_GET_POSITION => robot.position(Tag::Cart, PosMode::Actual).map(drop),
         TROL_TERMINATE_PCP => robot.terminate_pcp(),
         TROL_GET_STATUS => robot.status().map(drop),
+        TROL_GET_VERSION => robot.check_version().map(drop),
+        TROL_SET_WATCHDOG => robot.set_watchdog(std::time::Duration::ZERO),
         other => panic!("command {other} of the table has no method on Robot"),
     }
 }

@@ -40,6 +40,15 @@ pub struct LogEntry<'a> {
 /// A log hook: called after each transaction.
 pub type LogFn = Box<dyn FnMut(&LogEntry<'_>) + Send>;
 
+/// The watchdog halted the arm: no transaction arrived for `after` (SetWatchdog).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WatchdogTrip {
+    /// The limit that ran out.
+    pub after: Duration,
+    /// What the backend's Halt answered (its BIOS value, or why it failed).
+    pub halt: Result<i16, String>,
+}
+
 /// How often a deferred reply (Finish(FINISH_WAIT), Home) asks the backend whether the arm
 /// is idle.
 const POLL: Duration = Duration::from_millis(5);
@@ -53,6 +62,12 @@ pub struct Controller<P, B> {
     log: Option<LogFn>,
     /// The last request and its reply, for the log.
     last: (Vec<u8>, Vec<u8>),
+    /// When the last transaction arrived (or a long one was still under way).
+    last_seen: Instant,
+    /// Whether the watchdog has halted the arm since the last transaction.
+    tripped: bool,
+    /// The watchdog's last trip, not yet taken.
+    trip: Option<WatchdogTrip>,
 }
 
 impl<P: Port, B: Backend> Controller<P, B> {
@@ -65,6 +80,27 @@ impl<P: Port, B: Backend> Controller<P, B> {
             terminal: Terminal::default(),
             log: None,
             last: (Vec::new(), Vec::new()),
+            last_seen: Instant::now(),
+            tripped: false,
+            trip: None,
+        }
+    }
+
+    /// The watchdog's trip since the last call, if it halted the arm (for logs).
+    pub fn take_watchdog_trip(&mut self) -> Option<WatchdogTrip> {
+        self.trip.take()
+    }
+
+    /// The watchdog (SetWatchdog): once no transaction has arrived for its limit, halt the
+    /// arm, once, until the next transaction.
+    fn watch(&mut self) {
+        let Some(limit) = self.pcp.watchdog() else {
+            return;
+        };
+        if !self.tripped && self.last_seen.elapsed() >= limit {
+            self.tripped = true;
+            let halt = self.pcp.backend_mut().halt().map_err(|e| e.to_string());
+            self.trip = Some(WatchdogTrip { after: limit, halt });
         }
     }
 
@@ -110,6 +146,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     };
                     link.set_config(cfg);
                     self.mode = Mode::Server;
+                    self.last_seen = Instant::now();
                 }
             }
             Mode::Server => {
@@ -123,6 +160,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
                             self.server.serve(slice, &mut |_| Vec::new())?
                         }
                         None => {
+                            // A long call under way counts as a transaction for the watchdog.
+                            self.last_seen = Instant::now();
                             self.server.wait(POLL.min(slice))?;
                             return Ok(());
                         }
@@ -143,6 +182,12 @@ impl<P: Port, B: Backend> Controller<P, B> {
                         }
                     })?
                 };
+                // A request that arrived whole feeds the watchdog; noise on the line does not.
+                if !matches!(ev, ServerEvent::Idle | ServerEvent::ReceiveFailed(_)) {
+                    self.last_seen = Instant::now();
+                    self.tripped = false;
+                }
+                self.watch();
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     if let Some(log) = self.log.as_mut() {
                         let world = self.pcp.backend_mut().world();

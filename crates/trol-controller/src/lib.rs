@@ -22,7 +22,7 @@ pub mod sim;
 pub mod terminal;
 
 pub use backend::{Backend, BackendError, BiosResult, PosMode, Target};
-pub use controller::{Controller, Embedded, LogEntry, LogFn, Mode};
+pub use controller::{Controller, Embedded, LogEntry, LogFn, Mode, WatchdogTrip};
 pub use pcp::{Call, Context, Executed, Handled, Handler, Pcp, RegisterError, Status};
 pub use sim::{SIM_CODES, SimBackend, SimSettings};
 

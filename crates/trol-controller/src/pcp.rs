@@ -80,6 +80,9 @@ pub struct Context<'a, B> {
     pub terminate: &'a mut bool,
     /// The server's epoch.
     pub epoch: u16,
+    /// The watchdog's limit: the arm is halted when no transaction arrives for this long
+    /// (SetWatchdog; `None`: off).
+    pub watchdog: &'a mut Option<std::time::Duration>,
 }
 
 /// A handler of CAT2..CAT4: gets the decoded arguments and builds its reply itself.
@@ -142,6 +145,7 @@ pub struct Pcp<B> {
     terminate: bool,
     pending: Option<Pending>,
     epoch: u16,
+    watchdog: Option<std::time::Duration>,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -164,6 +168,7 @@ impl<B: Backend> Pcp<B> {
             terminate: false,
             pending: None,
             epoch: new_epoch(),
+            watchdog: None,
         };
         for def in table::BUILTIN {
             let handler = match def.class() {
@@ -237,6 +242,12 @@ impl<B: Backend> Pcp<B> {
         self.epoch
     }
 
+    /// The watchdog's limit (SetWatchdog), if it is on: the controller loop halts the arm when
+    /// no transaction arrives for this long.
+    pub fn watchdog(&self) -> Option<std::time::Duration> {
+        self.watchdog
+    }
+
     /// The transaction number of the request about to be handled (the PCI's low byte), for
     /// GetStatus's record.
     pub fn set_transaction(&mut self, number: u8) {
@@ -300,6 +311,7 @@ impl<B: Backend> Pcp<B> {
                     status: &mut self.status,
                     terminate: &mut self.terminate,
                     epoch: self.epoch,
+                    watchdog: &mut self.watchdog,
                 };
                 Handled::Reply(h(&mut ctx, &call).encode())
             }
@@ -447,6 +459,21 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
             last: ctx.status.last_error_code,
             transaction: ctx.status.transaction,
             epoch: ctx.epoch,
+        },
+        TROL_GET_VERSION => Reply::Version {
+            protocol: PROTOCOL_VERSION,
+            kind: ctx.backend.kind().into(),
+        },
+        TROL_SET_WATCHDOG => match c.int(0) {
+            Ok(0) => {
+                *ctx.watchdog = None;
+                Reply::Code(Code(0))
+            }
+            Ok(tenths) => {
+                *ctx.watchdog = Some(std::time::Duration::from_millis(100 * u64::from(tenths)));
+                Reply::Code(Code(0))
+            }
+            Err(code) => Reply::Code(code),
         },
         _ => Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN),
     }

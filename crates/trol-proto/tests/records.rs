@@ -57,7 +57,41 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         (&GET_POSITION, vec![Int(Tag::Cart as u8), Int(POS_ACT)]),
         (&TERMINATE_PCP, vec![]),
         (&GET_STATUS, vec![]),
+        (&GET_VERSION, vec![]),
+        (&SET_WATCHDOG, vec![Int(50)]),
     ]
+}
+
+#[test]
+fn a_version_reply_is_accepted_only_in_its_form() {
+    let good = Reply::Version {
+        protocol: PROTOCOL_VERSION,
+        kind: "simulated A465".into(),
+    };
+    let bytes = good.encode();
+    assert_eq!(Reply::decode(&GET_VERSION, &bytes).unwrap(), good);
+    let mut long = vec![0, 0, 3, 0];
+    long.extend(std::iter::repeat_n(b'x', 33));
+    for bad in [
+        vec![0, 0, 3, 0],                   // no kind
+        vec![1, 0, 3, 0, b'x'],             // a value that is not 0
+        vec![0, 0, 3],                      // cut in the version
+        vec![0, 0, 3, 0, b'x', 0x07, b'y'], // not printable
+        long,                               // too long
+    ] {
+        assert!(Reply::decode(&GET_VERSION, &bad).is_err(), "{bad:02x?}");
+    }
+    // A refusal is a refusal, as for every command.
+    assert_eq!(
+        Reply::decode(
+            &GET_VERSION,
+            &trol_proto::application::code::TROL_ERR_UNKNOWN
+                .0
+                .to_le_bytes()
+        )
+        .unwrap(),
+        Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN)
+    );
 }
 
 #[test]

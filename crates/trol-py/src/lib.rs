@@ -245,6 +245,7 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
         Reply::Status {
             bios_called, last, ..
         } => (bios_called, last.0).into_pyobject(py)?.into_any(),
+        Reply::Version { protocol, kind } => (protocol, kind).into_pyobject(py)?.into_any(),
         Reply::Bytes { value, bytes } => (value.0, PyBytes::new(py, &bytes))
             .into_pyobject(py)?
             .into_any(),
@@ -513,6 +514,25 @@ impl Robot {
     /// TROL code that kept it from being called).
     fn status(&self, py: Python<'_>) -> PyResult<(bool, i16)> {
         self.with(py, |r| r.status().map(|(b, c)| (b, c.0)))
+    }
+
+    /// TROLGetVersion, checked: (the protocol version, what drives the arm). Raises
+    /// ``trol.SetupError`` for a controller that speaks another protocol than this library.
+    fn version(&self, py: Python<'_>) -> PyResult<(u16, String)> {
+        self.with(py, |r| r.check_version().map(|v| (v.protocol, v.kind)))
+    }
+
+    /// TROLSetWatchdog: the controller halts the arm when no call arrives for ``seconds``
+    /// (0.1 .. 25; 0 turns it off). Every call feeds it, and so do ``finish()``'s polls.
+    fn set_watchdog(&self, py: Python<'_>, seconds: f64) -> PyResult<()> {
+        if !(0.0..=25.0).contains(&seconds) {
+            return Err(argument_error(
+                py,
+                format!("set_watchdog: {seconds} s is outside 0 .. 25 s"),
+            ));
+        }
+        let limit = std::time::Duration::from_secs_f64(seconds);
+        self.with(py, move |r| r.set_watchdog(limit))
     }
 
     /// Know the commands described in a TOML file (docs/extending.md), for ``call``.

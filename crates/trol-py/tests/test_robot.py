@@ -299,3 +299,15 @@ def test_added_commands_are_called_by_name() -> None:
     finally:
         proc.kill()
         proc.wait()
+
+
+def test_version_and_watchdog(sim_robot: trol.Robot) -> None:
+    protocol, kind = sim_robot.version()
+    assert protocol == 3
+    assert kind == "simulated A465"
+    with pytest.raises(trol.ArgumentError):
+        sim_robot.set_watchdog(30.0)
+    sim_robot.set_watchdog(2.0)
+    sim_robot.speed(50)
+    assert not sim_robot.is_moving()
+    sim_robot.set_watchdog(0)

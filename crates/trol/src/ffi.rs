@@ -637,6 +637,55 @@ pub unsafe extern "C" fn TROLGetStatus(lastBIOSRetVal: *mut std::ffi::c_int) -> 
     r
 }
 
+/// TROLGetVersion: the controller's protocol version in *protocol and its kind in `kind`
+/// (at most kindSize - 1 bytes and a NUL). A NULL pointer or a kindSize of 0 is
+/// TROL_ERR_ARG_RANGE, and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLGetVersion(
+    protocol: *mut TUINT,
+    kind: *mut std::ffi::c_char,
+    kindSize: TUINT,
+) -> TINT {
+    if protocol.is_null() || kind.is_null() || kindSize == 0 {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::GET_VERSION,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Version { protocol, kind } = reply {
+                got = Some((protocol, kind));
+            }
+        },
+    );
+    if let Some((p, k)) = got {
+        let n = k.len().min(usize::from(kindSize) - 1);
+        // SAFETY: the caller's TUINT and a buffer of kindSize bytes.
+        unsafe {
+            *protocol = p;
+            std::ptr::copy_nonoverlapping(k.as_ptr(), kind.cast::<u8>(), n);
+            *kind.add(n) = 0;
+        }
+    }
+    r
+}
+
+/// TROLSetWatchdog: the controller halts the arm when no call arrives for tenths/10 s
+/// (1..250); 0 turns it off.
+#[unsafe(no_mangle)]
+pub extern "C" fn TROLSetWatchdog(tenths: TUINT) -> TINT {
+    run(
+        &table::SET_WATCHDOG,
+        || {
+            Ok(vec![Value::Int(
+                u8::try_from(tenths).map_err(|_| ARG_RANGE)?,
+            )])
+        },
+        drop,
+    )
+}
+
 fn open_from_config() -> Result<(Robot, Config), String> {
     let cfg = Config::load().map_err(|e| e.to_string())?;
     let robot = Robot::from_config(&cfg).map_err(|e| e.to_string())?;

@@ -31,8 +31,8 @@ mod robot;
 
 pub use config::{Config, ConfigError};
 pub use robot::{
-    Error, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result, Robot, SetupError, StatusRecord,
-    Waited, timeout_policy, wait_idle,
+    ControllerVersion, Error, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result, Robot,
+    SetupError, StatusRecord, Waited, timeout_policy, wait_idle,
 };
 pub use trol_controller::SimSettings;
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
@@ -80,29 +80,36 @@ pub fn describe(value: i16) -> String {
     Code(value).describe(trol_controller::SIM_CODES)
 }
 
-/// Check that the server answers (InitTROL(1)): one GetStatus transaction.
+/// Check that the server answers (InitTROL(1)): one GetStatus transaction, then its protocol
+/// version ([`Robot::check_version`]).
 pub fn check_server(robot: &mut Robot) -> Result<()> {
     // A probe: one attempt, so that a controller in terminal mode is found out quickly.
     let repeats = robot.transactor_mut().repeats();
     robot.transactor_mut().set_repeats(0);
     let status = robot.status();
     robot.transactor_mut().set_repeats(repeats);
-    status.map(drop).map_err(|e| {
-        let busy = matches!(
-            &e,
-            Error::Link { error: trol_comm::TransError::Io(io), .. }
-                if io.kind() == std::io::ErrorKind::ConnectionRefused
-        );
-        Error::Setup(SetupError::NoServer(if busy {
-            format!("{e}; only one application at a time can drive the controller")
-        } else {
-            format!(
-                "the controller's TROL server does not answer ({e}); check the cable and the \
+    status
+        .map(drop)
+        .and_then(|()| robot.check_version().map(drop))
+        .map_err(|e| {
+            if let Error::Setup(SetupError::Incompatible(_)) = e {
+                return e;
+            }
+            let busy = matches!(
+                &e,
+                Error::Link { error: trol_comm::TransError::Io(io), .. }
+                    if io.kind() == std::io::ErrorKind::ConnectionRefused
+            );
+            Error::Setup(SetupError::NoServer(if busy {
+                format!("{e}; only one application at a time can drive the controller")
+            } else {
+                format!(
+                    "the controller's TROL server does not answer ({e}); check the cable and the \
                  port, that the baud rate in trol.cfg matches the controller, and that `trol \
                  init` has activated the server"
-            )
-        }))
-    })
+                )
+            }))
+        })
 }
 
 /// Bring the controller into server mode and apply the tool transform (InitTROL(0), `trol

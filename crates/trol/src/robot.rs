@@ -81,6 +81,19 @@ pub enum SetupError {
     /// A command description could not be added.
     #[error("{0}")]
     Command(#[from] CatalogError),
+    /// The controller speaks another protocol version than this library (GetVersion).
+    #[error("{0}")]
+    Incompatible(String),
+}
+
+/// What TROLGetVersion says of the controller.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ControllerVersion {
+    /// The protocol version it speaks ([`table::PROTOCOL_VERSION`] for this library).
+    pub protocol: u16,
+    /// What drives its arm: `simulated A465`, `C500 over RAPL-II`, or a controller
+    /// program's own word.
+    pub kind: String,
 }
 
 fn refusal_text(name: &Option<&str>, meaning: &Option<&str>) -> String {
@@ -340,7 +353,7 @@ impl Robot {
         let probe = self.status_record();
         self.transactor.set_repeats(repeats);
         match probe {
-            Ok(_) => Ok(()),
+            Ok(_) => self.check_version().map(drop),
             Err(e) => match self.reactivate {
                 Some(tool) => crate::activate(self, &tool),
                 None => Err(e),
@@ -750,6 +763,64 @@ impl Robot {
                 len: other.encode().len(),
             }),
         }
+    }
+
+    /// TROLGetVersion: the protocol version the controller speaks and what drives its arm.
+    /// [`crate::check_server`] (InitTROL, `trol init`) checks it with
+    /// [`Robot::check_version`].
+    pub fn version(&mut self) -> Result<ControllerVersion> {
+        let def = &table::GET_VERSION;
+        match self.call(def, &[])? {
+            Reply::Version { protocol, kind } => Ok(ControllerVersion { protocol, kind }),
+            other => Err(Error::BadReply {
+                command: def.name,
+                len: other.encode().len(),
+            }),
+        }
+    }
+
+    /// Ask the controller its version and refuse one that speaks another protocol than this
+    /// library, with what to do; name BIOS codes from then on as that controller's kind
+    /// names them (the simulated A465's, or a C500's over RAPL-II).
+    pub fn check_version(&mut self) -> Result<ControllerVersion> {
+        let v = match self.version() {
+            Ok(v) => v,
+            Err(e) if e.code() == trol_proto::application::code::TROL_ERR_UNKNOWN => {
+                return Err(SetupError::Incompatible(format!(
+                    "the controller does not know TROLGetVersion, so it speaks an older TROL                      protocol than version {} of this library: run the same TROL release on                      both sides",
+                    table::PROTOCOL_VERSION
+                ))
+                .into());
+            }
+            Err(e) => return Err(e),
+        };
+        if v.protocol != table::PROTOCOL_VERSION {
+            return Err(SetupError::Incompatible(format!(
+                "the controller ({}) speaks TROL protocol version {}, this library version {}:                  run the same TROL release on both sides (`trol --version`)",
+                v.kind,
+                v.protocol,
+                table::PROTOCOL_VERSION
+            ))
+            .into());
+        }
+        self.codes = match v.kind.as_str() {
+            "C500 over RAPL-II" => trol_rapl::RAPL_CODES,
+            _ => SIM_CODES,
+        };
+        Ok(v)
+    }
+
+    /// TROLSetWatchdog: the controller halts the arm when no call arrives for `limit` (in
+    /// tenths of a second, at most 25 s; zero turns it off), as ur_rtde's setWatchdog. Every
+    /// call feeds it, and so do the polls of a wait ([`Robot::finish`]): it catches an
+    /// application that hangs or dies, or a line that is cut. The arm is halted once, and
+    /// the next call works as usual.
+    pub fn set_watchdog(&mut self, limit: Duration) -> Result<()> {
+        let def = &table::SET_WATCHDOG;
+        let tenths = limit.as_millis().div_ceil(100);
+        let tenths = u16::try_from(tenths).unwrap_or(u16::MAX);
+        let args = [small(def, tenths)?];
+        self.cat1(def, &args).map(drop)
     }
 
     /// The transaction number of the last request sent (the PCI's low byte; GetStatus's

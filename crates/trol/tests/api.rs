@@ -676,3 +676,105 @@ fn impossible_link_settings_are_refused_and_the_delay_counts_in_the_timeouts() {
         .unwrap_err();
     assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
 }
+
+/// A controller on a thread that answers GetStatus and, to GetVersion, `version` (None:
+/// TROL_ERR_UNKNOWN, as a controller that does not know the command).
+fn controller_of_version(version: Option<u16>) -> Robot {
+    let (host, ctl) = trol_port::memory::pair(None);
+    std::thread::spawn(move || {
+        let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
+        for _ in 0..4 {
+            let r = server.serve(Duration::from_secs(5), &mut |req| match req.first() {
+                Some(&trol::table::TROL_GET_VERSION) => match version {
+                    Some(protocol) => Reply::Version {
+                        protocol,
+                        kind: "elsewhere".into(),
+                    }
+                    .encode(),
+                    None => Reply::Code(TROL_ERR_UNKNOWN).encode(),
+                },
+                _ => Reply::Status {
+                    bios_called: false,
+                    last: SUCCESS,
+                    transaction: 0,
+                    epoch: 7,
+                }
+                .encode(),
+            });
+            if r.is_err() {
+                break;
+            }
+        }
+    });
+    Robot::over(Box::new(host), LinkConfig::default(), None)
+}
+
+#[test]
+fn the_host_checks_the_controllers_version_and_kind() {
+    // The simulator: this library's version; its codes are the simulated A465's.
+    let mut robot = Robot::embedded(settings());
+    let v = robot.check_version().unwrap();
+    assert_eq!(v.protocol, trol::table::PROTOCOL_VERSION);
+    assert_eq!(v.kind, "simulated A465");
+    trol::check_server(&mut robot).unwrap();
+
+    // Another protocol version: refused with both numbers and what to do.
+    let mut robot = controller_of_version(Some(2));
+    let e = trol::check_server(&mut robot).unwrap_err();
+    assert!(
+        matches!(e, Error::Setup(trol::SetupError::Incompatible(_))),
+        "{e:?}"
+    );
+    let text = e.to_string();
+    assert!(
+        text.contains("version 2") && text.contains("version 3") && text.contains("same TROL"),
+        "{text}"
+    );
+
+    // A controller that does not know GetVersion: older than this library.
+    let mut robot = controller_of_version(None);
+    let e = trol::check_server(&mut robot).unwrap_err().to_string();
+    assert!(e.contains("does not know TROLGetVersion"), "{e}");
+}
+
+#[test]
+fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
+    let mut robot = Robot::embedded(SimSettings {
+        time_scale: 1.0,
+        ..settings()
+    });
+    robot.home(0).unwrap();
+    robot.finish().unwrap();
+    assert!(
+        robot
+            .set_watchdog(Duration::from_secs(26))
+            .unwrap_err()
+            .code()
+            == TROL_ERR_ARG_RANGE
+    );
+    robot.set_watchdog(Duration::from_millis(300)).unwrap();
+
+    // Fed by the polls of a wait, it lets a motion of a second end where it should.
+    robot.speed(20).unwrap();
+    robot.joint(1, 0.3).unwrap();
+    robot.finish().unwrap();
+    let j1 = joints(&mut robot)[0];
+    assert!((j1 - 0.3).abs() < 1e-3, "joint 1 at {j1}");
+
+    // Silent for five times its limit during a motion of several seconds: the arm was
+    // halted on the way.
+    robot.joint(1, 1.0).unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(!robot.is_moving().unwrap(), "the arm still moves");
+    let j1 = joints(&mut robot)[0];
+    assert!(j1 > 0.31 && j1 < 1.25, "halted on the way: joint 1 at {j1}");
+
+    // The next call works as usual, and the watchdog can be turned off: a motion of about a
+    // second, through a silence twice the old limit, ends where it should.
+    robot.set_watchdog(Duration::ZERO).unwrap();
+    robot.joint(1, -0.5).unwrap();
+    std::thread::sleep(Duration::from_millis(600));
+    robot.finish().unwrap();
+    let end = joints(&mut robot)[0];
+    assert!((end - (j1 - 0.5)).abs() < 1e-3, "{end} after {j1}");
+}

@@ -18,7 +18,8 @@ use trol_proto::link::control::{ACK, ENQ, NAK};
 use trol_proto::link::frame::HEADER_LEN;
 use trol_proto::link::{Link as L2, LinkConfig};
 
-/// Serve InitTROL's GetStatus properly, then misbehave once per step of callbacks.c.
+/// Serve InitTROL's GetStatus and GetVersion properly, then misbehave once per step of
+/// callbacks.c.
 fn scripted_controller(line: TcpLine) {
     let cfg = LinkConfig::default();
     let mut server = Server::new(line, cfg);
@@ -30,6 +31,16 @@ fn scripted_controller(line: TcpLine) {
                 last: SUCCESS,
                 transaction: 0,
                 epoch: 1,
+            }
+            .encode()
+        })
+        .unwrap();
+    // InitTROL(1): GetVersion.
+    server
+        .serve(Duration::from_secs(20), &mut |_| {
+            Reply::Version {
+                protocol: table::PROTOCOL_VERSION,
+                kind: "scripted controller".into(),
             }
             .encode()
         })

@@ -134,6 +134,8 @@ pub enum ReplyKind {
     Position,
     /// GetStatus's: BIOSCalled, lastErrorCode.
     Status,
+    /// GetVersion's: 0, the protocol version, and the controller's kind in words.
+    Version,
     /// The return value and any bytes (read by the application itself).
     Bytes,
 }

@@ -10,6 +10,9 @@ use super::command::{CommandDef, ReplyKind};
 use super::location::{ARM_DIMS, Location, Tag};
 use super::record::{format_location, format_number, get_location, put_location};
 
+/// The longest kind a GetVersion reply carries, bytes.
+pub const MAX_KIND: usize = 32;
+
 /// A reply, decoded.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Reply {
@@ -39,6 +42,14 @@ pub enum Reply {
         /// The controller's epoch: a number it draws when it starts.
         epoch: u16,
     },
+    /// TROLGetVersion: the protocol version the controller speaks and what it is (`simulated
+    /// A465`, `C500 over RAPL-II`; printable ASCII, 1 to [`MAX_KIND`] bytes).
+    Version {
+        /// The protocol version ([`super::table::PROTOCOL_VERSION`] on both ends).
+        protocol: u16,
+        /// The controller's kind.
+        kind: String,
+    },
     /// The return value and bytes the application reads itself.
     Bytes {
         /// The return value.
@@ -53,7 +64,7 @@ impl Reply {
     pub fn value(&self) -> Code {
         match self {
             Reply::Code(v) | Reply::Reals { value: v, .. } | Reply::Bytes { value: v, .. } => *v,
-            Reply::Position(_) => Code(0),
+            Reply::Position(_) | Reply::Version { .. } => Code(0),
             Reply::Status { bios_called, .. } => Code(i16::from(*bios_called)),
         }
     }
@@ -81,6 +92,14 @@ impl Reply {
                 out.extend_from_slice(&last.0.to_le_bytes());
                 out.extend_from_slice(&u16::from(*transaction).to_le_bytes());
                 out.extend_from_slice(&epoch.to_le_bytes());
+            }
+            Reply::Version { protocol, kind } => {
+                out.extend_from_slice(&protocol.to_le_bytes());
+                out.extend(
+                    kind.bytes()
+                        .filter(|b| (0x20..0x7f).contains(b))
+                        .take(MAX_KIND),
+                );
             }
             Reply::Bytes { bytes, .. } => out.extend_from_slice(bytes),
         }
@@ -134,6 +153,22 @@ impl Reply {
                 }
                 Ok(Reply::Position(get_location(tag, values)))
             }
+            ReplyKind::Version => {
+                let [lo, hi, kind @ ..] = rest else {
+                    return Err(bad());
+                };
+                if value.0 != 0
+                    || kind.is_empty()
+                    || kind.len() > MAX_KIND
+                    || !kind.iter().all(|b| (0x20..0x7f).contains(b))
+                {
+                    return Err(bad());
+                }
+                Ok(Reply::Version {
+                    protocol: u16::from_le_bytes([*lo, *hi]),
+                    kind: String::from_utf8_lossy(kind).into_owned(),
+                })
+            }
             ReplyKind::Status => {
                 if rest.len() != 6 || !(value.0 == 0 || value.0 == 1) || rest[3] != 0 {
                     return Err(bad());
@@ -164,6 +199,7 @@ impl Reply {
                 u8::from(*bios_called),
                 last.describe(bios)
             ),
+            Reply::Version { protocol, kind } => format!("protocol {protocol}, {kind}"),
             Reply::Reals { value, values } => {
                 let v: Vec<String> = values.iter().map(|x| format_number(*x)).collect();
                 format!("{}, values ({})", value.describe(bios), v.join(", "))

@@ -223,7 +223,29 @@ commands! {
         reply: ReplyKind::Status, success: &[], wait: Wait::Reply,
         help: "whether the last CAT1/CAT2 command called the BIOS, and its return value",
     }
+    /// TROLGetVersion(): the controller's protocol version and kind (added: the host checks
+    /// them when it connects, docs/protocol.md "Version and kind").
+    TROL_GET_VERSION = 194 => GET_VERSION {
+        name: "TROLGetVersion",
+        args: &[],
+        reply: ReplyKind::Version, success: &[], wait: Wait::Reply,
+        help: "the controller's TROL protocol version and what drives the arm",
+    }
+    /// TROLSetWatchdog(tenths): halt the arm when no transaction arrives for `tenths` tenths
+    /// of a second; 0 turns it off (added, as ur_rtde's setWatchdog).
+    TROL_SET_WATCHDOG = 195 => SET_WATCHDOG {
+        name: "TROLSetWatchdog",
+        args: &[int("tenths", 0, 250)],
+        reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
+        help: "halt the arm when no call arrives for tenths/10 s (0: off)",
+    }
 }
+
+/// The version of TROL's protocol this library speaks: 3 is this successor's (the manual's
+/// layers with the CRC-16 agreement, transaction numbers with repeats, GetStatus with its
+/// transaction and epoch, GetVersion and SetWatchdog). Host and controller must speak the
+/// same.
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// The largest built-in code of `class` (`LAST_CATx_CODE`); one below its base if it has
 /// none.
@@ -277,7 +299,7 @@ mod tests {
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
         assert_eq!(LAST_CAT3_CODE, 128);
-        assert_eq!(LAST_CAT4_CODE, 193);
+        assert_eq!(LAST_CAT4_CODE, 195);
     }
 
     #[test]

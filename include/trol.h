@@ -175,7 +175,15 @@ TUINT InitTROL(TUINT serOnly);
 TUINT CleanupTROL(void);
 void SetL3_TO_Intervall(TUINT TO_Intervall);
 void SetDelay(TUINT delay);           /* milliseconds between two bytes sent */
-TUINT GetLastCommErr(void);
+TUINT GetLastCommErr(void);           /* the last call's layer-2 failure, 0 if none */
+/* Added: which service that failure belongs to (ERR_LIMIT_EXCEEDED is 0x07 on both sides),
+ * and the code of a port that failed outright (an I/O error: the process behind a pty or a
+ * TCP connection is gone), on the send side and the receive side. */
+#define COMM_SIDE_SEND 1
+#define COMM_SIDE_RECEIVE 2
+#define ERR_PORT_SEND 0x08
+#define ERR_PORT_RECEIVE 0x88
+TUINT GetLastCommSide(void);
 
 /* Adding commands ("Erweiterung von TROL um eigene Kommandos", docs/extending.md).
  * Cat1Transaction (send.h): send a CAT1 request (its first byte the command code) and

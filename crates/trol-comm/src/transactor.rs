@@ -156,15 +156,48 @@ impl<P: Port> Transactor<P> {
 
     /// TransSR: send `request` and return the controller's reply.
     ///
-    /// If the port fails (an I/O error), the transaction is abandoned, the port's input is
-    /// flushed, and the next call starts afresh.
+    /// If the port fails (an I/O error), the failure is recorded for GetLastCommErr as
+    /// ERR_PORT of the side it hit (SendData's while the request goes out, ReceiveData's
+    /// after), the manual's handler of that side is told (ErrOnSend or ErrOnReceive; a dead
+    /// port cannot be mended, so the call fails whatever it answers), the transaction is
+    /// abandoned, the port's input is flushed, and the next call starts afresh.
     pub fn trans_sr(&mut self, request: &[u8]) -> Result<Vec<u8>, TransError> {
         let result = self.run_transaction(request);
         if let Err(TransError::Io(_)) = result {
+            let error = if self.initiator.is_sending() {
+                LinkError::Send(SendError::Port)
+            } else {
+                LinkError::Receive(trol_proto::link::ReceiveError::Port)
+            };
+            self.initiator.link_mut().note_failure(error);
+            self.tell_port_failure(error);
             self.initiator.abort();
             let _ = self.driver.port_mut().flush_input();
         }
         result
+    }
+
+    /// Tell the handler of the side the port failed on.
+    fn tell_port_failure(&mut self, error: LinkError) {
+        let cfg = *self.initiator.link().config();
+        let wait = self.initiator.reply_timeout();
+        let pci = self.initiator.current_pci();
+        let request = self.initiator.request().to_vec();
+        let mut line = LineChannel::new(&mut self.driver, cfg, wait);
+        let ctx = FailureContext {
+            error,
+            message: if matches!(error, LinkError::Send(_)) {
+                &request
+            } else {
+                &[]
+            },
+            pci,
+            attempts: 0,
+        };
+        let _ = match error {
+            LinkError::Send(_) => self.handlers.err_on_send_on(&ctx, &mut line),
+            LinkError::Receive(_) => self.handlers.err_on_receive_on(&ctx, &mut line),
+        };
     }
 
     fn run_transaction(&mut self, request: &[u8]) -> Result<Vec<u8>, TransError> {

@@ -381,3 +381,105 @@ fn a_port_error_mid_transaction_is_reported_and_the_next_transaction_works() {
     t.trans_sr(b"quit").unwrap();
     server.join().unwrap();
 }
+
+/// A port that fails its first receive after a send that carried EOT (the request is out:
+/// the failure hits the wait for the reply).
+struct FailsAfterRequest<P> {
+    inner: P,
+    once: bool,
+    armed: bool,
+}
+
+impl<P: Port> Port for FailsAfterRequest<P> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        if bytes.contains(&trol_proto::link::control::EOT) && std::mem::take(&mut self.once) {
+            self.armed = true;
+        }
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> std::io::Result<usize> {
+        if std::mem::take(&mut self.armed) {
+            return Err(std::io::Error::other("the controller's process is gone"));
+        }
+        self.inner.recv(buf, deadline)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "fails-after-request".into()
+    }
+}
+
+/// Records which handler was told of which failure.
+#[derive(Default, Clone)]
+struct Told(std::sync::Arc<std::sync::Mutex<Vec<(&'static str, trol_proto::link::LinkError)>>>);
+
+impl ErrorHandlers for Told {
+    fn err_on_send(&mut self, ctx: &FailureContext<'_>) -> Recovery {
+        self.0.lock().unwrap().push(("ErrOnSend", ctx.error));
+        Recovery::Fail
+    }
+    fn err_on_receive(&mut self, ctx: &FailureContext<'_>) -> Recovery {
+        self.0.lock().unwrap().push(("ErrOnReceive", ctx.error));
+        Recovery::Fail
+    }
+}
+
+#[test]
+fn a_port_that_fails_is_told_to_the_handler_of_its_side_and_kept_for_get_last_comm_err() {
+    use trol_proto::link::{LinkError, ReceiveError, SendError};
+    // While the request goes out: SendData's ERR_PORT, ErrOnSend.
+    let (a, _b) = memory::pair(None);
+    let told = Told::default();
+    let mut t = Transactor::new(
+        FailsOnce {
+            inner: a,
+            recvs: 0,
+            fail_at: 1,
+        },
+        quick_link(),
+    );
+    t.set_handlers(Box::new(told.clone()));
+    assert!(matches!(t.trans_sr(b"first"), Err(TransError::Io(_))));
+    let port_send = LinkError::Send(SendError::Port);
+    assert_eq!(*told.0.lock().unwrap(), vec![("ErrOnSend", port_send)]);
+    assert_eq!(t.last_comm_error(), Some(port_send));
+    assert_eq!(port_send.code(), 0x08);
+
+    // While the reply is awaited: ReceiveData's ERR_PORT, ErrOnReceive; then a transaction
+    // that goes through leaves no stale failure behind.
+    let (a, b) = memory::pair(None);
+    let server =
+        std::thread::spawn(move || serve(Server::new(b, quick_link()), Duration::from_secs(30)));
+    let told = Told::default();
+    let mut t = Transactor::new(
+        FailsAfterRequest {
+            inner: a,
+            once: true,
+            armed: false,
+        },
+        quick_link(),
+    );
+    t.set_handlers(Box::new(told.clone()));
+    t.set_repeats(0);
+    assert!(matches!(t.trans_sr(b"first"), Err(TransError::Io(_))));
+    let port_receive = LinkError::Receive(ReceiveError::Port);
+    assert_eq!(
+        *told.0.lock().unwrap(),
+        vec![("ErrOnReceive", port_receive)]
+    );
+    assert_eq!(t.last_comm_error(), Some(port_receive));
+    assert_eq!(port_receive.code(), 0x88);
+    // The controller's reply to "first" may still come: let its link give up, drop it.
+    std::thread::sleep(Duration::from_millis(1500));
+    let _ = t.driver_mut().port_mut().flush_input();
+    t.set_repeats(2);
+    assert_eq!(t.trans_sr(b"second").unwrap(), b"dnoces");
+    assert_eq!(t.last_comm_error(), None, "a stale failure was kept");
+    t.trans_sr(b"quit").unwrap();
+    server.join().unwrap();
+}

@@ -110,6 +110,28 @@ static STATE: Mutex<State> = Mutex::new(State {
 });
 
 static LAST_COMM_ERR: AtomicU16 = AtomicU16::new(0);
+/// Which service failed last: 0 none, [`COMM_SIDE_SEND`], [`COMM_SIDE_RECEIVE`].
+static LAST_COMM_SIDE: AtomicU16 = AtomicU16::new(0);
+/// GetLastCommSide: SendData failed.
+pub const COMM_SIDE_SEND: TUINT = 1;
+/// GetLastCommSide: ReceiveData failed.
+pub const COMM_SIDE_RECEIVE: TUINT = 2;
+
+/// Keep `error` for GetLastCommErr and GetLastCommSide (None: the call had no failure).
+fn note_comm(error: Option<trol_proto::link::LinkError>) {
+    let (code, side) = match error {
+        Some(e @ trol_proto::link::LinkError::Send(_)) => (e.code(), COMM_SIDE_SEND),
+        Some(e @ trol_proto::link::LinkError::Receive(_)) => (e.code(), COMM_SIDE_RECEIVE),
+        None => (0, 0),
+    };
+    LAST_COMM_ERR.store(code, Ordering::Relaxed);
+    LAST_COMM_SIDE.store(side, Ordering::Relaxed);
+}
+
+fn note_code(code: u16, side: TUINT) {
+    LAST_COMM_ERR.store(code, Ordering::Relaxed);
+    LAST_COMM_SIDE.store(side, Ordering::Relaxed);
+}
 
 fn state() -> std::sync::MutexGuard<'static, State> {
     STATE.lock().unwrap_or_else(|p| p.into_inner())
@@ -186,7 +208,7 @@ fn message_for_c(bytes: &[u8]) -> (Vec<u8>, SInData) {
 
 impl ErrorHandlers for CHandlers {
     fn err_on_send_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
-        LAST_COMM_ERR.store(ctx.error.code(), Ordering::Relaxed);
+        note_comm(Some(ctx.error));
         let Some(f) = self.0.resolved().on_send else {
             return Recovery::Fail;
         };
@@ -199,7 +221,7 @@ impl ErrorHandlers for CHandlers {
         }
     }
     fn err_on_receive_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
-        LAST_COMM_ERR.store(ctx.error.code(), Ordering::Relaxed);
+        note_comm(Some(ctx.error));
         let Some(f) = self.0.resolved().on_receive else {
             return Recovery::Fail;
         };
@@ -267,9 +289,7 @@ fn run(
                 return fatal_or(fatal, def.code, COMM);
             };
             let r = robot.call(def, &args);
-            if let Some(e) = robot.last_comm_error() {
-                LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
-            }
+            note_comm(robot.last_comm_error());
             (r, fatal)
         };
         match result {
@@ -834,9 +854,7 @@ pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT
                 return TransCode::ErrSend as TUINT;
             };
             let r = robot.transact_raw(request);
-            if let Some(e) = robot.last_comm_error() {
-                LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
-            }
+            note_comm(robot.last_comm_error());
             r
         };
         match result {
@@ -869,9 +887,7 @@ pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
                 return fatal_or(fatal, code, COMM);
             };
             let r = robot.cat1_transaction(request);
-            if let Some(e) = robot.last_comm_error() {
-                LAST_COMM_ERR.store(e.code(), Ordering::Relaxed);
-            }
+            note_comm(robot.last_comm_error());
             (r, fatal)
         };
         match result {
@@ -890,7 +906,7 @@ pub unsafe extern "C" fn SendData(in_: *mut SInData, PCI: TUINT) -> TUINT {
         };
         let code = on_line(|l| l.send_data(message, PCI)).unwrap_or(trol_comm::PORT_FAILED);
         if code != 0 {
-            LAST_COMM_ERR.store(code, Ordering::Relaxed);
+            note_code(code, COMM_SIDE_SEND);
         }
         code
     })
@@ -914,7 +930,7 @@ pub unsafe extern "C" fn ReceiveData(out: *mut SInData, PCI: *mut TUINT) -> TUIN
                 0
             }
             Err(code) => {
-                LAST_COMM_ERR.store(code, Ordering::Relaxed);
+                note_code(code, COMM_SIDE_RECEIVE);
                 code
             }
         }
@@ -938,11 +954,21 @@ pub extern "C" fn FlushBuffer() {
     })
 }
 
-/// GetLastCommErr: the layer-2 code of the last failure (NAK code in the high byte), 0 if
-/// none. Handlers may call it.
+/// GetLastCommErr: the layer-2 code of the last call's failure (NAK code in the high byte;
+/// ERR_PORT 0x08 / 0x88 when the port itself failed), 0 if the last call had none. Handlers
+/// may call it.
 #[unsafe(no_mangle)]
 pub extern "C" fn GetLastCommErr() -> TUINT {
     LAST_COMM_ERR.load(Ordering::Relaxed)
+}
+
+/// GetLastCommSide (added): which service GetLastCommErr's failure belongs to:
+/// COMM_SIDE_SEND (1, SendData), COMM_SIDE_RECEIVE (2, ReceiveData), or 0. The manual's
+/// codes tell the side apart by the low byte's 0x80 bit, except ERR_LIMIT_EXCEEDED (0x07 on
+/// both sides).
+#[unsafe(no_mangle)]
+pub extern "C" fn GetLastCommSide() -> TUINT {
+    LAST_COMM_SIDE.load(Ordering::Relaxed)
 }
 
 fn set_callbacks(f: impl FnOnce(&mut Callbacks)) {

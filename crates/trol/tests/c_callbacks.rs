@@ -130,13 +130,16 @@ fn run_with(link: Link) -> String {
 fn check(out: &str) {
     // 1: SendData failed: ErrOnSend got the request, then FatalError got TROL_ERR_COMM.
     assert!(
-        out.contains("ErrOnSend: 1 bytes, command 6, GetLastCommErr 0x0402"),
+        out.contains("ErrOnSend: 1 bytes, command 6, GetLastCommErr 0x0402, side 1"),
         "{out}"
     );
     assert!(out.contains("FatalError: command 6, code -32001"), "{out}");
     assert!(out.contains("TROLHalt -> -32001"), "{out}");
     // 2: ErrOnReceive was asked after ERR_BAD_ENQ and received the reply itself.
-    assert!(out.contains("ErrOnReceive: GetLastCommErr 0x0085"), "{out}");
+    assert!(
+        out.contains("ErrOnReceive: GetLastCommErr 0x0085, side 2"),
+        "{out}"
+    );
     assert!(out.contains("ErrOnReceive: received 2 bytes"), "{out}");
     assert!(out.contains("TROLReady -> 0"), "{out}");
     // 3: ErrAppTimeOut was asked with the command and waited on; nothing was waiting then.

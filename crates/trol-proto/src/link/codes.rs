@@ -111,6 +111,9 @@ pub enum SendError {
     TimeoutEtx,
     /// 0x07: one block was refused more than MAX_RETRIES times.
     LimitExceeded,
+    /// 0x08 (added; the manual's serial driver could not fail): the port itself failed while
+    /// sending, an I/O error (the process behind a pty or a TCP connection is gone).
+    Port,
 }
 
 impl SendError {
@@ -124,6 +127,7 @@ impl SendError {
             SendError::TimeoutNak => 0x04,
             SendError::TimeoutEtx => 0x05,
             SendError::LimitExceeded => 0x07,
+            SendError::Port => 0x08,
         }
     }
 
@@ -136,6 +140,7 @@ impl SendError {
             SendError::TimeoutNak => "ERR_TIMEOUT_NAK",
             SendError::TimeoutEtx => "ERR_TIMEOUT_ETX",
             SendError::LimitExceeded => "ERR_LIMIT_EXCEEDED",
+            SendError::Port => "ERR_PORT",
         }
     }
 }
@@ -159,6 +164,8 @@ pub enum ReceiveError {
     BadEot,
     /// 0x07: one block had to be refused more than MAX_RETRIES times.
     LimitExceeded,
+    /// 0x88 (added): the port itself failed while receiving, an I/O error.
+    Port,
 }
 
 impl ReceiveError {
@@ -174,6 +181,7 @@ impl ReceiveError {
             ReceiveError::BadEnq => 0x85,
             ReceiveError::BadEot => 0x86,
             ReceiveError::LimitExceeded => 0x07,
+            ReceiveError::Port => 0x88,
         }
     }
 
@@ -188,6 +196,7 @@ impl ReceiveError {
             ReceiveError::BadEnq => "ERR_BAD_ENQ",
             ReceiveError::BadEot => "ERR_BAD_EOT",
             ReceiveError::LimitExceeded => "ERR_LIMIT_EXCEEDED",
+            ReceiveError::Port => "ERR_PORT",
         }
     }
 }

@@ -138,6 +138,19 @@ impl Link {
         self.last_error
     }
 
+    /// Forget the last failure (a new transaction starts: what GetLastCommErr reports
+    /// afterwards belongs to it).
+    pub fn clear_last_error(&mut self) {
+        self.last_error = None;
+    }
+
+    /// Record a failure the link could not see itself: the port failed under it
+    /// ([`SendError::Port`], [`ReceiveError::Port`]).
+    pub fn note_failure(&mut self, err: LinkError) {
+        self.stats.failures += 1;
+        self.last_error = Some(err);
+    }
+
     /// Whether a transfer is under way (or waits for the reset to end).
     pub fn is_busy(&self) -> bool {
         !matches!(self.role, Role::Idle) || self.deferred.is_some()

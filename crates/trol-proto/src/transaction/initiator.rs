@@ -123,6 +123,12 @@ impl Initiator {
         self.send_request(now).is_ok()
     }
 
+    /// Whether the request is on its way out (a failure now is SendData's; later, while the
+    /// reply is awaited, ReceiveData's).
+    pub fn is_sending(&self) -> bool {
+        matches!(self.state, State::Sending)
+    }
+
     /// Whether a transaction is under way.
     pub fn is_busy(&self) -> bool {
         !matches!(self.state, State::Idle | State::Finished)
@@ -139,6 +145,7 @@ impl Initiator {
             )));
         }
         self.number = self.number.wrapping_add(1);
+        self.link.clear_last_error();
         self.repeat = false;
         self.request.clear();
         self.request.extend_from_slice(request);

@@ -13,15 +13,16 @@ TUINT ErrOnSend(SInData *in, TUINT *PCI)
 {
     (void)PCI;
     sends++;
-    printf("ErrOnSend: %u bytes, command %u, GetLastCommErr 0x%04x\n", in->numBytes,
-           in->numBytes ? in->data[0] : 0, GetLastCommErr());
+    printf("ErrOnSend: %u bytes, command %u, GetLastCommErr 0x%04x, side %u\n", in->numBytes,
+           in->numBytes ? in->data[0] : 0, GetLastCommErr(), GetLastCommSide());
     return RECOVERY_FAIL;
 }
 
 TUINT ErrOnReceive(SOutData *out, TUINT *PCI)
 {
     receives++;
-    printf("ErrOnReceive: GetLastCommErr 0x%04x\n", GetLastCommErr());
+    printf("ErrOnReceive: GetLastCommErr 0x%04x, side %u\n", GetLastCommErr(),
+           GetLastCommSide());
     /* Receive the reply ourselves and hand it on. */
     if (ReceiveData(out, PCI) == 0) {
         printf("ErrOnReceive: received %u bytes\n", out->numBytes);

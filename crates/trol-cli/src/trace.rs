@@ -91,6 +91,8 @@ struct Stream {
     /// The message being received: its length, PCI, bytes so far (from the header's first
     /// word), and frames accepted.
     message: Option<(usize, u16, Vec<u8>, usize)>,
+    /// The block check the message's header passed.
+    check: Option<BlockCheck>,
     /// Terminal text (bytes outside the protocol, shown as text).
     text: Vec<u8>,
     /// An ENQ went out from this side: a header may follow (so a byte within one bit of
@@ -193,19 +195,28 @@ impl<W: Write> Decoder<W> {
             let check = check_of(bcc, |c| frame::bcc(c, &block[1..7]));
             let ok = check.is_some() && accepts(block[9], ETX);
             let first: Vec<u8> = block[5..7.min(5 + len)].to_vec();
+            // In CRC-16 mode the PCI's bits 9..15 are the check of the whole message.
+            let shown = match check {
+                Some(BlockCheck::Crc16) => format!(
+                    "PCI {:#06x} (transaction {}), message check {:#04x}",
+                    pci & frame::PCI_LAYER3_BITS,
+                    pci & 0xFF,
+                    pci >> 9
+                ),
+                _ => format!("PCI {pci:#06x} (transaction {})", pci & 0xFF),
+            };
             self.line(
                 t,
                 dir,
                 format!(
-                    "HEADER #bytes {len}, PCI {pci:#06x} (transaction {}), first word \
-                     {:02x?}, BCC {bcc:#06x} {}",
-                    pci & 0xFF,
+                    "HEADER #bytes {len}, {shown}, first word {:02x?}, BCC {bcc:#06x} {}",
                     &block[5..7],
                     verdict(check)
                 ),
             );
             let s = self.stream(dir);
             s.message = if ok { Some((len, pci, first, 0)) } else { None };
+            s.check = check;
             return;
         }
         if accepts(b, STX) && block.len() > 6 {
@@ -218,6 +229,8 @@ impl<W: Write> Decoder<W> {
                 frame::frame_bcc(c, &block[1..1 + n], [block[1 + n], block[2 + n]])
             });
             let ok = check.is_some();
+            // In CRC-16 mode the field is the index XOR a second CRC of the data.
+            let fid = frame::frame_index_of(check.unwrap_or(BlockCheck::Lrc), fid, data);
             let term = if accepts(end, ETX) {
                 "ETX"
             } else if accepts(end, ETB) {
@@ -274,12 +287,19 @@ impl<W: Write> Decoder<W> {
         let Some((len, pci, bytes, _)) = s.message.take() else {
             return;
         };
+        let check = s.check;
         if bytes.len() != len {
             self.line(
                 t,
                 dir,
                 format!("message incomplete: {} of {len} bytes", bytes.len()),
             );
+            return;
+        }
+        if check == Some(BlockCheck::Crc16)
+            && frame::line_pci(BlockCheck::Crc16, pci, &bytes) != pci
+        {
+            self.line(t, dir, "message check WRONG: not delivered".to_string());
             return;
         }
         let n = pci & 0xFF;
@@ -418,7 +438,8 @@ mod tests {
         d.feed(0.004, Dir::Pc, &[EOT]);
         // The reply: -1 as a 2-byte message, in pieces.
         let reply = (-1i16).to_le_bytes();
-        let h = Header::for_message(&reply, 1).encode(BlockCheck::Crc16);
+        let pci = frame::line_pci(BlockCheck::Crc16, 1, &reply);
+        let h = Header::for_message(&reply, pci).encode(BlockCheck::Crc16);
         d.feed(0.010, Dir::Ctl, &[ENQ]);
         d.feed(0.011, Dir::Pc, &[ACK]);
         d.feed(0.012, Dir::Ctl, &h[..4]);
@@ -430,7 +451,8 @@ mod tests {
         d.feed(
             0.02,
             Dir::Pc,
-            &Header::for_message(&long, 2).encode(BlockCheck::Crc16),
+            &Header::for_message(&long, frame::line_pci(BlockCheck::Crc16, 2, &long))
+                .encode(BlockCheck::Crc16),
         );
         let mut f = Vec::new();
         encode_frame(&long, 0, BlockCheck::Crc16, &mut f);

@@ -42,14 +42,24 @@ fn sending(message: &[u8]) -> (Wire, Link, Script) {
     (Wire::new(), link, Script::default())
 }
 
+/// A header as the sender writes it for a message of `len` bytes starting with `first` (in
+/// CRC-16 mode the PCI carries the message check: right for messages of up to 2 bytes).
 fn header_bytes(len: u16, pci: u16, first: [u8; 2]) -> Vec<u8> {
+    let shown = &first[..usize::from(len).min(2)];
     Header {
         len,
-        pci,
+        pci: frame::line_pci(cfg().check, pci, shown),
         first_word: first,
     }
     .encode(cfg().check)
     .to_vec()
+}
+
+/// The header of `message` as the sender writes it.
+fn header_for(message: &[u8], pci: u16) -> Vec<u8> {
+    Header::for_message(message, frame::line_pci(cfg().check, pci, message))
+        .encode(cfg().check)
+        .to_vec()
 }
 
 fn frame_bytes(message: &[u8], index: usize) -> Vec<u8> {
@@ -331,12 +341,8 @@ fn receiver_after_header(message: &[u8]) -> (Wire, Link, Script) {
     let mut link = Link::new(cfg());
     link.receive(Instant::ZERO).unwrap();
     let mut w = Wire::new();
-    let first = [
-        message.first().copied().unwrap_or(0),
-        message.get(1).copied().unwrap_or(0),
-    ];
     let mut peer = Script {
-        to_send: [vec![ENQ], header_bytes(message.len() as u16, 7, first)].concat(),
+        to_send: [vec![ENQ], header_for(message, 7)].concat(),
         ..Script::default()
     };
     w.run(&mut link, &mut peer, T / 2, |_, p| p.received.len() >= 2);
@@ -362,7 +368,7 @@ fn receiver_aborts_on_a_wrong_frame_id() {
     let (mut w, mut link, mut peer) = receiver_after_header(msg);
     // A well-formed frame with ID 1 where 0 is expected (BCC computed over the wrong ID).
     let data = &msg[2..];
-    let fid = 1u16.to_le_bytes();
+    let fid = frame::frame_id_field(cfg().check, 1, data).to_le_bytes();
     let bcc = frame::frame_bcc(cfg().check, data, fid).to_le_bytes();
     peer.to_send = [
         vec![STX],
@@ -506,7 +512,8 @@ pub fn transfer(
         ..cfg()
     });
     r.receive(wire.now).unwrap();
-    s.send(message, 0x1234, wire.now).unwrap();
+    // In CRC-16 mode layer 3 has the PCI's bits 0..8 (the rest carries the message check).
+    s.send(message, 0x0134, wire.now).unwrap();
     let (mut so, mut ro) = (None, None);
     wire.run(&mut s, &mut r, Duration::from_secs(600), |s, r| {
         so = so.or(s.poll_outcome());
@@ -514,7 +521,7 @@ pub fn transfer(
         so.is_some() && ro.is_some()
     });
     let data = r.take_received().map(|(pci, d)| {
-        assert_eq!(pci, 0x1234);
+        assert_eq!(pci, 0x0134);
         d
     });
     (so, ro, data)
@@ -713,4 +720,64 @@ fn the_transcript_of_a_two_frame_message() {
     assert_eq!(*w.transcript[6].1.last().unwrap(), ETX);
     assert_eq!(w.transcript[8].1, vec![EOT]);
     assert_eq!(hex("1E"), vec![SOH]);
+}
+
+#[test]
+fn in_crc16_mode_damage_that_passes_a_blocks_crc_is_caught_by_the_two_more_checks() {
+    use trol_proto::link::BlockCheck::Crc16;
+    assert_eq!(cfg().check, Crc16);
+    // A header-only message whose BCC holds (as if the damage had matched the CRC-16) but
+    // whose message check in the PCI does not: asked for again, not delivered.
+    let msg = [0x11u8, 0x96];
+    let good = Header::for_message(&msg, frame::line_pci(Crc16, 5, &msg));
+    let damaged = Header {
+        first_word: [0x11, 0x97],
+        ..good
+    }
+    .encode(Crc16)
+    .to_vec();
+    let (got, o, _) = nak_after_header(damaged, cfg());
+    assert_eq!(got, vec![ACK, NAK, NakCode::Bcc.byte()]);
+    assert_eq!(o, None);
+
+    // A frame whose BCC holds but whose frame-ID field's second CRC does not.
+    let msg = b"hello";
+    let (mut w, mut link, mut peer) = receiver_after_header(msg);
+    let data = b"llp";
+    let fid = frame::frame_id_field(Crc16, 0, &msg[2..]).to_le_bytes();
+    let bcc = frame::frame_bcc(Crc16, data, fid).to_le_bytes();
+    peer.to_send = [
+        vec![STX],
+        data.to_vec(),
+        fid.to_vec(),
+        bcc.to_vec(),
+        vec![ETX],
+    ]
+    .concat();
+    w.run(&mut link, &mut peer, T / 2, |_, p| p.received.len() >= 2);
+    assert_eq!(peer.received, vec![NAK, NakCode::Bcc.byte()]);
+
+    // Damage in an earlier frame that passed both of its checks is still caught by the
+    // message check on the last frame: a header that announces other bytes than the frames
+    // carry (its check was made over "hellp").
+    let (mut w, mut link, mut peer) = {
+        let mut link = Link::new(cfg());
+        link.receive(Instant::ZERO).unwrap();
+        let mut w = Wire::new();
+        let other = b"hellp";
+        let header = Header::for_message(b"hello", frame::line_pci(Crc16, 7, other))
+            .encode(Crc16)
+            .to_vec();
+        let mut peer = Script {
+            to_send: [vec![ENQ], header].concat(),
+            ..Script::default()
+        };
+        w.run(&mut link, &mut peer, T / 2, |_, p| p.received.len() >= 2);
+        assert_eq!(peer.received, vec![ACK, ACK]);
+        peer.received.clear();
+        (w, link, peer)
+    };
+    peer.to_send = frame_bytes(b"hello", 0);
+    w.run(&mut link, &mut peer, T / 2, |_, p| p.received.len() >= 2);
+    assert_eq!(peer.received, vec![NAK, NakCode::Bcc.byte()]);
 }

@@ -89,6 +89,35 @@ def _bcc(block: bytes) -> bytes:
     return binascii.crc_hqx(block, 0xFFFF).to_bytes(2, "little")
 
 
+def _crc7(data: bytes) -> int:
+    """CRC-7/MMC (poly 0x09, init 0): CRC-16 mode's check of a whole message."""
+    crc = 0
+    for byte in data:
+        for i in range(7, -1, -1):
+            top = (crc >> 6) & 1
+            crc = (crc << 1) & 0x7F
+            if top ^ ((byte >> i) & 1):
+                crc ^= 0x09
+    return crc
+
+
+def _crc_arc(data: bytes) -> int:
+    """CRC-16/ARC (poly 0x8005 reflected, init 0): CRC-16 mode's second check of a frame."""
+    crc = 0
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
+    return crc
+
+
+def _line_pci(message: bytes, pci: int) -> int:
+    """The PCI on the line in CRC-16 mode: layer 3's bits 0..8, the message check in 9..15."""
+    own = pci & 0x1FF
+    check = _crc7(len(message).to_bytes(2, "little") + own.to_bytes(2, "little") + message)
+    return own | (check << 9)
+
+
 def _receive(conn: socket.socket) -> tuple[int, bytes]:
     """ReceiveData of a message of at most 2 bytes (header only)."""
     while _read(conn, 1)[0] != ENQ:
@@ -99,8 +128,9 @@ def _receive(conn: socket.socket) -> tuple[int, bytes]:
     n = int.from_bytes(header[1:3], "little")
     pci = int.from_bytes(header[3:5], "little")
     assert n <= 2, "the scripted controller takes only short requests"
+    assert _line_pci(header[5 : 5 + n], pci) == pci, "the message check"
     assert _read(conn, 1)[0] == EOT
-    return pci, header[5 : 5 + n]
+    return pci & 0x1FF, header[5 : 5 + n]
 
 
 def _send(conn: socket.socket, message: bytes, pci: int) -> None:
@@ -108,11 +138,13 @@ def _send(conn: socket.socket, message: bytes, pci: int) -> None:
     conn.sendall(bytes([ENQ]))
     assert _read(conn, 1)[0] == ACK
     first = (message[:2] + b"\0\0")[:2]
-    fields = len(message).to_bytes(2, "little") + pci.to_bytes(2, "little") + first
+    line_pci = _line_pci(message, pci)
+    fields = len(message).to_bytes(2, "little") + line_pci.to_bytes(2, "little") + first
     conn.sendall(bytes([SOH]) + fields + _bcc(fields) + bytes([ETX]))
     assert _read(conn, 1)[0] == ACK
     if len(message) > 2:
-        data = message[2:] + (0).to_bytes(2, "little")
+        # Frame 0's ID field: the index XOR CRC-16/ARC of the data.
+        data = message[2:] + (0 ^ _crc_arc(message[2:])).to_bytes(2, "little")
         conn.sendall(bytes([STX]) + data + _bcc(data) + bytes([ETX]))
         assert _read(conn, 1)[0] == ACK
     conn.sendall(bytes([EOT]))

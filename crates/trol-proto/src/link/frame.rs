@@ -7,7 +7,10 @@
 //! ```
 //!
 //! The BCC covers every byte of the block except the control codes (and except the BCC
-//! itself): the manual's LRC (their sum modulo 2^16), or CRC-16/CCITT ([`BlockCheck`]).
+//! itself): the manual's LRC (their sum modulo 2^16), or CRC-16/CCITT ([`BlockCheck`]). In
+//! CRC-16 mode two fields carry more checks at no cost on the line: the frame-ID field is the
+//! index XOR a second CRC of the frame's data ([`frame_id_field`]), and the PCI's bits 9..15
+//! a check of the whole message ([`message_check`]).
 
 use super::config::BlockCheck;
 use super::control::{ETB, ETX, SOH, STX};
@@ -42,6 +45,56 @@ const CCITT: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);
 /// CRC-16/CCITT (polynomial 0x1021, initial value 0xFFFF, no reflection, no final XOR).
 pub fn crc16(bytes: &[u8]) -> u16 {
     CCITT.checksum(bytes)
+}
+
+const ARC: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_ARC);
+const MMC7: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::CRC_7_MMC);
+
+/// In CRC-16 mode, the PCI bits that reach layer 3 (the transaction number and REPEAT);
+/// bits 9..15 carry the message check on the line.
+pub const PCI_LAYER3_BITS: u16 = 0x01FF;
+
+/// CRC-16 mode's check of the whole message, 7 bits (CRC-7/MMC, polynomial 0x09) over
+/// #bytes (little-endian), the PCI's layer-3 bits (little-endian) and every message byte.
+/// It rides in the PCI's bits 9..15, so a header or frame whose own CRC-16 missed damage
+/// is still caught before the message is delivered, at no cost on the line.
+pub fn message_check(len: u16, pci: u16, message: &[u8]) -> u16 {
+    let mut d = MMC7.digest();
+    d.update(&len.to_le_bytes());
+    d.update(&(pci & PCI_LAYER3_BITS).to_le_bytes());
+    d.update(message);
+    u16::from(d.finalize() & 0x7F)
+}
+
+/// The PCI as it goes on the line: in CRC-16 mode the layer-3 bits with the message check
+/// in bits 9..15; with the LRC the PCI as layer 3 gave it (the manual's).
+pub fn line_pci(check: BlockCheck, pci: u16, message: &[u8]) -> u16 {
+    match check {
+        BlockCheck::Lrc => pci,
+        BlockCheck::Crc16 => {
+            let own = pci & PCI_LAYER3_BITS;
+            own | (message_check(message.len() as u16, own, message) << 9)
+        }
+    }
+}
+
+/// The frame-ID field of frame `index` carrying `data`: the index with the LRC (the
+/// manual's), the index XOR a second CRC of the data (CRC-16/ARC, polynomial 0x8005) in
+/// CRC-16 mode, so that a frame has 32 check bits at no cost on the line.
+pub fn frame_id_field(check: BlockCheck, index: usize, data: &[u8]) -> u16 {
+    match check {
+        BlockCheck::Lrc => index as u16,
+        BlockCheck::Crc16 => (index as u16) ^ ARC.checksum(data),
+    }
+}
+
+/// The frame index a frame-ID field names, given the frame's data (the inverse of
+/// [`frame_id_field`]).
+pub fn frame_index_of(check: BlockCheck, field: u16, data: &[u8]) -> u16 {
+    match check {
+        BlockCheck::Lrc => field,
+        BlockCheck::Crc16 => field ^ ARC.checksum(data),
+    }
 }
 
 /// The BCC of a block's checked bytes (header: the six between SOH and BCC; frame: the data
@@ -146,7 +199,7 @@ pub fn encode_frame(message: &[u8], index: usize, check: BlockCheck, out: &mut V
     let range = frame_range(message.len(), index);
     let last = range.end == message.len();
     let data = &message[range];
-    let fid = (index as u16).to_le_bytes();
+    let fid = frame_id_field(check, index, data).to_le_bytes();
     let bcc = frame_bcc(check, data, fid).to_le_bytes();
     out.reserve(data.len() + FRAME_OVERHEAD);
     out.push(STX);
@@ -177,6 +230,9 @@ mod tests {
     fn crc16_is_ccitt_and_catches_what_the_lrc_misses() {
         // The standard check value of CRC-16/CCITT-FALSE (IBM-3740).
         assert_eq!(crc16(b"123456789"), 0x29B1);
+        // And of the two more checks of CRC-16 mode: CRC-16/ARC and CRC-7/MMC.
+        assert_eq!(ARC.checksum(b"123456789"), 0xBB3D);
+        assert_eq!(MMC7.checksum(b"123456789"), 0x75);
         // Two flips in one bit column: the sum stays, the CRC does not.
         let a = [0x10, 0x20, 0x30, 0x40];
         let b = [0x11, 0x1F, 0x30, 0x40];

@@ -8,14 +8,16 @@
 //!    any other byte NAK ERR_ETX (retry);
 //! 3. the BCC matches, else NAK ERR_BCC (retry);
 //! 4. header: #bytes within the receiver's limit, else NAK ERR_TOO_LARGE (fatal);
-//!    frame: the frame-ID is the one expected, else NAK ERR_FID (fatal).
+//!    frame: the frame-ID is the one expected, else NAK ERR_FID (fatal);
+//! 5. CRC-16 mode: the frame-ID field's second CRC, and, on the block that completes the
+//!    message, the message check in the PCI's bits 9..15; else NAK ERR_BCC (retry).
 //!
 //! A refused block is NAK'd and expected again, at most MAX_RETRIES times. Bytes that were
 //! handed in together with a refused block arrived before the NAK went out, so they cannot be
 //! the retransmission: they are dropped.
 
 use super::codes::{NakCode, ReceiveError};
-use super::config::LinkConfig;
+use super::config::{BlockCheck, LinkConfig};
 use super::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX};
 use super::frame::{self, HEADER_LEN, Header};
 use crate::time::Instant;
@@ -63,6 +65,8 @@ pub struct Receiver {
     need: usize,
     len: usize,
     pci: u16,
+    /// The PCI as it came on the line (in CRC-16 mode with the message check).
+    line_pci: u16,
     message: Vec<u8>,
     naks: u8,
     deadline: Option<Instant>,
@@ -79,6 +83,7 @@ impl Receiver {
             need: 0,
             len: 0,
             pci: 0,
+            line_pci: 0,
             message: Vec::new(),
             naks: 0,
             deadline: None,
@@ -286,17 +291,45 @@ impl Receiver {
         if computed != bcc {
             return Check::Retry(NakCode::Bcc);
         }
+        let check = self.cfg.check;
         match block {
             Block::Header => {
-                let len = usize::from(u16::from_le_bytes([b[1], b[2]]));
-                if len > self.cfg.max_message {
+                let len = u16::from_le_bytes([b[1], b[2]]);
+                if usize::from(len) > self.cfg.max_message {
                     return Check::Fatal(NakCode::TooLarge);
+                }
+                // A message that travels in the header alone: its check now.
+                let pci = u16::from_le_bytes([b[3], b[4]]);
+                let first = &b[5..5 + usize::from(len).min(2)];
+                if frame::frame_count(usize::from(len)) == 0
+                    && frame::line_pci(check, pci, first) != pci
+                {
+                    return Check::Retry(NakCode::Bcc);
                 }
             }
             Block::Frame(i) => {
-                let fid = u16::from_le_bytes([b[n - 5], b[n - 4]]);
-                if usize::from(fid) != i {
-                    return Check::Fatal(NakCode::Fid);
+                let data = &b[1..n - 5];
+                let field = u16::from_le_bytes([b[n - 5], b[n - 4]]);
+                let named = usize::from(frame::frame_index_of(check, field, data));
+                if named != i {
+                    // Another frame than the one expected (the one before, sent again after
+                    // a lost ACK, or the one after) is the manual's fatal ERR_FID; in CRC-16
+                    // mode a field that names any other index is damage the BCC missed: the
+                    // frame is asked for again.
+                    return if check == BlockCheck::Lrc || named + 1 == i || named == i + 1 {
+                        Check::Fatal(NakCode::Fid)
+                    } else {
+                        Check::Retry(NakCode::Bcc)
+                    };
+                }
+                // The last frame completes the message: its check (CRC-16 mode).
+                if i + 1 == frame::frame_count(self.len) && check == BlockCheck::Crc16 {
+                    let mut whole = Vec::with_capacity(self.len);
+                    whole.extend_from_slice(&self.message);
+                    whole.extend_from_slice(data);
+                    if frame::line_pci(check, self.pci, &whole) != self.line_pci {
+                        return Check::Retry(NakCode::Bcc);
+                    }
                 }
             }
         }
@@ -318,7 +351,12 @@ impl Receiver {
                         hdr.copy_from_slice(&self.block);
                         let header = Header::decode_fields(&hdr);
                         self.len = usize::from(header.len);
-                        self.pci = header.pci;
+                        self.line_pci = header.pci;
+                        // Layer 3 gets its own bits; in CRC-16 mode the rest is the check.
+                        self.pci = match self.cfg.check {
+                            BlockCheck::Lrc => header.pci,
+                            BlockCheck::Crc16 => header.pci & frame::PCI_LAYER3_BITS,
+                        };
                         self.message.clear();
                         self.message.reserve(self.len);
                         self.message

@@ -235,7 +235,8 @@ impl Sender {
         let before = self.out.len();
         match block {
             Block::Header => {
-                let header = Header::for_message(&self.message, self.pci);
+                let pci = frame::line_pci(self.cfg.check, self.pci, &self.message);
+                let header = Header::for_message(&self.message, pci);
                 self.out.extend_from_slice(&header.encode(self.cfg.check));
             }
             Block::Frame(i) => frame::encode_frame(&self.message, i, self.cfg.check, &mut self.out),

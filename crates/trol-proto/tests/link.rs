@@ -781,3 +781,27 @@ fn in_crc16_mode_damage_that_passes_a_blocks_crc_is_caught_by_the_two_more_check
     w.run(&mut link, &mut peer, T / 2, |_, p| p.received.len() >= 2);
     assert_eq!(peer.received, vec![NAK, NakCode::Bcc.byte()]);
 }
+
+#[test]
+fn a_receiver_that_does_not_know_the_senders_set_delay_still_takes_its_long_message() {
+    // The PC pauses 5 ms between bytes (the manual's SetDelay default); the controller's end
+    // knows only the baud rate. A 600-byte message's 256-byte frames then take 1.4 s each,
+    // longer than the block timeout: the receiver's timer restarts with each byte.
+    let delay = Duration::from_millis(5);
+    let ct = trol_proto::link::config::char_time(38400);
+    let mut w = Wire::paced(ct + delay);
+    let mut s = Link::new(LinkConfig::for_line(38400, delay));
+    let mut r = Link::new(LinkConfig::for_line(38400, Duration::ZERO));
+    r.receive(w.now).unwrap();
+    let message: Vec<u8> = (0..600u32).map(|i| (i * 7) as u8).collect();
+    s.send(&message, 3, w.now).unwrap();
+    let (mut so, mut ro) = (None, None);
+    w.run(&mut s, &mut r, Duration::from_secs(60), |s, r| {
+        so = so.or(s.poll_outcome());
+        ro = ro.or(r.poll_outcome());
+        so.is_some() && ro.is_some()
+    });
+    assert_eq!(ro, Some(Outcome::Received));
+    assert_eq!(so, Some(Outcome::Sent));
+    assert_eq!(r.take_received().map(|(_, d)| d), Some(message));
+}

@@ -199,6 +199,13 @@ impl Receiver {
                     let take = (self.need - self.block.len()).min(input.len() - i);
                     self.block.extend_from_slice(&input[i..i + take]);
                     i += take;
+                    // A block whose bytes keep coming is alive: a sender that pauses between
+                    // bytes (the manual's SetDelay, which this end cannot know) gets its
+                    // termc after its last byte, not after the block's line time.
+                    if take > 0 {
+                        let alive = now + self.cfg.timeouts.termc;
+                        self.deadline = self.deadline.map(|d| d.max(alive));
+                    }
                     if self.block.len() == self.need {
                         match self.finish_block(now) {
                             Check::Ok => {}

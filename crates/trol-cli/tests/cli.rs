@@ -910,3 +910,94 @@ fn the_watchdog_of_a_simulator_process_halts_the_arm_when_its_client_falls_silen
     let said = sim.wait_for("watchdog: no call for 0.5 s: the arm was halted", 20);
     assert!(said.iter().any(|l| l.contains("TROLJoint")), "{said:?}");
 }
+
+#[path = "../../trol/tests/common/cbuild.rs"]
+mod cbuild;
+
+/// The same C program carries on after its controller restarts (TCP: the process behind
+/// the port dies and a new one listens on the same address).
+#[test]
+fn the_same_c_program_carries_on_after_the_controller_restarts() {
+    use std::io::{BufRead, BufReader, Write};
+    let dir = scratch("c-restart");
+    let free = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = free.local_addr().unwrap();
+    drop(free);
+    let listen = format!("listen://{addr}");
+    let start = || {
+        Background::start(
+            &dir,
+            &[
+                "sim",
+                "--port",
+                &listen,
+                "--server",
+                "--homed",
+                "--time-scale",
+                "50",
+            ],
+            "serving on ",
+        )
+    };
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("38400\nsocket://{addr}\n0 0 0 0 0 0\n"),
+    )
+    .unwrap();
+    let exe = cbuild::compile(
+        &cbuild::root().join("crates/trol-cli/tests/c/restart.c"),
+        "restart",
+        cbuild::Link::Static,
+    );
+    let sim = start();
+    let mut program = cbuild::program(&exe)
+        .current_dir(&dir)
+        .env_remove("TROL_CONFIG")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(program.stdout.take().unwrap()).lines();
+    let first = out.next().unwrap().unwrap();
+    assert_eq!(first, "first 0");
+    drop(sim);
+    std::thread::sleep(Duration::from_millis(200));
+    let sim = start();
+    writeln!(program.stdin.take().unwrap(), "go").unwrap();
+    let rest: Vec<String> = out.map_while(Result::ok).collect();
+    let status = program.wait().unwrap();
+    assert!(status.success(), "{rest:?}");
+    assert!(rest.last().is_some_and(|l| l.ends_with(": 0")), "{rest:?}");
+    // The call that failed while the controller was away says why: the port (0x08 or 0x88)
+    // or the link.
+    for l in rest.iter().filter(|l| l.starts_with("while restarting")) {
+        assert!(l.contains("-32001"), "{l}");
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    let log = sim.output().join("\n");
+    assert!(
+        log.contains("TROLJoint"),
+        "the new controller ran the move: {log}"
+    );
+}
+
+/// `trol init`'s activation after a failed probe (the controller in terminal mode) works
+/// every time: 50 activations in a row against one controller process over a pty, each
+/// ended by TerminatePCP.
+#[test]
+fn activation_after_a_failed_probe_succeeds_fifty_times_out_of_fifty() {
+    let dir = scratch("init-50");
+    let sim = Background::start(&dir, &["sim", "--homed"], "serving on ");
+    // Short link timeouts, so that each failed probe (and its reset) ends quickly.
+    let cfg = trol_proto::link::LinkConfig {
+        timeouts: trol_proto::link::Timeouts::uniform(Duration::from_millis(150)),
+        ..trol_proto::link::LinkConfig::for_line(38400, Duration::ZERO)
+    };
+    for i in 0..50 {
+        let port = trol_port::open(&sim.name, &trol_port::PortSettings::default()).unwrap();
+        let mut robot = trol::Robot::over(port, cfg, None);
+        trol::activate(&mut robot, &[0.0; 6]).unwrap_or_else(|e| panic!("activation {i}: {e}"));
+        robot.speed(50).unwrap();
+        robot.terminate_pcp().unwrap();
+    }
+}

@@ -778,3 +778,42 @@ fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
     let end = joints(&mut robot)[0];
     assert!((end - (j1 - 0.5)).abs() < 1e-3, "{end} after {j1}");
 }
+
+/// CAT1: a command the controller answers only after 0.6 s.
+const SLOW: CommandDef = CommandDef {
+    code: trol::table::LAST_CAT1_CODE + 1,
+    name: "TROLSlow",
+    args: &[],
+    reply: ReplyKind::Code,
+    success: &[],
+    wait: Wait::Reply,
+    help: "answers late",
+};
+
+fn slow(_backend: &mut SimBackend, _call: &Call<'_>) -> Result<Executed, Code> {
+    std::thread::sleep(Duration::from_millis(600));
+    Ok(Executed::Now(0))
+}
+
+#[test]
+fn a_reply_that_comes_after_the_timeout_is_dropped_and_the_next_calls_work() {
+    let mut pcp = Pcp::new(SimBackend::new(settings()));
+    pcp.register(SLOW, Handler::Cat1(slow)).unwrap();
+    let mut rig = rig_with(pcp);
+    rig.robot.add_command(SLOW).unwrap();
+    // 0.2 s for a reply, no repeats: the call fails, and its reply arrives afterwards.
+    rig.robot.set_reply_timeout_tenths(2).unwrap();
+    let repeats = rig.robot.transactor_mut().repeats();
+    rig.robot.transactor_mut().set_repeats(0);
+    let e = rig.robot.call(&SLOW, &[]).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    rig.robot.transactor_mut().set_repeats(repeats);
+    // The next calls are made at once, while the controller still works and then while its
+    // late reply lands: each of them works (the repeats ride over the busy controller), and
+    // gets its own answer, not the late one.
+    for _ in 0..3 {
+        assert_eq!(rig.robot.status().unwrap(), (true, SUCCESS));
+        rig.robot.speed(40).unwrap();
+        std::thread::sleep(Duration::from_millis(300));
+    }
+}

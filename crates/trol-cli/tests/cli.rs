@@ -320,7 +320,8 @@ fn benches_print_json() {
 fn init_says_what_to_check_when_the_controller_does_not_answer() {
     let dir = scratch("silent");
     // A pty with nobody behind it.
-    let (_master, _slave, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let (_master, slave, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    drop(slave);
     let o = trol(&dir, &["init", "--port", &path], "");
     let (_, err) = text(&o);
     assert!(!o.status.success());
@@ -330,6 +331,24 @@ fn init_says_what_to_check_when_the_controller_does_not_answer() {
     let (_, err) = text(&o);
     assert!(!o.status.success());
     assert!(err.contains("trol init"), "{err}");
+
+    // Another program has the port open: the message names it.
+    let holder = std::process::Command::new("sleep")
+        .arg("30")
+        .stdin(std::fs::File::open(&path).unwrap())
+        .spawn()
+        .unwrap();
+    let pid = holder.id();
+    let o = trol(&dir, &["init", "--port", &path], "");
+    let (_, err) = text(&o);
+    let mut holder = holder;
+    let _ = holder.kill();
+    let _ = holder.wait();
+    assert!(!o.status.success());
+    assert!(
+        err.contains(&format!("also open in process {pid} (sleep)")),
+        "{err}"
+    );
 }
 
 /// The whole chain across processes: `trol sim` on a pty, `trol init` on it, `trol link`

@@ -92,6 +92,18 @@ pub enum OpenError {
         /// What is wrong with it.
         why: String,
     },
+    /// Another process holds the device (it was opened for exclusive use).
+    #[error(
+        "cannot open port '{name}': it is in use{}; only one program can use a port at a \
+         time: end that one, or use another port",
+        held_by(holders)
+    )]
+    Busy {
+        /// The name given.
+        name: String,
+        /// The processes that have it open, as far as this system tells.
+        holders: Vec<Holder>,
+    },
     /// The operating system refused.
     #[error("cannot open port '{name}': {source}")]
     Io {
@@ -136,11 +148,84 @@ pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenEr
         });
     }
     Ok(Box::new(
-        serial::SerialLine::open(name, settings.baud).map_err(|source| OpenError::Io {
-            name: name.to_string(),
-            source,
+        serial::SerialLine::open(name, settings.baud).map_err(|source| {
+            // EBUSY: the device was opened for exclusive use by another process.
+            if source.kind() == io::ErrorKind::ResourceBusy || source.raw_os_error() == Some(16) {
+                OpenError::Busy {
+                    name: name.to_string(),
+                    holders: holders(name),
+                }
+            } else {
+                OpenError::Io {
+                    name: name.to_string(),
+                    source,
+                }
+            }
         })?,
     ))
+}
+
+/// A process that has a port open.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Holder {
+    /// Its process id.
+    pub pid: u32,
+    /// Its command name.
+    pub command: String,
+}
+
+impl std::fmt::Display for Holder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "process {} ({})", self.pid, self.command)
+    }
+}
+
+/// ` by process 12 (trol)` for a message, or nothing when no holder is known.
+pub fn held_by(holders: &[Holder]) -> String {
+    if holders.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = holders.iter().map(|h| h.to_string()).collect();
+    format!(" by {}", list.join(", "))
+}
+
+/// The other processes that have the device `path` open (Linux: from /proc; elsewhere, and
+/// for names that are not device paths, none).
+pub fn holders(path: &str) -> Vec<Holder> {
+    let Ok(target) = std::fs::canonicalize(path) else {
+        return Vec::new();
+    };
+    let me = std::process::id();
+    let Ok(procs) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    let mut found = Vec::new();
+    for entry in procs.flatten() {
+        let Some(pid) = entry
+            .file_name()
+            .to_str()
+            .and_then(|n| n.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid == me {
+            continue;
+        }
+        let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
+            continue;
+        };
+        let holds = fds
+            .flatten()
+            .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|l| l == target));
+        if holds {
+            let command = std::fs::read_to_string(entry.path().join("comm"))
+                .map(|c| c.trim().to_string())
+                .unwrap_or_else(|_| "?".into());
+            found.push(Holder { pid, command });
+        }
+    }
+    found.sort_by_key(|h| h.pid);
+    found
 }
 
 /// Time left until `deadline`, zero when it has passed.

@@ -88,28 +88,45 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
     robot.transactor_mut().set_repeats(0);
     let status = robot.status();
     robot.transactor_mut().set_repeats(repeats);
-    status
-        .map(drop)
-        .and_then(|()| robot.check_version().map(drop))
-        .map_err(|e| {
-            if let Error::Setup(SetupError::Incompatible(_)) = e {
-                return e;
-            }
-            let busy = matches!(
-                &e,
-                Error::Link { error: trol_comm::TransError::Io(io), .. }
-                    if io.kind() == std::io::ErrorKind::ConnectionRefused
-            );
-            Error::Setup(SetupError::NoServer(if busy {
-                format!("{e}; only one application at a time can drive the controller")
-            } else {
-                format!(
-                    "the controller's TROL server does not answer ({e}); check the cable and the \
-                 port, that the baud rate in trol.cfg matches the controller, and that `trol \
-                 init` has activated the server"
-                )
-            }))
-        })
+    let e = match status.and_then(|_| robot.check_version()) {
+        Ok(_) => return Ok(()),
+        Err(e @ Error::Setup(SetupError::Incompatible(_))) => return Err(e),
+        Err(e) => e,
+    };
+    let busy = matches!(
+        &e,
+        Error::Link { error: trol_comm::TransError::Io(io), .. }
+            if io.kind() == std::io::ErrorKind::ConnectionRefused
+    );
+    if busy {
+        return Err(Error::Setup(SetupError::NoServer(format!(
+            "{e}; only one application at a time can drive the controller"
+        ))));
+    }
+    Err(Error::Setup(SetupError::NoServer(
+        match shared_port(robot) {
+            Some(shared) => format!("the controller's TROL server does not answer ({e}); {shared}"),
+            None => format!(
+                "the controller's TROL server does not answer ({e}); check the cable and the \
+             port, that the baud rate in trol.cfg matches the controller, and that `trol \
+             init` has activated the server"
+            ),
+        },
+    )))
+}
+
+/// When another program has the robot's device open too (it takes the controller's
+/// answers): what to say.
+fn shared_port(robot: &mut Robot) -> Option<String> {
+    let port = robot.transactor_mut().driver_mut().port_mut().name();
+    let others = trol_port::holders(&port);
+    (!others.is_empty()).then(|| {
+        format!(
+            "the port {port} is also open in {}: only one program can use a port at a time, \
+             so end that one",
+            trol_port::held_by(&others).trim_start_matches(" by ")
+        )
+    })
 }
 
 /// Bring the controller into server mode and apply the tool transform (InitTROL(0), `trol
@@ -134,12 +151,19 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
         while !String::from_utf8_lossy(&seen).contains(&answer) {
             let n = port.recv(&mut buf, deadline).map_err(io)?;
             if n == 0 {
-                return Err(Error::Setup(SetupError::NoServer(format!(
-                    "the controller did not answer the activation line `{line}` with `{answer}` \
-                     (it answered {:?}); check the cable, the port and the baud rate in \
-                     trol.cfg",
-                    String::from_utf8_lossy(&seen)
-                ))));
+                let said = String::from_utf8_lossy(&seen).into_owned();
+                let what = format!(
+                    "the controller did not answer the activation line `{line}` with \
+                     `{answer}` (it answered {said:?})"
+                );
+                return Err(Error::Setup(SetupError::NoServer(
+                    match shared_port(robot) {
+                        Some(shared) => format!("{what}; {shared}"),
+                        None => format!(
+                            "{what}; check the cable, the port and the baud rate in trol.cfg"
+                        ),
+                    },
+                )));
             }
             seen.extend_from_slice(&buf[..n]);
         }

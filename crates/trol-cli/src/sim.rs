@@ -168,6 +168,10 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             ServerEvent::Repeated => {
                 say!("{req} -> {reply} (a repeat: answered from memory, not run again)")
             }
+            ServerEvent::RepeatReplyFailed(err) => say!(
+                "{req} -> {reply} (a repeat, answered from memory, not run again; the reply \
+                 was lost again: {err})"
+            ),
             ServerEvent::ReplyFailed(err) => {
                 say!("{req} -> {reply} (the reply was lost: {err})")
             }

@@ -24,6 +24,9 @@ pub enum ServerEvent {
     Repeated,
     /// A request was executed but its reply could not be sent (TRANS_ERR_SEND).
     ReplyFailed(LinkError),
+    /// A repeated request was answered from memory (nothing ran), but that reply could not be
+    /// sent either (TRANS_ERR_SEND).
+    RepeatReplyFailed(LinkError),
     /// A request was executed but its reply is longer than layer 2 can carry
     /// (`trol_proto::link::frame::MAX_MESSAGE`); it was not sent.
     ReplyTooLong {
@@ -187,7 +190,9 @@ impl<P: Port> Server<P> {
                     if decision == Decision::GiveUp {
                         // The responder reports Failed next; report the cause instead.
                         let _ = self.responder.poll_event();
+                        let repeat = self.responder.repeats_answered() > answered_before;
                         return Ok(match failure {
+                            Failure::Send(_) if repeat => ServerEvent::RepeatReplyFailed(error),
                             Failure::Send(_) => ServerEvent::ReplyFailed(error),
                             _ => ServerEvent::ReceiveFailed(error),
                         });

@@ -483,3 +483,96 @@ fn a_port_that_fails_is_told_to_the_handler_of_its_side_and_kept_for_get_last_co
     t.trans_sr(b"quit").unwrap();
     server.join().unwrap();
 }
+
+/// A port that, while `armed`, hears nothing from its own EOT until it sends ENQ again: the
+/// requests arrive, every reply is lost.
+struct DeafToReplies<P> {
+    inner: P,
+    armed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    deaf: bool,
+}
+
+impl<P: Port> Port for DeafToReplies<P> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        if self.armed.load(std::sync::atomic::Ordering::SeqCst) {
+            if bytes.contains(&trol_proto::link::control::ENQ) {
+                self.deaf = false;
+            }
+            if bytes.contains(&trol_proto::link::control::EOT) {
+                self.deaf = true;
+            }
+        } else {
+            self.deaf = false;
+        }
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> std::io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        Ok(if self.deaf { 0 } else { n })
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "deaf-to-replies".into()
+    }
+}
+
+#[test]
+fn a_repeat_answered_from_memory_whose_reply_is_lost_again_is_not_reported_as_run() {
+    // The host hears nothing: the request runs once, its reply is lost, the repeat is
+    // answered from memory and that reply is lost too. The server's events say so: one
+    // execution, then a repeat that ran nothing.
+    let (a, b) = memory::pair(None);
+    let events = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let seen = events.clone();
+    let server = std::thread::spawn(move || {
+        let mut server = Server::new(b, quick_link());
+        let started = Instant::now();
+        while started.elapsed() < Duration::from_secs(20) {
+            let ev = server
+                .serve(Duration::from_millis(100), &mut |req| execute(req))
+                .unwrap();
+            if ev != ServerEvent::Idle {
+                seen.lock().unwrap().push(ev);
+            }
+            if seen.lock().unwrap().len() >= 3 {
+                break;
+            }
+        }
+    });
+    let deaf = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let mut t = Transactor::new(
+        DeafToReplies {
+            inner: a,
+            armed: deaf.clone(),
+            deaf: false,
+        },
+        quick_link(),
+    );
+    t.set_repeats(1);
+    t.initiator_mut()
+        .set_reply_timeout(Duration::from_millis(800));
+    assert!(t.trans_sr(b"move").is_err());
+    // Let the server give up on the second reply, then hear again: a third request.
+    std::thread::sleep(Duration::from_millis(1500));
+    deaf.store(false, std::sync::atomic::Ordering::SeqCst);
+    let _ = t.driver_mut().port_mut().flush_input();
+    assert_eq!(t.trans_sr(b"next").unwrap(), b"txen");
+    server.join().unwrap();
+    let events = events.lock().unwrap().clone();
+    assert!(
+        matches!(
+            events.as_slice(),
+            [
+                ServerEvent::ReplyFailed(_),
+                ServerEvent::RepeatReplyFailed(_),
+                ServerEvent::Executed
+            ]
+        ),
+        "{events:?}"
+    );
+}

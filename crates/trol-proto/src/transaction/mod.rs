@@ -14,7 +14,7 @@
 //! |-------|---------|
 //! | 0..7  | transaction number, counted by the PC; a reply carries its request's number |
 //! | 8     | REPEAT: the PC sends this request again, with the number it had |
-//! | 9..15 | reserved, sent as 0, ignored |
+//! | 9..15 | layer 2's: with the CRC-16 block check they carry the message check on the line and never reach layer 3; with the LRC reserved, sent as 0, ignored |
 //!
 //! A reply whose number is not that of the pending request is stale (from a transaction the
 //! PC gave up on) and is dropped.

@@ -30,7 +30,7 @@ use clap::{Parser, Subcommand};
 /// --port, --baud and --config override it. Without trol.cfg the port is `sim`, the
 /// embedded simulator.
 #[derive(Parser)]
-#[command(name = "trol", version, about, long_about = None, after_help = "\
+#[command(name = "trol", version, long_about = None, after_help = "\
 Examples:
   trol demo                                   # the manual's pick example on the simulator
   trol interp                                 # type TROL commands
@@ -75,6 +75,47 @@ enum Command {
     Bench(bench::Bench),
     /// The manual's pick example on the embedded simulator, step by step.
     Demo(demo::DemoArgs),
+    /// Print the completion script for a shell (bash, zsh, fish, elvish, powershell).
+    #[command(after_help = "\
+Examples:
+  trol completions bash > ~/.local/share/bash-completion/completions/trol
+  trol completions zsh > ~/.zfunc/_trol          # with fpath+=(~/.zfunc) in ~/.zshrc
+  trol completions fish > ~/.config/fish/completions/trol.fish")]
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Write the man pages (trol.1, and trol-SUBCOMMAND.1 for each subcommand) into a folder.
+    #[command(after_help = "\
+Example:
+  trol man --out target/man && man -l target/man/trol.1")]
+    Man {
+        /// The folder to write them into (made if missing).
+        #[arg(long, default_value = ".")]
+        out: std::path::PathBuf,
+    },
+}
+
+fn completions(shell: clap_complete::Shell) -> Result<(), String> {
+    use clap::CommandFactory;
+    let mut cmd = Cli::command();
+    let mut out = Vec::new();
+    clap_complete::generate(shell, &mut cmd, "trol", &mut out);
+    say!("{}", String::from_utf8_lossy(&out).trim_end());
+    Ok(())
+}
+
+fn man(out: &std::path::Path) -> Result<(), String> {
+    use clap::CommandFactory;
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot make {}: {e}", out.display()))?;
+    clap_mangen::generate_to(Cli::command(), out)
+        .map_err(|e| format!("cannot write the man pages into {}: {e}", out.display()))?;
+    say!(
+        "man pages written to {} (read one with: man -l {}/trol.1)",
+        out.display(),
+        out.display()
+    );
+    Ok(())
 }
 
 fn ports() -> Result<(), String> {
@@ -106,6 +147,8 @@ fn main() -> ExitCode {
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
         Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),
         Command::Demo(a) => demo::run(a),
+        Command::Completions { shell } => completions(shell).map(|()| ExitCode::SUCCESS),
+        Command::Man { out } => man(&out).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

@@ -1020,3 +1020,34 @@ fn activation_after_a_failed_probe_succeeds_fifty_times_out_of_fifty() {
         robot.terminate_pcp().unwrap();
     }
 }
+
+#[test]
+fn completions_and_man_pages_come_from_the_cli_definition() {
+    let dir = scratch("completions");
+    for shell in ["bash", "zsh", "fish"] {
+        let o = trol(&dir, &["completions", shell], "");
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{shell}: {err}");
+        for sub in ["interp", "gateway", "rapl", "bench"] {
+            assert!(out.contains(sub), "{shell} completion lacks {sub}");
+        }
+    }
+    // The bash script is valid bash.
+    let o = trol(&dir, &["completions", "bash"], "");
+    std::fs::write(dir.join("trol.bash"), &o.stdout).unwrap();
+    let check = std::process::Command::new("bash")
+        .arg("-n")
+        .arg(dir.join("trol.bash"))
+        .output()
+        .unwrap();
+    assert!(check.status.success(), "{:?}", text(&check));
+
+    let o = trol(&dir, &["man", "--out", "man"], "");
+    assert!(o.status.success(), "{:?}", text(&o));
+    for page in ["trol.1", "trol-interp.1", "trol-rapl-probe.1", "trol-sim.1"] {
+        let roff = std::fs::read_to_string(dir.join("man").join(page)).unwrap();
+        assert!(roff.contains(".TH"), "{page}");
+    }
+    let interp = std::fs::read_to_string(dir.join("man/trol-interp.1")).unwrap();
+    assert!(interp.contains("command interpreter"), "{interp}");
+}

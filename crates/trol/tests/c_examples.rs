@@ -57,3 +57,61 @@ fn the_position_example_reads_all_forms_and_the_status() {
     );
     assert!(out.contains("position: done"));
 }
+
+/// scripts/install-c.sh puts libtrol, trol.h and trol.pc under a prefix, and a program
+/// builds with `cc app.c $(pkg-config --cflags --libs trol)` and runs.
+#[test]
+fn the_installed_library_builds_a_program_through_pkg_config() {
+    common::cbuild::build_libtrol();
+    let root = root();
+    let prefix = std::env::temp_dir().join(format!("trol-prefix-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&prefix);
+    let install = std::process::Command::new("bash")
+        .arg(root.join("scripts/install-c.sh"))
+        .arg("--prefix")
+        .arg(&prefix)
+        .env("TROL_LIB_DIR", common::cbuild::lib_dir())
+        .output()
+        .unwrap();
+    assert!(
+        install.status.success(),
+        "{}",
+        String::from_utf8_lossy(&install.stderr)
+    );
+    for f in [
+        "lib/libtrol.so",
+        "lib/libtrol.a",
+        "include/trol.h",
+        "lib/pkgconfig/trol.pc",
+    ] {
+        assert!(prefix.join(f).exists(), "{f} not installed");
+    }
+    let exe = prefix.join("position");
+    let build = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "cc {} -Wno-pointer-sign -o {} $(pkg-config --cflags --libs trol)",
+            root.join("examples/position.c").display(),
+            exe.display()
+        ))
+        .env("PKG_CONFIG_PATH", prefix.join("lib/pkgconfig"))
+        .output()
+        .unwrap();
+    assert!(
+        build.status.success(),
+        "{}",
+        String::from_utf8_lossy(&build.stderr)
+    );
+    let run = std::process::Command::new(&exe)
+        .current_dir(root.join("examples"))
+        .env("LD_LIBRARY_PATH", prefix.join("lib"))
+        .env_remove("TROL_CONFIG")
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success() && out.contains("position: done"),
+        "{out}"
+    );
+    let _ = std::fs::remove_dir_all(&prefix);
+}

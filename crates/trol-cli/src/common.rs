@@ -41,20 +41,24 @@ impl Conn {
     /// trol.cfg with the flags applied. A missing default trol.cfg means the defaults (port
     /// `sim`); a missing file named by --config or $TROL_CONFIG is an error.
     pub fn config(&self) -> Result<Config, String> {
-        let named = self
-            .config
-            .clone()
-            .or_else(|| std::env::var_os(trol::config::ENV_VAR).map(PathBuf::from));
-        let mut cfg = match &named {
-            Some(path) => Config::from_file(path).map_err(|e| e.to_string())?,
-            None => {
-                let path = PathBuf::from(trol::config::FILE_NAME);
-                if path.exists() {
-                    Config::from_file(&path).map_err(|e| e.to_string())?
-                } else {
-                    Config::default()
-                }
+        self.config_with_source().map(|(cfg, _)| cfg)
+    }
+
+    /// Like [`Conn::config`], with where the file came from. Without a trol.cfg the note
+    /// says once that the embedded simulator is used, as in every TROL program.
+    pub fn config_with_source(&self) -> Result<(Config, trol::config::ConfigSource), String> {
+        use trol::config::ConfigSource;
+        let source = match &self.config {
+            Some(p) => ConfigSource::Named(p.clone()),
+            None => Config::locate(),
+        };
+        let mut cfg = match &source {
+            ConfigSource::Named(p) | ConfigSource::Found(p) => {
+                Config::from_file(p).map_err(|e| e.to_string())?
             }
+            // A port named on the command line needs no note.
+            ConfigSource::Defaults if self.port.is_some() => Config::default(),
+            ConfigSource::Defaults => Config::load().map_err(|e| e.to_string())?,
         };
         if let Some(p) = &self.port {
             cfg.port = p.clone();
@@ -65,7 +69,7 @@ impl Conn {
         if let Some(t) = self.time_scale {
             cfg.time_scale = t;
         }
-        Ok(cfg)
+        Ok((cfg, source))
     }
 
     /// Connect as the configuration says. On a real port the server must answer
@@ -180,4 +184,112 @@ pub fn say(line: std::fmt::Arguments) {
 /// stop, rather than move it unwatched; the simulator goes on serving.
 pub fn stdout_closed() -> bool {
     STDOUT_CLOSED.load(Ordering::SeqCst)
+}
+
+/// `trol config`: the configuration in use, each value with where it came from.
+pub fn show_config(conn: &Conn) -> Result<(), String> {
+    use trol::config::ConfigSource;
+    let (cfg, source) = conn.config_with_source()?;
+    let file_text = match &source {
+        ConfigSource::Named(p) | ConfigSource::Found(p) => std::fs::read_to_string(p).ok(),
+        ConfigSource::Defaults => None,
+    };
+    let file = match &source {
+        ConfigSource::Named(p) => format!(
+            "{} (named by --config or ${})",
+            p.display(),
+            trol::config::ENV_VAR
+        ),
+        ConfigSource::Found(p) => format!("{} (in the current folder)", p.display()),
+        ConfigSource::Defaults => "none: no trol.cfg here and no $TROL_CONFIG".to_string(),
+    };
+    say!("file: {file}");
+    // The first three entries are the file's whenever there is one; a key counts as the
+    // file's when a line sets it.
+    let in_file = |keys: &[&str]| {
+        file_text.as_deref().is_some_and(|t| {
+            t.lines().any(|l| {
+                let l = l.trim();
+                keys.iter().any(|k| {
+                    l.strip_prefix(k)
+                        .is_some_and(|rest| rest.trim_start().starts_with('='))
+                })
+            })
+        })
+    };
+    let from = |flag: bool, file: bool| {
+        if flag {
+            "the command line"
+        } else if file {
+            "trol.cfg"
+        } else {
+            "default"
+        }
+    };
+    let has_file = file_text.is_some();
+    let tool: Vec<String> = cfg.tool.iter().map(|v| format!("{v}")).collect();
+    let shown = |p: &Option<PathBuf>| {
+        p.as_ref()
+            .map_or("none".into(), |p| p.display().to_string())
+    };
+    let rows: Vec<(&str, String, &str)> = vec![
+        (
+            "baud",
+            cfg.baud.to_string(),
+            from(conn.baud.is_some(), has_file),
+        ),
+        (
+            "port",
+            cfg.port.clone(),
+            from(conn.port.is_some(), has_file),
+        ),
+        ("tool", tool.join(" "), from(false, has_file)),
+        (
+            "check",
+            cfg.check.word().to_ascii_lowercase(),
+            from(false, in_file(&["check"])),
+        ),
+        (
+            "time_scale",
+            cfg.time_scale.to_string(),
+            from(
+                conn.time_scale.is_some(),
+                in_file(&["time_scale", "time-scale"]),
+            ),
+        ),
+        (
+            "locations",
+            shown(&cfg.locations),
+            from(false, in_file(&["locations"])),
+        ),
+        (
+            "objects",
+            shown(&cfg.objects),
+            from(false, in_file(&["objects"])),
+        ),
+        (
+            "table_z",
+            cfg.table_z.to_string(),
+            from(false, in_file(&["table_z", "table-z"])),
+        ),
+        (
+            "homed",
+            if cfg.homed { "yes" } else { "no" }.into(),
+            from(false, in_file(&["homed"])),
+        ),
+        (
+            "object",
+            cfg.object.map_or("none".into(), |w| format!("{w} mm")),
+            from(false, in_file(&["object"])),
+        ),
+        (
+            "rapl-profile",
+            shown(&cfg.rapl_profile),
+            from(false, in_file(&["rapl-profile", "rapl_profile"])),
+        ),
+    ];
+    for (key, value, src) in rows {
+        say!("{key:<13} {value:<30} ({src})");
+    }
+    Ok(())
 }

@@ -68,6 +68,12 @@ enum Command {
     /// Show the traffic layer by layer, live between two ports or from a capture.
     #[command(subcommand)]
     Trace(trace::Trace),
+    /// Show the configuration in use (trol.cfg or $TROL_CONFIG, the flags, the defaults),
+    /// each value with where it came from.
+    #[command(
+        after_help = "Examples:\n  trol config\n  TROL_CONFIG=lab.cfg trol config --port /dev/ttyUSB0"
+    )]
+    Config(common::Conn),
     /// List the serial ports of this machine.
     Ports,
     /// Measure: link throughput, transactions, inverse kinematics.
@@ -145,6 +151,7 @@ fn main() -> ExitCode {
         Command::Rapl(r) => rapl::run(r).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
+        Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
         Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),
         Command::Demo(a) => demo::run(a),
         Command::Completions { shell } => completions(shell).map(|()| ExitCode::SUCCESS),

@@ -225,7 +225,7 @@ fn subcommands_have_help_with_examples() {
     let dir = scratch("helps");
     for sub in [
         "interp", "init", "cleanup", "sim", "link", "trace", "ports", "bench", "demo", "gateway",
-        "rapl",
+        "config", "rapl",
     ] {
         let o = trol(&dir, &[sub, "--help"], "");
         let (out, _) = text(&o);
@@ -332,12 +332,26 @@ fn init_says_what_to_check_when_the_controller_does_not_answer() {
     assert!(!o.status.success());
     assert!(err.contains("trol init"), "{err}");
 
-    // Another program has the port open: the message names it.
-    let holder = std::process::Command::new("sleep")
-        .arg("30")
-        .stdin(std::fs::File::open(&path).unwrap())
-        .spawn()
-        .unwrap();
+    // Another program has the port open: the message names it. (It must not inherit this
+    // test's end of the pty, so it closes every descriptor but the standard ones.)
+    let holder = {
+        use std::os::unix::process::CommandExt;
+        unsafe extern "C" {
+            fn close(fd: i32) -> i32;
+        }
+        let mut cmd = std::process::Command::new("sleep");
+        cmd.arg("30").stdin(std::fs::File::open(&path).unwrap());
+        // SAFETY: only close(2), async-signal-safe, between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                for fd in 3..1024 {
+                    close(fd);
+                }
+                Ok(())
+            });
+        }
+        cmd.spawn().unwrap()
+    };
     let pid = holder.id();
     let o = trol(&dir, &["init", "--port", &path], "");
     let (_, err) = text(&o);
@@ -1050,4 +1064,77 @@ fn completions_and_man_pages_come_from_the_cli_definition() {
     }
     let interp = std::fs::read_to_string(dir.join("man/trol-interp.1")).unwrap();
     assert!(interp.contains("command interpreter"), "{interp}");
+}
+
+/// One behaviour for a missing trol.cfg, in every surface: the embedded simulator, and a
+/// note on stderr, once. A file $TROL_CONFIG names must exist; a bad one is reported once,
+/// before any command.
+#[test]
+fn a_missing_trol_cfg_means_the_simulator_everywhere_and_a_bad_one_stops_before_any_command() {
+    let dir = scratch("no-cfg");
+    let note = "no trol.cfg here and no TROL_CONFIG: using the defaults, port `sim`";
+    let o = trol(&dir, &["interp"], "speed 50\nspeed 60\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert_eq!(err.matches(note).count(), 1, "{err}");
+    assert!(out.contains("speed 60"), "{out}");
+
+    // The same from C: a program without trol.cfg runs against the simulator.
+    let exe = cbuild::compile(
+        &cbuild::root().join("examples/position.c"),
+        "position-no-cfg",
+        cbuild::Link::Static,
+    );
+    let run = cbuild::program(&exe)
+        .current_dir(&dir)
+        .env_remove("TROL_CONFIG")
+        .output()
+        .unwrap();
+    let (out, err) = text(&run);
+    assert!(run.status.success(), "{out}\n{err}");
+    assert!(out.contains("position: done"), "{out}");
+    assert_eq!(err.matches(note).count(), 1, "{err}");
+
+    // A file TROL_CONFIG names that does not exist is an error, also with no command.
+    let o = std::process::Command::new(common::TROL)
+        .arg("interp")
+        .current_dir(&dir)
+        .env("TROL_CONFIG", dir.join("nonexistent.cfg"))
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let (_, err) = text(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("nonexistent.cfg: cannot read it"), "{err}");
+
+    // A bad trol.cfg: said once, with file, line and the expected form; no command ran.
+    std::fs::write(dir.join("trol.cfg"), "fast\nsim\n0 0 0 0 0 0\n").unwrap();
+    let o = trol(&dir, &["interp", "-k"], "speed 50\nspeed 60\nspeed 70\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success());
+    assert_eq!(err.matches("trol.cfg:1:").count(), 1, "{err}");
+    assert!(!out.contains("speed"), "{out}");
+
+    // `trol config` says where each value came from.
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "38400\nsim\n0 0 0 0 0 0\ntime_scale = 5\n",
+    )
+    .unwrap();
+    let o = trol(&dir, &["config", "--port", "socket://127.0.0.1:9"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(out.contains("file: trol.cfg"), "{out}");
+    let row = |key: &str| {
+        out.lines()
+            .find(|l| l.starts_with(key))
+            .unwrap_or_else(|| panic!("{key}: {out}"))
+            .to_string()
+    };
+    assert!(row("baud").contains("38400") && row("baud").ends_with("(trol.cfg)"));
+    assert!(
+        row("port").contains("socket://127.0.0.1:9") && row("port").ends_with("(the command line)")
+    );
+    assert!(row("time_scale").ends_with("(trol.cfg)"));
+    assert!(row("check").ends_with("(default)"));
 }

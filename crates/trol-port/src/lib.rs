@@ -24,6 +24,7 @@ pub mod serial;
 pub mod tcp;
 
 use std::io;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// One end of a byte line.
@@ -190,7 +191,9 @@ pub fn held_by(holders: &[Holder]) -> String {
 }
 
 /// The other processes that have the device `path` open (Linux: from /proc; elsewhere, and
-/// for names that are not device paths, none).
+/// for names that are not device paths, none). For a pseudo-terminal, the process that made
+/// it (it has the pty's master, /dev/ptmx, open too: a `trol sim` serving on it) is the other
+/// end, not a rival, and is left out.
 pub fn holders(path: &str) -> Vec<Holder> {
     let Ok(target) = std::fs::canonicalize(path) else {
         return Vec::new();
@@ -214,10 +217,16 @@ pub fn holders(path: &str) -> Vec<Holder> {
         let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
             continue;
         };
-        let holds = fds
+        let links: Vec<PathBuf> = fds
             .flatten()
-            .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|l| l == target));
-        if holds {
+            .filter_map(|fd| std::fs::read_link(fd.path()).ok())
+            .collect();
+        let holds = links.iter().any(|l| *l == target);
+        let pty_maker = target.starts_with("/dev/pts")
+            && links
+                .iter()
+                .any(|l| l == Path::new("/dev/ptmx") || l == Path::new("/dev/pts/ptmx"));
+        if holds && !pty_maker {
             let command = std::fs::read_to_string(entry.path().join("comm"))
                 .map(|c| c.trim().to_string())
                 .unwrap_or_else(|_| "?".into());

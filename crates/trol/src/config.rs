@@ -77,6 +77,30 @@ impl Default for Config {
     }
 }
 
+/// Where a configuration comes from ([`Config::locate`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ConfigSource {
+    /// The file `$TROL_CONFIG` (or a `--config` flag) names.
+    Named(PathBuf),
+    /// `./trol.cfg`.
+    Found(PathBuf),
+    /// No trol.cfg: the defaults (the embedded simulator).
+    Defaults,
+}
+
+impl std::fmt::Display for ConfigSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ConfigSource::Named(p) | ConfigSource::Found(p) => write!(f, "{}", p.display()),
+            ConfigSource::Defaults => write!(
+                f,
+                "no trol.cfg here and no {ENV_VAR}: using the defaults, port `sim` (the embedded \
+                 simulator); write a trol.cfg (see examples/trol.cfg) to drive a controller"
+            ),
+        }
+    }
+}
+
 /// A missing or malformed trol.cfg.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConfigError {
@@ -107,9 +131,29 @@ impl Config {
             .unwrap_or_else(|| PathBuf::from(FILE_NAME))
     }
 
-    /// Read trol.cfg from its default place.
+    /// Where the configuration comes from: the file `$TROL_CONFIG` names (it must exist),
+    /// else `./trol.cfg` if there is one, else the defaults.
+    pub fn locate() -> ConfigSource {
+        match std::env::var_os(ENV_VAR) {
+            Some(p) => ConfigSource::Named(PathBuf::from(p)),
+            None if Path::new(FILE_NAME).exists() => ConfigSource::Found(PathBuf::from(FILE_NAME)),
+            None => ConfigSource::Defaults,
+        }
+    }
+
+    /// Read the configuration the same way in every language and tool (decision, README
+    /// "Configuration"): the file `$TROL_CONFIG` names, which must exist; else `./trol.cfg`;
+    /// else, with no trol.cfg at all, the defaults, which drive the embedded simulator (port
+    /// `sim`), and a note on stderr says so once per process.
     pub fn load() -> Result<Config, ConfigError> {
-        Config::from_file(&Config::default_path())
+        match Config::locate() {
+            ConfigSource::Named(p) | ConfigSource::Found(p) => Config::from_file(&p),
+            ConfigSource::Defaults => {
+                static SAID: std::sync::Once = std::sync::Once::new();
+                SAID.call_once(|| eprintln!("trol: {}", ConfigSource::Defaults));
+                Ok(Config::default())
+            }
+        }
     }
 
     /// Read a configuration file.

@@ -284,6 +284,8 @@ Results print as the value and its name (0 (success), -1 (BIOS_NOT_HOMED), ...).
 }
 
 pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
+    // The configuration is read once, before any command: a bad one is reported now.
+    let (cfg, source) = a.conn.config_with_source()?;
     let mut session = Session {
         conn: a.conn.clone(),
         robot: None,
@@ -292,6 +294,15 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     catch_interrupts();
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
     if interactive {
+        say!(
+            "configuration: {} (port {}, baud {}; `trol config` shows every value)",
+            match &source {
+                trol::config::ConfigSource::Defaults => "the defaults".to_string(),
+                other => other.to_string(),
+            },
+            cfg.port,
+            cfg.baud
+        );
         return repl(&mut session);
     }
     let (name, reader): (String, Box<dyn BufRead>) = match &a.script {

@@ -510,6 +510,12 @@ fn line_up(asked: &[Asked], executed: &[Execution], report: &mut Report) {
             && !ran.contains(&got.as_slice())
         {
             report.corrupted_replies_accepted += 1;
+            // Each one is worth a look: what was asked, what was taken, what ran.
+            eprintln!(
+                "a reply the controller never sent was accepted: request {:02x?}, accepted \
+                 {got:02x?}, the controller's replies to those bytes {ran:02x?}",
+                a.request
+            );
         }
         if a.relative {
             report.relative_moves += 1;

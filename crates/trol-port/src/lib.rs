@@ -221,7 +221,7 @@ pub fn holders(path: &str) -> Vec<Holder> {
             .flatten()
             .filter_map(|fd| std::fs::read_link(fd.path()).ok())
             .collect();
-        let holds = links.iter().any(|l| *l == target);
+        let holds = links.contains(&target);
         let pty_maker = target.starts_with("/dev/pts")
             && links
                 .iter()

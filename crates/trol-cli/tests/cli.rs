@@ -1138,3 +1138,29 @@ fn a_missing_trol_cfg_means_the_simulator_everywhere_and_a_bad_one_stops_before_
     assert!(row("time_scale").ends_with("(trol.cfg)"));
     assert!(row("check").ends_with("(default)"));
 }
+
+#[test]
+fn each_v_gives_more_detail_and_logs_have_no_colour_in_a_pipe() {
+    let dir = scratch("verbose");
+    let run = |flag: &str| {
+        let o = trol(&dir, &[flag, "interp", "--port", "sim"], "speed 50\n");
+        assert!(o.status.success(), "{:?}", text(&o));
+        text(&o).1
+    };
+    let v = run("-v");
+    let vv = run("-vv");
+    let vvv = run("-vvv");
+    assert!(!v.contains("request TROLSpeed 50"), "{v}");
+    assert!(
+        vv.contains("request TROLSpeed 50") && vv.contains("reply 0 (success)"),
+        "{vv}"
+    );
+    assert!(!vv.contains("sent ["), "{vv}");
+    assert!(
+        vvv.contains("sent [") && vvv.contains("received ["),
+        "{vvv}"
+    );
+    for log in [&v, &vv, &vvv] {
+        assert!(!log.contains('\u{1b}'), "colour codes in a pipe: {log:?}");
+    }
+}

@@ -113,6 +113,7 @@ impl<P: Port> Driver<P> {
         if self.out.is_empty() {
             return Ok(());
         }
+        tracing::trace!("sent {:02x?}", self.out);
         if let Some(trace) = self.trace.as_mut() {
             trace(Direction::Out, &self.out, self.clock.now());
         }
@@ -164,6 +165,7 @@ impl<P: Port> Driver<P> {
             let n = self.port.recv(&mut self.rx, self.clock.to_std(wake))?;
             let now = self.clock.now();
             if n > 0 {
+                tracing::trace!("received {:02x?}", &self.rx[..n]);
                 if let Some(trace) = self.trace.as_mut() {
                     trace(Direction::In, &self.rx[..n], now);
                 }

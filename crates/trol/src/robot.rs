@@ -520,8 +520,16 @@ impl Robot {
     /// that `def` does not count as success is [`Error::Refused`].
     pub fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<Reply> {
         let request = record::encode(def, args)?;
-        let bytes = self.trans(def.name, &request)?;
+        tracing::debug!(
+            transaction = self.transactor.transaction_number().wrapping_add(1),
+            "request {}",
+            self.catalog.request_text(&request)
+        );
+        let bytes = self.trans(def.name, &request).inspect_err(|e| {
+            tracing::info!("{}: {e}", def.name);
+        })?;
         let reply = Reply::decode(def, &bytes)?;
+        tracing::debug!("reply {}", reply.text(self.codes));
         match reply {
             // These carry data, not a return value: a refusal comes as a bare code.
             Reply::Status { .. } | Reply::Position(_) => Ok(reply),

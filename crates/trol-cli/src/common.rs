@@ -27,6 +27,10 @@ pub struct Conn {
     /// Port `sim`: run the simulation this many times faster than real time.
     #[arg(long, value_name = "N", global = true, value_parser = positive)]
     pub time_scale: Option<f64>,
+    /// Port `sim`: the location table to load (docs/a465.md, "Locations"), as `trol sim
+    /// --locations` does.
+    #[arg(long, value_name = "FILE", global = true)]
+    pub locations: Option<PathBuf>,
 }
 
 /// A number greater than 0.
@@ -68,6 +72,9 @@ impl Conn {
         }
         if let Some(t) = self.time_scale {
             cfg.time_scale = t;
+        }
+        if let Some(l) = &self.locations {
+            cfg.locations = Some(l.clone());
         }
         Ok((cfg, source))
     }

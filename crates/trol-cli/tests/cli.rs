@@ -1164,3 +1164,57 @@ fn each_v_gives_more_detail_and_logs_have_no_colour_in_a_pipe() {
         assert!(!log.contains('\u{1b}'), "colour codes in a pipe: {log:?}");
     }
 }
+
+/// The example lines of `trol interp --help` run, as written, against the simulator with
+/// the example locations; a failure says what to do next.
+#[test]
+fn the_interpreters_own_example_runs_and_failures_hint_at_the_next_step() {
+    let dir = scratch("interp-example");
+    let help = text(&trol(&dir, &["interp", "--help"], "")).0;
+    let lines: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("A line is a command"))
+        .skip(2)
+        .take_while(|l| l.starts_with("  "))
+        .map(str::trim)
+        .collect();
+    assert!(lines.len() >= 6, "{help}");
+    let locations = cbuild::root().join("examples/locations.txt");
+    let o = trol(
+        &dir,
+        &[
+            "interp",
+            "--locations",
+            locations.to_str().unwrap(),
+            "--time-scale",
+            "50",
+        ],
+        &(lines.join("\n") + "\n"),
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{lines:?}\n{out}\n{err}");
+    assert_eq!(
+        out.lines().filter(|l| l.contains("->")).count(),
+        lines.len(),
+        "{out}"
+    );
+
+    // Not homed: the hint says how.
+    let o = trol(
+        &dir,
+        &["interp", "--time-scale", "50"],
+        "moveii c(400, 0, 300, 0, 1.5707963, 0)\n",
+    );
+    let (_, err) = text(&o);
+    assert!(
+        err.contains("BIOS_NOT_HOMED") && err.contains("hint: home the arm first: `home 0`"),
+        "{err}"
+    );
+    // A name the controller does not know: the hint says how to load locations.
+    let o = trol(&dir, &["interp"], "move test_001\n");
+    let (_, err) = text(&o);
+    assert!(
+        err.contains("TROL_ERR_LOCATION") && err.contains("--locations FILE"),
+        "{err}"
+    );
+}

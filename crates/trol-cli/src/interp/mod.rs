@@ -29,10 +29,15 @@ Examples:
   trol interp -k pick.trol             # run every line, exit 1 if any failed
   echo 'home 0' | trol interp --port socket://localhost:7000
 
-A line is a command and its arguments, e.g.:
+A line is a command and its arguments; the manual's pick example, with
+`--locations examples/locations.txt` on the simulator:
   home 0
-  appro test_001 c(-90) straight
-  moveii c(400, 0, 150, 0, 1.5708, 0) 1
+  finish
+  appro test_001 c(-90)
+  move test_001 straight
+  finish
+  close 60
+  depart c(-90) straight
   getposition cart actual
 `help` lists every command with its arguments and ranges.")]
 pub struct InterpArgs {
@@ -179,6 +184,9 @@ impl Session {
                         say!("{}  ->  {text}", line.trim());
                     }
                     eprintln!("{}error: {} failed: {text}", prefix(origin), def.name);
+                    if let Some(hint) = next_step(&text) {
+                        eprintln!("  hint: {hint}");
+                    }
                     Outcome::Failed
                 }
             },
@@ -450,4 +458,47 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
         let _ = rl.save_history(h);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What to do next after a failure, where there is an obvious next step.
+fn next_step(failure: &str) -> Option<&'static str> {
+    const STEPS: &[(&str, &str)] = &[
+        (
+            "BIOS_NOT_HOMED",
+            "home the arm first: `home 0`, then `finish`",
+        ),
+        (
+            "BIOS_OUT_OF_REACH",
+            "the A465 reaches about 711 mm from its shoulder, 330 mm above the base \
+             (docs/a465.md); `getposition cart` shows where the tool is",
+        ),
+        (
+            "BIOS_JOINT_LIMIT",
+            "`getposition joint` shows the joints; their limits are in docs/a465.md (joint 1 \
+             +-175, 2 +-90, 3 +-110, 4 +-180, 5 +-105, 6 +-180 degrees)",
+        ),
+        (
+            "BIOS_BELOW_TABLE",
+            "the tool tip would go below the table: aim higher, or lower `table_z` in trol.cfg",
+        ),
+        (
+            "BIOS_SINGULAR_PATH",
+            "a straight line cannot pass there: leave out `straight`, or go through another point",
+        ),
+        (
+            "TROL_ERR_LOCATION",
+            "the controller has no location of that name: give one as c(x, y, z, yaw, pitch, \
+             roll), or load a location file (`--locations FILE`, or `locations = FILE` in \
+             trol.cfg)",
+        ),
+        (
+            "TROL_ERR_COMM",
+            "is the controller there? `trol sim` prints where it serves; a controller in \
+             terminal mode needs `init`; after a restart, `reconnect`",
+        ),
+    ];
+    STEPS
+        .iter()
+        .find(|(name, _)| failure.contains(name))
+        .map(|(_, step)| *step)
 }

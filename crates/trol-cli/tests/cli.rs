@@ -1218,3 +1218,25 @@ fn the_interpreters_own_example_runs_and_failures_hint_at_the_next_step() {
         "{err}"
     );
 }
+
+#[test]
+fn help_wraps_at_word_boundaries() {
+    let dir = scratch("help-wrap");
+    let o = trol(&dir, &["interp"], "help\n");
+    let (out, _) = text(&o);
+    assert!(o.status.success());
+    for line in out.lines() {
+        assert!(
+            line.chars().count() <= 80,
+            "longer than 80 columns: {line:?}"
+        );
+    }
+    // Nothing is cut inside a word: the words of a command's help are all there.
+    let flat = out.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains(
+            "approach a given location (cartesian or precision point), displaced in its tool frame"
+        ),
+        "{out}"
+    );
+}

@@ -259,17 +259,36 @@ p(n1, ..) precision point (encoder counts), numDims = how many values; a bare ( 
 kind the command expects. The straight flag is 0 / interpolated (default) or 1 / straight.
 Commands are case-insensitive, with or without the TROL prefix (TROLMove = move).
 Results print as the value and its name (0 (success), -1 (BIOS_NOT_HOMED), ...).";
+    // At word boundaries, to the terminal's width (80 columns in a pipe).
+    let width = textwrap::termwidth().clamp(40, 200);
+    let syntax = textwrap::fill(&syntax.replace('\n', " "), width);
+    let entry = |usage: &str, what: &str| {
+        const COLUMN: usize = 61;
+        if width >= COLUMN + 20 && usage.len() <= COLUMN - 3 {
+            let first = format!("  {usage:<58} ");
+            let rest = " ".repeat(COLUMN);
+            let options = textwrap::Options::new(width)
+                .initial_indent(&first)
+                .subsequent_indent(&rest);
+            textwrap::fill(what, options) + "\n"
+        } else {
+            let options = textwrap::Options::new(width)
+                .initial_indent("      ")
+                .subsequent_indent("      ");
+            format!("  {usage}\n{}\n", textwrap::fill(what, options))
+        }
+    };
     match topic {
         None => {
             let mut out = String::from("Commands (the TROL API):\n");
             for d in catalog.iter() {
-                out.push_str(&format!("  {:<58} {}\n", usage(d), d.help));
+                out.push_str(&entry(&usage(d), d.help));
             }
             out.push_str("Interpreter:\n");
             for (name, args, what) in OWN {
-                out.push_str(&format!("  {:<58} {what}\n", format!("{name} {args}")));
+                out.push_str(&entry(&format!("{name} {args}"), what));
             }
-            out.push_str(syntax);
+            out.push_str(&syntax);
             Ok(out)
         }
         Some(t) => {

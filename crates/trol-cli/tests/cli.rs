@@ -1240,3 +1240,41 @@ fn help_wraps_at_word_boundaries() {
         "{out}"
     );
 }
+
+#[test]
+fn interp_json_prints_one_object_per_reply() {
+    let dir = scratch("interp-json");
+    let o = trol(
+        &dir,
+        &[
+            "interp",
+            "--json",
+            "-k",
+            "--port",
+            "sim",
+            "--time-scale",
+            "50",
+        ],
+        "speed 50\ngetposition joint commanded\ngetstatus\nmove nowhere\n",
+    );
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "the failed move is in the exit status");
+    let objects: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}\n{err}")))
+        .collect();
+    assert_eq!(objects.len(), 4, "{out}");
+    assert_eq!(objects[0]["command"], "TROLSpeed");
+    assert_eq!(objects[0]["ok"], true);
+    assert_eq!(objects[0]["name"], "success");
+    assert_eq!(objects[1]["position"]["form"], "joint");
+    assert_eq!(
+        objects[1]["position"]["values"].as_array().unwrap().len(),
+        6
+    );
+    assert_eq!(objects[2]["status"]["bios_called"], true);
+    assert_eq!(objects[3]["ok"], false);
+    assert_eq!(objects[3]["code"], -32102);
+    assert_eq!(objects[3]["name"], "TROL_ERR_LOCATION");
+    assert!(objects[3]["hint"].as_str().unwrap().contains("--locations"));
+}

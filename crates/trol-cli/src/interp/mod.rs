@@ -47,6 +47,12 @@ pub struct InterpArgs {
     /// Go on after a failed command (the exit status still says that one failed).
     #[arg(short = 'k', long)]
     keep_going: bool,
+    /// Print each command's result as one JSON object per line on stdout (for scripts):
+    /// `command`, `ok`, `value` and `name`, and the reply's data (`position`, `status`,
+    /// `values`, ...); a failure has `code`, `name`, `error` and, where there is one,
+    /// `hint`.
+    #[arg(long)]
+    json: bool,
     /// Commands an application added, described in FILE (docs/extending.md): the
     /// interpreter reads, checks, sends and shows them like the built-in ones.
     #[arg(long, value_name = "FILE")]
@@ -66,6 +72,84 @@ struct Session {
     conn: Conn,
     robot: Option<Robot>,
     catalog: Catalog,
+    json: bool,
+}
+
+/// A reply as JSON.
+fn reply_json(
+    def: &CommandDef,
+    reply: &trol::Reply,
+    codes: &'static trol::CodeTable,
+) -> serde_json::Value {
+    use serde_json::json;
+    let value = reply.value();
+    let mut o = json!({
+        "command": def.name,
+        "ok": true,
+        "value": value.0,
+        "text": reply.text(codes),
+    });
+    // A return value's name; GetStatus's and the position's first word is no code.
+    if matches!(
+        reply,
+        trol::Reply::Code(_) | trol::Reply::Reals { .. } | trol::Reply::Bytes { .. }
+    ) && let Some(map) = o.as_object_mut()
+    {
+        let name = if value.0 == 0 {
+            Some("success")
+        } else {
+            value.name(codes)
+        };
+        map.insert("name".into(), name.into());
+    }
+    let extra = match reply {
+        trol::Reply::Position(loc) => json!({"position": {
+            "form": match loc.tag() {
+                trol::Tag::Cart => "cart",
+                trol::Tag::Joint => "joint",
+                trol::Tag::Prec => "prec",
+            },
+            "values": loc.to_array6(),
+        }}),
+        trol::Reply::Status {
+            bios_called,
+            last,
+            transaction,
+            epoch,
+        } => json!({"status": {
+            "bios_called": bios_called,
+            "last": last.0,
+            "last_name": if last.0 == 0 { Some("success") } else { last.name(codes) },
+            "transaction": transaction,
+            "epoch": epoch,
+        }}),
+        trol::Reply::Version { protocol, kind } => json!({"protocol": protocol, "kind": kind}),
+        trol::Reply::Reals { values, .. } => json!({"values": values}),
+        trol::Reply::Bytes { bytes, .. } => json!({"bytes": bytes}),
+        trol::Reply::Code(_) => json!({}),
+    };
+    if let (Some(o), Some(e)) = (o.as_object_mut(), extra.as_object()) {
+        o.extend(e.clone());
+    }
+    o
+}
+
+/// A failure as JSON.
+fn failure_json(
+    def: &CommandDef,
+    code: Option<trol::Code>,
+    codes: &'static trol::CodeTable,
+    error: &str,
+) -> serde_json::Value {
+    let mut o = serde_json::json!({"command": def.name, "ok": false, "error": error});
+    if let (Some(map), Some(code)) = (o.as_object_mut(), code) {
+        map.insert("code".into(), code.0.into());
+        map.insert("name".into(), code.name(codes).into());
+    }
+    if let (Some(map), Some(hint)) = (o.as_object_mut(), next_step(error)) {
+        map.insert("hint".into(), hint.into());
+    }
+    o
 }
 
 impl Session {
@@ -170,8 +254,12 @@ impl Session {
                 }
                 Outcome::Ok
             }
-            Action::Call(def, args) => match self.call(&def, &args) {
-                Ok(text) => {
+            Action::Call(def, args) => match self.call_json(&def, &args) {
+                Ok((_, j)) if self.json => {
+                    say!("{j}");
+                    Outcome::Ok
+                }
+                Ok((text, _)) => {
                     if echo {
                         say!("{}  ->  {text}", line.trim());
                     } else {
@@ -179,7 +267,11 @@ impl Session {
                     }
                     Outcome::Ok
                 }
-                Err(text) => {
+                Err((_, j)) if self.json => {
+                    say!("{j}");
+                    Outcome::Failed
+                }
+                Err((text, _)) => {
                     if echo {
                         say!("{}  ->  {text}", line.trim());
                     }
@@ -194,6 +286,67 @@ impl Session {
     }
 
     /// One API call: Ok(result text) or Err(result text) when it failed.
+    /// One API call: Ok(result text) or Err(result text) when it failed; each with its JSON.
+    fn call_json(
+        &mut self,
+        def: &CommandDef,
+        args: &[Value],
+    ) -> Result<(String, serde_json::Value), (String, serde_json::Value)> {
+        let robot = match self.robot() {
+            Ok(r) => r,
+            Err(e) => {
+                let j = failure_json(
+                    def,
+                    Some(trol::code::TROL_ERR_COMM),
+                    trol_controller::SIM_CODES,
+                    &e,
+                );
+                return Err((e, j));
+            }
+        };
+        let codes = robot.codes();
+        let plain = !(def.code == table::HOME.code
+            || (def.code == table::FINISH.code
+                && matches!(args.first(), Some(Value::Int(v)) if *v == table::FINISH_WAIT)));
+        if plain {
+            let long = record::encode(def, args)
+                .map(|bytes| def.extra_wait(&bytes) != Some(Duration::ZERO))
+                .unwrap_or(false);
+            let reply = if long {
+                waiting(&format!("{} ...", def.name), || robot.call(def, args))
+            } else {
+                robot.call(def, args)
+            };
+            return match reply {
+                Ok(r) => Ok((r.text(codes), reply_json(def, &r, codes))),
+                Err(e) => {
+                    let code = e.code();
+                    let text = match &e {
+                        trol::Error::Refused {
+                            meaning: Some(m), ..
+                        } => {
+                            format!("{}: {m}", code.describe(codes))
+                        }
+                        trol::Error::Refused { .. } => code.describe(codes),
+                        e => format!("{}: {e}", code.describe(codes)),
+                    };
+                    let j = failure_json(def, Some(code), codes, &text);
+                    Err((text, j))
+                }
+            };
+        }
+        match self.call(def, args) {
+            Ok(text) => {
+                let j = serde_json::json!({"command": def.name, "ok": true, "value": 0, "name": "success", "text": text});
+                Ok((text, j))
+            }
+            Err(text) => {
+                let j = failure_json(def, None, codes, &text);
+                Err((text, j))
+            }
+        }
+    }
+
     fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<String, String> {
         let robot = self.robot()?;
         // The waits: polled, and Ctrl-C halts the arm and gives the prompt back.
@@ -315,6 +468,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     let (cfg, source) = a.conn.config_with_source()?;
     let mut session = Session {
         conn: a.conn.clone(),
+        json: a.json,
         robot: None,
         catalog: trol::described::catalog(a.commands.as_deref())?,
     };

@@ -1278,3 +1278,100 @@ fn interp_json_prints_one_object_per_reply() {
     assert_eq!(objects[3]["name"], "TROL_ERR_LOCATION");
     assert!(objects[3]["hint"].as_str().unwrap().contains("--locations"));
 }
+
+/// The interactive interpreter in a real terminal (`script` gives it a pseudo-terminal that is
+/// its controlling terminal): lines typed ahead run in order, a bracketed paste runs line by
+/// line, completion offers each argument's words and the location names, Ctrl-C during a wait
+/// halts the arm and gives the prompt back, Ctrl-D leaves.
+#[test]
+fn the_interactive_interpreter_in_a_real_terminal() {
+    use std::io::{Read, Write};
+    use std::sync::{Arc, Mutex};
+    let dir = scratch("interactive");
+    let locations = cbuild::root().join("examples/locations.txt");
+    let command = format!(
+        "exec {} interp --port sim --time-scale 2 --locations {}",
+        common::TROL,
+        locations.display()
+    );
+    let mut child = std::process::Command::new("script")
+        .args(["-qfec", &command, "/dev/null"])
+        .current_dir(&dir)
+        .env("HOME", &dir)
+        .env("TERM", "xterm")
+        .env("SHELL", "/bin/sh")
+        .env_remove("TROL_CONFIG")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("script (util-linux) runs the interpreter in a pseudo-terminal");
+    let screen = Arc::new(Mutex::new(String::new()));
+    let mut out = child.stdout.take().unwrap();
+    let keep = screen.clone();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = out.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            keep.lock()
+                .unwrap()
+                .push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+    });
+    let mut keys = child.stdin.take().unwrap();
+    let mut typed = |s: &str| {
+        keys.write_all(s.as_bytes()).unwrap();
+        keys.flush().unwrap();
+    };
+    // Wait until the screen shows `what` at least `n` times.
+    let wait = |what: &str, n: usize| {
+        let deadline = Instant::now() + Duration::from_secs(20);
+        loop {
+            let seen = screen.lock().unwrap().matches(what).count();
+            if seen >= n {
+                return;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "`{what}` x{n} not seen:\n{}",
+                screen.lock().unwrap()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    wait("trol> ", 1);
+    // Typed ahead: three lines at once, each runs.
+    typed("speed 10\rspeed 20\rspeed 30\r");
+    wait("0 (success)", 3);
+    // A bracketed paste of two lines.
+    typed("\u{1b}[200~speed 40\nspeed 50\n\u{1b}[201~\r");
+    wait("0 (success)", 5);
+    // Completion: the command, then each argument's own words.
+    typed("getpos\t");
+    wait("getposition", 1);
+    typed(" jo\t");
+    wait("getposition joint", 1);
+    typed(" act\t\r");
+    wait("j(", 1);
+    // A location name from the location file.
+    typed("home 0\r");
+    wait("0 (success)", 6);
+    typed("move test_\t");
+    wait("move test_001", 1);
+    typed("\r");
+    wait("0 (success)", 7);
+    // Ctrl-C during a wait: Halt, and the prompt comes back.
+    typed("speed 5\rjoint 1 2.5\rfinish\r");
+    wait("0 (success)", 9);
+    std::thread::sleep(Duration::from_millis(500));
+    typed("\u{3}");
+    wait("interrupted: Halt sent", 1);
+    typed("getposition joint\r");
+    wait("j(", 2);
+    // Ctrl-D leaves.
+    typed("\u{4}");
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{}", screen.lock().unwrap());
+}

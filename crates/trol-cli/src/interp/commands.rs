@@ -32,17 +32,22 @@ pub fn arg_usage(name: &str, kind: &ArgKind) -> String {
     }
 }
 
-/// The words that may follow a command (for completion): its choices and the straight flag.
-pub fn arg_words(def: &CommandDef) -> Vec<&'static str> {
-    let mut words = Vec::new();
-    for a in def.args {
-        match a.kind {
-            ArgKind::Choice(options) => words.extend(options.iter().map(|c| c.word)),
-            ArgKind::Straight => words.extend(["straight", "interpolated"]),
-            _ => {}
-        }
+/// The words one argument takes (its choices, the straight flag; a location's literal
+/// forms), for completion.
+pub fn words_for(kind: &ArgKind) -> Vec<&'static str> {
+    match kind {
+        ArgKind::Choice(options) => options.iter().map(|c| c.word).collect(),
+        ArgKind::Straight => vec!["straight", "interpolated"],
+        ArgKind::Loc { tags, .. } => tags
+            .iter()
+            .map(|t| match t {
+                Tag::Cart => "c(",
+                Tag::Joint => "j(",
+                Tag::Prec => "p(",
+            })
+            .collect(),
+        _ => Vec::new(),
     }
-    words
 }
 
 /// The interpreter's own commands.

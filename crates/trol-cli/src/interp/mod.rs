@@ -539,9 +539,37 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Completion of command names, and of the words each command's arguments take.
+/// Completion of command names, and, argument by argument, of the words each argument
+/// takes: its choices, the straight flag, and location names (those of the location file).
 struct Helper {
     catalog: Catalog,
+    locations: Vec<String>,
+}
+
+/// The arguments already typed after the command in `head` (a location literal with its
+/// blanks and commas counts as one).
+fn args_typed(head: &str) -> usize {
+    let mut count: usize = 0;
+    let mut depth = 0i32;
+    let mut in_word = false;
+    for c in head.chars() {
+        match c {
+            '(' => {
+                depth += 1;
+                in_word = true;
+            }
+            ')' => depth -= 1,
+            c if c.is_whitespace() && depth <= 0 => {
+                if in_word {
+                    count += 1;
+                }
+                in_word = false;
+            }
+            _ => in_word = true,
+        }
+    }
+    // The command itself is the first word.
+    count.saturating_sub(1)
 }
 
 impl rustyline::completion::Completer for Helper {
@@ -560,6 +588,7 @@ impl rustyline::completion::Completer for Helper {
             .unwrap_or(0);
         let word = head[start..].to_ascii_lowercase();
         let first = head[..start].trim().is_empty();
+        let inside = head[..start].matches('(').count() > head[..start].matches(')').count();
         let mut words: Vec<String> = Vec::new();
         if first {
             words.extend(
@@ -568,15 +597,32 @@ impl rustyline::completion::Completer for Helper {
                     .map(|d| d.short_name().to_ascii_lowercase()),
             );
             words.extend(OWN.iter().map(|o| o.0.to_string()));
+        } else if inside {
+            // Inside a location literal: numbers, nothing to offer.
         } else if let Some(def) = head
             .split_whitespace()
             .next()
             .and_then(|w| self.catalog.find(w))
         {
-            words.extend(commands::arg_words(def).into_iter().map(String::from));
+            let n = args_typed(&head[..start]);
+            if let Some(arg) = def.args.get(n) {
+                words.extend(commands::words_for(&arg.kind).into_iter().map(String::from));
+                if matches!(arg.kind, trol_proto::application::ArgKind::Name) {
+                    words.extend(self.locations.iter().cloned());
+                }
+            }
+        } else if head.trim_start().to_ascii_lowercase().starts_with("help ") {
+            words.extend(
+                self.catalog
+                    .iter()
+                    .map(|d| d.short_name().to_ascii_lowercase()),
+            );
         }
         let bare = word.strip_prefix("trol").unwrap_or(&word).to_string();
-        let found = words.into_iter().filter(|w| w.starts_with(&bare)).collect();
+        let found = words
+            .into_iter()
+            .filter(|w| w.to_ascii_lowercase().starts_with(&bare))
+            .collect();
         Ok((start, found))
     }
 }
@@ -596,8 +642,19 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
     use rustyline::error::ReadlineError;
     let mut rl: rustyline::Editor<Helper, rustyline::history::DefaultHistory> =
         rustyline::Editor::new().map_err(|e| format!("cannot start line editing: {e}"))?;
+    // Location names to offer: the location file's (the embedded simulator's table).
+    let locations = session
+        .conn
+        .config()
+        .ok()
+        .and_then(|c| c.locations)
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .and_then(|t| trol_a465::arm::parse_locations(&t).ok())
+        .map(|l| l.into_iter().map(|(name, _)| name).collect())
+        .unwrap_or_default();
     rl.set_helper(Some(Helper {
         catalog: session.catalog.clone(),
+        locations,
     }));
     let hist = history_file();
     if let Some(h) = &hist {
@@ -606,19 +663,30 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
     say!("TROL command interpreter. `help` lists the commands, Ctrl-D leaves.");
     loop {
         match rl.readline("trol> ") {
-            Ok(line) => {
-                clear_interrupt();
-                if !line.trim().is_empty() {
-                    let _ = rl.add_history_entry(line.as_str());
-                }
-                let outcome = session.line(&line, "", false);
-                if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
-                    // Whatever the line did, the arm stops (a wait has halted it already).
-                    if let Some(robot) = session.robot.as_mut() {
-                        let _ = robot.finish_unless(interrupted());
+            Ok(text) => {
+                // A bracketed paste of several lines comes as one text: its lines run in
+                // order, each as if typed.
+                let mut quit = false;
+                for line in text.split(['\n', '\r']) {
+                    clear_interrupt();
+                    if !line.trim().is_empty() {
+                        let _ = rl.add_history_entry(line);
+                    }
+                    let outcome = session.line(line, "", false);
+                    if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+                        // Whatever the line did, the arm stops (a wait has halted it already);
+                        // the rest of a paste is dropped.
+                        if let Some(robot) = session.robot.as_mut() {
+                            let _ = robot.finish_unless(interrupted());
+                        }
+                        break;
+                    }
+                    if let Outcome::Quit = outcome {
+                        quit = true;
+                        break;
                     }
                 }
-                if let Outcome::Quit = outcome {
+                if quit {
                     break;
                 }
             }

@@ -1375,3 +1375,42 @@ fn the_interactive_interpreter_in_a_real_terminal() {
     let status = child.wait().unwrap();
     assert!(status.success(), "{}", screen.lock().unwrap());
 }
+
+/// Over a serial device: the controller restarts behind a device name that stays (as a USB
+/// adapter's /dev/serial/by-id/... link does when it is plugged in again): the same Robot
+/// opens the name again on its next call and carries on. A link to a `trol sim` pty plays
+/// the device.
+#[test]
+fn the_same_robot_carries_on_over_a_serial_device_after_the_controller_restarts() {
+    let dir = scratch("pty-restart");
+    let device = dir.join("ttyTROL");
+    let start = || {
+        let sim = Background::start(
+            &dir,
+            &["sim", "--server", "--homed", "--time-scale", "50"],
+            "serving on ",
+        );
+        let _ = std::fs::remove_file(&device);
+        std::os::unix::fs::symlink(&sim.name, &device).unwrap();
+        sim
+    };
+    let sim = start();
+    let mut robot = trol::Robot::open(device.to_str().unwrap(), 38400).unwrap();
+    robot.joint(1, 0.1).unwrap();
+    let before = robot.status_record().unwrap().epoch;
+    drop(sim);
+    std::thread::sleep(Duration::from_millis(200));
+    let e = robot.joint(1, 0.1).unwrap_err();
+    assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{e}");
+    let _sim = start();
+    let mut ok = false;
+    for _ in 0..30 {
+        if robot.joint(1, 0.1).is_ok() {
+            ok = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(ok, "the robot did not carry on");
+    assert_ne!(before, robot.status_record().unwrap().epoch);
+}

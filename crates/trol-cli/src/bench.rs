@@ -49,6 +49,128 @@ pub enum Bench {
     ///
     /// Example: trol bench gateway --count 50 --moves 20 --json
     Gateway(GatewayArgs),
+    /// Run every benchmark of docs/performance.md with the arguments written there, each as
+    /// its own `trol bench ...` process, and print the table of their figures (Markdown).
+    /// Takes about a minute.
+    ///
+    /// Example: trol bench all
+    All,
+}
+
+/// `trol bench all`: each documented command, and the figure the page quotes from it.
+fn all() -> Result<(), String> {
+    let me = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
+    let run = |args: &[&str]| -> Result<serde_json::Value, String> {
+        let out = std::process::Command::new(&me)
+            .arg("bench")
+            .args(args)
+            .arg("--json")
+            .env_remove("TROL_CONFIG")
+            .output()
+            .map_err(|e| format!("cannot run trol bench {}: {e}", args.join(" ")))?;
+        if !out.status.success() {
+            return Err(format!(
+                "trol bench {} failed: {}",
+                args.join(" "),
+                String::from_utf8_lossy(&out.stderr)
+            ));
+        }
+        serde_json::from_slice(&out.stdout)
+            .map_err(|e| format!("trol bench {}: not JSON: {e}", args.join(" ")))
+    };
+    let f = |v: &serde_json::Value, key: &str| v[key].as_f64().unwrap_or(f64::NAN);
+    let mut rows: Vec<(String, String, String)> = Vec::new();
+    for (args, what) in [
+        (
+            &["link", "--baud", "38400", "--bytes", "65535"][..],
+            "64 KiB at 38400 baud",
+        ),
+        (
+            &["link", "--baud", "9600", "--bytes", "4096"][..],
+            "4 KiB at 9600 baud",
+        ),
+        (
+            &["link", "--baud", "38400", "--bytes", "8", "--repeat", "5"][..],
+            "8 bytes at 38400 baud",
+        ),
+    ] {
+        let v = run(args)?;
+        rows.push((
+            format!("link: {what}"),
+            format!("trol bench {}", args.join(" ")),
+            format!(
+                "{:.2} % efficiency ({:.2} % the format allows), {:.4} s",
+                100.0 * f(&v, "efficiency"),
+                100.0 * f(&v, "format_efficiency"),
+                f(&v, "seconds")
+            ),
+        ));
+    }
+    let v = run(&["ik"])?;
+    rows.push((
+        "all-solutions IK of the A465".into(),
+        "trol bench ik".into(),
+        format!(
+            "{:.0} ns per pose, {:.2} solutions per pose",
+            f(&v, "ns_per_pose"),
+            f(&v, "solutions_per_pose")
+        ),
+    ));
+    let v = run(&["transact", "--count", "5000", "--port", "sim"])?;
+    rows.push((
+        "a small transaction, embedded controller".into(),
+        "trol bench transact --count 5000 --port sim".into(),
+        format!(
+            "{:.1} us each, {:.0} per second",
+            f(&v, "us_per_transaction"),
+            f(&v, "transactions_per_second")
+        ),
+    ));
+    let v = run(&["moves"])?;
+    let moves = v.as_array().cloned().unwrap_or_default();
+    let within = moves
+        .iter()
+        .filter(|m| f(m, "seconds") >= f(m, "speed_bound_seconds"))
+        .count();
+    rows.push((
+        "the standard moves at 100 %".into(),
+        "trol bench moves".into(),
+        format!(
+            "{} moves, {within} no faster than the published speeds allow; {:.2} s in all",
+            moves.len(),
+            moves.iter().map(|m| f(m, "seconds")).sum::<f64>()
+        ),
+    ));
+    let v = run(&["gateway", "--count", "20", "--moves", "10"])?;
+    let finish: Vec<String> = v["finish"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .map(|x| {
+            format!(
+                "Finish {:.0} ms after the motion's end ({})",
+                f(&x["after_motion_end"], "median_ms"),
+                x["completion"].as_str().unwrap_or("?")
+            )
+        })
+        .collect();
+    rows.push((
+        "the whole path to a C500 at 38400 baud".into(),
+        "trol bench gateway --count 20 --moves 10".into(),
+        format!(
+            "round trip {:.1} ms, GetPosition {:.0} ms, {}",
+            f(&v["speed_round_trip"], "median_ms"),
+            f(&v["get_position_cart_actual"], "median_ms"),
+            finish.join(", ")
+        ),
+    ));
+    say!("| figure | command (with --json) | result |");
+    say!("|---|---|---|");
+    for (what, cmd, result) in rows {
+        say!("| {what} | `{cmd}` | {result} |");
+    }
+    Ok(())
 }
 
 #[derive(Args)]
@@ -315,6 +437,7 @@ pub fn run(b: Bench) -> Result<(), String> {
         Bench::Moves(a) => moves(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
+        Bench::All => all(),
     }
 }
 

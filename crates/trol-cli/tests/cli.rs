@@ -301,6 +301,9 @@ fn benches_print_json() {
         );
     }
 
+    let o = trol(&dir, &["bench", "--help"], "");
+    assert!(text(&o).0.contains("all "), "{:?}", text(&o));
+
     let o = trol(&dir, &["bench", "moves", "--json"], "");
     let (out, err) = text(&o);
     assert!(o.status.success(), "{err}");

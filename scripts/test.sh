@@ -18,3 +18,7 @@ PY="$PWD/target/py/bin/python"
 "$PY" -m pip install --quiet ./crates/trol-py
 (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" "$PY" -m pytest -q)
 (cd /tmp && "$PY" -m mypy.stubtest trol)
+
+# The README's walk-through, every block as written (install, demo, interp, the simulator as
+# a process, a C program through pkg-config, Rust, Python, completions and man pages).
+bash scripts/readme.sh

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Run every shell block of README.md's walk-through (between <!-- walk-through --> and
+# <!-- /walk-through -->), as written, one after the other, from the repository's root, so
+# the README cannot drift. HOME is a fresh folder (what the blocks install under ~ lands
+# there), `cargo install` goes to a folder of its own (CARGO_INSTALL_ROOT) that is put on
+# PATH, and cargo shares this repository's target folder. Python: `pip` and `python` are
+# target/py's (made by scripts/test.sh), or the first on PATH.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The blocks, NUL-separated.
+awk '
+  /<!-- walk-through -->/ { on = 1; next }
+  /<!-- \/walk-through -->/ { on = 0 }
+  on && /^```sh$/ { inblock = 1; next }
+  on && inblock && /^```$/ { inblock = 0; printf "%c", 0; next }
+  on && inblock { print }
+' README.md > "$work/blocks"
+
+# The toolchain and the crates stay where they are; only HOME moves.
+export RUSTUP_HOME="${RUSTUP_HOME:-$HOME/.rustup}" CARGO_HOME="${CARGO_HOME:-$HOME/.cargo}"
+export HOME="$work/home" CARGO_INSTALL_ROOT="$work/cargo"
+export CARGO_TARGET_DIR="$root/target"
+export PATH="$CARGO_INSTALL_ROOT/bin:$PATH"
+[ -x "$root/target/py/bin/python" ] && export PATH="$root/target/py/bin:$PATH"
+unset TROL_CONFIG
+mkdir -p "$HOME"
+
+n=0
+while IFS= read -r -d '' block; do
+  n=$((n + 1))
+  echo "--- README walk-through, block $n:"
+  printf '%s\n' "$block" | sed 's/^/    /'
+  if ! bash -euo pipefail -c "$block" > "$work/out" 2>&1; then
+    cat "$work/out"
+    echo "README walk-through: block $n failed" >&2
+    exit 1
+  fi
+  tail -n 3 "$work/out" | sed 's/^/  > /'
+done < "$work/blocks"
+[ "$n" -gt 0 ] || { echo "README walk-through: no blocks found" >&2; exit 1; }
+echo "README walk-through: $n passed, 0 failed"

@@ -41,8 +41,8 @@ fn a_noisy_line_neither_executes_nor_accepts_a_corrupted_block() {
     ]);
     assert!(n(&r, "flipped_bits") > 100, "the line was noisy: {r:#}");
     assert_nothing_wrong(&r);
-    // (At BER 1e-2 a few damaged blocks in 100,000 calls still pass the CRC-16: see
-    // docs/reliability.md. A short run there would pass by luck, so it is not here.)
+    // (BER 1e-2 is measured over 100,000 calls in docs/reliability.md; a short run there
+    // would pass by luck, so it is not here.)
 }
 
 #[test]

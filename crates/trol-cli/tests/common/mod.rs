@@ -9,9 +9,13 @@ use std::time::{Duration, Instant};
 
 pub const TROL: &str = env!("CARGO_BIN_EXE_trol");
 
-/// A scratch folder of this test's own, without a trol.cfg (so the port is `sim`).
+/// A scratch folder of this call's own, without a trol.cfg (so the port is `sim`). Each call
+/// gets a new folder: tests run in parallel, and two that asked for the same name must not
+/// remove each other's folder (a program started in a folder that was just removed fails).
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("trol-cli-{}-{name}", std::process::id()));
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("trol-cli-{}-{name}-{n}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

@@ -4,7 +4,8 @@
 //! - [`model`]: link lengths, limits, speeds, encoders, the READY pose;
 //! - [`kinematics`]: forward kinematics and all-solutions inverse kinematics with a tool
 //!   transform; usable on the PC as well as in the simulated controller;
-//! - [`arm`]: the simulated arm (timed motion, gripper, location table, safety checks).
+//! - [`arm`]: the simulated arm (timed motion, gripper, location table, safety checks);
+//! - [`urdf`]: the arm as a URDF with TROL's joints (`trol urdf`, docs/ros2.md).
 //!
 //! Conventions and which figures are assumptions: docs/a465.md, included below (its
 //! example runs as a doctest).
@@ -17,5 +18,6 @@ pub mod arm;
 pub mod kinematics;
 pub mod model;
 pub mod motion;
+pub mod urdf;
 
 pub use kinematics::{Config, IkError, Joints, Kinematics, Pose, Solution, Solutions};

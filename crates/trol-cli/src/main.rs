@@ -81,6 +81,12 @@ enum Command {
     Bench(bench::Bench),
     /// The manual's pick example on the embedded simulator, step by step.
     Demo(demo::DemoArgs),
+    /// Print the A465's URDF (links base_link, link_1..link_6, flange, tool0; joints
+    /// joint_1..joint_6 with TROL's zero and directions), generated from the arm's model.
+    #[command(
+        after_help = "Example:\n  trol urdf > crs_a465.urdf      # for RViz, a description package, docs/ros2.md"
+    )]
+    Urdf,
     /// Print the completion script for a shell (bash, zsh, fish, elvish, powershell).
     #[command(after_help = "\
 Examples:
@@ -154,6 +160,10 @@ fn main() -> ExitCode {
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
         Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),
         Command::Demo(a) => demo::run(a),
+        Command::Urdf => {
+            say!("{}", trol_a465::urdf::urdf().trim_end());
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Completions { shell } => completions(shell).map(|()| ExitCode::SUCCESS),
         Command::Man { out } => man(&out).map(|()| ExitCode::SUCCESS),
     };

@@ -225,7 +225,7 @@ fn subcommands_have_help_with_examples() {
     let dir = scratch("helps");
     for sub in [
         "interp", "init", "cleanup", "sim", "link", "trace", "ports", "bench", "demo", "gateway",
-        "config", "rapl",
+        "config", "rapl", "urdf",
     ] {
         let o = trol(&dir, &[sub, "--help"], "");
         let (out, _) = text(&o);
@@ -1416,4 +1416,16 @@ fn the_same_robot_carries_on_over_a_serial_device_after_the_controller_restarts(
     }
     assert!(ok, "the robot did not carry on");
     assert_ne!(before, robot.status_record().unwrap().epoch);
+}
+
+#[test]
+fn trol_urdf_prints_the_arm_with_trols_joints() {
+    let dir = scratch("urdf");
+    let o = trol(&dir, &["urdf"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(out.starts_with("<?xml"), "{out}");
+    for name in ["joint_1", "joint_6", "base_link", "flange", "tool0"] {
+        assert!(out.contains(&format!("name=\"{name}\"")), "{name}");
+    }
 }

@@ -127,4 +127,7 @@ pub trait Backend: Send {
     fn world(&mut self) -> Option<String> {
         None
     }
+    /// Called after each request the controller served and after its watchdog halted the
+    /// arm: a moment to share the arm's state (the simulator renews its live view's copy).
+    fn after_request(&mut self) {}
 }

@@ -100,6 +100,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
         if !self.tripped && self.last_seen.elapsed() >= limit {
             self.tripped = true;
             let halt = self.pcp.backend_mut().halt().map_err(|e| e.to_string());
+            self.pcp.backend_mut().after_request();
             self.trip = Some(WatchdogTrip { after: limit, halt });
         }
     }
@@ -189,6 +190,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 }
                 self.watch();
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
+                    self.pcp.backend_mut().after_request();
                     if let Some(log) = self.log.as_mut() {
                         let world = self.pcp.backend_mut().world();
                         log(&LogEntry {

@@ -24,7 +24,7 @@ pub mod terminal;
 pub use backend::{Backend, BackendError, BiosResult, PosMode, Target};
 pub use controller::{Controller, Embedded, LogEntry, LogFn, Mode, WatchdogTrip};
 pub use pcp::{Call, Context, Executed, Handled, Handler, Pcp, RegisterError, Status};
-pub use sim::{SIM_CODES, SimBackend, SimSettings};
+pub use sim::{ArmView, SIM_CODES, SharedArm, SimBackend, SimSettings};
 
 use trol_port::memory::{self, MemoryLine};
 use trol_proto::link::LinkConfig;

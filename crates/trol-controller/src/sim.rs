@@ -81,7 +81,30 @@ pub struct SimBackend {
     arm: Arm,
     epoch: Instant,
     scale: f64,
+    view: Option<SharedArm>,
 }
+
+/// A copy of the simulated arm for a view (a browser page): the arm's motions are planned,
+/// so where it is at any instant follows from the copy and the simulation's clock.
+#[derive(Clone, Debug)]
+pub struct ArmView {
+    /// The arm as of the last transaction.
+    pub arm: Arm,
+    /// When the simulation's time was 0.
+    pub epoch: Instant,
+    /// How much faster than real time the simulation runs.
+    pub scale: f64,
+}
+
+impl ArmView {
+    /// Simulation time now, s.
+    pub fn now(&self) -> f64 {
+        self.epoch.elapsed().as_secs_f64() * self.scale
+    }
+}
+
+/// The arm's copy, shared with a view and renewed after every transaction.
+pub type SharedArm = std::sync::Arc<std::sync::Mutex<Option<ArmView>>>;
 
 impl SimBackend {
     /// A simulated arm with `settings`.
@@ -95,6 +118,28 @@ impl SimBackend {
             arm,
             epoch: Instant::now(),
             scale: settings.time_scale.max(1e-3),
+            view: None,
+        }
+    }
+
+    /// Share a copy of the arm with a view: it is renewed after every request and watchdog
+    /// halt ([`Backend::after_request`]).
+    pub fn share(&mut self) -> SharedArm {
+        let shared = SharedArm::default();
+        self.view = Some(shared.clone());
+        self.publish();
+        shared
+    }
+
+    fn publish(&self) {
+        if let Some(v) = &self.view {
+            if let Ok(mut slot) = v.lock() {
+                *slot = Some(ArmView {
+                    arm: self.arm.clone(),
+                    epoch: self.epoch,
+                    scale: self.scale,
+                });
+            }
         }
     }
 
@@ -197,6 +242,9 @@ impl Backend for SimBackend {
     }
     fn speed(&mut self, percent: u8) -> BiosResult {
         Ok(self.arm.set_speed(percent as f64))
+    }
+    fn after_request(&mut self) {
+        self.publish();
     }
     fn world(&mut self) -> Option<String> {
         let now = self.now();

@@ -1,0 +1,245 @@
+// The TROL view: the A465 drawn from its URDF (/urdf), moved by the state the controller
+// side sends (/state once, then /events). Lengths: mm from TROL, m in the scene (as URDF).
+import * as THREE from 'three';
+import { OrbitControls } from '/OrbitControls.js';
+
+const COLOURS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b'];
+const NEAR_LIMIT = 10 * Math.PI / 180;
+const HISTORY_S = 10;
+
+const host = document.getElementById('scene');
+const status = document.getElementById('status');
+const joints = [];          // the revolute joints' rotors, joint_1 .. joint_6
+let tool0 = null;
+let fingers = [];
+const history = [];         // [time, q1..q6]
+let frames = 0;
+
+// --- the scene (WebGL may be missing: the panel works without it) ---
+let renderer = null, scene = null, camera = null, controls = null;
+let trail = null, trailPoints = [], target = null, table = null;
+const objects = new Map();
+try {
+  renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  host.appendChild(renderer.domElement);
+  scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xf4f4f1);
+  camera = new THREE.PerspectiveCamera(45, 1, 0.01, 20);
+  camera.up.set(0, 0, 1);
+  camera.position.set(1.7, -1.45, 1.15);
+  controls = new OrbitControls(camera, renderer.domElement);
+  controls.target.set(0.15, 0, 0.5);
+  controls.update();
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x888877, 1.6));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+  sun.position.set(1, -2, 3);
+  scene.add(sun);
+  table = new THREE.Mesh(new THREE.PlaneGeometry(2, 2),
+    new THREE.MeshLambertMaterial({ color: 0xc8c2b4, side: THREE.DoubleSide }));
+  scene.add(table);
+  const grid = new THREE.GridHelper(2, 20, 0x999999, 0xbbbbbb);
+  grid.rotation.x = Math.PI / 2;
+  grid.position.z = 0.0005;
+  table.add(grid);
+  trail = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0x2a5db0 }));
+  scene.add(trail);
+  target = new THREE.Mesh(new THREE.SphereGeometry(0.012, 16, 12),
+    new THREE.MeshLambertMaterial({ color: 0xd62728, transparent: true, opacity: 0.6 }));
+  target.visible = false;
+  scene.add(target);
+  document.body.dataset.webgl = 'ok';
+} catch (e) {
+  renderer = null;
+  document.body.dataset.webgl = 'missing';
+  status.textContent = 'no WebGL here: the panel still follows the arm';
+}
+
+function resize() {
+  if (!renderer) return;
+  const w = host.clientWidth, h = host.clientHeight;
+  renderer.setSize(w, h);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+resize();
+
+// --- the arm, from its URDF ---
+function vec(text, n = 3) {
+  const v = (text || '').trim().split(/\s+/).map(Number);
+  while (v.length < n) v.push(0);
+  return v;
+}
+
+function placeOrigin(obj, el) {
+  if (!el) return;
+  const [x, y, z] = vec(el.getAttribute('xyz'));
+  const [r, p, yaw] = vec(el.getAttribute('rpy'));
+  obj.position.set(x, y, z);
+  obj.rotation.set(r, p, yaw, 'ZYX');   // R = Rz(yaw) Ry(pitch) Rx(roll), as URDF
+}
+
+async function loadArm() {
+  const text = await (await fetch('/urdf')).text();
+  const doc = new DOMParser().parseFromString(text, 'application/xml');
+  const materials = {};
+  for (const m of doc.querySelectorAll('robot > material')) {
+    const c = vec(m.querySelector('color')?.getAttribute('rgba'), 4);
+    materials[m.getAttribute('name')] = new THREE.MeshLambertMaterial({ color: new THREE.Color(c[0], c[1], c[2]) });
+  }
+  const links = {};
+  for (const l of doc.querySelectorAll('robot > link')) {
+    const g = new THREE.Group();
+    g.name = l.getAttribute('name');
+    for (const v of l.querySelectorAll('visual')) {
+      const geo = v.querySelector('geometry > *');
+      let geometry = null;
+      if (geo.tagName === 'cylinder') {
+        geometry = new THREE.CylinderGeometry(+geo.getAttribute('radius'), +geo.getAttribute('radius'), +geo.getAttribute('length'), 24);
+        geometry.rotateX(Math.PI / 2);     // three's cylinders stand on y, URDF's on z
+      } else if (geo.tagName === 'box') {
+        const [a, b, c] = vec(geo.getAttribute('size'));
+        geometry = new THREE.BoxGeometry(a, b, c);
+      } else if (geo.tagName === 'sphere') {
+        geometry = new THREE.SphereGeometry(+geo.getAttribute('radius'), 20, 14);
+      }
+      if (!geometry) continue;
+      const name = v.querySelector('material')?.getAttribute('name');
+      const mesh = new THREE.Mesh(geometry, materials[name] || new THREE.MeshLambertMaterial({ color: 0xcccccc }));
+      placeOrigin(mesh, v.querySelector('origin'));
+      g.add(mesh);
+    }
+    links[g.name] = g;
+  }
+  for (const j of doc.querySelectorAll('robot > joint')) {
+    const parent = links[j.querySelector('parent').getAttribute('link')];
+    const child = links[j.querySelector('child').getAttribute('link')];
+    const origin = new THREE.Group();
+    placeOrigin(origin, j.querySelector('origin'));
+    const rotor = new THREE.Group();
+    origin.add(rotor);
+    rotor.add(child);
+    parent.add(origin);
+    if (j.getAttribute('type') === 'revolute') {
+      const k = Number(j.getAttribute('name').replace('joint_', ''));
+      joints[k - 1] = { rotor, axis: new THREE.Vector3(...vec(j.querySelector('axis')?.getAttribute('xyz'))).normalize() };
+    }
+  }
+  tool0 = links.tool0;
+  // Two fingers along the tool's y axis, beyond the gripper body (tool x is out of the flange).
+  const fingerMaterial = new THREE.MeshLambertMaterial({ color: 0x333333 });
+  fingers = [-1, 1].map(side => {
+    const f = new THREE.Mesh(new THREE.BoxGeometry(0.05, 0.008, 0.02), fingerMaterial);
+    f.userData.side = side;
+    f.position.set(0.105, side * 0.025, 0);
+    tool0.add(f);
+    return f;
+  });
+  if (scene) scene.add(links.base_link);
+}
+
+// --- the panel ---
+const jointRows = [];
+function buildPanel(limits) {
+  const t = document.getElementById('joints');
+  t.innerHTML = '';
+  for (let i = 0; i < 6; i++) {
+    const tr = document.createElement('tr');
+    tr.innerHTML = `<td style="color:${COLOURS[i]}">J${i + 1}</td><td class="value" id="j${i + 1}">-</td>` +
+      `<td><div class="bar"><span></span></div></td><td>±${(limits[i] * 180 / Math.PI).toFixed(0)}</td>`;
+    t.appendChild(tr);
+    jointRows.push(tr);
+  }
+  document.getElementById('legend').innerHTML =
+    COLOURS.map((c, i) => `<span style="color:${c}">■ J${i + 1}</span>`).join('');
+}
+
+function showObjects(list) {
+  const seen = new Set();
+  for (const o of list) {
+    seen.add(o.name);
+    let m = objects.get(o.name);
+    if (!m && scene) {
+      m = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), new THREE.MeshLambertMaterial({ color: 0xe0a030 }));
+      scene.add(m);
+      objects.set(o.name, m);
+    }
+    if (m) {
+      const w = o.width / 1000;
+      m.scale.set(w, w, w);
+      m.position.set(o.x / 1000, o.y / 1000, o.z / 1000 + w / 2);
+    }
+  }
+  for (const [name, m] of objects) if (!seen.has(name)) { scene.remove(m); objects.delete(name); }
+  document.getElementById('objects').textContent = list.length
+    ? list.map(o => `${o.name}: ${o.held ? 'in the gripper' : 'resting'} at x ${o.x.toFixed(1)}, y ${o.y.toFixed(1)}, z ${o.z.toFixed(1)} mm`).join('; ')
+    : 'no objects in the world';
+}
+
+function update(s) {
+  frames += 1;
+  document.body.dataset.frames = String(frames);
+  if (!jointRows.length) buildPanel(s.limits);
+  s.joints.forEach((q, i) => {
+    if (joints[i]) joints[i].rotor.quaternion.setFromAxisAngle(joints[i].axis, q);
+    const cell = document.getElementById(`j${i + 1}`);
+    cell.textContent = (q * 180 / Math.PI).toFixed(2);
+    cell.dataset.rad = q.toFixed(6);
+    const limit = s.limits[i];
+    jointRows[i].querySelector('.bar span').style.left = `${((q + limit) / (2 * limit)) * 100}%`;
+    jointRows[i].classList.toggle('near', limit - Math.abs(q) < NEAR_LIMIT);
+  });
+  const [x, y, z, yaw, pitch, roll] = s.tcp;
+  document.getElementById('tcp').textContent =
+    `x ${x.toFixed(1)}, y ${y.toFixed(1)}, z ${z.toFixed(1)} mm; yaw ${(yaw * 180 / Math.PI).toFixed(1)}, ` +
+    `pitch ${(pitch * 180 / Math.PI).toFixed(1)}, roll ${(roll * 180 / Math.PI).toFixed(1)}°`;
+  document.getElementById('gripper').textContent = `fingers ${s.gripper_mm.toFixed(1)} mm apart`;
+  for (const f of fingers) f.position.y = f.userData.side * (s.gripper_mm / 2000 + 0.004);
+  showObjects(s.objects);
+  status.textContent = `${s.moving ? 'moving' : 'still'}, t = ${s.time.toFixed(2)} s` +
+    (renderer ? '' : ' (no WebGL here)');
+  document.body.dataset.moving = String(s.moving);
+  if (scene) {
+    table.position.z = s.table_z / 1000;
+    trailPoints.push(new THREE.Vector3(x / 1000, y / 1000, z / 1000));
+    if (trailPoints.length > 3000) trailPoints.shift();
+    trail.geometry.setFromPoints(trailPoints);
+    target.visible = !!s.target_tcp;
+    if (s.target_tcp) target.position.set(s.target_tcp[0] / 1000, s.target_tcp[1] / 1000, s.target_tcp[2] / 1000);
+  }
+  history.push([s.time, ...s.joints]);
+  while (history.length && history[0][0] < s.time - HISTORY_S) history.shift();
+  plot();
+}
+
+function plot() {
+  const c = document.getElementById('plot');
+  const g = c.getContext('2d');
+  g.clearRect(0, 0, c.width, c.height);
+  g.strokeStyle = '#ccc';
+  g.beginPath(); g.moveTo(0, c.height / 2); g.lineTo(c.width, c.height / 2); g.stroke();
+  if (history.length < 2) return;
+  const t1 = history[history.length - 1][0], t0 = t1 - HISTORY_S;
+  for (let i = 0; i < 6; i++) {
+    g.strokeStyle = COLOURS[i];
+    g.beginPath();
+    history.forEach((h, n) => {
+      const px = (h[0] - t0) / HISTORY_S * c.width;
+      const py = c.height / 2 - h[i + 1] / Math.PI * (c.height / 2);
+      n ? g.lineTo(px, py) : g.moveTo(px, py);
+    });
+    g.stroke();
+  }
+}
+
+function render() {
+  if (renderer) { controls.update(); renderer.render(scene, camera); }
+  requestAnimationFrame(render);
+}
+
+await loadArm().catch(e => { status.textContent = `cannot load the arm: ${e}`; });
+const first = await fetch('/state').then(r => r.ok ? r.json() : null).catch(() => null);
+if (first) update(first);
+new EventSource('/events').onmessage = e => update(JSON.parse(e.data));
+render();

@@ -1,0 +1,392 @@
+//! A live 3D view of the simulated A465 in the browser (`trol sim --view`, `trol demo
+//! --view`, trol.cfg's `view = ADDR`).
+//!
+//! The controller side serves it, so every client (C, Rust, Python, the interpreter) gets it
+//! without code of its own. The server answers GET requests only:
+//!
+//! | path | what |
+//! |---|---|
+//! | `/` | the page: the arm drawn from its URDF (three.js), the table, the tool's trail, the target of the motion under way, the gripper and the world's objects, each joint's value against its limits, a plot of the joints over the last seconds |
+//! | `/state` | the state as JSON: `joints` (6, rad), `tcp` (x, y, z mm, yaw, pitch, roll rad), `moving`, `gripper_mm`, `objects`, `time` (s, the simulation's), and `target`, `limits`, `table_z` |
+//! | `/events` | the same state as server-sent events: 50 a second while the arm moves, one when it stops, then a comment every 10 s to keep the connection |
+//! | `/urdf` | the arm's URDF (`trol urdf`) |
+//! | `/three.module.js`, `/three.core.js`, `/OrbitControls.js` | three.js 0.187.0 from the npm registry, embedded (MIT licence: `/LICENSE-three.js.txt`, THIRD_PARTY.md) |
+//!
+//! The view never slows the controller: the controller only renews a copy of the arm after
+//! each request ([`trol_controller::SimBackend::share`]); this server's threads compute
+//! the state from that copy and the simulation's clock. A client that stops reading is
+//! dropped once its socket's buffer is full and a write has waited a second; one that closes
+//! is noticed within a round; at most [`MAX_CLIENTS`] connections are served at once.
+//!
+//! The server is a few dozen lines on `std::net` instead of an HTTP crate: it serves GET
+//! only, and each event stream needs a write timeout of its own, which std gives directly.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Duration;
+
+use serde_json::json;
+use trol_a465::arm::Which;
+use trol_a465::model::LIMITS_RAD;
+use trol_controller::SharedArm;
+
+/// The address the view listens on by default: this machine only.
+pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
+
+/// How often a moving arm's state is sent.
+pub const EVENT_INTERVAL: Duration = Duration::from_millis(20);
+
+/// At most this many connections are served at once (each page holds one event stream and
+/// opens a few more while it loads); more get 503.
+pub const MAX_CLIENTS: usize = 32;
+
+/// The most a request's head may take.
+const MAX_HEAD: u64 = 16 * 1024;
+
+const INDEX: &str = include_str!("../assets/index.html");
+const APP: &str = include_str!("../assets/app.js");
+const THREE_MODULE: &str = include_str!("../assets/three.module.js");
+const THREE_CORE: &str = include_str!("../assets/three.core.js");
+const ORBIT: &str = include_str!("../assets/OrbitControls.js");
+const THREE_LICENCE: &str = include_str!("../assets/LICENSE-three.js.txt");
+
+/// The state of the arm now, as `/state` and `/events` give it; `None` before the controller
+/// shared its arm.
+pub fn state(shared: &SharedArm) -> Option<serde_json::Value> {
+    let mut slot = shared.lock().ok()?;
+    let view = slot.as_mut()?;
+    let now = view.now();
+    let arm = &mut view.arm;
+    let q = arm.position(now, Which::Actual);
+    let tcp = arm.kinematics().fk_xyzypr(&q);
+    let moving = arm.is_moving(now);
+    let target = moving.then(|| arm.planned_end());
+    let target_tcp = target.map(|t| arm.kinematics().fk_xyzypr(&t));
+    let held = arm.held().map(str::to_string);
+    let objects: Vec<serde_json::Value> = arm
+        .objects(now)
+        .iter()
+        .map(|o| {
+            json!({
+                "name": o.name,
+                "x": o.pos[0], "y": o.pos[1], "z": o.pos[2],
+                "width": o.width,
+                "held": held.as_deref() == Some(o.name.as_str()),
+            })
+        })
+        .collect();
+    Some(json!({
+        "joints": q,
+        "tcp": tcp,
+        "moving": moving,
+        "gripper_mm": arm.fingers(now),
+        "objects": objects,
+        "time": now,
+        "target": target,
+        "target_tcp": target_tcp,
+        "limits": LIMITS_RAD,
+        "table_z": arm.settings().table_z,
+    }))
+}
+
+/// A running view server; it stops when dropped.
+pub struct ViewServer {
+    addr: SocketAddr,
+    stop: Arc<AtomicBool>,
+}
+
+impl ViewServer {
+    /// The address it listens on (with the port the system gave, for port 0).
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The page's address.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr)
+    }
+
+    /// A warning to show when the view is open to other machines (an address that is not
+    /// loopback); `None` for this machine only.
+    pub fn exposure(&self) -> Option<String> {
+        (!self.addr.ip().is_loopback()).then(|| {
+            format!(
+                "the view at {} is open to every machine that can reach this one, without a \
+                 password (it only shows the arm; nothing can be moved through it)",
+                self.addr
+            )
+        })
+    }
+}
+
+impl Drop for ViewServer {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        // Wake the accept loop.
+        let _ = TcpStream::connect_timeout(&self.addr, Duration::from_millis(200));
+    }
+}
+
+/// Serve the view of `shared` on `addr` (`host:port`; port 0 picks a free one) on threads
+/// of its own.
+pub fn serve(addr: &str, shared: SharedArm) -> std::io::Result<ViewServer> {
+    let listener = TcpListener::bind(addr).map_err(|e| {
+        let hint = match e.kind() {
+            std::io::ErrorKind::AddrInUse => {
+                " (another program uses that port: name another, like 127.0.0.1:8466)"
+            }
+            std::io::ErrorKind::AddrNotAvailable => {
+                " (no interface of this machine has that address: 127.0.0.1 is this machine only)"
+            }
+            _ => "",
+        };
+        std::io::Error::new(e.kind(), format!("{e}{hint}"))
+    })?;
+    let local = listener.local_addr()?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let clients = Arc::new(AtomicUsize::new(0));
+    std::thread::Builder::new()
+        .name("trol-view".into())
+        .spawn(move || {
+            for conn in listener.incoming() {
+                if flag.load(Ordering::Relaxed) {
+                    break;
+                }
+                let Ok(mut conn) = conn else { continue };
+                if clients.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
+                    clients.fetch_sub(1, Ordering::SeqCst);
+                    let _ = conn.set_write_timeout(Some(Duration::from_secs(1)));
+                    let _ = respond(
+                        &mut conn,
+                        "503 Service Unavailable",
+                        "text/plain",
+                        b"too many viewers at once: close a page and reload\n",
+                    );
+                    continue;
+                }
+                let shared = shared.clone();
+                let flag = flag.clone();
+                let count = clients.clone();
+                let spawned = std::thread::Builder::new()
+                    .name("trol-view-client".into())
+                    .spawn(move || {
+                        let _ = answer(conn, &shared, &flag);
+                        count.fetch_sub(1, Ordering::SeqCst);
+                    });
+                if spawned.is_err() {
+                    clients.fetch_sub(1, Ordering::SeqCst);
+                }
+            }
+        })?;
+    Ok(ViewServer { addr: local, stop })
+}
+
+fn respond(conn: &mut TcpStream, status: &str, kind: &str, body: &[u8]) -> std::io::Result<()> {
+    write!(
+        conn,
+        "HTTP/1.1 {status}\r\nContent-Type: {kind}\r\nContent-Length: {}\r\n\
+         Cache-Control: no-store\r\nConnection: close\r\n\r\n",
+        body.len()
+    )?;
+    conn.write_all(body)?;
+    conn.flush()
+}
+
+/// A request's method and path, from its head (read up to its blank line); `None` if the
+/// head is larger than [`MAX_HEAD`] (nothing beyond that is read).
+fn read_head(reader: impl BufRead) -> std::io::Result<Option<(String, String)>> {
+    let mut reader = reader.take(MAX_HEAD);
+    let mut line = String::new();
+    reader.read_line(&mut line)?;
+    let mut parts = line.split_whitespace();
+    let (method, path) = (
+        parts.next().unwrap_or("").to_string(),
+        parts.next().unwrap_or("").to_string(),
+    );
+    loop {
+        let mut h = String::new();
+        let n = reader.read_line(&mut h)?;
+        if n > 0 && h.trim().is_empty() {
+            return Ok(Some((method, path)));
+        }
+        if n == 0 || !h.ends_with('\n') {
+            // The end of the input, or of what may be read, inside the head.
+            return Ok(if reader.limit() == 0 {
+                None
+            } else {
+                Some((method, path))
+            });
+        }
+    }
+}
+
+/// Read one request and answer it.
+fn answer(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io::Result<()> {
+    conn.set_read_timeout(Some(Duration::from_secs(5)))?;
+    // A client that stops reading is dropped: every write must go through within a second.
+    conn.set_write_timeout(Some(Duration::from_secs(1)))?;
+    let head = read_head(BufReader::new(conn.try_clone()?))?;
+    let Some((method, path)) = head else {
+        return respond(
+            &mut conn,
+            "431 Request Header Fields Too Large",
+            "text/plain",
+            b"the request's head is too large\n",
+        );
+    };
+    if method != "GET" {
+        return respond(
+            &mut conn,
+            "405 Method Not Allowed",
+            "text/plain",
+            b"GET only\n",
+        );
+    }
+    let path = path.split('?').next().unwrap_or(&path);
+    let js = "text/javascript; charset=utf-8";
+    match path {
+        "/" | "/index.html" => respond(
+            &mut conn,
+            "200 OK",
+            "text/html; charset=utf-8",
+            INDEX.as_bytes(),
+        ),
+        "/app.js" => respond(&mut conn, "200 OK", js, APP.as_bytes()),
+        "/three.module.js" => respond(&mut conn, "200 OK", js, THREE_MODULE.as_bytes()),
+        "/three.core.js" => respond(&mut conn, "200 OK", js, THREE_CORE.as_bytes()),
+        "/OrbitControls.js" => respond(&mut conn, "200 OK", js, ORBIT.as_bytes()),
+        "/LICENSE-three.js.txt" => respond(
+            &mut conn,
+            "200 OK",
+            "text/plain; charset=utf-8",
+            THREE_LICENCE.as_bytes(),
+        ),
+        "/urdf" => respond(
+            &mut conn,
+            "200 OK",
+            "application/xml",
+            trol_a465::urdf::urdf().as_bytes(),
+        ),
+        "/state" => match state(shared) {
+            Some(s) => respond(
+                &mut conn,
+                "200 OK",
+                "application/json",
+                s.to_string().as_bytes(),
+            ),
+            None => respond(
+                &mut conn,
+                "503 Service Unavailable",
+                "text/plain",
+                b"no arm yet\n",
+            ),
+        },
+        "/events" => events(conn, shared, stop),
+        _ => respond(&mut conn, "404 Not Found", "text/plain", b"not here\n"),
+    }
+}
+
+/// Server-sent events: the state while the arm moves, once when it stops, then quiet.
+fn events(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io::Result<()> {
+    write!(
+        conn,
+        "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
+         Connection: keep-alive\r\n\r\n"
+    )?;
+    let mut last_sent: Option<serde_json::Value> = None;
+    let mut quiet = std::time::Instant::now();
+    while !stop.load(Ordering::Relaxed) {
+        // One round each EVENT_INTERVAL, whatever the round itself takes.
+        let next = std::time::Instant::now() + EVENT_INTERVAL;
+        if let Some(s) = state(shared) {
+            let moving = s["moving"].as_bool().unwrap_or(false);
+            // Still: only a change is sent (a new tool, an object put down), not the time or
+            // the servo's dither of a count or two.
+            let changed = match &last_sent {
+                None => true,
+                Some(prev) => {
+                    moving
+                        || prev["moving"] != s["moving"]
+                        || prev["gripper_mm"] != s["gripper_mm"]
+                        || prev["objects"] != s["objects"]
+                        || tcp_moved(prev, &s)
+                }
+            };
+            if changed {
+                write!(conn, "data: {s}\n\n")?;
+                conn.flush()?;
+                last_sent = Some(s);
+                quiet = std::time::Instant::now();
+            } else if quiet.elapsed() > Duration::from_secs(10) {
+                conn.write_all(b": still\n\n")?;
+                conn.flush()?;
+                quiet = std::time::Instant::now();
+            }
+        }
+        if client_gone(&mut conn) {
+            break;
+        }
+        std::thread::sleep(next.saturating_duration_since(std::time::Instant::now()));
+    }
+    Ok(())
+}
+
+/// Whether the client of an event stream has closed its side (it sends nothing after its
+/// request), looking for at most a millisecond: its slot comes free at once, not at the next
+/// write that fails.
+fn client_gone(conn: &mut TcpStream) -> bool {
+    if conn
+        .set_read_timeout(Some(Duration::from_millis(1)))
+        .is_err()
+    {
+        return true;
+    }
+    let mut buf = [0u8; 256];
+    match conn.peek(&mut buf) {
+        Ok(0) => true,
+        // Bytes after the request (nothing a browser sends): read and forget them.
+        Ok(_) => conn.read(&mut buf).is_err(),
+        Err(e) => !matches!(
+            e.kind(),
+            std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+        ),
+    }
+}
+
+/// Whether the tool centre point is more than half a millimetre from where it was.
+fn tcp_moved(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    (0..3).any(|i| {
+        let (x, y) = (a["tcp"][i].as_f64(), b["tcp"][i].as_f64());
+        matches!((x, y), (Some(x), Some(y)) if (x - y).abs() > 0.5)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_head_is_read_to_its_blank_line_and_no_further_than_the_limit() {
+        let head = read_head(&b"GET /state?x HTTP/1.1\r\nHost: a\r\n\r\nrest"[..]).unwrap();
+        assert_eq!(head, Some(("GET".into(), "/state?x".into())));
+        // A megabyte of head without an end: refused after the limit, the rest unread.
+        let mut big = b"GET / HTTP/1.1\r\nX: ".to_vec();
+        big.extend(std::iter::repeat_n(b'a', 1 << 20));
+        let mut input = std::io::Cursor::new(big);
+        assert_eq!(read_head(&mut input).unwrap(), None);
+        assert!(
+            input.position() <= MAX_HEAD + 8 * 1024,
+            "read {}",
+            input.position()
+        );
+        // A head cut short by the client is taken as it is.
+        let head = read_head(&b"GET /urdf HTTP/1.1\r\n"[..]).unwrap();
+        assert_eq!(head, Some(("GET".into(), "/urdf".into())));
+    }
+}

@@ -1,0 +1,161 @@
+//! The view's server on its own, over loopback: what it serves, the state's form, event
+//! streams that speak while the arm moves and keep quiet while it stands, and the limit on
+//! clients that keeps it from hurting the controller (the limit on a request's size is the
+//! library's unit test).
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
+
+use trol_controller::{Backend, SimBackend, SimSettings};
+
+fn viewed() -> (SimBackend, trol_view::ViewServer) {
+    let mut settings = SimSettings::default();
+    settings.arm.homed = true;
+    let mut backend = SimBackend::new(settings);
+    let server = trol_view::serve("127.0.0.1:0", backend.share()).unwrap();
+    (backend, server)
+}
+
+fn request(server: &trol_view::ViewServer, head: &str) -> String {
+    let mut s = TcpStream::connect(server.addr()).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    s.write_all(head.as_bytes()).unwrap();
+    let mut all = String::new();
+    let _ = s.read_to_string(&mut all);
+    all
+}
+
+#[test]
+fn it_serves_the_page_its_scripts_the_urdf_and_the_state() {
+    let (_backend, server) = viewed();
+    let get = |path: &str| request(&server, &format!("GET {path} HTTP/1.1\r\n\r\n"));
+    for (path, kind) in [
+        ("/", "text/html"),
+        ("/app.js", "text/javascript"),
+        ("/three.module.js", "text/javascript"),
+        ("/three.core.js", "text/javascript"),
+        ("/OrbitControls.js", "text/javascript"),
+        ("/urdf", "application/xml"),
+        ("/LICENSE-three.js.txt", "text/plain"),
+        ("/state?x=1", "application/json"),
+    ] {
+        let r = get(path);
+        assert!(
+            r.starts_with("HTTP/1.1 200 OK"),
+            "{path}: {}",
+            r.lines().next().unwrap_or("")
+        );
+        assert!(r.contains(&format!("Content-Type: {kind}")), "{path}");
+    }
+    assert!(get("/LICENSE-three.js.txt").contains("MIT License"));
+    assert!(get("/nowhere").starts_with("HTTP/1.1 404"));
+    assert!(request(&server, "POST /state HTTP/1.1\r\n\r\n").starts_with("HTTP/1.1 405"));
+
+    let body = get("/state");
+    let state: serde_json::Value =
+        serde_json::from_str(body.split_once("\r\n\r\n").unwrap().1).unwrap();
+    assert_eq!(state["joints"].as_array().unwrap().len(), 6);
+    assert_eq!(state["tcp"].as_array().unwrap().len(), 6);
+    assert_eq!(state["moving"], false);
+    assert!(state["gripper_mm"].as_f64().unwrap() > 0.0);
+    assert!(state["objects"].as_array().unwrap().is_empty());
+    assert!(state["time"].as_f64().unwrap() >= 0.0);
+    assert!(
+        state["target"].is_null(),
+        "a standing arm has no target: {state}"
+    );
+}
+
+/// Updates on an event stream until `until`: (arrival, moving) each.
+fn updates(reader: &mut BufReader<TcpStream>, until: Instant) -> Vec<(Instant, bool)> {
+    let mut seen = Vec::new();
+    let mut line = String::new();
+    while Instant::now() < until {
+        line.clear();
+        match reader.read_line(&mut line) {
+            Ok(0) => break,
+            Ok(_) => {
+                if let Some(data) = line.strip_prefix("data: ") {
+                    let v: serde_json::Value = serde_json::from_str(data).unwrap();
+                    seen.push((Instant::now(), v["moving"] == true));
+                }
+            }
+            Err(_) => {} // the read timeout: look at the clock again
+        }
+    }
+    seen
+}
+
+#[test]
+fn events_flow_while_the_arm_moves_and_stop_when_it_stands() {
+    let (mut backend, server) = viewed();
+    let mut s = TcpStream::connect(server.addr()).unwrap();
+    s.set_read_timeout(Some(Duration::from_millis(100)))
+        .unwrap();
+    s.write_all(b"GET /events HTTP/1.1\r\n\r\n").unwrap();
+    let mut reader = BufReader::new(s);
+    // Standing: the state once, then nothing.
+    let still = updates(&mut reader, Instant::now() + Duration::from_millis(600));
+    assert_eq!(still.len(), 1, "{still:?}");
+    assert!(!still[0].1);
+
+    // A motion of about a second (joint 1 by 1 rad at full speed is well under that at the
+    // A465's 180 degrees a second; joints 2 and 3 take longer), shared as the controller
+    // would after the request.
+    backend.speed(100).unwrap();
+    backend.ma([1.0, 0.6, 1.0, 0.0, 0.0, 0.0]).unwrap();
+    backend.after_request();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let mut seen = Vec::new();
+    while Instant::now() < deadline {
+        seen.extend(updates(
+            &mut reader,
+            Instant::now() + Duration::from_millis(200),
+        ));
+        if seen.iter().any(|u| u.1) && !seen.last().unwrap().1 {
+            break;
+        }
+    }
+    let moving = seen.iter().filter(|u| u.1).count();
+    // Not a rate (that is `trol bench view`'s): several updates, ending with the stop.
+    assert!(moving >= 3, "{moving} updates while moving");
+    assert!(
+        !seen.last().unwrap().1,
+        "the last update says the arm stands"
+    );
+    // Standing again: quiet.
+    let after = updates(&mut reader, Instant::now() + Duration::from_millis(600));
+    assert!(after.is_empty(), "{after:?}");
+}
+
+#[test]
+fn too_many_clients_are_turned_away_until_one_leaves() {
+    let (_backend, server) = viewed();
+    // MAX_CLIENTS event streams held open; one more is turned away with 503, and a slot
+    // comes free when a stream ends.
+    let mut held = Vec::new();
+    for _ in 0..trol_view::MAX_CLIENTS {
+        let mut s = TcpStream::connect(server.addr()).unwrap();
+        s.write_all(b"GET /events HTTP/1.1\r\n\r\n").unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        let mut first = [0u8; 15];
+        s.read_exact(&mut first).unwrap();
+        assert_eq!(&first, b"HTTP/1.1 200 OK");
+        held.push(s);
+    }
+    let r = request(&server, "GET /state HTTP/1.1\r\n\r\n");
+    assert!(r.starts_with("HTTP/1.1 503"), "{r}");
+    assert!(r.contains("too many viewers"));
+    held.truncate(trol_view::MAX_CLIENTS - 1);
+    // The ended stream's thread notices within its next round (20 ms); try for up to 10 s.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let r = request(&server, "GET /state HTTP/1.1\r\n\r\n");
+        if r.starts_with("HTTP/1.1 200") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no slot came free: {r}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}

@@ -18,6 +18,7 @@
 //! | `object` | width of an object held between the fingers at start, mm | none |
 //! | `objects` | a file of objects in the world, `NAME x y z width` per line (relative to trol.cfg's folder) | none |
 //! | `rapl-profile` | port `rapl:DEVICE`: the RAPL-II profile of the C500 on DEVICE (docs/c500.md; relative to trol.cfg's folder) | the safe default |
+//! | `view` | port `sim`: serve the live 3D view of the arm at this address (`host:port`; `127.0.0.1:8465` is this machine only) | none |
 //!
 //! Blank lines and lines starting with `#` are skipped.
 
@@ -57,6 +58,8 @@ pub struct Config {
     pub rapl_profile: Option<PathBuf>,
     /// Object width between the fingers, mm.
     pub object: Option<f64>,
+    /// Where the embedded simulator serves its live view (`host:port`).
+    pub view: Option<String>,
 }
 
 impl Default for Config {
@@ -73,6 +76,7 @@ impl Default for Config {
             homed: false,
             object: None,
             rapl_profile: None,
+            view: None,
         }
     }
 }
@@ -282,6 +286,21 @@ impl Config {
                         }
                         "locations" => cfg.locations = Some(PathBuf::from(value)),
                         "objects" => cfg.objects = Some(PathBuf::from(value)),
+                        "view" => {
+                            let ok = value.rsplit_once(':').is_some_and(|(host, port)| {
+                                !host.is_empty() && port.parse::<u16>().is_ok()
+                            });
+                            if !ok {
+                                return Err((
+                                    n,
+                                    format!(
+                                        "view: expected host:port, like 127.0.0.1:8465 (this \
+                                         machine only), found {value:?}"
+                                    ),
+                                ));
+                            }
+                            cfg.view = Some(value.to_string())
+                        }
                         "rapl-profile" | "rapl_profile" => {
                             cfg.rapl_profile = Some(PathBuf::from(value))
                         }
@@ -309,7 +328,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile"
+                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile, view"
                                 ),
                             ));
                         }
@@ -362,6 +381,14 @@ mod tests {
         let e = Config::parse("9600\nsim\n0 0 1e30 0 0 0\n").unwrap_err();
         assert_eq!(e.0, 3);
         assert!(e.1.contains("beyond what the arm can carry"), "{e:?}");
+        // The view's address: host and port.
+        for bad in ["8465", ":8465", "localhost:", "127.0.0.1:99999"] {
+            let e = Config::parse(&format!("9600\nsim\n0 0 0 0 0 0\nview = {bad}\n")).unwrap_err();
+            assert_eq!(e.0, 4, "{bad}");
+            assert!(e.1.contains("host:port"), "{e:?}");
+        }
+        let c = Config::parse("9600\nsim\n0 0 0 0 0 0\nview = 0.0.0.0:8465\n").unwrap();
+        assert_eq!(c.view.as_deref(), Some("0.0.0.0:8465"));
     }
 
     #[test]

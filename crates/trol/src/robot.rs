@@ -204,6 +204,8 @@ pub struct Robot {
     reactivate: Option<[f64; 6]>,
     /// The controller's epoch when last seen (GetStatus).
     epoch: Option<u16>,
+    /// The live view of an embedded simulator, served while the connection lives.
+    view: Option<trol_view::ViewServer>,
 }
 
 /// The port prefix that embeds the controller with the RAPL-II backend (`rapl:/dev/ttyUSB0`).
@@ -260,7 +262,21 @@ impl Robot {
                 check: cfg.check,
                 ..LinkConfig::default()
             };
-            return Ok(Robot::embedded_on(crate::sim_settings(cfg)?, link));
+            let settings = crate::sim_settings(cfg)?;
+            return match &cfg.view {
+                Some(addr) => {
+                    let robot = Robot::embedded_viewed(settings, link, addr)?;
+                    // trol.cfg asked for it: say where it is (port 0 picks one).
+                    if let Some(view) = &robot.view {
+                        eprintln!("trol: the view of the simulated arm: {}", view.url());
+                        if let Some(w) = view.exposure() {
+                            eprintln!("trol: warning: {w}");
+                        }
+                    }
+                    Ok(robot)
+                }
+                None => Ok(Robot::embedded_on(settings, link)),
+            };
         }
         Robot::open_with(&cfg.port, cfg.baud, cfg.check)
     }
@@ -294,6 +310,32 @@ impl Robot {
         Robot::embedded_on(settings, LinkConfig::default())
     }
 
+    /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`
+    /// (`host:port`; docs: crates/trol-view), and connect to it. The view lives as long as the
+    /// connection; [`Robot::view_url`] says where it is.
+    pub fn embedded_viewed(settings: SimSettings, cfg: LinkConfig, addr: &str) -> Result<Robot> {
+        let mut backend = trol_controller::SimBackend::new(settings);
+        let shared = backend.share();
+        let view = trol_view::serve(addr, shared)
+            .map_err(|e| SetupError::Config(format!("cannot serve the view at {addr}: {e}")))?;
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+        let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.view = Some(view);
+        Ok(robot)
+    }
+
+    /// Where the live view of an embedded simulator is served, if it is.
+    pub fn view_url(&self) -> Option<String> {
+        self.view.as_ref().map(|v| v.url())
+    }
+
+    /// A warning when the live view is open to other machines (see
+    /// [`trol_view::ViewServer::exposure`]).
+    pub fn view_exposure(&self) -> Option<String> {
+        self.view.as_ref().and_then(|v| v.exposure())
+    }
+
     fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
         let (line, handle) = trol_controller::embedded(settings, cfg);
         Robot::over(Box::new(line), cfg, Some(handle))
@@ -317,6 +359,7 @@ impl Robot {
             broken: false,
             reactivate: None,
             epoch: None,
+            view: None,
         }
     }
 

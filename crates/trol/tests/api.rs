@@ -563,7 +563,7 @@ fn robots_from_a_config_file() {
     std::fs::write(
         dir.join("trol.cfg"),
         "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locs.txt\nhomed = yes\n\
-         objects = objs.txt\n",
+         objects = objs.txt\nview = 127.0.0.1:0\n",
     )
     .unwrap();
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
@@ -582,6 +582,24 @@ fn robots_from_a_config_file() {
     assert!(
         world.starts_with("cube at x 420.0") && world.ends_with("in the gripper"),
         "{world}"
+    );
+    // `view = ADDR`: the embedded controller serves the live view; /state tells the same.
+    let url = r.view_url().expect("trol.cfg's view is served");
+    let state = view_state(&url);
+    let q = r.position(Tag::Joint, PosMode::Actual).unwrap().to_array6();
+    for (i, qi) in q.iter().enumerate() {
+        let shown = state["joints"][i].as_f64().unwrap();
+        assert!(
+            (shown - qi).abs() < 1e-3,
+            "joint {}: {shown} against {qi}",
+            i + 1
+        );
+    }
+    assert_eq!(state["objects"][0]["name"], "cube");
+    assert_eq!(state["objects"][0]["held"], true);
+    assert!(
+        (state["tcp"][0].as_f64().unwrap() - 420.0).abs() < 0.1,
+        "{state}"
     );
     std::fs::write(dir.join("bad.cfg"), "9600\nsim\n1 2 3\n").unwrap();
     let e = trol::Config::from_file(&dir.join("bad.cfg")).unwrap_err();
@@ -739,10 +757,15 @@ fn the_host_checks_the_controllers_version_and_kind() {
 
 #[test]
 fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
-    let mut robot = Robot::embedded(SimSettings {
-        time_scale: 1.0,
-        ..settings()
-    });
+    let mut robot = Robot::embedded_viewed(
+        SimSettings {
+            time_scale: 1.0,
+            ..settings()
+        },
+        Default::default(),
+        "127.0.0.1:0",
+    )
+    .unwrap();
     robot.home(0).unwrap();
     robot.finish().unwrap();
     assert!(
@@ -765,6 +788,12 @@ fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
     // halted on the way.
     robot.joint(1, 1.0).unwrap();
     std::thread::sleep(Duration::from_millis(1500));
+    // The live view learnt of the halt without a request.
+    let state = view_state(&robot.view_url().unwrap());
+    assert_eq!(
+        state["moving"], false,
+        "the view shows the arm moving: {state}"
+    );
     assert!(!robot.is_moving().unwrap(), "the arm still moves");
     let j1 = joints(&mut robot)[0];
     assert!(j1 > 0.31 && j1 < 1.25, "halted on the way: joint 1 at {j1}");
@@ -777,6 +806,18 @@ fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
     robot.finish().unwrap();
     let end = joints(&mut robot)[0];
     assert!((end - (j1 - 0.5)).abs() < 1e-3, "{end} after {j1}");
+}
+
+/// `/state` of the live view at `url`.
+fn view_state(url: &str) -> serde_json::Value {
+    use std::io::{Read, Write};
+    let addr = url.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = std::net::TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    write!(s, "GET /state HTTP/1.1\r\n\r\n").unwrap();
+    let mut reply = String::new();
+    s.read_to_string(&mut reply).unwrap();
+    serde_json::from_str(reply.split_once("\r\n\r\n").unwrap().1).unwrap()
 }
 
 /// CAT1: a command the controller answers only after 0.6 s.

@@ -1,10 +1,25 @@
 #!/usr/bin/env bash
 # Every test: Rust (the core, the arm, the API over the whole stack), the C programs against
-# libtrol, the trol binary across processes, and TROL for Python. Does its own set-up on a
-# fresh machine with the Rust toolchain, a C compiler and Python 3.10 or later: cargo fetches
-# the crates, pip the Python packages (into target/py, a virtual environment).
+# libtrol, the trol binary across processes, the live view in a real browser, and TROL for
+# Python. Does its own set-up on a fresh machine with the Rust toolchain, a C compiler,
+# Python 3.10 or later and Node.js: cargo fetches the crates, pip the Python packages (into
+# target/py, a virtual environment), npm Playwright (into tests/browser/node_modules), and
+# apt Debian's Chromium if it is missing and this runs as root.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# The live view's browser test (crates/trol-cli/tests/view.rs): headless Chromium driven by
+# Playwright.
+if [ ! -x /usr/bin/chromium ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    apt-get update && apt-get install -y --no-install-recommends chromium
+  else
+    echo "scripts/test.sh: the view's test needs Chromium at /usr/bin/chromium:" \
+      "sudo apt-get install chromium" >&2
+    exit 1
+  fi
+fi
+(cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
 
 cargo test --workspace
 

@@ -9,6 +9,8 @@ use trol_port::memory;
 use trol_proto::link::frame::{self, FRAME_SIZE, MAX_MESSAGE};
 use trol_proto::link::{Link, LinkConfig};
 
+mod view;
+
 #[derive(Subcommand)]
 pub enum Bench {
     /// Send one message over an in-memory line paced at a baud rate (8N1, 10 bits a byte)
@@ -49,9 +51,16 @@ pub enum Bench {
     ///
     /// Example: trol bench gateway --count 50 --moves 20 --json
     Gateway(GatewayArgs),
+    /// What the live view (`trol sim --view`) costs the controller: its CPU while an
+    /// application drives the arm through whole motions, with nobody watching, with event
+    /// streams open as a page holds one, and with a browser showing the page (--browser);
+    /// and how often a stream gets an update while the arm moves and while it stands.
+    ///
+    /// Example: trol bench view --seconds 10 --browser /usr/bin/chromium --json
+    View(view::ViewArgs),
     /// Run every benchmark of docs/performance.md with the arguments written there, each as
     /// its own `trol bench ...` process, and print the table of their figures (Markdown).
-    /// Takes about a minute.
+    /// Takes about two minutes.
     ///
     /// Example: trol bench all
     All,
@@ -163,6 +172,30 @@ fn all() -> Result<(), String> {
             f(&v["speed_round_trip"], "median_ms"),
             f(&v["get_position_cart_actual"], "median_ms"),
             finish.join(", ")
+        ),
+    ));
+    let v = run(&["view", "--seconds", "5"])?;
+    let cpu: Vec<String> = v["measurements"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default()
+        .iter()
+        .map(|m| {
+            format!(
+                "{:.1} % ({})",
+                f(m, "controller_cpu_percent"),
+                m["watching"].as_str().unwrap_or("?")
+            )
+        })
+        .collect();
+    rows.push((
+        "the live view's cost to the controller".into(),
+        "trol bench view --seconds 5".into(),
+        format!(
+            "controller CPU {}; {:.1} updates per second while moving, {} while still",
+            cpu.join(", "),
+            f(&v, "updates_per_second_moving"),
+            v["updates_while_still"]
         ),
     ));
     say!("| figure | command (with --json) | result |");
@@ -437,6 +470,7 @@ pub fn run(b: Bench) -> Result<(), String> {
         Bench::Moves(a) => moves(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
+        Bench::View(a) => view::view(a),
         Bench::All => all(),
     }
 }

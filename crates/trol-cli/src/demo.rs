@@ -10,7 +10,9 @@ use trol_a465::arm::{Stored, WorldObject};
 use trol_proto::application::record::Value;
 use trol_proto::application::table;
 
-use crate::common::{Conn, catch_interrupts, interrupted, stdout_closed, waiting};
+use crate::common::{
+    Conn, catch_interrupts, interrupted, sleep_unless_interrupted, stdout_closed, waiting,
+};
 
 #[derive(Args, Debug)]
 #[command(after_help = "\
@@ -21,6 +23,13 @@ Examples:
 pub struct DemoArgs {
     #[command(flatten)]
     conn: Conn,
+    /// Serve the live 3D view of the arm at ADDR while the demo runs (default
+    /// 127.0.0.1:8465, this machine only); open the address it prints in a browser.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR)]
+    view: Option<String>,
+    /// With --view: keep serving the view this many seconds after the last step.
+    #[arg(long, value_name = "S", default_value_t = 0.0, requires = "view")]
+    linger: f64,
 }
 
 /// The location of the manual's example: 400 mm in front of the robot, 150 mm above the
@@ -55,7 +64,24 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
             "  motion commands return as soon as the controller accepted them; the arm moves \
              on while the program goes on, until TROLFinish(FINISH_WAIT) waits for it"
         );
-        Robot::embedded(settings)
+        match &a.view {
+            Some(addr) => {
+                let link = trol_proto::link::LinkConfig {
+                    check: cfg.check,
+                    ..Default::default()
+                };
+                let robot =
+                    Robot::embedded_viewed(settings, link, addr).map_err(|e| e.to_string())?;
+                if let Some(url) = robot.view_url() {
+                    say!("  the view: {url}");
+                }
+                if let Some(w) = robot.view_exposure() {
+                    tracing::warn!("{w}");
+                }
+                robot
+            }
+            None => Robot::embedded(settings),
+        }
     } else {
         let (robot, _) = a.conn.robot()?;
         say!("trol demo: the manual's pick example on {}", cfg.port);
@@ -132,6 +158,10 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
     }
     if let Some(world) = robot.world() {
         say!("trol demo: {world}");
+    }
+    if a.linger > 0.0 && robot.view_url().is_some() {
+        say!("trol demo: the view stays for {} s", a.linger);
+        let _ = sleep_unless_interrupted(std::time::Duration::from_secs_f64(a.linger));
     }
     if failed == 0 {
         say!("trol demo: all {} steps succeeded", steps.len());

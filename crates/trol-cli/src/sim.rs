@@ -75,6 +75,10 @@ pub struct SimArgs {
     /// `trol gateway --profile` or trol.cfg's rapl-profile) and exit.
     #[arg(long, requires = "rapl")]
     print_profile: bool,
+    /// Serve the live 3D view of the arm at ADDR (default 127.0.0.1:8465, this machine only;
+    /// name an address to serve others): open it in a browser. Not with --rapl.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with = "rapl")]
+    view: Option<String>,
     /// With --rapl: a teach pendant on standard input. Each line `J1 J2 J3 J4 J5 J6`
     /// (degrees) moves the arm there as an operator would by hand, whatever the host port
     /// does; the log says `pendant: at ...` once it stands (for `trol rapl probe --poses`).
@@ -115,6 +119,15 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if a.rapl {
         return run_rapl(&a, settings);
     }
+    // The view first: an address in use ends the start before anything is served.
+    let mut backend = SimBackend::new(settings);
+    let view = match &a.view {
+        Some(addr) => Some(
+            trol_view::serve(addr, backend.share())
+                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?,
+        ),
+        None => None,
+    };
     // A new pty or a listening socket, like the application's side of a relay.
     let opened = open_side(&a.port, a.baud, Side::Application)?;
     let name = opened.name.clone();
@@ -130,11 +143,17 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if !a.server {
         say!("  activate it with: trol init --port {name}");
     }
+    if let Some(v) = &view {
+        say!("  the view: {}", v.url());
+        if let Some(w) = v.exposure() {
+            tracing::warn!("{w}");
+        }
+    }
     let cfg = LinkConfig {
         check: a.check,
         ..LinkConfig::for_line(a.baud, Duration::ZERO)
     };
-    let pcp = Pcp::new(SimBackend::new(settings));
+    let pcp = Pcp::new(backend);
     let described = trol::described::catalog(a.commands.as_deref())?;
     let mode = if a.server {
         Mode::Server

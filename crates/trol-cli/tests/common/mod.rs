@@ -69,6 +69,17 @@ impl Background {
         args: &[&str],
         marker: &str,
     ) -> Background {
+        Background::start_program_within(program, dir, args, marker, 20)
+    }
+
+    /// Like [`Background::start_program`], waiting up to `secs` seconds for `marker`.
+    pub fn start_program_within(
+        program: impl AsRef<std::ffi::OsStr>,
+        dir: &Path,
+        args: &[&str],
+        marker: &str,
+        secs: u64,
+    ) -> Background {
         let mut child = Command::new(program)
             .args(args)
             .current_dir(dir)
@@ -89,7 +100,7 @@ impl Background {
                 }
             }
         });
-        let deadline = Instant::now() + Duration::from_secs(20);
+        let deadline = Instant::now() + Duration::from_secs(secs);
         let name = loop {
             let left = deadline.saturating_duration_since(Instant::now());
             let Ok(line) = rx.recv_timeout(left) else {
@@ -105,7 +116,7 @@ impl Background {
         let Some(name) = name else {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("{args:?} did not say `{marker}`");
+            panic!("{args:?} did not say `{marker}` within {secs} s");
         };
         Background {
             child,

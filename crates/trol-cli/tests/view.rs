@@ -1,0 +1,180 @@
+//! The live view in a real browser: headless Chromium (Debian's, with SwiftShader for WebGL,
+//! driven by Playwright from tests/browser/view.mjs) loads the page `trol sim --view` serves,
+//! after the arm moved through the API; the page drew something (its 3D canvas is not one
+//! colour) and shows the joint values that `/state` and GetPosition give, then follows a
+//! motion as it runs. `/state` and `/urdf` over plain HTTP; a client that stops reading does
+//! not stop the controller.
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::path::Path;
+use std::time::Duration;
+
+use trol::{PosMode, Robot, Tag};
+
+mod common;
+use common::{Background, scratch};
+
+/// GET `path` from `addr`: (status line, body).
+fn get(addr: &str, path: &str) -> (String, String) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut all = String::new();
+    s.read_to_string(&mut all).unwrap();
+    let (head, body) = all.split_once("\r\n\r\n").unwrap_or((&all, ""));
+    (
+        head.lines().next().unwrap_or("").to_string(),
+        body.to_string(),
+    )
+}
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// tests/browser: view.mjs and the Playwright it runs (`npm ci` there; scripts/test.sh does).
+fn browser_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/browser")
+}
+
+/// The six `joints` of a JSON object.
+fn six(v: &serde_json::Value) -> [f64; 6] {
+    let a = v["joints"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no joints in {v}"));
+    std::array::from_fn(|i| a[i].as_f64().unwrap())
+}
+
+fn close(what: &str, a: [f64; 6], b: [f64; 6]) {
+    for i in 0..6 {
+        assert!(
+            (a[i] - b[i]).abs() < 1e-3,
+            "joint {}: {what}: {} against {}",
+            i + 1,
+            a[i],
+            b[i]
+        );
+    }
+}
+
+#[test]
+fn the_page_draws_the_arm_and_follows_it() {
+    assert!(
+        Path::new(CHROMIUM).exists(),
+        "{CHROMIUM} is missing: install Debian's `chromium` (scripts/test.sh does)"
+    );
+    assert!(
+        browser_dir().join("node_modules/playwright-core").exists(),
+        "Playwright is missing: run `npm ci` in tests/browser (scripts/test.sh does)"
+    );
+    let dir = scratch("view");
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--server",
+            "--homed",
+            "--view",
+            "127.0.0.1:0",
+        ],
+        "serving on ",
+    );
+    let url = sim.wait_for("the view: ", 10).pop().unwrap();
+    let url = url.split("the view: ").nth(1).unwrap().trim().to_string();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    let mut robot = Robot::open(&sim.name, 38400).unwrap();
+    robot.ma(&[0.4, 0.3, 1.2, -0.5, 0.8, 0.2]).unwrap();
+    robot.finish().unwrap();
+
+    // Plain HTTP: the page, the URDF, the state.
+    let (status, page) = get(&addr, "/");
+    assert!(
+        status.contains("200") && page.contains("/app.js"),
+        "{status}"
+    );
+    let (_, urdf) = get(&addr, "/urdf");
+    assert!(urdf.contains("name=\"joint_6\""));
+    let (status, state) = get(&addr, "/state");
+    assert!(status.contains("200"), "{status}");
+    let state: serde_json::Value = serde_json::from_str(&state).unwrap();
+    assert_eq!(state["moving"], false);
+    for key in ["joints", "tcp", "gripper_mm", "objects", "time"] {
+        assert!(!state[key].is_null(), "no {key} in {state}");
+    }
+    let (status, _) = get(&addr, "/nowhere");
+    assert!(status.contains("404"), "{status}");
+
+    // A client that stops reading the events does not stop the controller.
+    let mut stalled = TcpStream::connect(&addr).unwrap();
+    write!(stalled, "GET /events HTTP/1.1\r\n\r\n").unwrap();
+
+    // The browser: the page shows the joints that /state and GetPosition give.
+    let png = dir.join("view.png");
+    let mut page = Background::start_program_within(
+        "node",
+        &dir,
+        &[
+            browser_dir().join("view.mjs").to_str().unwrap(),
+            &url,
+            png.to_str().unwrap(),
+        ],
+        "shown ",
+        120,
+    );
+    let shown: serde_json::Value = serde_json::from_str(&page.name).unwrap();
+    assert_eq!(shown["webgl"], "ok", "no WebGL in the page: {shown}");
+    let by_api = robot
+        .position(Tag::Joint, PosMode::Actual)
+        .unwrap()
+        .to_array6();
+    close("page against /state", six(&shown), six(&state));
+    close("page against GetPosition", six(&shown), by_api);
+
+    // The page drew something: the 3D canvas (the left part; the panel is 330 px wide on the
+    // right) has the arm, the table and the sky in many colours, not one.
+    let decoder = png::Decoder::new(std::io::Cursor::new(std::fs::read(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.line_size / info.width as usize;
+    let mut colours = std::collections::HashSet::new();
+    for y in (0..info.height as usize).step_by(4) {
+        for x in (0..(info.width as usize).saturating_sub(400)).step_by(4) {
+            let p = &buf[y * info.line_size + x * channels..][..3];
+            colours.insert([p[0] / 8, p[1] / 8, p[2] / 8]);
+        }
+    }
+    assert!(
+        colours.len() > 20,
+        "the canvas is nearly one colour: {} colours",
+        colours.len()
+    );
+
+    // The page follows a motion as it runs, and ends where GetPosition says.
+    page.type_line("watch");
+    page.wait_for("watching", 30);
+    robot.ma(&[-0.6, 0.1, 0.9, 0.4, -0.5, 1.0]).unwrap();
+    robot.finish().unwrap();
+    let followed = page.wait_for("followed ", 90).pop().unwrap();
+    let followed: serde_json::Value =
+        serde_json::from_str(followed.split("followed ").nth(1).unwrap()).unwrap();
+    let moving_frames = followed["moving_frames"].as_u64().unwrap();
+    assert!(
+        moving_frames >= 2,
+        "the page showed the motion in {moving_frames} update(s)"
+    );
+    let by_api = robot
+        .position(Tag::Joint, PosMode::Actual)
+        .unwrap()
+        .to_array6();
+    close(
+        "page after the motion against GetPosition",
+        six(&followed),
+        by_api,
+    );
+    drop(stalled);
+}

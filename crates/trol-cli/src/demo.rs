@@ -27,8 +27,9 @@ pub struct DemoArgs {
     /// 127.0.0.1:8465, this machine only); open the address it prints in a browser.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR)]
     view: Option<String>,
-    /// With --view: keep serving the view this many seconds after the last step.
-    #[arg(long, value_name = "S", default_value_t = 0.0, requires = "view")]
+    /// With the view (--view, or trol.cfg's `view = ADDR`): keep serving it this many seconds
+    /// after the last step (up to 3600)
+    #[arg(long, value_name = "S", default_value_t = 0.0)]
     linger: f64,
 }
 
@@ -40,7 +41,22 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
     if a.conn.time_scale.is_none() {
         a.conn.time_scale = Some(5.0);
     }
+    if !(a.linger.is_finite() && (0.0..=3600.0).contains(&a.linger)) {
+        return Err(format!(
+            "--linger: give 0 to 3600 seconds, not {}",
+            a.linger
+        ));
+    }
     let cfg = a.conn.config()?;
+    if a.view.is_some() && cfg.port != "sim" {
+        return Err(format!(
+            "--view: the demo serves the view only with the embedded simulator (port sim), \
+             not on {}; a simulator process serves its own (trol sim --view)",
+            cfg.port
+        ));
+    }
+    // --view, or trol.cfg's `view = ADDR`.
+    let view = a.view.clone().or_else(|| cfg.view.clone());
     let mut robot = if cfg.port == "sim" {
         let mut settings = trol::sim_settings(&cfg).map_err(|e| e.to_string())?;
         if !settings.locations.iter().any(|(n, _)| n == "test_001") {
@@ -64,7 +80,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
             "  motion commands return as soon as the controller accepted them; the arm moves \
              on while the program goes on, until TROLFinish(FINISH_WAIT) waits for it"
         );
-        match &a.view {
+        match &view {
             Some(addr) => {
                 let link = trol_proto::link::LinkConfig {
                     check: cfg.check,

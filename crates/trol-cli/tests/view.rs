@@ -13,7 +13,7 @@ use std::time::Duration;
 use trol::{PosMode, Robot, Tag};
 
 mod common;
-use common::{Background, scratch};
+use common::{Background, scratch, text, trol};
 
 /// GET `path` from `addr`: (status line, body).
 fn get(addr: &str, path: &str) -> (String, String) {
@@ -177,4 +177,49 @@ fn the_page_draws_the_arm_and_follows_it() {
         by_api,
     );
     drop(stalled);
+}
+
+#[test]
+fn demo_and_sim_serve_the_view_and_refuse_what_they_cannot_do() {
+    let dir = scratch("view-cli");
+    let o = trol(
+        &dir,
+        &["demo", "--view", "127.0.0.1:0", "--time-scale", "50"],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("  the view: http://127.0.0.1:"), "{out}");
+    assert!(out.contains("all 11 steps succeeded"), "{out}");
+
+    for (args, says) in [
+        (
+            &["demo", "--view", "--linger", "inf"][..],
+            "--linger: give 0 to 3600 seconds",
+        ),
+        (
+            &["demo", "--view", "--port", "/dev/null"][..],
+            "only with the embedded simulator",
+        ),
+        (
+            &["sim", "--view", "8465"][..],
+            "cannot serve the view at 8465",
+        ),
+    ] {
+        let o = trol(&dir, args, "");
+        let (out, err) = text(&o);
+        assert!(!o.status.success(), "{args:?}: {out}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        // Refused before anything was served.
+        assert!(!out.contains("serving on"), "{args:?}: {out}");
+    }
+
+    // An address in use: the simulator says so and what to do, and does not start.
+    let busy = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = busy.local_addr().unwrap().to_string();
+    let o = trol(&dir, &["sim", "--view", &addr], "");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("name another"), "{err}");
+    assert!(!out.contains("serving on"), "{out}");
 }

@@ -252,17 +252,39 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
     })
 }
 
+/// A new connection, checked (with ``check``) as InitTROL(1) checks it: one GetStatus, then
+/// the controller's protocol version ([`trol::check_server`]).
+fn connected(py: Python<'_>, robot: trol::Result<trol::Robot>, check: bool) -> PyResult<Robot> {
+    let fail = |error| {
+        to_py(
+            py,
+            Failure {
+                error,
+                last_comm: None,
+            },
+        )
+    };
+    let mut robot = robot.map_err(fail)?;
+    if check {
+        py.detach(|| trol::check_server(&mut robot)).map_err(fail)?;
+    }
+    Ok(Robot::new(robot))
+}
+
 #[pymethods]
 impl Robot {
     /// Connect: "sim" starts the embedded simulated controller (``time_scale`` times real
     /// time); otherwise a serial device, a pseudo-terminal or socket://HOST:PORT at ``baud``.
+    /// With ``check`` (the default) the server must answer and speak this library's protocol
+    /// version, as InitTROL(1) checks: SetupError otherwise, saying what to do.
     #[staticmethod]
-    #[pyo3(signature = (port = "sim", *, baud = None, time_scale = None))]
+    #[pyo3(signature = (port = "sim", *, baud = None, time_scale = None, check = true))]
     fn open(
         py: Python<'_>,
         port: &str,
         baud: Option<u32>,
         time_scale: Option<f64>,
+        check: bool,
     ) -> PyResult<Robot> {
         if port == "sim" {
             let scale = time_scale.unwrap_or(1.0);
@@ -276,7 +298,7 @@ impl Robot {
                 time_scale: scale,
                 ..SimSettings::default()
             };
-            return Ok(Robot::new(py.detach(|| trol::Robot::embedded(settings))));
+            return connected(py, Ok(trol::Robot::embedded(settings)), check);
         }
         if time_scale.is_some() {
             return Err(argument_error(
@@ -285,40 +307,22 @@ impl Robot {
             ));
         }
         let port = port.to_string();
-        py.detach(|| trol::Robot::open(&port, baud.unwrap_or(9600)))
-            .map(Robot::new)
-            .map_err(|error| {
-                to_py(
-                    py,
-                    Failure {
-                        error,
-                        last_comm: None,
-                    },
-                )
-            })
+        let robot = py.detach(|| trol::Robot::open(&port, baud.unwrap_or(9600)));
+        connected(py, robot, check)
     }
 
     /// Connect as trol.cfg says (``path``, else $TROL_CONFIG, else ./trol.cfg), as InitTROL
-    /// reads it; the embedded simulator gets the file's settings.
+    /// reads it; the embedded simulator gets the file's settings. ``check`` as for open.
     #[staticmethod]
-    #[pyo3(signature = (path = None))]
-    fn from_config(py: Python<'_>, path: Option<PathBuf>) -> PyResult<Robot> {
+    #[pyo3(signature = (path = None, *, check = true))]
+    fn from_config(py: Python<'_>, path: Option<PathBuf>, check: bool) -> PyResult<Robot> {
         let cfg = match &path {
             Some(p) => Config::from_file(p),
             None => Config::load(),
         }
         .map_err(|e| setup_error(py, e.to_string()))?;
-        py.detach(|| trol::Robot::from_config(&cfg))
-            .map(Robot::new)
-            .map_err(|error| {
-                to_py(
-                    py,
-                    Failure {
-                        error,
-                        last_comm: None,
-                    },
-                )
-            })
+        let robot = py.detach(|| trol::Robot::from_config(&cfg));
+        connected(py, robot, check)
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {

@@ -149,7 +149,7 @@ def test_bad_arguments_raise_argument_error_and_send_nothing(sim_robot: trol.Rob
 
 def test_a_silent_controller_raises_link_error(scripted: tuple[str, list[bytes]]) -> None:
     port, _ = scripted
-    robot = trol.Robot.open(port)
+    robot = trol.Robot.open(port, check=False)
     with pytest.raises(trol.LinkError) as e:
         robot.halt()
     assert e.value.code == -32001
@@ -159,10 +159,30 @@ def test_a_silent_controller_raises_link_error(scripted: tuple[str, list[bytes]]
 def test_a_reply_of_the_wrong_size_raises_bad_reply_error(scripted: tuple[str, list[bytes]]) -> None:
     port, replies = scripted
     replies.append(bytes([1, 0, 0, 0, 0]))  # GetStatus answered with 5 bytes, not 8
-    robot = trol.Robot.open(port)
+    robot = trol.Robot.open(port, check=False)
     with pytest.raises(trol.BadReplyError) as e:
         robot.status()
     assert e.value.code == -32002
+
+
+def test_open_checks_the_servers_protocol_version(scripted: tuple[str, list[bytes]]) -> None:
+    """As InitTROL(1): a controller that speaks another protocol version is refused at open,
+    with both versions and what to do."""
+    port, replies = scripted
+    status = bytes([1, 0, 0, 0, 0, 0, 7, 0])  # called, last 0, transaction 0, epoch 7
+    version = bytes([0, 0, 2, 0]) + b"an older TROL"  # protocol 2
+    replies.extend([status, version])
+    with pytest.raises(trol.SetupError) as e:
+        trol.Robot.open(port)
+    text = str(e.value)
+    assert "version 2" in text and "same TROL release" in text, text
+
+
+def test_open_refuses_a_silent_server_unless_told_not_to_check(scripted: tuple[str, list[bytes]]) -> None:
+    port, _ = scripted
+    with pytest.raises(trol.SetupError) as e:
+        trol.Robot.open(port)
+    assert "does not answer" in str(e.value) and "trol init" in str(e.value), str(e.value)
 
 
 def test_setup_errors(tmp_path: Path, sim_robot: trol.Robot) -> None:

@@ -838,7 +838,9 @@ impl Robot {
             Ok(v) => v,
             Err(e) if e.code() == trol_proto::application::code::TROL_ERR_UNKNOWN => {
                 return Err(SetupError::Incompatible(format!(
-                    "the controller does not know TROLGetVersion, so it speaks an older TROL                      protocol than version {} of this library: run the same TROL release on                      both sides",
+                    "the controller does not know TROLGetVersion, so it speaks an older TROL \
+                     protocol than version {} of this library: run the same TROL release \
+                     on both sides",
                     table::PROTOCOL_VERSION
                 ))
                 .into());
@@ -847,7 +849,8 @@ impl Robot {
         };
         if v.protocol != table::PROTOCOL_VERSION {
             return Err(SetupError::Incompatible(format!(
-                "the controller ({}) speaks TROL protocol version {}, this library version {}:                  run the same TROL release on both sides (`trol --version`)",
+                "the controller ({}) speaks TROL protocol version {}, this library version {}: \
+                 run the same TROL release on both sides (`trol --version`)",
                 v.kind,
                 v.protocol,
                 table::PROTOCOL_VERSION

@@ -748,11 +748,16 @@ fn the_host_checks_the_controllers_version_and_kind() {
         text.contains("version 2") && text.contains("version 3") && text.contains("same TROL"),
         "{text}"
     );
+    assert!(
+        !text.contains("  "),
+        "one sentence, no runs of spaces: {text}"
+    );
 
     // A controller that does not know GetVersion: older than this library.
     let mut robot = controller_of_version(None);
     let e = trol::check_server(&mut robot).unwrap_err().to_string();
     assert!(e.contains("does not know TROLGetVersion"), "{e}");
+    assert!(!e.contains("  "), "one sentence, no runs of spaces: {e}");
 }
 
 #[test]

@@ -298,7 +298,8 @@ impl Robot {
                 time_scale: scale,
                 ..SimSettings::default()
             };
-            return connected(py, Ok(trol::Robot::embedded(settings)), check);
+            let robot = py.detach(|| trol::Robot::embedded(settings));
+            return connected(py, Ok(robot), check);
         }
         if time_scale.is_some() {
             return Err(argument_error(

@@ -158,7 +158,11 @@ pub fn serve(addr: &str, shared: SharedArm) -> std::io::Result<ViewServer> {
                 if flag.load(Ordering::Relaxed) {
                     break;
                 }
-                let Ok(mut conn) = conn else { continue };
+                let Ok(mut conn) = conn else {
+                    // Out of file descriptors, say: wait a moment, not a busy loop.
+                    std::thread::sleep(Duration::from_millis(10));
+                    continue;
+                };
                 if clients.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
                     clients.fetch_sub(1, Ordering::SeqCst);
                     let _ = conn.set_write_timeout(Some(Duration::from_secs(1)));

@@ -65,7 +65,7 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
         port,
         profile,
         Some(Box::new(|line: &str| say!("  c500: {line}"))),
-        false,
+        None,
     )
     .map_err(|e| e.to_string())?;
     let opened = open_side(&a.port, a.baud, Side::Application)?;

@@ -4,18 +4,22 @@
 
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use clap::{Args, Subcommand};
+use trol_rapl::backend::Recorder;
 use trol_rapl::{Profile, RaplBackend};
 
 #[derive(Subcommand)]
 pub enum Rapl {
     /// First contact: open a session, send only commands that cannot move the arm (STATUS,
-    /// SERIAL, W0, W2, LISTL), record every byte with its time, and close. With --poses N,
-    /// ask the operator to move the arm by pendant N times, read W2 at each pose, and fit the
-    /// profile's `units`, `angles` and `joint_units` (joints against world through the A465
-    /// kinematics); the fitted profile is written to --profile-out.
+    /// SERIAL, W0, W2, LISTL) and one unknown word (to learn how this controller refuses),
+    /// record every byte with its time (written on every exit, a failed opening included),
+    /// and close. With --poses N, ask the operator to move the arm by pendant N times, read
+    /// W2 at each pose, and fit the profile's `pulse_scale` and `pulse_zero` (PULSES against
+    /// JOINTS), `units`, `angles` and `tool_rotation` (joints against world through the A465
+    /// kinematics). What was learned is written to --profile-out.
     #[command(after_help = "\
 Examples:
   trol rapl probe --controller /dev/ttyUSB0 --out first.txt
@@ -49,7 +53,7 @@ pub struct ProbeArgs {
     /// Ask for this many poses by pendant and fit the conventions from them.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=20))]
     poses: u16,
-    /// With --poses: where to write the fitted profile (an existing file is not overwritten).
+    /// Where to write the profile with what was learned (an existing file is not overwritten).
     #[arg(long, value_name = "FILE", default_value = "c500.toml")]
     profile_out: PathBuf,
 }
@@ -81,8 +85,8 @@ fn load_profile(path: Option<&Path>) -> Result<Profile, String> {
     }
 }
 
-/// Open a session on `device` as `profile` says, recording when asked.
-fn open(device: &str, profile: Profile, record: bool) -> Result<RaplBackend, String> {
+/// Open a session on `device` as `profile` says, adding every byte to `record` when given.
+fn open(device: &str, profile: Profile, record: Option<Recorder>) -> Result<RaplBackend, String> {
     let settings = trol_port::PortSettings {
         baud: profile.baud,
         ..Default::default()
@@ -97,20 +101,32 @@ fn open(device: &str, profile: Profile, record: bool) -> Result<RaplBackend, Str
     .map_err(|e| e.to_string())
 }
 
-fn write_transcript(b: &RaplBackend, path: &Path) -> Result<(), String> {
-    let text = b.transcript().map(|t| t.to_text()).unwrap_or_default();
+fn write_transcript(record: &Recorder, path: &Path) -> Result<(), String> {
+    let text = record.lock().map(|t| t.to_text()).unwrap_or_default();
     std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
 fn probe(a: ProbeArgs) -> Result<(), String> {
-    if a.poses > 0 && a.profile_out.exists() {
+    if a.profile_out.exists() {
         return Err(format!(
             "{} exists: name another file with --profile-out, or remove it",
             a.profile_out.display()
         ));
     }
     let base = load_profile(a.profile.as_deref())?;
-    let mut b = open(&a.controller, base.clone(), true)?;
+    let record = Recorder::default();
+    let opened = open(&a.controller, base.clone(), Some(record.clone()));
+    let mut b = match opened {
+        Ok(b) => b,
+        Err(e) => {
+            // The bytes of a first contact that failed are the ones that matter most.
+            write_transcript(&record, &a.out)?;
+            return Err(format!(
+                "{e}\ntranscript (every byte, with its time): {}",
+                a.out.display()
+            ));
+        }
+    };
     say!("trol rapl probe: session open on {}", a.controller);
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
@@ -123,7 +139,7 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
         Ok(input.read_line(&mut line)? > 0)
     });
     b.close();
-    write_transcript(&b, &a.out)?;
+    write_transcript(&record, &a.out)?;
     for (line, r) in &contact.replies {
         match r {
             Ok(text) => say!("{line}:{}", indent(text)),
@@ -134,35 +150,68 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
         "transcript (every byte, with its time): {}",
         a.out.display()
     );
-    let Some(fit) = contact.fit else {
-        return Ok(());
+    let mut profile = base.clone();
+    let mut learned = Vec::new();
+    match &contact.refusal {
+        Some(Ok(form)) => {
+            say!("refusal form: \"{form}\" (from the answer to an unknown word)");
+            profile.refusal = vec![form.clone()];
+            learned.push(format!("refusal = [\"{form}\"]"));
+        }
+        Some(Err(e)) => say!("refusal form not learned: {e}"),
+        None => {}
+    }
+    let fit = match contact.fit {
+        Some(Ok(fit)) => {
+            profile = fit.apply(&profile);
+            match &fit.pulses {
+                Ok(_) => learned.push("pulse_scale, pulse_zero".into()),
+                Err(e) => say!("pulses not fitted: {e}"),
+            }
+            learned.push(format!(
+                "units = \"{}\", angles = \"{}\", tool_rotation = {:?}",
+                match fit.units {
+                    trol_rapl::profile::Units::Inch => "inch",
+                    _ => "mm",
+                },
+                fit.angles,
+                fit.tool_rotation
+            ));
+            Some(fit)
+        }
+        Some(Err(e)) => {
+            say!("the conventions could not be fitted: {e}");
+            None
+        }
+        None => None,
     };
-    let fit = fit.map_err(|e| format!("the conventions could not be fitted: {e}"))?;
-    let profile = fit.apply(&base);
-    let text = format!(
-        "# Fitted by `trol rapl probe --poses {}` from {} W2 readings: the WORLD row matched the\n\
-         # A465 kinematics within {:.2} mm and {:.2} degrees. joint_units is the unit of the\n\
-         # JOINTS row; that MA and MI take the same unit is an assumption: check it with one\n\
-         # supervised `mi` at speed 5 (docs/c500.md, \"Settle the conventions\").\n{}",
-        a.poses,
-        contact.readings.len(),
-        fit.position_error_mm,
-        fit.angle_error_deg,
-        profile.to_toml()
+    if learned.is_empty() {
+        return Err("nothing was learned: no profile written".into());
+    }
+    let mut head = format!(
+        "# Learned by `trol rapl probe` on {}: {}.\n",
+        a.controller,
+        learned.join("; ")
     );
-    std::fs::write(&a.profile_out, text)
+    if let Some(fit) = &fit {
+        head.push_str(&format!(
+            "# {} W2 readings: the WORLD row matched the A465 kinematics within {:.2} mm and \
+             {:.2} degrees.\n",
+            contact.readings.len(),
+            fit.position_error_mm,
+            fit.angle_error_deg
+        ));
+    }
+    head.push_str(
+        "# Not learned by reading: the units of MA and MI (joint_units) and JOG's frame\n\
+         # (jog_frame); until they are set those commands are refused. docs/c500.md, \"Settle\n\
+         # the conventions\", has the supervised step at speed 5 that settles each.\n",
+    );
+    std::fs::write(&a.profile_out, format!("{head}{}", profile.to_toml()))
         .map_err(|e| format!("cannot write {}: {e}", a.profile_out.display()))?;
     say!(
-        "fitted: units = \"{}\", angles = \"{}\", joint_units = \"{}\" (within {:.2} mm, \
-         {:.2} deg); profile written to {}",
-        match fit.units {
-            trol_rapl::profile::Units::Inch => "inch",
-            _ => "mm",
-        },
-        fit.angles,
-        fit.joint_units,
-        fit.position_error_mm,
-        fit.angle_error_deg,
+        "learned: {}; profile written to {}",
+        learned.join("; "),
         a.profile_out.display()
     );
     Ok(())
@@ -179,6 +228,11 @@ fn indent(text: &str) -> String {
     lines.iter().map(|l| format!("\n  {l}")).collect()
 }
 
+/// Ctrl-C in the terminal: stop what runs.
+static STOP: AtomicBool = AtomicBool::new(false);
+/// A second Ctrl-C: close the session and leave.
+static QUIT: AtomicBool = AtomicBool::new(false);
+
 /// Commands that may wait for a motion: their reply gets the profile's motion timeout.
 const LONG: &[&str] = &["FINISH", "HOME", "READY"];
 
@@ -188,7 +242,20 @@ fn term(a: TermArgs) -> Result<(), String> {
         Duration::from_millis(profile.reply_timeout_ms),
         Duration::from_secs(profile.motion_timeout_s),
     );
-    let mut b = open(&a.controller, profile, a.out.is_some())?;
+    let record = a.out.is_some().then(Recorder::default);
+    let mut b = open(&a.controller, profile, record.clone())?;
+    // Ctrl-C while a line runs: the controller's stop; a second one closes the session.
+    let installed = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            QUIT.store(true, Ordering::SeqCst);
+            eprintln!("\ninterrupted twice: closing the session");
+        } else {
+            eprintln!("\ninterrupted: stopping the controller (Ctrl-C again closes the session)");
+        }
+    });
+    if let Err(e) = installed {
+        tracing::warn!("Ctrl-C will end the terminal without stopping the controller: {e}");
+    }
     let run_line = |b: &mut RaplBackend, line: &str| {
         let line = line.trim();
         if line.is_empty() {
@@ -200,22 +267,28 @@ fn term(a: TermArgs) -> Result<(), String> {
         } else {
             short
         };
-        match b.type_line(&line.to_ascii_uppercase(), t) {
+        match b.type_line_unless(&line.to_ascii_uppercase(), t, &STOP) {
             Ok(r) => {
                 let body: Vec<&str> = r
                     .text
                     .split(['\r', '\n'])
-                    .filter(|l| !l.trim().is_empty())
+                    .filter(|l| {
+                        !l.trim_matches(|c: char| c.is_whitespace() || c == '\0')
+                            .is_empty()
+                    })
                     .collect();
                 for l in body {
                     say!("{l}");
                 }
-                match r.error {
-                    Some((n, t)) => say!("{n:03}-{t}."),
+                match b.refusal(&r) {
+                    Some(_) => say!("refused"),
                     None => say!("{}", if r.ack { "ok (ACK)" } else { "ok" }),
                 }
             }
             Err(e) => say!("error: {e}"),
+        }
+        if !QUIT.load(Ordering::SeqCst) {
+            STOP.store(false, Ordering::SeqCst);
         }
     };
     if std::io::stdin().is_terminal() {
@@ -236,9 +309,23 @@ fn term(a: TermArgs) -> Result<(), String> {
                     if !line.trim().is_empty() {
                         let _ = rl.add_history_entry(line.as_str());
                     }
+                    STOP.store(false, Ordering::SeqCst);
                     run_line(&mut b, &line);
+                    if QUIT.load(Ordering::SeqCst) {
+                        break;
+                    }
                 }
-                Err(ReadlineError::Interrupted) => continue,
+                Err(ReadlineError::Interrupted) => {
+                    // At the prompt: the controller's stop; a second in a row leaves.
+                    if STOP.swap(true, Ordering::SeqCst) {
+                        break;
+                    }
+                    say!("stopping the controller (Ctrl-C again closes the session)");
+                    if let Err(e) = trol_controller::backend::Backend::halt(&mut b) {
+                        say!("error: {e}");
+                    }
+                    continue;
+                }
                 Err(ReadlineError::Eof) => break,
                 Err(e) => return Err(format!("reading the terminal: {e}")),
             }
@@ -250,12 +337,15 @@ fn term(a: TermArgs) -> Result<(), String> {
         for line in std::io::stdin().lock().lines() {
             let line = line.map_err(|e| format!("reading the input: {e}"))?;
             run_line(&mut b, &line);
+            if QUIT.load(Ordering::SeqCst) {
+                break;
+            }
         }
     }
     b.close();
     let _ = std::io::stdout().flush();
-    if let Some(out) = &a.out {
-        write_transcript(&b, out)?;
+    if let (Some(out), Some(record)) = (&a.out, &record) {
+        write_transcript(record, out)?;
     }
     say!("session closed (the C500's port is back in ACI mode)");
     Ok(())

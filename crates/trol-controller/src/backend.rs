@@ -130,4 +130,9 @@ pub trait Backend: Send {
     /// Called after each request the controller served and after its watchdog halted the
     /// arm: a moment to share the arm's state (the simulator renews its live view's copy).
     fn after_request(&mut self) {}
+    /// Called when the line has been quiet for a moment (no request arrived): a backend that
+    /// keeps motions of its own for later (the RAPL-II backend's queue behind a motion under
+    /// way) starts them here. It must return within the time one short command takes, so a
+    /// Halt waits no longer.
+    fn idle(&mut self) {}
 }

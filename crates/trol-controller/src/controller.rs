@@ -189,6 +189,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     self.tripped = false;
                 }
                 self.watch();
+                if matches!(ev, ServerEvent::Idle) {
+                    self.pcp.backend_mut().idle();
+                }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     self.pcp.backend_mut().after_request();
                     if let Some(log) = self.log.as_mut() {

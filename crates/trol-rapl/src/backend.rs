@@ -1,24 +1,45 @@
 //! The RAPL-II backend: the PCP server's robot backend ([`trol_controller::Backend`]) on a
 //! real C500, over a port (c500-rapl.md §1.4 has the command table this follows).
 //!
+//! The rule (docs/c500.md, "What TROL assumes"): where the public sources do not settle what a
+//! C500 does, take the reading under which TROL never reports success for a failure nor moves
+//! the arm unasked; where it cannot tell, say so (TROL_ERR_ROBOT_UNSURE with the controller's
+//! text) and send nothing further.
+//!
+//! - **Success is recognised, not assumed**: a command succeeded only when its reply is the
+//!   exact success form (the ACK as this controller gives it, the prompt, and no text where
+//!   the command prints none). A line in one of the profile's refusal forms is a refusal with
+//!   its text; any other line, or a refusal line followed by ACK, is UNSURE.
+//! - **No stale target**: a scratch location is read back (LISTL) after POINT and must hold
+//!   what was sent before a MOVE names it; scratch names rotate, so a queued motion never
+//!   moves to another's target.
+//! - **Before a motion**, STATUS: arm power (LIMP) and HOMED are checked, and a motion while
+//!   another runs waits in the backend's queue (so the line stays free for Halt) and starts
+//!   once the first has ended.
+//! - **Finish tells the truth**: the end of a motion is STATUS's DONE row *and* the arm (W2)
+//!   at the motion's target within the profile's tolerance (or, for a target not known
+//!   beforehand, seen moving or standing still); arm power lost or HOMED lost during a motion,
+//!   and any line the controller prints unasked, end the wait with a named code.
+//! - **The safe default gates what it does not know**: cartesian values need `angles` and
+//!   units, MA/MI `joint_units`, precision points and joint targets `pulse_scale` (or MA),
+//!   a straight Jog `jog_frame`; each is refused before anything is sent, naming the key.
+//! - **Halt always gets through**: it is typed through an XOFF, clears the queue, and no
+//!   other wait holds the line longer than one short command (motion commands answer at
+//!   their start; their end is polled).
 //! - Move and Appro by name use the controller's own location table (LISTL first, so an
-//!   unknown name is TROL_ERR_LOCATION whatever the controller's error numbers);
-//! - MoveII, ApproII, Depart, Jog off the straight line and SetToolTransform are computed on
-//!   the PC with the A465 kinematics (trol-a465) and sent as POINT plus MOVE/MOVES or TOOL;
-//!   a joint target goes as a precision point (pulses), so no angle unit is guessed;
-//! - GetPosition reads W0 (commanded) or W2 (actual) in every form;
-//! - the end of a motion is polled (STATUS's DONE row by default), so between polls the line
-//!   is free for Halt;
-//! - error lines map onto BIOS codes through the profile, their raw text logged;
-//! - a failure of the line is TROL_ERR_ROBOT when the line was cancelled before its
+//!   unknown name is TROL_ERR_LOCATION whatever the controller's error numbers); MoveII,
+//!   ApproII, Depart, Jog off the straight line and SetToolTransform are computed on the PC
+//!   with the A465 kinematics (trol-a465) and sent as POINT plus MOVE/MOVES or TOOL.
+//! - A failure of the line is TROL_ERR_ROBOT when the line was cancelled before its
 //!   terminator (the command did not run), TROL_ERR_ROBOT_UNSURE after it.
 
 use std::collections::VecDeque;
 use std::io;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use trol_a465::arm::code as sim_code;
 use trol_a465::kinematics::{Kinematics, Pose};
-use trol_a465::model::{counts_to_joints, joints_to_counts};
 use trol_controller::backend::{Backend, BackendError, BiosResult, PosMode, Target};
 use trol_controller::sim::SIM_CODES;
 use trol_port::Port;
@@ -27,7 +48,7 @@ use trol_proto::time::Instant;
 
 use crate::aci::{AciError, Master};
 use crate::frames::{Frames, Unsettled};
-use crate::profile::{Completion, Entry, Halt, JointUnits, Profile, Units};
+use crate::profile::{Ack, Completion, Entry, Halt, JointUnits, Profile, RefusalForm, Units};
 use crate::session::{CTRL_Z, Reply, Session, SessionConfig, SessionError};
 use crate::text::{self, Listed};
 
@@ -43,10 +64,16 @@ pub const UNSUPPORTED: i16 = -11;
 pub const NO_JOINT_UNITS: i16 = -12;
 /// Cartesian values need the controller's length units.
 pub const NO_UNITS: i16 = -13;
+/// Precision points and joint targets as pulses need the pulse convention.
+pub const NO_PULSES: i16 = -14;
+/// A straight Jog needs JOG's frame.
+pub const NO_JOG_FRAME: i16 = -15;
+/// A motion computed from where the arm is, while another motion has not ended.
+pub const BUSY: i16 = -16;
 
 /// The BIOS codes of the RAPL-II backend: the simulator's, and those of a real controller.
 pub static RAPL_CODES: &CodeTable = &{
-    const EXTRA: [CodeInfo; 6] = [
+    const EXTRA: [CodeInfo; 9] = [
         CodeInfo {
             value: ARM_POWER,
             name: "BIOS_ARM_POWER",
@@ -81,14 +108,33 @@ pub static RAPL_CODES: &CodeTable = &{
             meaning: "the controller's length units are unknown: set `units` (mm or inch) in the \
                       RAPL-II profile",
         },
+        CodeInfo {
+            value: NO_PULSES,
+            name: "BIOS_NO_PULSES",
+            meaning: "precision points and joint targets need the controller's pulse scale, sign \
+                      and zero: set `pulse_scale` and `pulse_zero` in the RAPL-II profile \
+                      (`trol rapl probe --poses 4` fits them), or `joint_units` for joint targets",
+        },
+        CodeInfo {
+            value: NO_JOG_FRAME,
+            name: "BIOS_NO_JOG_FRAME",
+            meaning: "a straight Jog needs JOG's frame: set `jog_frame` (world or tool) in the \
+                      RAPL-II profile (docs/c500.md, section Settle the conventions)",
+        },
+        CodeInfo {
+            value: BUSY,
+            name: "BIOS_BUSY",
+            meaning: "a motion computed from where the arm is (Depart, Jog, Joint, MI) while \
+                      another has not ended: call TROLFinish(FINISH_WAIT) first",
+        },
     ];
-    let mut all = [EXTRA[0]; 14];
+    let mut all = [EXTRA[0]; 17];
     let mut i = 0;
     while i < 8 {
         all[i] = SIM_CODES[i];
         i += 1;
     }
-    while i < 14 {
+    while i < 17 {
         all[i] = EXTRA[i - 8];
         i += 1;
     }
@@ -117,6 +163,12 @@ pub enum RaplError {
     /// A command of the opening failed.
     #[error("opening the RAPL-II session failed: {0}")]
     Session(#[from] SessionError),
+    /// The controller echoes nothing.
+    #[error(
+        "the C500 answers Ctrl-C with its prompt but echoes nothing typed ({0}): TROL checks \
+         every echo, so turn the controller's echo on (RAPL-II CONFIG); nothing was sent"
+    )]
+    NoEcho(SessionError),
     /// STATUS could not be read.
     #[error("the C500's STATUS could not be read: {0}")]
     Status(String),
@@ -171,11 +223,67 @@ impl Transcript {
 /// Where the backend's log lines go.
 pub type LogFn = Box<dyn FnMut(&str) + Send>;
 
+/// A transcript shared with the caller, so that it outlives a session that failed to open
+/// (`trol rapl probe` writes it on every exit).
+pub type Recorder = Arc<Mutex<Transcript>>;
+
 /// What an error line means.
 enum Meaning {
     Code(i16),
     Location,
 }
+
+/// What a motion must end at for Finish to call it ended.
+#[derive(Clone, Debug, PartialEq)]
+enum Expect {
+    /// The JOINTS row, degrees.
+    Joints([f64; 6]),
+    /// The WORLD row, the controller's units and angles.
+    World([f64; 6]),
+    /// The PULSES row.
+    Pulses([i64; 6]),
+    /// Not known beforehand (READY): seen moving, or standing still `settle_ms`.
+    Unknown,
+    /// HOME: HOMED on every axis, and as [`Expect::Unknown`].
+    Homed,
+}
+
+/// A motion line and what it must end at.
+#[derive(Clone, Debug)]
+struct Motion {
+    line: String,
+    expect: Expect,
+}
+
+/// A motion the controller accepted whose end has not been seen.
+#[derive(Debug)]
+struct Outstanding {
+    motion: Motion,
+    since: std::time::Instant,
+    seen_moving: bool,
+    still: Option<(std::time::Instant, [f64; 6])>,
+}
+
+/// How a reply reads.
+enum Answer {
+    /// The exact success form.
+    Done(Reply),
+    /// A refusal in one of the profile's forms: number (0 for a form without one), text.
+    Refused(u16, String),
+}
+
+/// How a motion may go now.
+enum Gate {
+    /// Refused before anything was sent, with this code.
+    Refuse(i16),
+    /// The arm stands: send it.
+    Idle,
+    /// A motion runs or waits: queue it.
+    Busy,
+}
+
+/// How many motions may wait behind the one under way (the simulated arm's queue).
+pub const QUEUE: usize = trol_a465::arm::MOTION_QUEUE;
 
 /// The RAPL-II backend over a port.
 pub struct RaplBackend {
@@ -183,13 +291,20 @@ pub struct RaplBackend {
     session: Session,
     profile: Profile,
     frames: Frames,
+    forms: Vec<RefusalForm>,
+    ack: bool,
     joint_units: Option<JointUnits>,
     epoch: std::time::Instant,
     tool: [f64; 6],
     last_poll: Option<(std::time::Instant, bool)>,
+    outstanding: Option<Outstanding>,
+    queue: VecDeque<Motion>,
+    deferred: Option<BackendError>,
+    unasked: String,
+    scratch: usize,
     log: VecDeque<String>,
     log_fn: Option<LogFn>,
-    transcript: Option<Transcript>,
+    transcript: Option<Recorder>,
     status: Option<text::Status>,
     closed: bool,
 }
@@ -200,37 +315,45 @@ impl RaplBackend {
     /// Open a session on `port` as `profile` says: the ACI steps (falling back to Ctrl-C if
     /// the port is in terminal mode already), NOHELP, STATUS.
     pub fn connect(port: Box<dyn Port>, profile: Profile) -> Result<RaplBackend, RaplError> {
-        RaplBackend::connect_with(port, profile, None, false)
+        RaplBackend::connect_with(port, profile, None, None)
     }
 
     /// Like [`RaplBackend::connect`], logging each line to `log_fn` and, with `record`,
-    /// keeping a transcript of every byte.
+    /// adding every byte to the transcript (kept by the caller, so it is there even when
+    /// the opening fails).
     pub fn connect_with(
         port: Box<dyn Port>,
         profile: Profile,
         log_fn: Option<LogFn>,
-        record: bool,
+        record: Option<Recorder>,
     ) -> Result<RaplBackend, RaplError> {
-        let frames = Frames {
-            mm: profile.units.mm(),
-            angles: profile.angles(),
-        };
         let mut b = RaplBackend {
             port,
             session: Session::new(SessionConfig::from(&profile)),
             joint_units: profile.joint_units().ok().flatten(),
-            frames,
+            frames: Frames::of(&profile),
+            forms: profile.refusal_forms(),
+            ack: profile.ack == Ack::Required,
             profile,
             epoch: std::time::Instant::now(),
             tool: [0.0; 6],
             last_poll: None,
+            outstanding: None,
+            queue: VecDeque::new(),
+            deferred: None,
+            unasked: String::new(),
+            scratch: 0,
             log: VecDeque::new(),
             log_fn,
-            transcript: record.then(Transcript::default),
+            transcript: record,
             status: None,
             closed: false,
         };
-        b.open()?;
+        if let Err(e) = b.open() {
+            b.note(format!("opening failed: {e}"));
+            b.closed = true;
+            return Err(e);
+        }
         Ok(b)
     }
 
@@ -249,14 +372,22 @@ impl RaplBackend {
         self.log.iter().cloned().collect()
     }
 
-    /// The transcript, when recording.
-    pub fn transcript(&self) -> Option<&Transcript> {
-        self.transcript.as_ref()
+    /// The transcript so far, when recording.
+    pub fn transcript(&self) -> Option<Transcript> {
+        self.transcript
+            .as_ref()
+            .map(|t| t.lock().map(|t| t.clone()).unwrap_or_default())
     }
 
     /// The profile the session was opened with.
     pub fn profile(&self) -> &Profile {
         &self.profile
+    }
+
+    /// Whether this controller answers a successful command with ACK (the profile's `ack`,
+    /// or what NOHELP's answer showed with `ack = "auto"`).
+    pub fn expects_ack(&self) -> bool {
+        self.ack
     }
 
     /// Type a line that cannot move the arm (its keyword is one of
@@ -284,6 +415,67 @@ impl RaplBackend {
         self.exchange(line, timeout)
     }
 
+    /// Like [`RaplBackend::type_line`], stopped when `stop` is set (Ctrl-C in `trol rapl
+    /// term`): the line is cancelled with Ctrl-C and the arm halted as the profile says; the
+    /// answer is then UNSURE (the line may have run) with what was done.
+    pub fn type_line_unless(
+        &mut self,
+        line: &str,
+        timeout: Duration,
+        stop: &std::sync::atomic::AtomicBool,
+    ) -> Result<Reply, BackendError> {
+        self.last_poll = None;
+        self.settle()?;
+        let now = self.now();
+        self.session
+            .send_line(line, timeout, now)
+            .map_err(|e| BackendError::Link(e.to_string()))?;
+        match self.pump_unless(Some(stop)) {
+            Ok(Some(Ok(r))) => Ok(r),
+            Ok(Some(Err(e))) => Err(if e.surely_not_run() {
+                BackendError::Link(e.to_string())
+            } else {
+                BackendError::Unsure(e.to_string())
+            }),
+            Ok(None) => {
+                let cancelled = self.interrupt();
+                let halted = self.halt();
+                Err(BackendError::Unsure(format!(
+                    "`{line}` interrupted: Ctrl-C sent ({}), then the halt ({})",
+                    match cancelled {
+                        Ok(()) => "prompt back".to_string(),
+                        Err(e) => e.to_string(),
+                    },
+                    match halted {
+                        Ok(0) => "done".to_string(),
+                        Ok(c) => format!("refused, {c}"),
+                        Err(e) => e.to_string(),
+                    }
+                )))
+            }
+            Err(e) => Err(BackendError::Unsure(format!("`{line}`: {e}"))),
+        }
+    }
+
+    /// Ctrl-C, as a terminal's user presses it: the line is cancelled and the controller's
+    /// prompt awaited (on a controller whose halt is Ctrl-C, this stops the arm).
+    pub fn interrupt(&mut self) -> Result<(), BackendError> {
+        let now = self.now();
+        self.session.resync(now);
+        match self.pump() {
+            Ok(Ok(_)) => Ok(()),
+            Ok(Err(e)) => Err(BackendError::Unsure(e.to_string())),
+            Err(e) => Err(BackendError::Unsure(e.to_string())),
+        }
+    }
+
+    /// The refusal in `reply`, if one of its lines has one of the profile's forms.
+    pub fn refusal(&self, reply: &Reply) -> Option<(u16, String)> {
+        lines(&reply.text)
+            .into_iter()
+            .find_map(|l| self.forms.iter().find_map(|f| f.read(&l)))
+    }
+
     /// STATUS as read at the opening.
     pub fn opening_status(&self) -> Option<&text::Status> {
         self.status.as_ref()
@@ -297,22 +489,24 @@ impl RaplBackend {
         self.epoch.elapsed().as_secs_f64()
     }
 
-    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
-        let t = self.secs();
-        if let Some(tr) = self.transcript.as_mut() {
-            tr.add(t, Dir::ToController, bytes);
+    fn record(&self, dir: Dir, bytes: &[u8]) {
+        if let Some(tr) = self.transcript.as_ref() {
+            if let Ok(mut tr) = tr.lock() {
+                tr.add(self.secs(), dir, bytes);
+            }
         }
+    }
+
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.record(Dir::ToController, bytes);
         self.port.send(bytes)
     }
 
     fn recv(&mut self, until: std::time::Instant) -> io::Result<Vec<u8>> {
         let mut buf = [0u8; 512];
         let n = self.port.recv(&mut buf, until)?;
-        let t = self.secs();
         if n > 0 {
-            if let Some(tr) = self.transcript.as_mut() {
-                tr.add(t, Dir::FromController, &buf[..n]);
-            }
+            self.record(Dir::FromController, &buf[..n]);
         }
         Ok(buf[..n].to_vec())
     }
@@ -323,13 +517,33 @@ impl RaplBackend {
 
     /// Run the session until its next event.
     fn pump(&mut self) -> io::Result<Result<Reply, SessionError>> {
+        Ok(self
+            .pump_unless(None)?
+            .expect("without a stop flag, pumping ends in an event"))
+    }
+
+    /// Run the session until its next event, or until `stop` is set (None).
+    fn pump_unless(
+        &mut self,
+        stop: Option<&std::sync::atomic::AtomicBool>,
+    ) -> io::Result<Option<Result<Reply, SessionError>>> {
         loop {
+            if stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst)) {
+                return Ok(None);
+            }
             let now = self.now();
             while let Some(b) = self.session.poll_transmit(now) {
                 self.send(&[b])?;
             }
+            let expired = self.session.take_xoff_expired();
+            if expired > 0 {
+                self.note(format!(
+                    "the C500 said XOFF and no XON followed within {} ms: typing went on",
+                    crate::session::XOFF_LIMIT.as_millis()
+                ));
+            }
             if let Some(ev) = self.session.poll_event() {
-                return Ok(ev);
+                return Ok(Some(ev));
             }
             let wake = self
                 .session
@@ -345,13 +559,14 @@ impl RaplBackend {
             self.session.handle_timeout(now);
             if self.session.is_lost() {
                 if let Some(ev) = self.session.poll_event() {
-                    return Ok(ev);
+                    return Ok(Some(ev));
                 }
             }
         }
     }
 
-    /// Drop what arrived unasked; if anything did, or the session was lost, resynchronise.
+    /// Take in what arrived unasked: a line of text is kept (the next call reports it); any
+    /// byte at all, or a lost session, makes the next command resynchronise first.
     fn settle(&mut self) -> Result<(), BackendError> {
         while self.port.available().map_err(|e| link(&e))? > 0 {
             let got = self.recv(std::time::Instant::now()).map_err(|e| link(&e))?;
@@ -361,10 +576,19 @@ impl RaplBackend {
         let stray = self.session.take_stray();
         if !stray.is_empty() || self.session.is_lost() {
             if !stray.is_empty() {
-                self.note(format!(
-                    "unasked bytes from the C500 dropped: {:?}; resynchronising",
-                    String::from_utf8_lossy(&stray)
-                ));
+                let text = String::from_utf8_lossy(&stray).into_owned();
+                let said = lines(&text)
+                    .into_iter()
+                    .filter(|l| !l.ends_with(">>") && !l.ends_with("O>"))
+                    .collect::<Vec<_>>()
+                    .join(" / ");
+                self.note(format!("the C500 sent unasked: {text:?}; resynchronising"));
+                if !said.is_empty() {
+                    if !self.unasked.is_empty() {
+                        self.unasked.push_str(" / ");
+                    }
+                    self.unasked.push_str(&said);
+                }
             }
             let now = self.now();
             self.session.resync(now);
@@ -379,8 +603,49 @@ impl RaplBackend {
         Ok(())
     }
 
+    /// A line the controller printed unasked, reported once: a refusal form the profile maps
+    /// gives its code; anything else is UNSURE with the text. A motion of ours that was under
+    /// way or queued is given up (the queue is dropped: nothing more is sent after it).
+    fn report_unasked(&mut self) -> Result<(), BackendError> {
+        self.settle()?;
+        if self.unasked.is_empty() {
+            return Ok(());
+        }
+        let text = std::mem::take(&mut self.unasked);
+        self.outstanding = None;
+        let dropped = self.queue.len();
+        self.queue.clear();
+        let known = lines(&text)
+            .into_iter()
+            .find_map(|l| self.forms.iter().find_map(|f| f.read(&l)));
+        let tail = if dropped > 0 {
+            format!("; {dropped} queued motion(s) dropped, not sent")
+        } else {
+            String::new()
+        };
+        self.note(format!("the C500 said unasked: {text}{tail}"));
+        match known {
+            Some((n, _)) if n > 0 => match self.meaning(n) {
+                Meaning::Code(c) => Err(BackendError::Refused(c)),
+                Meaning::Location => Err(BackendError::Refused(RAPL_ERROR)),
+            },
+            _ => Err(BackendError::Unsure(format!(
+                "the C500 said unasked: {text}{tail}"
+            ))),
+        }
+    }
+
     /// Type a line and read its reply.
     fn exchange(&mut self, line: &str, timeout: Duration) -> Result<Reply, BackendError> {
+        self.exchange_as(line, timeout, false)
+    }
+
+    fn exchange_as(
+        &mut self,
+        line: &str,
+        timeout: Duration,
+        urgent: bool,
+    ) -> Result<Reply, BackendError> {
         if self.closed {
             return Err(BackendError::Link(format!(
                 "`{line}` not sent: the RAPL-II session is closed"
@@ -388,9 +653,12 @@ impl RaplBackend {
         }
         self.settle()?;
         let now = self.now();
-        self.session
-            .send_line(line, timeout, now)
-            .map_err(|e| BackendError::Link(e.to_string()))?;
+        let started = if urgent {
+            self.session.send_urgent(line, timeout, now)
+        } else {
+            self.session.send_line(line, timeout, now)
+        };
+        started.map_err(|e| BackendError::Link(e.to_string()))?;
         match self.pump() {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => {
@@ -405,6 +673,63 @@ impl RaplBackend {
         }
     }
 
+    /// How the reply to `line` reads. `output`: the command prints text (its parser checks
+    /// it); otherwise any text at all is not the success form.
+    fn answer(&mut self, line: &str, r: Reply, output: bool) -> Result<Answer, BackendError> {
+        let refused = self.refusal(&r);
+        let printed = lines(&r.text).join(" / ");
+        if let Some((n, t)) = refused {
+            if r.ack {
+                let e = format!(
+                    "`{line}`: the C500 printed `{printed}` and then ACK: whether it ran is not \
+                     known, so nothing further was sent"
+                );
+                self.note(e.clone());
+                return Err(BackendError::Unsure(e));
+            }
+            self.note(format!("`{line}` refused: {printed}"));
+            return Ok(Answer::Refused(n, t));
+        }
+        if self.ack && !r.ack {
+            let e = format!(
+                "`{line}`: answered without the ACK this controller gives on success{}; whether \
+                 it ran is not known, so nothing further was sent (a controller that sends no \
+                 ACK: ack = \"never\" in the profile)",
+                if printed.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (it printed `{printed}`)")
+                }
+            );
+            self.note(e.clone());
+            return Err(BackendError::Unsure(e));
+        }
+        if !output && !printed.is_empty() {
+            let e = format!(
+                "`{line}`: the C500 printed `{printed}`, which is neither its success form nor \
+                 one of the profile's refusal forms; whether it ran is not known, so nothing \
+                 further was sent (if it is a refusal, add its form to `refusal` in the profile)"
+            );
+            self.note(e.clone());
+            return Err(BackendError::Unsure(e));
+        }
+        Ok(Answer::Done(r))
+    }
+
+    /// A command whose output is parsed (STATUS, W0, W2, LISTL): a refusal is a failure
+    /// of the line (these commands change nothing).
+    fn output(&mut self, line: &str) -> Result<Reply, BackendError> {
+        let t = self.reply_timeout();
+        // These lines change nothing: a failure leaves no doubt about the arm.
+        let r = self.exchange(line, t).map_err(not_run)?;
+        match self.answer(line, r, true)? {
+            Answer::Done(r) => Ok(r),
+            Answer::Refused(n, t) => Err(BackendError::Link(format!(
+                "`{line}` was refused: {n:03}-{t}"
+            ))),
+        }
+    }
+
     fn reply_timeout(&self) -> Duration {
         Duration::from_millis(self.profile.reply_timeout_ms)
     }
@@ -416,40 +741,279 @@ impl RaplBackend {
     fn meaning(&self, number: u16) -> Meaning {
         match self.profile.error_target(number) {
             Some("TROL_ERR_LOCATION") => Meaning::Location,
-            Some(name) => Meaning::Code(
-                RAPL_CODES
-                    .iter()
-                    .find(|c| c.name == name)
-                    .map(|c| c.value)
-                    .unwrap_or(RAPL_ERROR),
-            ),
+            Some(name) => Meaning::Code(code_of(name)),
             None => Meaning::Code(RAPL_ERROR),
         }
     }
 
-    /// A command whose answer is ACK or an error line; `name` is the location it names.
-    fn command(&mut self, line: &str, timeout: Duration, name: Option<LocName>) -> BiosResult {
-        let r = self.exchange(line, timeout)?;
-        match r.error {
-            None => Ok(0),
-            Some((n, t)) => {
-                self.note(format!("`{line}` refused: {n:03}-{t}."));
-                match (self.meaning(n), name) {
-                    (Meaning::Location, Some(name)) => Err(BackendError::UnknownLocation(name)),
-                    (Meaning::Location, None) => Ok(code_of("BIOS_BAD_ARGUMENT")),
-                    (Meaning::Code(c), _) => Ok(c),
+    /// A command whose answer is the success form or a refusal; `name` is the location it
+    /// names. Its timeout is the short one: nothing here waits for a motion's end.
+    fn command(&mut self, line: &str, name: Option<LocName>) -> BiosResult {
+        self.command_as(line, name, false)
+    }
+
+    fn command_as(&mut self, line: &str, name: Option<LocName>, urgent: bool) -> BiosResult {
+        let t = self.reply_timeout();
+        let r = self.exchange_as(line, t, urgent)?;
+        match self.answer(line, r, false)? {
+            Answer::Done(_) => Ok(0),
+            Answer::Refused(n, _) => match (self.meaning(n), name) {
+                (Meaning::Location, Some(name)) => Err(BackendError::UnknownLocation(name)),
+                (Meaning::Location, None) => Ok(code_of("BIOS_BAD_ARGUMENT")),
+                (Meaning::Code(c), _) => Ok(c),
+            },
+        }
+    }
+
+    fn read_status(&mut self) -> Result<text::Status, BackendError> {
+        let r = self.output("STATUS")?;
+        let s = text::read_status(&r.text).map_err(BackendError::Link)?;
+        self.status = Some(s.clone());
+        Ok(s)
+    }
+
+    /// Whether a motion may be sent now: power and homing checked, and whether the arm is
+    /// busy (a motion of ours not seen to end, a queue, or the DONE row).
+    fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
+        self.report_unasked()?;
+        if let Some(e) = self.deferred.take() {
+            return Err(e);
+        }
+        let moving = self.poll()?;
+        let st = self.status.clone().ok_or_else(|| {
+            BackendError::Link("STATUS could not be read before the motion".into())
+        })?;
+        if st.limp.iter().any(|l| *l) {
+            self.note(
+                "refused before sending: STATUS says the arm has no power (LIMP): restore arm \
+                 power at the controller"
+                    .into(),
+            );
+            return Ok(Gate::Refuse(ARM_POWER));
+        }
+        if !homing && !st.homed.iter().all(|h| *h) {
+            self.note(
+                "refused before sending: STATUS says the arm is not homed: call TROLHome(0) \
+                 (with the arm near its home position)"
+                    .into(),
+            );
+            return Ok(Gate::Refuse(sim_code::NOT_HOMED));
+        }
+        Ok(if moving || !self.queue.is_empty() {
+            Gate::Busy
+        } else {
+            Gate::Idle
+        })
+    }
+
+    /// Send a motion now or queue it behind the one under way.
+    fn submit(&mut self, m: Motion, busy: bool) -> BiosResult {
+        if busy {
+            if self.queue.len() >= QUEUE {
+                self.note(format!(
+                    "`{}` refused: {QUEUE} motions wait already",
+                    m.line
+                ));
+                return Ok(sim_code::QUEUE_FULL);
+            }
+            self.note(format!(
+                "`{}` waits for the motion under way to end",
+                m.line
+            ));
+            self.queue.push_back(m);
+            return Ok(0);
+        }
+        self.launch(m)
+    }
+
+    /// Type a motion line; on the success form it is under way.
+    fn launch(&mut self, m: Motion) -> BiosResult {
+        self.last_poll = None;
+        match self.command(&m.line, None) {
+            Ok(0) => {
+                self.outstanding = Some(Outstanding {
+                    motion: m,
+                    since: std::time::Instant::now(),
+                    seen_moving: false,
+                    still: None,
+                });
+                Ok(0)
+            }
+            other => {
+                if !self.queue.is_empty() {
+                    self.note(format!(
+                        "{} queued motion(s) dropped after `{}` failed: not sent",
+                        self.queue.len(),
+                        m.line
+                    ));
+                    self.queue.clear();
                 }
+                other
             }
         }
     }
 
-    fn motion(&mut self, line: &str, name: Option<LocName>) -> BiosResult {
-        let timeout = self.motion_timeout();
-        let r = self.command(line, timeout, name)?;
-        if r == 0 {
-            self.last_poll = None;
+    /// One look at the arm: STATUS, and W2 when the controller says done while a motion of
+    /// ours is under way; starts the next queued motion once the last has ended. Whether
+    /// anything still moves.
+    fn poll(&mut self) -> Result<bool, BackendError> {
+        self.report_unasked()?;
+        let st = match self.profile.completion {
+            Completion::W5 if self.outstanding.is_none() && self.queue.is_empty() => {
+                // W5 alone: velocities.
+                let r = self.output("W5")?;
+                let v = text::row(&r.text, "JOINTS").map_err(BackendError::Link)?;
+                let st = self.read_status()?;
+                if v.iter().any(|x| x.abs() > 1e-6) {
+                    return Ok(true);
+                }
+                st
+            }
+            _ => self.read_status()?,
+        };
+        if st.limp.iter().any(|l| *l) {
+            let ours = self.outstanding.take();
+            let dropped = std::mem::take(&mut self.queue);
+            if ours.is_some() || !dropped.is_empty() {
+                self.note(format!(
+                    "the arm lost power (STATUS: LIMP){}{}",
+                    ours.map(|o| format!(" during `{}`", o.motion.line))
+                        .unwrap_or_default(),
+                    if dropped.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; {} queued motion(s) dropped, not sent", dropped.len())
+                    }
+                ));
+                return Err(BackendError::Refused(ARM_POWER));
+            }
+            return Ok(false);
         }
-        Ok(r)
+        let done = st.done.iter().all(|d| *d);
+        let Some(o) = self.outstanding.as_mut() else {
+            if done {
+                return self.next_in_queue();
+            }
+            return Ok(true);
+        };
+        if o.motion.expect != Expect::Homed && !st.homed.iter().all(|h| *h) {
+            let line = o.motion.line.clone();
+            self.outstanding = None;
+            self.queue.clear();
+            self.note(format!(
+                "the arm lost its homing during `{line}` (STATUS: HOMED); queue dropped"
+            ));
+            return Err(BackendError::Refused(sim_code::NOT_HOMED));
+        }
+        if !done {
+            o.seen_moving = true;
+            return Ok(true);
+        }
+        if self.arrived()? {
+            self.outstanding = None;
+            return self.next_in_queue();
+        }
+        let o = self.outstanding.as_ref().expect("a motion under way");
+        if o.since.elapsed() > self.motion_timeout() {
+            let line = o.motion.line.clone();
+            let expect = o.motion.expect.clone();
+            self.outstanding = None;
+            self.queue.clear();
+            let e = format!(
+                "`{line}`: the C500 says done, but after {} s the arm (W2) is not at the \
+                 motion's end ({expect:?}); whether it ran as asked is not known, and the queue \
+                 was dropped",
+                self.profile.motion_timeout_s
+            );
+            self.note(e.clone());
+            return Err(BackendError::Unsure(e));
+        }
+        Ok(true)
+    }
+
+    fn next_in_queue(&mut self) -> Result<bool, BackendError> {
+        let Some(m) = self.queue.pop_front() else {
+            return Ok(false);
+        };
+        let line = m.line.clone();
+        match self.launch(m)? {
+            0 => Ok(true),
+            c => {
+                self.note(format!("queued `{line}` was refused when its turn came"));
+                Err(BackendError::Refused(c))
+            }
+        }
+    }
+
+    /// Whether the arm is where the motion under way ends (the controller said done).
+    fn arrived(&mut self) -> Result<bool, BackendError> {
+        let expect = match &self.outstanding {
+            Some(o) => o.motion.expect.clone(),
+            None => return Ok(true),
+        };
+        let p = self.read_position(PosMode::Actual)?;
+        let tol = self.profile.arrive_deg;
+        Ok(match expect {
+            Expect::Joints(q) => p.joints.iter().zip(&q).all(|(a, b)| (a - b).abs() <= tol),
+            Expect::Pulses(c) => {
+                let scale = self
+                    .frames
+                    .pulses
+                    .map(|s| s.map(|(k, _)| k.abs()))
+                    .unwrap_or([1.0; 6]);
+                p.pulses
+                    .iter()
+                    .zip(&c)
+                    .zip(&scale)
+                    .all(|((a, b), k)| ((a - b) as f64).abs() <= tol * k)
+            }
+            Expect::World(w) => self.world_near(&p.world, &w),
+            Expect::Unknown | Expect::Homed => {
+                let homed = self
+                    .status
+                    .as_ref()
+                    .is_some_and(|s| s.homed.iter().all(|h| *h));
+                let o = self.outstanding.as_mut().expect("a motion under way");
+                if expect == Expect::Homed && !homed {
+                    false
+                } else if o.seen_moving {
+                    true
+                } else {
+                    let settle = Duration::from_millis(self.profile.settle_ms);
+                    match o.still {
+                        Some((t, q))
+                            if q.iter().zip(&p.joints).all(|(a, b)| (a - b).abs() <= tol) =>
+                        {
+                            t.elapsed() >= settle
+                        }
+                        _ => {
+                            o.still = Some((std::time::Instant::now(), p.joints));
+                            false
+                        }
+                    }
+                }
+            }
+        })
+    }
+
+    /// Whether two WORLD rows are the same pose within the profile's tolerance (the angles
+    /// compared as rotations when the profile knows them).
+    fn world_near(&self, a: &[f64; 6], b: &[f64; 6]) -> bool {
+        let mm = self.frames.mm.unwrap_or(1.0);
+        let d = (0..3)
+            .map(|i| (a[i] - b[i]) * mm)
+            .map(|x| x * x)
+            .sum::<f64>();
+        if d.sqrt() > self.profile.arrive_mm {
+            return false;
+        }
+        match (self.frames.from_rapl(*a), self.frames.from_rapl(*b)) {
+            (Ok(x), Ok(y)) => {
+                crate::probe::rotation_distance_deg(&Pose::from_xyzypr(x), &Pose::from_xyzypr(y))
+                    <= self.profile.arrive_deg
+            }
+            _ => true,
+        }
     }
 
     fn open(&mut self) -> Result<(), RaplError> {
@@ -494,17 +1058,46 @@ impl RaplBackend {
             self.reply_timeout(),
             now,
         )?;
-        let r = self.pump()??;
-        if r.error.is_some() {
+        let mut r = self.pump()?.map_err(no_echo)?;
+        if self.refusal(&r).is_some() {
             let now = self.now();
             self.session
                 .send_line("NOHELP", self.reply_timeout(), now)?;
-            self.pump()??;
+            r = self.pump()?.map_err(no_echo)?;
+            if let Some((n, t)) = self.refusal(&r) {
+                return Err(RaplError::Status(format!(
+                    "NOHELP was refused ({n:03}-{t}); nothing was moved"
+                )));
+            }
         }
-        let st = self
-            .exchange("STATUS", self.reply_timeout())
+        match self.profile.ack {
+            Ack::Required if !r.ack => {
+                return Err(RaplError::Status(
+                    "NOHELP was answered without ACK, which the profile requires (ack = \
+                     \"required\"): set ack = \"auto\" if this controller sends none; nothing \
+                     was moved"
+                        .into(),
+                ));
+            }
+            Ack::Never if r.ack => {
+                return Err(RaplError::Status(
+                    "NOHELP was answered with ACK, but the profile says ack = \"never\": set \
+                     ack = \"auto\"; nothing was moved"
+                        .into(),
+                ));
+            }
+            Ack::Auto => {
+                self.ack = r.ack;
+                self.note(format!(
+                    "this controller answers success {} ACK (learned from NOHELP)",
+                    if r.ack { "with" } else { "without" }
+                ));
+            }
+            _ => {}
+        }
+        let status = self
+            .read_status()
             .map_err(|e| RaplError::Status(e.to_string()))?;
-        let status = text::read_status(&st.text).map_err(RaplError::Status)?;
         match (self.profile.units, status.metric) {
             (Units::Auto, m) => self.frames.mm = m.map(|m| if m { 1.0 } else { 25.4 }),
             (Units::Mm, Some(false)) | (Units::Inch, Some(true)) => {
@@ -534,7 +1127,18 @@ impl RaplBackend {
                 None => "unknown (cartesian commands refused)",
             }
         ));
-        self.status = Some(status);
+        if status.limp.iter().any(|l| *l) {
+            self.note(
+                "the arm has no power (STATUS: LIMP): motions are refused until it has".into(),
+            );
+        }
+        if !status.homed.iter().all(|h| *h) {
+            self.note(
+                "the arm is not homed (STATUS: HOMED): call TROLHome(0) with the arm near its \
+                 home position; other motions are refused until then"
+                    .into(),
+            );
+        }
         Ok(())
     }
 
@@ -560,10 +1164,15 @@ impl RaplBackend {
     }
 
     /// End the session: HELP back on, then two Ctrl-Z to ACI mode. Once: later calls, and
-    /// dropping the backend, send nothing more.
+    /// dropping the backend, send nothing more. Motions still queued are dropped, not sent.
     pub fn close(&mut self) {
         if self.closed {
             return;
+        }
+        if !self.queue.is_empty() {
+            let n = self.queue.len();
+            self.queue.clear();
+            self.note(format!("{n} queued motion(s) dropped at close, not sent"));
         }
         let t = self.reply_timeout();
         let _ = self.exchange("HELP", t);
@@ -572,44 +1181,86 @@ impl RaplBackend {
     }
 
     fn unsettled(&mut self, u: Unsettled) -> i16 {
-        self.note(format!("refused: {u}"));
+        self.note(format!("refused before sending: {u}"));
         match u {
             Unsettled::Units => NO_UNITS,
             Unsettled::Angles => NO_ANGLES,
+            Unsettled::Pulses => NO_PULSES,
         }
     }
 
-    /// Define the scratch location `name` for a TROL target.
-    fn point(&mut self, name: &str, loc: &Location) -> Result<Result<String, i16>, BackendError> {
-        let line = match loc {
+    /// A scratch name not used by a motion under way or queued.
+    fn scratch_name(&mut self) -> String {
+        self.scratch = (self.scratch % (QUEUE + 2)) + 1;
+        format!("T{}", self.scratch)
+    }
+
+    /// Define a scratch location for a TROL target and read it back; the motion line's
+    /// target name and what the motion must end at, or the code that refused it.
+    fn point(&mut self, loc: &Location) -> Result<Result<(String, Expect), i16>, BackendError> {
+        let name = self.scratch_name();
+        let (name, values, expect) = match loc {
             Location::Cart(_) => match self.frames.to_rapl(loc.to_array6()) {
-                Ok(v) => format!("POINT {name} {}", join(&v)),
+                Ok(v) => (name, v, Expect::World(v)),
                 Err(u) => return Ok(Err(self.unsettled(u))),
             },
             Location::Prec(_) => {
-                let c = loc.to_array6();
-                format!("POINT #{name} {}", join_int(&c.map(|x| x.round() as i64)))
+                if self.frames.pulses.is_none() {
+                    return Ok(Err(self.unsettled(Unsettled::Pulses)));
+                }
+                let c = loc.to_array6().map(|x| x.round() as i64);
+                (format!("#{name}"), c.map(|x| x as f64), Expect::Pulses(c))
             }
             Location::Joint(_) => {
-                let c = joints_to_counts(&loc.to_array6());
-                format!("POINT #{name} {}", join_int(&c.map(i64::from)))
+                let deg = loc.to_array6().map(f64::to_degrees);
+                match self.frames.joints_to_pulses(deg) {
+                    Ok(c) => (format!("#{name}"), c.map(|x| x as f64), Expect::Joints(deg)),
+                    Err(u) => return Ok(Err(self.unsettled(u))),
+                }
             }
         };
-        let t = self.reply_timeout();
-        match self.command(&line, t, None)? {
-            0 => Ok(Ok(if matches!(loc, Location::Cart(_)) {
-                name.to_string()
-            } else {
-                format!("#{name}")
-            })),
-            c => Ok(Err(c)),
+        let line = if name.starts_with('#') {
+            format!("POINT {name} {}", join_int(&values.map(|x| x as i64)))
+        } else {
+            format!("POINT {name} {}", join(&values))
+        };
+        // POINT changes a scratch location only: whatever happened to it, no motion was sent.
+        match self.command(&line, None).map_err(not_run)? {
+            0 => {}
+            c => return Ok(Err(c)),
         }
+        // Read it back: the motion names it only if it holds what was sent.
+        let back = self.output(&format!("LISTL {name}"))?;
+        let rows = text::read_listl(&back.text).map_err(BackendError::Link)?;
+        let held = rows.into_iter().find(|(n, _)| *n == name).map(|(_, l)| l);
+        let same = match (&held, &expect) {
+            (Some(Listed::Cart(v)), Expect::World(w)) => {
+                v.iter().zip(w).all(|(a, b)| (a - b).abs() <= 0.002)
+            }
+            (Some(Listed::Prec(p)), _) => p.iter().zip(&values).all(|(a, b)| *a as f64 == *b),
+            _ => false,
+        };
+        if !same {
+            let e = format!(
+                "`{line}` was answered with success, but LISTL {name} reads {held:?}: the \
+                 scratch location does not hold the target, so no motion was sent"
+            );
+            self.note(e.clone());
+            return Err(BackendError::Link(e));
+        }
+        Ok(Ok((name, expect)))
     }
 
-    fn move_pose(&mut self, pose: &Pose, straight: bool) -> BiosResult {
+    fn move_pose(&mut self, pose: &Pose, straight: bool, busy: bool) -> BiosResult {
         let loc = Location::from_array6(Tag::Cart, pose.to_xyzypr());
-        match self.point("T1", &loc)? {
-            Ok(n) => self.motion(&format!("{} {n}", mv(straight)), None),
+        match self.point(&loc)? {
+            Ok((n, expect)) => self.submit(
+                Motion {
+                    line: format!("{} {n}", mv(straight)),
+                    expect,
+                },
+                busy,
+            ),
             Err(c) => Ok(c),
         }
     }
@@ -617,23 +1268,29 @@ impl RaplBackend {
     /// A location of the controller's table, or None when it has none of the name.
     fn listed(&mut self, name: &LocName) -> Result<Option<Listed>, BackendError> {
         let upper = name.as_str().to_ascii_uppercase();
+        let line = format!("LISTL {upper}");
         let t = self.reply_timeout();
-        let r = self.exchange(&format!("LISTL {upper}"), t)?;
-        if r.error.is_some() {
-            return Ok(None);
-        }
+        let r = self.exchange(&line, t)?;
+        let r = match self.answer(&line, r, true)? {
+            Answer::Refused(..) => return Ok(None),
+            Answer::Done(r) => r,
+        };
         let rows = text::read_listl(&r.text).map_err(BackendError::Link)?;
         Ok(rows.into_iter().find(|(n, _)| *n == upper).map(|(_, l)| l))
     }
 
-    /// The pose of a listed location (a cartesian one needs the profile's conventions).
+    /// The pose of a listed location (a cartesian one needs the profile's conventions, a
+    /// precision point its pulses).
     fn pose_of(&mut self, l: Listed) -> Result<Pose, i16> {
         Ok(match l {
             Listed::Cart(v) => match self.frames.from_rapl(v) {
                 Ok(t) => Pose::from_xyzypr(t),
                 Err(u) => return Err(self.unsettled(u)),
             },
-            Listed::Prec(p) => self.kin().fk(&counts_to_joints(&p.map(|x| x as f64))),
+            Listed::Prec(p) => match self.frames.pulses_to_joints(p) {
+                Ok(deg) => self.kin().fk(&deg.map(f64::to_radians)),
+                Err(u) => return Err(self.unsettled(u)),
+            },
         })
     }
 
@@ -641,29 +1298,14 @@ impl RaplBackend {
         Kinematics::new(self.tool)
     }
 
-    /// Wait until the arm is idle (for a motion computed from where the arm will be).
-    fn wait_idle(&mut self) -> Result<(), BackendError> {
-        let until = std::time::Instant::now() + self.motion_timeout();
-        while self.moving()? {
-            if std::time::Instant::now() > until {
-                return Err(BackendError::Link(
-                    "the previous motion did not end within motion_timeout_s".into(),
-                ));
-            }
-            std::thread::sleep(Duration::from_millis(self.profile.poll_ms));
-        }
-        Ok(())
-    }
-
     fn read_position(&mut self, mode: PosMode) -> Result<text::Position, BackendError> {
         let cmd = match mode {
             PosMode::Commanded => "W0",
             PosMode::Actual => "W2",
         };
-        let t = self.reply_timeout();
         let mut why = String::new();
         for _ in 0..3 {
-            let r = self.exchange(cmd, t)?;
+            let r = self.output(cmd)?;
             match text::read_position(&r.text).and_then(|p| self.consistent(p)) {
                 Ok(p) => return Ok(p),
                 Err(e) => {
@@ -677,38 +1319,124 @@ impl RaplBackend {
         )))
     }
 
-    /// A reading whose PULSES and JOINTS rows agree (within 0.01 degrees), when the profile
-    /// asks for the check.
+    /// A reading whose PULSES and JOINTS rows agree (within 0.01 degrees) under the
+    /// profile's pulse convention, when it has one and asks for the check.
     fn consistent(&self, p: text::Position) -> Result<text::Position, String> {
         if !self.profile.cross_check {
             return Ok(p);
         }
-        let q = counts_to_joints(&p.pulses.map(|x| x as f64));
+        let Ok(q) = self.frames.pulses_to_joints(p.pulses) else {
+            return Ok(p);
+        };
         for (i, (from_pulses, read)) in q.iter().zip(&p.joints).enumerate() {
-            if (from_pulses.to_degrees() - read).abs() > 0.01 {
+            if (from_pulses - read).abs() > 0.01 {
                 return Err(format!(
-                    "joint {} reads {read:.4} deg but its pulses say {:.4} deg",
+                    "joint {} reads {read:.4} deg but its pulses say {from_pulses:.4} deg",
                     i + 1,
-                    from_pulses.to_degrees()
                 ));
             }
         }
         Ok(p)
     }
 
+    /// Where the arm stands (W0), for a motion computed from it; BUSY while a motion of ours
+    /// has not ended (its end would be a guess).
+    fn standing(&mut self) -> Result<Result<text::Position, i16>, BackendError> {
+        if self.outstanding.is_some() || !self.queue.is_empty() {
+            self.note(
+                "refused: a motion has not ended, and this one is computed from where the arm \
+                 is: call TROLFinish(FINISH_WAIT) first"
+                    .into(),
+            );
+            return Ok(Err(BUSY));
+        }
+        self.read_position(PosMode::Commanded).map(Ok)
+    }
+
     fn here(&mut self) -> Result<Result<Pose, i16>, BackendError> {
-        self.wait_idle()?;
-        let p = self.read_position(PosMode::Commanded)?;
+        let p = match self.standing()? {
+            Ok(p) => p,
+            Err(c) => return Ok(Err(c)),
+        };
         Ok(match self.frames.from_rapl(p.world) {
             Ok(v) => Ok(Pose::from_xyzypr(v)),
             Err(u) => Err(self.unsettled(u)),
         })
+    }
+
+    /// The gate, then `f` with whether the arm is busy.
+    fn motion_with(
+        &mut self,
+        homing: bool,
+        f: impl FnOnce(&mut Self, bool) -> BiosResult,
+    ) -> BiosResult {
+        match self.gate(homing)? {
+            Gate::Refuse(c) => Ok(c),
+            Gate::Idle => f(self, false),
+            Gate::Busy => f(self, true),
+        }
+    }
+
+    fn joints(&mut self, cmd: &str, q: [f64; 6], relative: bool) -> BiosResult {
+        let Some(units) = self.joint_units else {
+            self.note(format!(
+                "refused {cmd} before sending: its units are not known; set joint_units in the \
+                 RAPL-II profile (docs/c500.md, Settle the conventions)"
+            ));
+            return Ok(NO_JOINT_UNITS);
+        };
+        if q.iter().any(|x| !x.is_finite()) {
+            return Ok(code_of("BIOS_BAD_ARGUMENT"));
+        }
+        let v = match units {
+            JointUnits::Degrees => q.map(f64::to_degrees),
+            JointUnits::Radians => q,
+        };
+        let line = format!("{cmd} {}", join(&v));
+        self.motion_with(false, |b, busy| {
+            let deg = q.map(f64::to_degrees);
+            let expect = if relative {
+                let p = match b.standing()? {
+                    Ok(p) => p,
+                    Err(c) => return Ok(c),
+                };
+                Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]))
+            } else {
+                Expect::Joints(deg)
+            };
+            b.submit(Motion { line, expect }, busy)
+        })
+    }
+}
+
+/// The lines of a reply's text, trimmed, without blank ones (NULs and spaces a controller
+/// sends after a number count as blank).
+fn lines(text: &str) -> Vec<String> {
+    text.split(['\r', '\n'])
+        .map(|l| l.trim_matches(|c: char| c.is_whitespace() || c == '\0'))
+        .filter(|l| !l.is_empty())
+        .map(str::to_string)
+        .collect()
+}
+
+fn no_echo(e: SessionError) -> RaplError {
+    match e {
+        e @ SessionError::EchoTimeout { at: 0, .. } => RaplError::NoEcho(e),
+        e => RaplError::Session(e),
     }
 }
 
 impl Drop for RaplBackend {
     fn drop(&mut self) {
         self.close();
+    }
+}
+
+/// A failure of a line that cannot move the arm: the motion it prepared was not sent.
+fn not_run(e: BackendError) -> BackendError {
+    match e {
+        BackendError::Unsure(t) => BackendError::Link(t),
+        e => e,
     }
 }
 
@@ -750,92 +1478,83 @@ impl Backend for RaplBackend {
         RAPL_CODES
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
-        let pose = match target {
-            Target::Name(n) => match self.listed(n)? {
-                Some(l) => match self.pose_of(l) {
-                    Ok(p) => p,
-                    Err(c) => return Ok(c),
+        let target = target.clone();
+        self.motion_with(false, |b, busy| {
+            let pose = match &target {
+                Target::Name(n) => match b.listed(n)? {
+                    Some(l) => match b.pose_of(l) {
+                        Ok(p) => p,
+                        Err(c) => return Ok(c),
+                    },
+                    None => return Err(BackendError::UnknownLocation(*n)),
                 },
-                None => return Err(BackendError::UnknownLocation(*n)),
-            },
-            Target::Location(l @ Location::Cart(_)) => Pose::from_xyzypr(l.to_array6()),
-            Target::Location(l @ Location::Prec(_)) => {
-                self.kin().fk(&counts_to_joints(&l.to_array6()))
-            }
-            Target::Location(l @ Location::Joint(_)) => self.kin().fk(&l.to_array6()),
-        };
-        self.move_pose(&pose.then(&Pose::from_xyzypr(disp)), straight)
+                Target::Location(l @ Location::Cart(_)) => Pose::from_xyzypr(l.to_array6()),
+                Target::Location(l @ Location::Prec(_)) => {
+                    match b
+                        .frames
+                        .pulses_to_joints(l.to_array6().map(|x| x.round() as i64))
+                    {
+                        Ok(deg) => b.kin().fk(&deg.map(f64::to_radians)),
+                        Err(u) => return Ok(b.unsettled(u)),
+                    }
+                }
+                Target::Location(l @ Location::Joint(_)) => b.kin().fk(&l.to_array6()),
+            };
+            b.move_pose(&pose.then(&Pose::from_xyzypr(disp)), straight, busy)
+        })
     }
     fn close(&mut self, force: u8) -> BiosResult {
-        let t = self.reply_timeout();
-        let r = self.command(&format!("CLOSE {force}"), t, None)?;
-        if r == 0 {
-            self.last_poll = None;
-        }
+        self.report_unasked()?;
+        let r = self.command(&format!("CLOSE {force}"), None)?;
+        self.last_poll = None;
         Ok(r)
     }
     fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
-        match self.here()? {
-            Ok(p) => self.move_pose(&p.then(&Pose::from_xyzypr(disp)), straight),
+        self.motion_with(false, |b, busy| match b.here()? {
+            Ok(p) => b.move_pose(&p.then(&Pose::from_xyzypr(disp)), straight, busy),
             Err(c) => Ok(c),
-        }
+        })
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
+        if let Some(e) = self.deferred.take() {
+            return Err(e);
+        }
         if let Some((at, m)) = self.last_poll {
             if at.elapsed() < Duration::from_millis(self.profile.poll_ms) {
                 return Ok(m);
             }
         }
-        let t = self.reply_timeout();
-        let m = match self.profile.completion {
-            Completion::Status => {
-                let r = self.exchange("STATUS", t)?;
-                let s = text::read_status(&r.text).map_err(BackendError::Link)?;
-                !s.done.iter().all(|d| *d)
-            }
-            Completion::W5 => {
-                let r = self.exchange("W5", t)?;
-                let v = text::row(&r.text, "JOINTS").map_err(BackendError::Link)?;
-                v.iter().any(|x| x.abs() > 1e-6)
-            }
-            Completion::Finish => {
-                let mt = self.motion_timeout();
-                self.exchange("FINISH", mt)?;
-                false
-            }
-        };
+        let m = self.poll()?;
         self.last_poll = Some((std::time::Instant::now(), m));
         Ok(m)
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
+        self.report_unasked()?;
         let d = match self.frames.length_to_rapl(f64::from(dist)) {
             Ok(d) => d,
             Err(u) => return Ok(self.unsettled(u)),
         };
-        let t = self.reply_timeout();
-        let r = self.command(&format!("GRIP {}", text::num(d)), t, None)?;
-        if r == 0 {
-            self.last_poll = None;
-        }
+        let r = self.command(&format!("GRIP {}", text::num(d)), None)?;
+        self.last_poll = None;
         Ok(r)
     }
     fn halt(&mut self) -> BiosResult {
+        // Nothing queued goes out after a Halt, whatever happens to the Halt itself.
         self.last_poll = None;
-        let t = self.reply_timeout();
-        match self.profile.halt {
-            Halt::Halt => self.command("HALT", t, None),
-            Halt::Abort => self.command("ABORT", t, None),
-            Halt::CtrlC => {
-                self.settle()?;
-                let now = self.now();
-                self.session.resync(now);
-                match self.pump() {
-                    Ok(Ok(_)) => Ok(0),
-                    Ok(Err(e)) => Err(BackendError::Unsure(e.to_string())),
-                    Err(e) => Err(BackendError::Unsure(e.to_string())),
-                }
-            }
+        if !self.queue.is_empty() {
+            let n = self.queue.len();
+            self.queue.clear();
+            self.note(format!("Halt: {n} queued motion(s) dropped, not sent"));
         }
+        let r = match self.profile.halt {
+            Halt::Halt => self.command_as("HALT", None, true),
+            Halt::Abort => self.command_as("ABORT", None, true),
+            Halt::CtrlC => self.interrupt().map(|_| 0),
+        };
+        if matches!(r, Ok(0)) {
+            self.outstanding = None;
+        }
+        r
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         if axis != 0 {
@@ -844,87 +1563,193 @@ impl Backend for RaplBackend {
             ));
             return Ok(UNSUPPORTED);
         }
-        self.motion("HOME", None)
+        self.motion_with(true, |b, busy| {
+            b.submit(
+                Motion {
+                    line: "HOME".into(),
+                    expect: Expect::Homed,
+                },
+                busy,
+            )
+        })
     }
     fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult {
         if straight {
+            match self.profile.jog_frame() {
+                Ok(Some(true)) => {}
+                Ok(Some(false)) => {
+                    self.note(
+                        "refused before sending: this controller's JOG moves in the tool \
+                         frame, TROL's Jog in the world frame; use Jog with straight = 0"
+                            .into(),
+                    );
+                    return Ok(UNSUPPORTED);
+                }
+                _ => {
+                    self.note(
+                        "refused before sending: JOG's frame is not known; set jog_frame in \
+                         the RAPL-II profile (docs/c500.md, Settle the conventions)"
+                            .into(),
+                    );
+                    return Ok(NO_JOG_FRAME);
+                }
+            }
             let v: Result<Vec<f64>, Unsettled> =
                 d.iter().map(|x| self.frames.length_to_rapl(*x)).collect();
-            return match v {
-                Ok(v) => self.motion(&format!("JOG {}", join(&v)), None),
-                Err(u) => Ok(self.unsettled(u)),
+            let v = match v {
+                Ok(v) => v,
+                Err(u) => return Ok(self.unsettled(u)),
             };
+            return self.motion_with(false, |b, busy| {
+                let p = match b.standing()? {
+                    Ok(p) => p,
+                    Err(c) => return Ok(c),
+                };
+                let mut w = p.world;
+                for i in 0..3 {
+                    w[i] += v[i];
+                }
+                b.submit(
+                    Motion {
+                        line: format!("JOG {}", join(&v)),
+                        expect: Expect::World(w),
+                    },
+                    busy,
+                )
+            });
         }
-        match self.here()? {
+        self.motion_with(false, |b, busy| match b.here()? {
             Ok(mut p) => {
                 p.pos.x += d[0];
                 p.pos.y += d[1];
                 p.pos.z += d[2];
-                self.move_pose(&p, false)
+                b.move_pose(&p, false, busy)
             }
             Err(c) => Ok(c),
-        }
+        })
     }
     fn joint(&mut self, joint: u8, radians: f64) -> BiosResult {
         if !(1..=6).contains(&joint) || !radians.is_finite() {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
-        self.motion(
-            &format!("JOINT {joint},{}", text::num(radians.to_degrees())),
-            None,
-        )
+        let deg = radians.to_degrees();
+        self.motion_with(false, |b, busy| {
+            let p = match b.standing()? {
+                Ok(p) => p,
+                Err(c) => return Ok(c),
+            };
+            let mut q = p.joints;
+            q[usize::from(joint - 1)] += deg;
+            b.submit(
+                Motion {
+                    line: format!("JOINT {joint},{}", text::num(deg)),
+                    expect: Expect::Joints(q),
+                },
+                busy,
+            )
+        })
     }
     fn ma(&mut self, q: [f64; 6]) -> BiosResult {
-        self.joints("MA", q)
+        self.joints("MA", q, false)
     }
     fn mi(&mut self, dq: [f64; 6]) -> BiosResult {
-        self.joints("MI", dq)
+        self.joints("MI", dq, true)
     }
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
-        match target {
-            Target::Name(n) => match self.listed(n)? {
-                Some(_) => {
+        let target = target.clone();
+        if let Target::Location(l @ Location::Joint(_)) = &target {
+            // A joint target goes as MA where its units are known: no pulse convention needed.
+            if self.joint_units.is_some() && !straight {
+                return self.joints("MA", l.to_array6(), false);
+            }
+        }
+        self.motion_with(false, |b, busy| match &target {
+            Target::Name(n) => match b.listed(n)? {
+                Some(l) => {
+                    let expect = match l {
+                        Listed::Cart(v) => Expect::World(v),
+                        Listed::Prec(p) => Expect::Pulses(p),
+                    };
                     let upper = n.as_str().to_ascii_uppercase();
-                    self.motion(&format!("{} {upper}", mv(straight)), Some(*n))
+                    let line = format!("{} {upper}", mv(straight));
+                    if busy {
+                        return b.submit(Motion { line, expect }, true);
+                    }
+                    b.last_poll = None;
+                    match b.command(&line, Some(*n))? {
+                        0 => {
+                            b.outstanding = Some(Outstanding {
+                                motion: Motion { line, expect },
+                                since: std::time::Instant::now(),
+                                seen_moving: false,
+                                still: None,
+                            });
+                            Ok(0)
+                        }
+                        c => Ok(c),
+                    }
                 }
                 None => Err(BackendError::UnknownLocation(*n)),
             },
-            Target::Location(l) => match self.point("T1", l)? {
-                Ok(name) => self.motion(&format!("{} {name}", mv(straight)), None),
+            Target::Location(l) => match b.point(l)? {
+                Ok((name, expect)) => b.submit(
+                    Motion {
+                        line: format!("{} {name}", mv(straight)),
+                        expect,
+                    },
+                    busy,
+                ),
                 Err(c) => Ok(c),
             },
-        }
+        })
     }
     fn open(&mut self, force: u8) -> BiosResult {
-        let t = self.reply_timeout();
-        let r = self.command(&format!("OPEN {force}"), t, None)?;
-        if r == 0 {
-            self.last_poll = None;
-        }
+        self.report_unasked()?;
+        let r = self.command(&format!("OPEN {force}"), None)?;
+        self.last_poll = None;
         Ok(r)
     }
     fn ready(&mut self) -> BiosResult {
-        self.motion("READY", None)
+        self.motion_with(false, |b, busy| {
+            b.submit(
+                Motion {
+                    line: "READY".into(),
+                    expect: Expect::Unknown,
+                },
+                busy,
+            )
+        })
     }
     fn set_tool(&mut self, tool: [f64; 6]) -> BiosResult {
-        match self.point("TL", &Location::from_array6(Tag::Cart, tool))? {
-            Ok(_) => {
-                let t = self.reply_timeout();
-                let r = self.command("TOOL TL", t, None)?;
-                if r == 0 {
-                    self.tool = tool;
-                }
-                Ok(r)
-            }
-            Err(c) => Ok(c),
+        self.report_unasked()?;
+        if self.outstanding.is_some() || !self.queue.is_empty() {
+            self.note(
+                "refused: the tool changes what a queued motion's target means: call \
+                 TROLFinish(FINISH_WAIT) first"
+                    .into(),
+            );
+            return Ok(BUSY);
         }
+        let v = match self.frames.to_rapl(tool) {
+            Ok(v) => v,
+            Err(u) => return Ok(self.unsettled(u)),
+        };
+        match self.command(&format!("POINT TL {}", join(&v)), None)? {
+            0 => {}
+            c => return Ok(c),
+        }
+        let r = self.command("TOOL TL", None)?;
+        if r == 0 {
+            self.tool = tool;
+        }
+        Ok(r)
     }
     fn speed(&mut self, percent: u8) -> BiosResult {
         if !(1..=100).contains(&percent) {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
-        let t = self.reply_timeout();
-        self.command(&format!("SPEED {percent}"), t, None)
+        self.report_unasked()?;
+        self.command(&format!("SPEED {percent}"), None)
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let p = self.read_position(mode)?;
@@ -937,20 +1762,23 @@ impl Backend for RaplBackend {
             },
         })
     }
-}
-
-impl RaplBackend {
-    fn joints(&mut self, cmd: &str, q: [f64; 6]) -> BiosResult {
-        let Some(units) = self.joint_units else {
-            self.note(format!(
-                "refused {cmd}: its units are not known; set joint_units in the RAPL-II profile"
-            ));
-            return Ok(NO_JOINT_UNITS);
-        };
-        let v = match units {
-            JointUnits::Degrees => q.map(f64::to_degrees),
-            JointUnits::Radians => q,
-        };
-        self.motion(&format!("{cmd} {}", join(&v)), None)
+    fn idle(&mut self) {
+        if self.closed || (self.queue.is_empty() && self.deferred.is_none()) {
+            return;
+        }
+        if self.deferred.is_some() {
+            return;
+        }
+        if self
+            .last_poll
+            .is_some_and(|(at, _)| at.elapsed() < Duration::from_millis(self.profile.poll_ms))
+        {
+            return;
+        }
+        match self.poll() {
+            Ok(m) => self.last_poll = Some((std::time::Instant::now(), m)),
+            // Told by the next call (Finish, or any motion).
+            Err(e) => self.deferred = Some(e),
+        }
     }
 }

@@ -7,8 +7,11 @@
 //! - terminal mode: echo (upper-cased), Ctrl-C cancels the line and prompts, backspace,
 //!   HELP mode on at start with keyword completion (the rest of the word and two blanks,
 //!   an assumption fitting RW's five-byte read after `NOH`) until NOHELP, the profile's
-//!   `extra_after_digit` NUL bytes after the first character of a number (assumption: RW
-//!   read 4 bytes it never explained), ACK (unless `ack = "never"`) and the prompt;
+//!   `extra_after_digit` bytes (`[twin] extra_byte`, spaces by default) after the first
+//!   character of a number (assumption: RW read 4 bytes it never explained), ACK (unless
+//!   `ack = "never"`) and the prompt;
+//! - every point the public sources leave open is a switch ([`crate::profile::Twin`] and the
+//!   profile's conventions), and [`VARIANTS`] names the matrix the backend's tests run across;
 //! - a finite type-ahead buffer: while a command waits (FINISH, or a motion behind another,
 //!   which waits for the first to end), input queues and XOFF goes out when it fills, XON
 //!   when it drains; the host's XOFF stops the output;
@@ -18,11 +21,11 @@
 use std::collections::{BTreeMap, VecDeque};
 
 use trol_a465::arm::{self, Arm, Stored, Which, code};
-use trol_a465::model::joints_to_counts;
+use trol_a465::model::{counts_to_joints, joints_to_counts};
 
 use crate::aci::Slave;
 use crate::frames::Frames;
-use crate::profile::{Ack, Entry, Halt, JointUnits, Profile, SIM_ERRORS};
+use crate::profile::{Ack, Entry, Halt, JointUnits, Profile, RefusalForm, SIM_ERRORS, Units};
 use crate::session::{ACK, CTRL_C, CTRL_Z, XOFF, XON};
 use crate::text::{self, Listed, Position, Status};
 
@@ -55,9 +58,162 @@ enum Waiting {
     Motion(String),
 }
 
+/// The controllers the public sources allow, one per open point (docs/c500.md, "What TROL
+/// assumes"): a name, what it changes, and the profile that makes the simulated C500 play
+/// it. `trol sim --rapl --variant NAME` serves one; the backend's tests run across all.
+pub const VARIANTS: &[(&str, &str)] = &[
+    (
+        "default",
+        "the simulator's own readings of every open point",
+    ),
+    (
+        "colon-refusal",
+        "refusals as `:NNN-TEXT.` (the form of the only public program error)",
+    ),
+    (
+        "stars-refusal",
+        "refusals as `*** TEXT ***`, without a number",
+    ),
+    ("no-period", "refusals as `NNN-TEXT`, without the period"),
+    ("ack-at-end", "a motion's ACK and prompt come at its end"),
+    (
+        "done-lag",
+        "the DONE row still says done for 0.3 s after a motion's ACK",
+    ),
+    (
+        "estop-line",
+        "an emergency stop prints `*** EMERGENCY STOP ***` unasked",
+    ),
+    (
+        "warning-then-ack",
+        "a numbered warning line before the ACK of every motion",
+    ),
+    (
+        "no-ack",
+        "no ACK on success (the G3000 driver never looks for one)",
+    ),
+    ("ma-radians", "MA and MI take radians (R2JSON, RobWork)"),
+    ("inch", "lengths in inches (RobWork's controller)"),
+    (
+        "world-offset",
+        "WORLD angles of a model with identity orientation at all joints zero",
+    ),
+    (
+        "pulses-g3000",
+        "one pulse per encoder line and a negative sign (the G3000 driver's table)",
+    ),
+    (
+        "nul-after-digit",
+        "four NUL bytes after a number's first character",
+    ),
+    ("no-echo", "echo off (RAPL-II's CONFIG ECHO)"),
+    ("not-homed", "the arm is not homed at power-up"),
+];
+
+/// The profile of variant `name` (see [`VARIANTS`]), and whether its arm starts homed.
+pub fn variant(name: &str) -> Option<(Profile, bool)> {
+    let base = Profile::simulator();
+    let twin = base.twin.clone();
+    let p = match name {
+        "default" | "not-homed" => base,
+        "colon-refusal" => Profile {
+            twin: crate::profile::Twin {
+                refusal: ":NNN-TEXT.".into(),
+                ..twin
+            },
+            ..base
+        },
+        "stars-refusal" => Profile {
+            twin: crate::profile::Twin {
+                refusal: "*** TEXT ***".into(),
+                ..twin
+            },
+            ..base
+        },
+        "no-period" => Profile {
+            twin: crate::profile::Twin {
+                refusal: "NNN-TEXT".into(),
+                ..twin
+            },
+            ..base
+        },
+        "ack-at-end" => Profile {
+            twin: crate::profile::Twin {
+                ack_at_end: true,
+                ..twin
+            },
+            ..base
+        },
+        "done-lag" => Profile {
+            twin: crate::profile::Twin {
+                done_lag_ms: 300,
+                ..twin
+            },
+            ..base
+        },
+        "estop-line" => Profile {
+            twin: crate::profile::Twin {
+                estop_line: "*** EMERGENCY STOP ***".into(),
+                ..twin
+            },
+            ..base
+        },
+        "warning-then-ack" => Profile {
+            twin: crate::profile::Twin {
+                motion_warning: "101-NEAR JOINT LIMIT.".into(),
+                ..twin
+            },
+            ..base
+        },
+        "no-ack" => Profile {
+            ack: Ack::Never,
+            ..base
+        },
+        "ma-radians" => Profile {
+            joint_units: "radians".into(),
+            ..base
+        },
+        "inch" => Profile {
+            units: Units::Inch,
+            ..base
+        },
+        "world-offset" => Profile {
+            tool_rotation: [0.0, 90.0, 0.0],
+            ..base
+        },
+        "pulses-g3000" => Profile {
+            pulse_scale: trol_a465::model::ENCODER_LINES
+                .iter()
+                .zip(trol_a465::model::GEAR_RATIOS)
+                .map(|(l, g)| -l * g / 360.0)
+                .collect(),
+            pulse_zero: vec![120.0, -40.0, 7.0, 0.0, 2.0, -9.0],
+            ..base
+        },
+        "nul-after-digit" => Profile {
+            twin: crate::profile::Twin {
+                extra_byte: 0,
+                ..twin
+            },
+            ..base
+        },
+        "no-echo" => Profile {
+            twin: crate::profile::Twin {
+                echo: false,
+                ..twin
+            },
+            ..base
+        },
+        _ => return None,
+    };
+    Some((p, name != "not-homed"))
+}
+
 /// The simulated C500.
 pub struct C500 {
     profile: Profile,
+    refusal: RefusalForm,
+    acked_at: f64,
     frames: Frames,
     joint_units: JointUnits,
     arm: Arm,
@@ -85,14 +241,15 @@ fn is_numeric(b: u8) -> bool {
 impl C500 {
     /// A C500 as `profile` describes it, with `arm`, and the locations (names upper-cased).
     pub fn new(profile: Profile, arm: Arm, locations: Vec<(String, Stored)>) -> C500 {
-        let frames = Frames {
-            mm: profile.units.mm().or(Some(1.0)),
-            angles: profile
-                .angles()
-                .or(crate::profile::parse_angles("yaw pitch roll")
-                    .ok()
-                    .flatten()),
-        };
+        let mut frames = Frames::of(&profile);
+        frames.mm = frames.mm.or(Some(1.0));
+        frames.angles = frames
+            .angles
+            .or(crate::profile::parse_angles("yaw pitch roll")
+                .ok()
+                .flatten());
+        let model = Frames::of(&Profile::simulator());
+        frames.pulses = frames.pulses.or(model.pulses);
         let joint_units = profile
             .joint_units()
             .ok()
@@ -103,7 +260,32 @@ impl C500 {
         } else {
             Mode::Aci(Slave::new(profile.slave))
         };
+        let refusal = RefusalForm::parse(&profile.twin.refusal)
+            .or_else(|_| RefusalForm::parse("NNN-TEXT."))
+            .expect("the default form parses");
+        // Precision points of a location file are the A465 model's counts: as this
+        // controller's pulses.
+        let locations = locations
+            .into_iter()
+            .map(|(n, l)| {
+                let l = match l {
+                    Stored::Prec(c) => {
+                        let deg = counts_to_joints(&c.map(f64::from)).map(f64::to_degrees);
+                        Stored::Prec(
+                            frames
+                                .joints_to_pulses(deg)
+                                .unwrap_or_default()
+                                .map(|p| p as i32),
+                        )
+                    }
+                    other => other,
+                };
+                (n.to_ascii_uppercase(), l)
+            })
+            .collect();
         C500 {
+            refusal,
+            acked_at: f64::NEG_INFINITY,
             help: profile.help_at_start,
             frames,
             joint_units,
@@ -120,10 +302,7 @@ impl C500 {
             last_error: "000-NO ERROR.".into(),
             ctrl_z: 0,
             limp: false,
-            locations: locations
-                .into_iter()
-                .map(|(n, l)| (n.to_ascii_uppercase(), l))
-                .collect(),
+            locations,
             log: Vec::new(),
             profile,
         }
@@ -138,6 +317,18 @@ impl C500 {
         }
         if p.joint_units.is_empty() {
             p.joint_units = "degrees".into();
+        }
+        if p.pulse_scale.is_empty() {
+            p.pulse_scale = Profile::simulator().pulse_scale;
+        }
+        if p.jog_frame.is_empty() {
+            p.jog_frame = "world".into();
+        }
+        if !p.refusal.contains(&p.twin.refusal) {
+            p.refusal = vec![p.twin.refusal.clone()];
+        }
+        if p.units == Units::Auto {
+            p.units = Units::Mm;
         }
         p
     }
@@ -249,6 +440,10 @@ impl C500 {
 
     fn ok(&mut self, body: &str) {
         self.out.extend(body.bytes());
+        self.ack_prompt();
+    }
+
+    fn ack_prompt(&mut self) {
         if self.profile.ack != Ack::Never {
             self.out.push_back(ACK);
         }
@@ -261,7 +456,7 @@ impl C500 {
             .find(|e| e.0 == number)
             .map(|e| e.1)
             .unwrap_or("COMMAND ERROR");
-        let line = format!("{number:03}-{text}.");
+        let line = self.refusal.write(number, text);
         self.out.extend(b"\n");
         self.out.extend(line.bytes());
         self.last_error = line;
@@ -283,7 +478,9 @@ impl C500 {
         let terminator = self.profile.terminator.byte();
         match b {
             _ if b == terminator => {
-                self.out.push_back(b);
+                if self.profile.twin.echo {
+                    self.out.push_back(b);
+                }
                 let line = String::from_utf8_lossy(&self.line).trim().to_string();
                 self.line.clear();
                 self.swallow.clear();
@@ -306,11 +503,13 @@ impl C500 {
                     return;
                 }
                 self.line.push(c);
-                self.out.push_back(c);
                 let numeric = is_numeric(c);
-                if numeric && !self.in_number {
-                    for _ in 0..self.profile.extra_after_digit {
-                        self.out.push_back(0);
+                if self.profile.twin.echo {
+                    self.out.push_back(c);
+                    if numeric && !self.in_number {
+                        for _ in 0..self.profile.extra_after_digit {
+                            self.out.push_back(self.profile.twin.extra_byte);
+                        }
                     }
                 }
                 self.in_number = numeric;
@@ -361,10 +560,43 @@ impl C500 {
         }
     }
 
+    /// A motion's answer: a refusal at once; an acceptance with the warning line (if any) and
+    /// the ACK now, or once the motion ends (`ack_at_end`).
+    fn motion_answer(&mut self, c: i16, now: f64) {
+        if c != code::OK {
+            return self.refuse(Self::code_error(c));
+        }
+        self.acked_at = now;
+        if !self.profile.twin.motion_warning.is_empty() {
+            let w = format!("\r\n{}\r\n", self.profile.twin.motion_warning);
+            self.out.extend(w.bytes());
+        }
+        if self.profile.twin.ack_at_end && self.arm.is_moving(now) {
+            self.waiting = Some(Waiting::Finish);
+        } else {
+            self.ack_prompt();
+        }
+    }
+
+    /// This controller's pulses as the A465 model's counts.
+    fn model_counts(&self, p: [i32; 6]) -> [f64; 6] {
+        let deg = self
+            .frames
+            .pulses_to_joints(p.map(i64::from))
+            .unwrap_or_default();
+        joints_to_counts(&deg.map(f64::to_radians)).map(f64::from)
+    }
+
+    fn pulses_of(&self, q: &[f64; 6]) -> [i64; 6] {
+        self.frames
+            .joints_to_pulses(q.map(f64::to_degrees))
+            .unwrap_or_default()
+    }
+
     fn target(&self, name: &str) -> Option<arm::Target> {
         Some(match self.locations.get(name)? {
             Stored::Cart(v) => arm::Target::Cart(*v),
-            Stored::Prec(c) => arm::Target::Prec(c.map(f64::from)),
+            Stored::Prec(c) => arm::Target::Prec(self.model_counts(*c)),
         })
     }
 
@@ -372,7 +604,7 @@ impl C500 {
         let q = self.arm.position(now, which);
         let trol = self.arm.kinematics().fk_xyzypr(&q);
         Position {
-            pulses: joints_to_counts(&q).map(i64::from),
+            pulses: self.pulses_of(&q),
             joints: q.map(f64::to_degrees),
             world: self.frames.to_rapl(trol).unwrap_or([0.0; 6]),
         }
@@ -430,16 +662,16 @@ impl C500 {
             }
             ("READY", _) => {
                 let c = self.arm.ready(now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("HOME", _) => {
                 let c = self.arm.home(0, now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("MOVE" | "MOVES", _) if args.len() == 1 => match self.target(args[0]) {
                 Some(t) => {
                     let c = self.arm.move_to(t, word == "MOVES", now);
-                    self.answer(c)
+                    self.motion_answer(c, now)
                 }
                 None => self.refuse(35),
             },
@@ -451,7 +683,7 @@ impl C500 {
                 let c = self
                     .arm
                     .appro(t, [-d * mm, 0.0, 0.0, 0.0, 0.0, 0.0], straight, now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("DEPART", _) if !args.is_empty() => {
                 let Ok(d) = args[0].parse::<f64>() else {
@@ -461,11 +693,11 @@ impl C500 {
                 let c = self
                     .arm
                     .depart([-d * mm, 0.0, 0.0, 0.0, 0.0, 0.0], straight, now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("JOINT", Some([j, deg])) if j.fract() == 0.0 && (1.0..=6.0).contains(j) => {
                 let c = self.arm.joint(*j as u8, deg.to_radians(), now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("MA" | "MI", Some(q)) if q.len() == 6 => {
                 let f = match self.joint_units {
@@ -478,11 +710,11 @@ impl C500 {
                 } else {
                     self.arm.mi(v, now)
                 };
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("JOG", Some([x, y, z])) => {
                 let c = self.arm.jog([x * mm, y * mm, z * mm], true, now);
-                self.answer(c)
+                self.motion_answer(c, now)
             }
             ("HALT" | "ABORT", _) => {
                 self.arm.halt(now);
@@ -522,6 +754,7 @@ impl C500 {
                         return self.refuse(12);
                     }
                     Stored::Prec(v.map(|p| p as i32))
+                    // (this controller's pulses; MOVE converts them)
                 } else {
                     match self.frames.from_rapl(v) {
                         Ok(t) => Stored::Cart(t),
@@ -547,7 +780,7 @@ impl C500 {
                 };
                 let q = self.arm.position(now, which);
                 let stored = if args[0].starts_with('#') {
-                    Stored::Prec(joints_to_counts(&q))
+                    Stored::Prec(self.pulses_of(&q).map(|p| p as i32))
                 } else {
                     Stored::Cart(self.arm.kinematics().fk_xyzypr(&q))
                 };
@@ -616,7 +849,8 @@ impl C500 {
                 self.ok(&body)
             }
             ("STATUS", _) => {
-                let moving = self.arm.is_moving(now);
+                let lagging = now - self.acked_at < self.profile.twin.done_lag_ms as f64 / 1000.0;
+                let moving = self.arm.is_moving(now) && !lagging;
                 let s = Status {
                     version: "RAPL-II Version 2.60     A465 Robot (simulated)".into(),
                     last_error: self.last_error.clone(),
@@ -671,10 +905,27 @@ impl C500 {
         self.arm.is_moving(now)
     }
 
-    /// Cut the arm's power now (a fault: an e-stop), as LIMP does.
+    /// Cut the arm's power now (a fault: an e-stop), as LIMP does; a controller with an
+    /// `estop_line` prints it unasked.
     pub fn power_off(&mut self, now: f64) {
         self.limp = true;
         self.arm.halt(now);
+        if !self.profile.twin.estop_line.is_empty() {
+            let l = format!("\r\n{}\r\n", self.profile.twin.estop_line);
+            self.out.extend(l.bytes());
+            self.prompt();
+        }
+    }
+
+    /// Whether the arm has power.
+    pub fn has_power(&self) -> bool {
+        !self.limp
+    }
+
+    /// Where the arm will be once every accepted motion has ended (radians), for tests that
+    /// check that nothing moved unasked.
+    pub fn planned_end(&self) -> [f64; 6] {
+        self.arm.planned_end()
     }
 }
 
@@ -775,7 +1026,7 @@ mod tests {
         c.feed(b"ELP\r", 0.0);
         assert_eq!(out(&mut c), b"\r\x06\r\n>>");
         c.feed(b"SPEED 50\r", 0.0);
-        assert_eq!(out(&mut c), b"SPEED 5\x00\x00\x00\x000\r\x06\r\n>>");
+        assert_eq!(out(&mut c), b"SPEED 5    0\r\x06\r\n>>");
     }
 
     #[test]

@@ -1,38 +1,46 @@
 //! First contact with a controller (`trol rapl probe`, c500-rapl.md §1.6): a session that sends
-//! only commands that cannot move the arm, records every byte, and, from W2 readings taken at
-//! poses the operator sets by pendant, fits what the public sources leave open: the length
-//! units, the order and signs of the WORLD angles, and the units of the JOINTS row.
+//! only commands that cannot move the arm, records every byte, provokes one harmless refusal
+//! (an unknown word) to learn the controller's refusal form, and, from W2 readings taken at
+//! poses the operator sets by pendant, fits what the public sources leave open: the pulse
+//! scale, sign and zero of each joint, the length units, the order and signs of the WORLD
+//! angles, and a fixed rotation between the controller's tool frame and TROL's.
 //!
-//! The fit compares each reading with itself: the PULSES row gives the joints through the
-//! A465 model (docs/a465.md), the joints give the pose through trol-a465's forward kinematics,
-//! and that pose must be what the WORLD row says under the fitted conventions. It assumes the
-//! controller's tool is the bare flange (no TOOL set); a reading taken with another tool fits
-//! nothing, and the fit says so.
+//! The fit compares each reading with itself: the PULSES row against the JOINTS row (degrees,
+//! as RobWork and the W2 sample read it) gives the pulse convention; the joints give the pose
+//! through trol-a465's forward kinematics, and that pose must be what the WORLD row says under
+//! the fitted conventions. It assumes the controller's tool is the bare flange (no TOOL set);
+//! a reading taken with another tool fits nothing, and the fit says so. It does not set MA and
+//! MI's units, nor JOG's frame: the JOINTS row does not tell them (RobWork and the RAPL-II
+//! reference send MA in radians); docs/c500.md has the supervised step that does.
 
 use trol_a465::kinematics::{Kinematics, Pose};
-use trol_a465::model::counts_to_joints;
 
 use crate::backend::RaplBackend;
 use crate::frames::Frames;
-use crate::profile::{Profile, Units, parse_angles};
+use crate::profile::{Profile, RefusalForm, Units, parse_angles};
 use crate::text::{Position, read_position};
 
 /// The keywords of the commands the probe sends: none of them moves the arm or changes a
 /// setting.
-pub const READ_ONLY: &[&str] = &["STATUS", "SERIAL", "W0", "W2", "W5", "LISTL", "LLOC"];
+pub const READ_ONLY: &[&str] = &[
+    "STATUS", "SERIAL", "W0", "W2", "W5", "LISTL", "LLOC", PROBE_WORD,
+];
 
 /// The lines the probe sends at first contact, in order.
 pub const FIRST_CONTACT: &[&str] = &["STATUS", "SERIAL", "W0", "W2", "LISTL"];
+
+/// The unknown word the probe types to see how this controller refuses (no RAPL-II keyword,
+/// and not a name a program would have: an assumption, docs/c500.md).
+pub const PROBE_WORD: &str = "QZXTROL";
 
 /// How far the WORLD position may be from the kinematics' (mm).
 pub const POSITION_TOLERANCE_MM: f64 = 2.0;
 /// How far the WORLD orientation may be from the kinematics' (degrees).
 pub const ANGLE_TOLERANCE_DEG: f64 = 0.5;
-/// How far the JOINTS row may be from the PULSES row's joints, in its own units (degrees, or
-/// radians scaled alike).
-const JOINT_TOLERANCE_DEG: f64 = 0.05;
-/// A joint turned at least this far (degrees) in some reading tells degrees from radians.
+/// A joint turned at least this far (degrees) between two readings tells its pulse scale.
 const TELLING_JOINT_DEG: f64 = 5.0;
+/// How far (pulses) a reading may be from the fitted line.
+const PULSE_TOLERANCE: f64 = 2.5;
 
 /// What the readings settle.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,8 +49,11 @@ pub struct Fit {
     pub units: Units,
     /// The order and signs of the WORLD angles, as the profile's `angles` writes them.
     pub angles: String,
-    /// The units of the JOINTS row (`degrees` or `radians`).
-    pub joint_units: String,
+    /// The fixed rotation between TROL's tool frame and the controller's (yaw pitch roll,
+    /// degrees), as the profile's `tool_rotation`.
+    pub tool_rotation: [f64; 3],
+    /// Per joint: pulses per degree and pulses at zero, when every joint turned far enough.
+    pub pulses: Result<([f64; 6], [f64; 6]), String>,
     /// The largest position difference over the readings, mm.
     pub position_error_mm: f64,
     /// The largest orientation difference over the readings, degrees.
@@ -52,10 +63,16 @@ pub struct Fit {
 impl Fit {
     /// `profile` with the fitted keys set.
     pub fn apply(&self, profile: &Profile) -> Profile {
+        let (pulse_scale, pulse_zero) = match &self.pulses {
+            Ok((s, z)) => (s.to_vec(), z.to_vec()),
+            Err(_) => (profile.pulse_scale.clone(), profile.pulse_zero.clone()),
+        };
         Profile {
             units: self.units,
             angles: self.angles.clone(),
-            joint_units: self.joint_units.clone(),
+            tool_rotation: self.tool_rotation,
+            pulse_scale,
+            pulse_zero,
             ..profile.clone()
         }
     }
@@ -88,10 +105,55 @@ pub fn every_angle_order() -> Vec<String> {
 }
 
 /// The angle between two rotations, degrees.
-fn rotation_distance_deg(a: &Pose, b: &Pose) -> f64 {
+pub fn rotation_distance_deg(a: &Pose, b: &Pose) -> f64 {
     let m = a.rot.transpose() * b.rot;
     let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
     ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// The pulse convention from the PULSES and JOINTS rows: per joint, a line through the
+/// readings (the two farthest apart give it; every reading must lie on it).
+pub fn fit_pulses(readings: &[Position]) -> Result<([f64; 6], [f64; 6]), String> {
+    let mut scale = [0.0; 6];
+    let mut zero = [0.0; 6];
+    for j in 0..6 {
+        let (mut lo, mut hi) = (&readings[0], &readings[0]);
+        for r in readings {
+            if r.joints[j] < lo.joints[j] {
+                lo = r;
+            }
+            if r.joints[j] > hi.joints[j] {
+                hi = r;
+            }
+        }
+        let dj = hi.joints[j] - lo.joints[j];
+        if dj < TELLING_JOINT_DEG {
+            return Err(format!(
+                "joint {} turned less than {TELLING_JOINT_DEG} degrees over the poses, so its \
+                 pulses per degree are not told: turn every joint between poses",
+                j + 1
+            ));
+        }
+        let k = (hi.pulses[j] - lo.pulses[j]) as f64 / dj;
+        let z = lo.pulses[j] as f64 - k * lo.joints[j];
+        // The JOINTS row has four decimals: the line holds within its rounding.
+        let tol = PULSE_TOLERANCE + k.abs() * 0.0001;
+        if let Some(r) = readings
+            .iter()
+            .find(|r| (r.pulses[j] as f64 - (z + k * r.joints[j])).abs() > tol)
+        {
+            return Err(format!(
+                "joint {}: the PULSES and JOINTS rows are not proportional (pulses {} at {} \
+                 degrees, {k:.4} pulses per degree elsewhere)",
+                j + 1,
+                r.pulses[j],
+                r.joints[j]
+            ));
+        }
+        scale[j] = k;
+        zero[j] = z.round();
+    }
+    Ok((scale, zero))
 }
 
 /// Fit the conventions from W2 (or W0) readings taken at different poses. Needs at least two
@@ -106,40 +168,8 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
     }
     let joints: Vec<[f64; 6]> = readings
         .iter()
-        .map(|r| counts_to_joints(&r.pulses.map(|p| p as f64)))
+        .map(|r| r.joints.map(f64::to_radians))
         .collect();
-
-    // The JOINTS row: degrees or radians of the joints the pulses give.
-    let telling = joints
-        .iter()
-        .flatten()
-        .any(|q| q.to_degrees().abs() >= TELLING_JOINT_DEG);
-    if !telling {
-        return Err(format!(
-            "every joint stayed within {TELLING_JOINT_DEG} degrees of zero: move the arm \
-             further from its zero pose in at least one reading"
-        ));
-    }
-    let matches = |scale: f64, tol: f64| {
-        readings.iter().zip(&joints).all(|(r, q)| {
-            r.joints
-                .iter()
-                .zip(q)
-                .all(|(shown, q)| (shown - q * scale).abs() <= tol)
-        })
-    };
-    let joint_units = if matches(180.0 / std::f64::consts::PI, JOINT_TOLERANCE_DEG) {
-        "degrees"
-    } else if matches(1.0, JOINT_TOLERANCE_DEG.to_radians()) {
-        "radians"
-    } else {
-        return Err(
-            "the JOINTS row matches the PULSES row in neither degrees nor radians: this \
-             controller's encoder counts differ from the A465 model (docs/a465.md), so the \
-             fit cannot use them"
-                .into(),
-        );
-    };
 
     // The poses must differ, or nothing is told apart.
     let spread = joints
@@ -158,6 +188,7 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
              the arm further between readings"
         ));
     }
+    let pulses = fit_pulses(readings);
 
     let kin = Kinematics::new([0.0; 6]);
     let fk: Vec<Pose> = joints.iter().map(|q| kin.fk(q)).collect();
@@ -190,13 +221,37 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
         ));
     };
 
-    // The angles: every order and sign, against the kinematics' rotation.
+    // The angles: every order and sign, each with the fixed rotation the first reading
+    // gives, against the kinematics' rotation at every reading.
     let mut fitting = Vec::new();
     let mut best = f64::INFINITY;
     for words in every_angle_order() {
-        let frames = Frames {
+        let plain = Frames {
             mm: Some(mm),
             angles: parse_angles(&words).ok().flatten(),
+            tool_rotation: [0.0; 3],
+            pulses: None,
+        };
+        let Ok(first) = plain.from_rapl(readings[0].world) else {
+            continue;
+        };
+        // R_controller = R_TROL * R_off.
+        let off = Pose {
+            rot: fk[0].rot.transpose() * Pose::from_xyzypr(first).rot,
+            pos: Default::default(),
+        };
+        let a = off.to_xyzypr();
+        let mut rot = [a[3], a[4], a[5]];
+        for x in &mut rot {
+            // Whole tenths of a degree: an offset between models is a designed angle.
+            *x = ((x.to_degrees() * 10.0).round() / 10.0).to_radians();
+            if x.abs() < 1e-9 {
+                *x = 0.0;
+            }
+        }
+        let frames = Frames {
+            tool_rotation: rot,
+            ..plain
         };
         let mut worst: f64 = 0.0;
         for (r, p) in readings.iter().zip(&fk) {
@@ -208,24 +263,31 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
         }
         best = best.min(worst);
         if worst <= ANGLE_TOLERANCE_DEG {
-            fitting.push((words, worst));
+            fitting.push((words, rot.map(f64::to_degrees), worst));
         }
+    }
+    // Where the readings cannot tell an order with no rotation from one with a rotation,
+    // the one without is the plain reading.
+    if fitting.len() > 1 && fitting.iter().filter(|f| f.1 == [0.0; 3]).count() == 1 {
+        fitting.retain(|f| f.1 == [0.0; 3]);
     }
     match fitting.len() {
         1 => {
-            let (angles, angle_error_deg) = fitting.remove(0);
+            let (angles, tool_rotation, angle_error_deg) = fitting.remove(0);
             Ok(Fit {
                 units,
                 angles,
-                joint_units: joint_units.into(),
+                tool_rotation,
+                pulses,
                 position_error_mm,
                 angle_error_deg,
             })
         }
         0 => Err(format!(
-            "no order and signs of the WORLD angles match the kinematics (the best is off by \
-             {best:.1} degrees): the controller's angles may have another convention or an \
-             offset to TROL's (docs/a465.md); keep the transcript and set `angles` by hand"
+            "no order and signs of the WORLD angles match the kinematics, even with a fixed \
+             rotation of the tool frame (the best is off by {best:.1} degrees): the controller's \
+             joints may turn the other way than TROL's (docs/a465.md); keep the transcript and \
+             set `angles` by hand"
         )),
         _ => Err(format!(
             "{} orders of the WORLD angles fit these poses ({}): tilt the wrist (joint 5 away \
@@ -234,7 +296,7 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
             fitting.len(),
             fitting
                 .iter()
-                .map(|(w, _)| format!("\"{w}\""))
+                .map(|(w, _, _)| format!("\"{w}\""))
                 .collect::<Vec<_>>()
                 .join(", ")
         )),
@@ -246,16 +308,19 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
 pub struct Contact {
     /// Each line sent and its reply's text (or why it has none).
     pub replies: Vec<(String, Result<String, String>)>,
+    /// The refusal form learned from the answer to [`PROBE_WORD`] (a template for the
+    /// profile's `refusal`), or why none was.
+    pub refusal: Option<Result<String, String>>,
     /// The W2 readings: the one at first contact, then one per pose.
     pub readings: Vec<Position>,
     /// The fit, when poses were asked for.
     pub fit: Option<Result<Fit, String>>,
 }
 
-/// Run first contact on an open session: the lines of [`FIRST_CONTACT`], then `poses` times
-/// `operator(k, poses)` (which returns once the operator has moved the arm by pendant to pose
-/// k, `false` to stop early) and a W2 reading; then the fit, when `poses` > 0. Nothing sent
-/// can move the arm: every line goes through [`RaplBackend::read_only`].
+/// Run first contact on an open session: the lines of [`FIRST_CONTACT`], the unknown word,
+/// then `poses` times `operator(k, poses)` (which returns once the operator has moved the arm
+/// by pendant to pose k, `false` to stop early) and a W2 reading; then the fit, when `poses`
+/// > 0. Nothing sent can move the arm: every line goes through [`RaplBackend::read_only`].
 pub fn first_contact(
     b: &mut RaplBackend,
     poses: usize,
@@ -263,13 +328,7 @@ pub fn first_contact(
 ) -> Contact {
     let mut c = Contact::default();
     for line in FIRST_CONTACT {
-        let r = b
-            .read_only(line)
-            .map(|r| match r.error {
-                Some((n, t)) => format!("{n:03}-{t}."),
-                None => r.text,
-            })
-            .map_err(|e| e.to_string());
+        let r = b.read_only(line).map(|r| r.text).map_err(|e| e.to_string());
         if *line == "W2" {
             if let Ok(p) = r
                 .as_ref()
@@ -281,6 +340,28 @@ pub fn first_contact(
         }
         c.replies.push((line.to_string(), r));
     }
+    let refused = b.read_only(PROBE_WORD).map_err(|e| e.to_string());
+    c.refusal = Some(refused.as_ref().map_err(|e| e.clone()).and_then(|r| {
+        let said = r
+            .text
+            .split(['\r', '\n'])
+            .map(str::trim)
+            .find(|l| !l.is_empty())
+            .unwrap_or_default()
+            .to_string();
+        if r.ack {
+            return Err(format!(
+                "the unknown word {PROBE_WORD} was answered with ACK ({said:?}): this controller \
+                 does not refuse it as expected; keep the transcript"
+            ));
+        }
+        RefusalForm::learn(&said).ok_or_else(|| {
+            format!(
+                "the answer to the unknown word {PROBE_WORD}, {said:?}, has no form TROL can learn"
+            )
+        })
+    }));
+    c.replies.push((PROBE_WORD.into(), refused.map(|r| r.text)));
     if poses == 0 {
         return c;
     }
@@ -312,24 +393,28 @@ pub fn first_contact(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use trol_a465::model::joints_to_counts;
 
     /// A reading as a controller with these conventions would print it.
-    fn reading(q: [f64; 6], mm: f64, angles: &str, joints_in_degrees: bool) -> Position {
+    fn reading_with(q: [f64; 6], mm: f64, angles: &str, rot: [f64; 3], scale: f64) -> Position {
         let frames = Frames {
             mm: Some(mm),
             angles: parse_angles(angles).unwrap(),
+            tool_rotation: rot.map(f64::to_radians),
+            pulses: Some(std::array::from_fn(|i| {
+                (scale * (i as f64 + 1.0), 10.0 * i as f64)
+            })),
         };
         let pose = Kinematics::new([0.0; 6]).fk_xyzypr(&q);
+        let joints = q.map(|x| (x.to_degrees() * 1e4).round() / 1e4);
         Position {
-            pulses: joints_to_counts(&q).map(i64::from),
-            joints: if joints_in_degrees {
-                q.map(f64::to_degrees)
-            } else {
-                q
-            },
+            pulses: frames.joints_to_pulses(joints).unwrap(),
+            joints,
             world: frames.to_rapl(pose).unwrap(),
         }
+    }
+
+    fn reading(q: [f64; 6], mm: f64, angles: &str, _deg: bool) -> Position {
+        reading_with(q, mm, angles, [0.0; 3], 100.0)
     }
 
     fn poses() -> Vec<[f64; 6]> {
@@ -355,14 +440,74 @@ mod tests {
                 let f = fit(&r).unwrap_or_else(|e| panic!("{angles} {mm}: {e}"));
                 assert_eq!(f.angles, angles);
                 assert_eq!(f.units, units);
-                assert_eq!(f.joint_units, "degrees");
+                assert_eq!(f.tool_rotation, [0.0; 3]);
             }
         }
-        let r: Vec<Position> = poses()
-            .into_iter()
-            .map(|q| reading(q, 1.0, "roll pitch yaw", false))
-            .collect();
-        assert_eq!(fit(&r).unwrap().joint_units, "radians");
+    }
+
+    #[test]
+    fn a_fixed_tool_rotation_and_a_negative_pulse_table_are_found() {
+        for rot in [[0.0, 90.0, 0.0], [90.0, 0.0, -90.0], [0.0, -90.0, 180.0]] {
+            let r: Vec<Position> = poses()
+                .into_iter()
+                .map(|q| reading_with(q, 1.0, "roll -pitch yaw", rot, -140.3))
+                .collect();
+            let f = fit(&r).unwrap_or_else(|e| panic!("{rot:?}: {e}"));
+            assert_eq!(f.angles, "roll -pitch yaw", "{rot:?}");
+            let back = Pose::from_xyzypr([
+                0.0,
+                0.0,
+                0.0,
+                f.tool_rotation[0].to_radians(),
+                f.tool_rotation[1].to_radians(),
+                f.tool_rotation[2].to_radians(),
+            ]);
+            let want = Pose::from_xyzypr([
+                0.0,
+                0.0,
+                0.0,
+                rot[0].to_radians(),
+                rot[1].to_radians(),
+                rot[2].to_radians(),
+            ]);
+            assert!(
+                rotation_distance_deg(&back, &want) < 0.01,
+                "{rot:?}: {:?}",
+                f.tool_rotation
+            );
+            let (scale, zero) = f.pulses.unwrap();
+            for i in 0..6 {
+                assert!(
+                    (scale[i] - -140.3 * (i as f64 + 1.0)).abs() < 0.05,
+                    "{scale:?}"
+                );
+                assert_eq!(zero[i], 10.0 * i as f64);
+            }
+        }
+    }
+
+    #[test]
+    fn refusal_forms_are_learned_from_the_answer_to_an_unknown_word() {
+        for (line, form) in [
+            ("012-COMMAND ERROR.", "NNN-TEXT."),
+            (":012-COMMAND ERROR.", ":NNN-TEXT."),
+            ("*** UNKNOWN COMMAND ***", "*** TEXT ***"),
+            ("012-COMMAND ERROR", "NNN-TEXT"),
+        ] {
+            assert_eq!(RefusalForm::learn(line).as_deref(), Some(form), "{line}");
+            let f = RefusalForm::parse(form).unwrap();
+            assert!(f.read(line).is_some(), "{line}");
+            assert_eq!(
+                f.read(&f.write(58, "ARM POWER IS OFF")).unwrap().1,
+                "ARM POWER IS OFF"
+            );
+        }
+        assert_eq!(RefusalForm::learn(""), None);
+        // An ordinary output line is no refusal of a form with a number.
+        let f = RefusalForm::parse("NNN-TEXT.").unwrap();
+        assert_eq!(f.read("LAST ERROR CODE: 012-COMMAND ERROR."), None);
+        assert_eq!(f.read("+000.0150 +000.0150."), None);
+        assert!(RefusalForm::parse("TEXT").is_err());
     }
 
     #[test]

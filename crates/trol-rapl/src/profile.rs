@@ -260,9 +260,183 @@ pub struct Profile {
     /// counts per radian) and read again when they disagree, so a damaged digit is never
     /// reported as the position. Turn off if a controller's pulses do not follow the model.
     pub cross_check: bool,
+    /// The forms a refusal takes on this controller, as templates: `NNN` stands for the
+    /// three-digit error number, `TEXT` for the message, everything else is literal
+    /// (`"NNN-TEXT."`, `":NNN-TEXT."`, `"*** TEXT ***"`). A reply line in one of these forms is
+    /// a refusal; any other line where a command prints nothing is not understood, and the
+    /// call ends in TROL_ERR_ROBOT_UNSURE with the line (`trol rapl probe` records the
+    /// controller's form).
+    pub refusal: Vec<String>,
+    /// Pulses per degree of each joint's JOINTS row, signed (the G3000 driver's table had one
+    /// pulse per encoder line and a negative sign; TROL's model counts four). Empty: not
+    /// established, and precision points are refused (`trol rapl probe --poses` fits it).
+    pub pulse_scale: Vec<f64>,
+    /// The PULSES reading at each joint's zero of the JOINTS row (with `pulse_scale`; empty:
+    /// zero).
+    pub pulse_zero: Vec<f64>,
+    /// The frame of JOG's dx dy dz: `world` or `tool`. Empty: not established, and a straight
+    /// Jog is refused (docs/c500.md, "Settle the conventions").
+    pub jog_frame: String,
+    /// A fixed rotation between TROL's tool frame and the controller's, yaw pitch roll in
+    /// degrees (R_controller = R_TROL * R(tool_rotation)): public kinematic models of the
+    /// A465 have an identity orientation at all joints zero, TROL's model pitch -90 degrees.
+    pub tool_rotation: [f64; 3],
+    /// Finish: how far (mm) the arm (W2) may be from the motion's target when the controller
+    /// says done.
+    pub arrive_mm: f64,
+    /// Finish: how far (degrees) the arm's joints and orientation may be from the target.
+    pub arrive_deg: f64,
+    /// Finish, for a motion whose end pose is not known beforehand (READY, HOME) and that was
+    /// never seen moving: how long W2 must stay still before the motion counts as ended, ms.
+    pub settle_ms: u64,
     /// Error numbers (three digits) and the code each means (one of [`ERROR_TARGETS`]);
     /// numbers not listed give BIOS_RAPL_ERROR, and their text is logged.
     pub errors: BTreeMap<String, String>,
+    /// How the simulated C500 plays the points the public sources leave open (read only by
+    /// `trol sim --rapl`; a real controller's profile needs none of it).
+    #[serde(skip_serializing_if = "Twin::is_default")]
+    pub twin: Twin,
+}
+
+/// The simulated C500's answers to what no public source settles (each a switch, so the
+/// backend's tests run across all of them: [`crate::c500::VARIANTS`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Twin {
+    /// How it writes a refusal (a template as in [`Profile::refusal`]).
+    pub refusal: String,
+    /// The byte it sends `extra_after_digit` times after a number's first character (RW read
+    /// four bytes it never looked at; the G3000 driver reads replies as C strings, so NULs
+    /// would cut them: spaces satisfy both).
+    pub extra_byte: u8,
+    /// Whether it echoes what is typed (RAPL-II's CONFIG has an ECHO setting).
+    pub echo: bool,
+    /// Whether a motion's ACK and prompt come at its end instead of its start.
+    pub ack_at_end: bool,
+    /// How long after a motion's ACK its DONE row still says done, ms.
+    pub done_lag_ms: u64,
+    /// A line it prints unasked when the arm loses power ("": none).
+    pub estop_line: String,
+    /// A numbered line it prints before the ACK of every motion ("": none).
+    pub motion_warning: String,
+}
+
+impl Default for Twin {
+    fn default() -> Self {
+        Twin {
+            refusal: "NNN-TEXT.".into(),
+            extra_byte: b' ',
+            echo: true,
+            ack_at_end: false,
+            done_lag_ms: 0,
+            estop_line: String::new(),
+            motion_warning: String::new(),
+        }
+    }
+}
+
+impl Twin {
+    fn is_default(&self) -> bool {
+        *self == Twin::default()
+    }
+}
+
+/// A refusal's form: literal text around the error number (`NNN`) and the message (`TEXT`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RefusalForm {
+    before: String,
+    number: bool,
+    between: String,
+    after: String,
+}
+
+impl RefusalForm {
+    /// Parse a template; it needs `TEXT` once, at most one `NNN` before it, and something
+    /// literal or a number so that an ordinary line of output cannot match.
+    pub fn parse(template: &str) -> Result<RefusalForm, String> {
+        let bad = |why: &str| {
+            format!(
+                "refusal form \"{template}\": {why} (forms look like \"NNN-TEXT.\", \":NNN-TEXT.\", \"*** TEXT ***\")"
+            )
+        };
+        let (head, after) = template
+            .split_once("TEXT")
+            .ok_or_else(|| bad("it needs TEXT where the message stands"))?;
+        if after.contains("TEXT") || after.contains("NNN") {
+            return Err(bad("TEXT must come once, after NNN"));
+        }
+        let (before, number, between) = match head.split_once("NNN") {
+            Some((b, m)) if !m.contains("NNN") => (b, true, m),
+            Some(_) => return Err(bad("NNN must come once")),
+            None => (head, false, ""),
+        };
+        if !number && before.trim().is_empty() && after.trim().is_empty() {
+            return Err(bad("without NNN it needs literal text around TEXT"));
+        }
+        Ok(RefusalForm {
+            before: before.to_string(),
+            number,
+            between: between.to_string(),
+            after: after.to_string(),
+        })
+    }
+
+    /// The error number (0 when the form has none) and message of `line` (trimmed), if it
+    /// has this form.
+    pub fn read(&self, line: &str) -> Option<(u16, String)> {
+        let l = line.trim();
+        let rest = l.strip_prefix(self.before.as_str())?;
+        let (number, rest) = if self.number {
+            let digits = rest.get(..3)?;
+            if !digits.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            (digits.parse().ok()?, &rest[3..])
+        } else {
+            (0, rest)
+        };
+        let rest = rest.strip_prefix(self.between.as_str())?;
+        let text = rest.strip_suffix(self.after.as_str())?;
+        let text = text.trim();
+        if text.is_empty() || !text.bytes().any(|b| b.is_ascii_alphabetic()) {
+            return None;
+        }
+        Some((number, text.to_string()))
+    }
+
+    /// A refusal in this form.
+    pub fn write(&self, number: u16, text: &str) -> String {
+        let n = if self.number {
+            format!("{number:03}")
+        } else {
+            String::new()
+        };
+        format!("{}{n}{}{text}{}", self.before, self.between, self.after)
+    }
+
+    /// The template that describes `line` (what `trol rapl probe` records from the answer to
+    /// an unknown word): the first three-digit number is NNN, the run of words after it is
+    /// TEXT, the rest literal.
+    pub fn learn(line: &str) -> Option<String> {
+        let l = line.trim();
+        let b = l.as_bytes();
+        let num = (0..b.len().saturating_sub(2)).find(|&i| {
+            b[i..i + 3].iter().all(u8::is_ascii_digit)
+                && (i == 0 || !b[i - 1].is_ascii_digit())
+                && b.get(i + 3).is_none_or(|c| !c.is_ascii_digit())
+        });
+        let from = num.map(|i| i + 3).unwrap_or(0);
+        let start = from + l[from..].find(|c: char| c.is_ascii_alphabetic())?;
+        let end = l.rfind(|c: char| c.is_ascii_alphanumeric())? + 1;
+        if end <= start {
+            return None;
+        }
+        let t = match num {
+            Some(i) => format!("{}NNN{}TEXT{}", &l[..i], &l[i + 3..start], &l[end..]),
+            None => format!("{}TEXT{}", &l[..start], &l[end..]),
+        };
+        RefusalForm::parse(&t).ok()?.read(l).map(|_| t)
+    }
 }
 
 impl Default for Profile {
@@ -287,10 +461,19 @@ impl Default for Profile {
             motion_timeout_s: 120,
             poll_ms: 50,
             cross_check: true,
+            refusal: vec!["NNN-TEXT.".into(), ":NNN-TEXT.".into()],
+            pulse_scale: Vec::new(),
+            pulse_zero: Vec::new(),
+            jog_frame: String::new(),
+            tool_rotation: [0.0; 3],
+            arrive_mm: 1.0,
+            arrive_deg: 0.2,
+            settle_ms: 1000,
             errors: SIM_ERRORS
                 .iter()
                 .map(|(n, _, to)| (format!("{n:03}"), to.to_string()))
                 .collect(),
+            twin: Twin::default(),
         }
     }
 }
@@ -314,6 +497,10 @@ impl Profile {
             units: Units::Mm,
             angles: "yaw pitch roll".into(),
             joint_units: "degrees".into(),
+            pulse_scale: trol_a465::model::counts_per_radian()
+                .map(|c| c * std::f64::consts::PI / 180.0)
+                .to_vec(),
+            jog_frame: "world".into(),
             ..Profile::default()
         }
     }
@@ -368,6 +555,41 @@ impl Profile {
                 self.motion_timeout_s
             ));
         }
+        if self.refusal.is_empty() {
+            return Err("`refusal = []`: name at least one form (\"NNN-TEXT.\")".into());
+        }
+        for t in self.refusal.iter().chain([&self.twin.refusal]) {
+            RefusalForm::parse(t)?;
+        }
+        self.pulses()?;
+        self.jog_frame()?;
+        if self
+            .tool_rotation
+            .iter()
+            .any(|a| !a.is_finite() || a.abs() > 360.0)
+        {
+            return Err("`tool_rotation`: three angles in degrees, -360 to 360".into());
+        }
+        if !((0.0..=50.0).contains(&self.arrive_mm)
+            && self.arrive_mm > 0.0
+            && (0.0..=10.0).contains(&self.arrive_deg)
+            && self.arrive_deg > 0.0)
+        {
+            return Err("`arrive_mm` (0 to 50) and `arrive_deg` (0 to 10) must be above 0".into());
+        }
+        if !(1..=60_000).contains(&self.settle_ms) {
+            return Err(format!(
+                "`settle_ms = {}`: expected 1 to 60000",
+                self.settle_ms
+            ));
+        }
+        if self.completion == Completion::Finish {
+            return Err(
+                "`completion = \"finish\"` holds the line for the whole motion, so a Halt could \
+                 not reach the arm: use \"status\" or \"w5\""
+                    .into(),
+            );
+        }
         for (k, v) in &self.errors {
             if k.len() != 3 || !k.bytes().all(|b| b.is_ascii_digit()) {
                 return Err(format!(
@@ -382,6 +604,55 @@ impl Profile {
             }
         }
         Ok(())
+    }
+
+    /// The refusal forms.
+    pub fn refusal_forms(&self) -> Vec<RefusalForm> {
+        self.refusal
+            .iter()
+            .filter_map(|t| RefusalForm::parse(t).ok())
+            .collect()
+    }
+
+    /// The pulse convention, when established: per joint (pulses per degree, pulses at 0).
+    pub fn pulses(&self) -> Result<Option<[(f64, f64); 6]>, String> {
+        if self.pulse_scale.is_empty() {
+            return Ok(None);
+        }
+        let zero = if self.pulse_zero.is_empty() {
+            vec![0.0; 6]
+        } else {
+            self.pulse_zero.clone()
+        };
+        if self.pulse_scale.len() != 6 || zero.len() != 6 {
+            return Err(
+                "`pulse_scale` and `pulse_zero`: six numbers each (pulses per degree, pulses at 0)"
+                    .into(),
+            );
+        }
+        if self
+            .pulse_scale
+            .iter()
+            .any(|s| !s.is_finite() || s.abs() < 1.0 || s.abs() > 1e5)
+            || zero.iter().any(|z| !z.is_finite())
+        {
+            return Err("`pulse_scale`: each 1 to 100000 pulses per degree, either sign".into());
+        }
+        Ok(Some(std::array::from_fn(|i| {
+            (self.pulse_scale[i], zero[i])
+        })))
+    }
+
+    /// JOG's frame, when established: Some(true) world, Some(false) tool.
+    pub fn jog_frame(&self) -> Result<Option<bool>, String> {
+        match self.jog_frame.trim().to_ascii_lowercase().as_str() {
+            "" => Ok(None),
+            "world" => Ok(Some(true)),
+            "tool" => Ok(Some(false)),
+            other => Err(format!(
+                "`jog_frame = \"{other}\"`: expected \"world\", \"tool\", or \"\" to refuse JOG"
+            )),
+        }
     }
 
     /// The angles, when set.

@@ -2,20 +2,21 @@
 //! echo checked, and the reply read up to the prompt (c500-rapl.md §1.3).
 //!
 //! Bytes in ([`Session::feed`]), bytes out ([`Session::poll_transmit`]), time passed in;
-//! no I/O, no clock. The reader is tolerant of what the two public drivers saw: an ACK or
-//! none, the prompts `>>` and `O>`, error lines `NNN-TEXT.`, up to `extra_after_digit`
-//! bytes after the first character of a number, XON/XOFF anywhere. Anything else is a
-//! surprise: the session types Ctrl-C and waits for the prompt and a quiet line before it
-//! reports the failure, so no stale byte is ever taken for the next reply. A surprise
-//! before the terminator was typed cancels the line: the command did not run.
+//! no I/O, no clock. The reader takes what the two public drivers saw: an ACK or none, the
+//! prompts `>>` and `O>`, up to `extra_after_digit` bytes after the first character of a
+//! number, XON/XOFF anywhere (an XOFF that no XON follows within [`XOFF_LIMIT`] is given up,
+//! and an urgent line, Halt, is typed through it). What a reply means, success or refusal,
+//! the backend decides from the profile ([`crate::backend`]). Anything else is a surprise:
+//! the session types Ctrl-C and waits for the prompt and a quiet line before it reports the
+//! failure, so no stale byte is ever taken for the next reply. A surprise before the
+//! terminator was typed cancels the line: the command did not run.
 
 use std::collections::VecDeque;
 use std::time::Duration;
 
 use trol_proto::time::Instant;
 
-use crate::profile::{Ack, Flow, Profile};
-use crate::text::error_line;
+use crate::profile::{Flow, Profile};
 
 /// Acknowledge: a command succeeded.
 pub const ACK: u8 = 0x06;
@@ -32,6 +33,9 @@ pub const CTRL_Z: u8 = 0x1A;
 pub const SETTLE: Duration = Duration::from_millis(60);
 /// How long one Ctrl-C may wait for the prompt (three are tried).
 pub const RESYNC_WAIT: Duration = Duration::from_millis(1000);
+/// How long an XOFF holds the typing before it is taken for a stray byte and the typing goes
+/// on (the controller's XON was lost, or the byte was noise).
+pub const XOFF_LIMIT: Duration = Duration::from_millis(1000);
 
 /// The settings the session takes from the profile.
 #[derive(Clone, Debug)]
@@ -40,12 +44,13 @@ pub struct SessionConfig {
     pub terminator: u8,
     /// Bytes tolerated after the echo of a number's first character.
     pub extra_after_digit: u8,
-    /// Whether replies must carry an ACK.
-    pub ack: Ack,
     /// Honour XON/XOFF.
     pub flow: Flow,
     /// How long one echo may take.
     pub echo_timeout: Duration,
+    /// How long typing waits after a number's first character for the controller's extra
+    /// bytes (they may be spaces, which the next typed space would be taken for).
+    pub extra_wait: Duration,
 }
 
 impl From<&Profile> for SessionConfig {
@@ -53,9 +58,9 @@ impl From<&Profile> for SessionConfig {
         SessionConfig {
             terminator: p.terminator.byte(),
             extra_after_digit: p.extra_after_digit,
-            ack: p.ack,
             flow: p.flow,
             echo_timeout: Duration::from_millis(p.echo_timeout_ms),
+            extra_wait: (p.char_time() * 10).max(Duration::from_millis(20)),
         }
     }
 }
@@ -67,8 +72,6 @@ pub struct Reply {
     pub text: String,
     /// Whether an ACK came.
     pub ack: bool,
-    /// The error line, if the command was refused: number and text.
-    pub error: Option<(u16, String)>,
     /// Bytes the controller sent while the line was typed besides its echo (HELP-mode
     /// completion, the extra bytes after numbers).
     pub extra: Vec<u8>,
@@ -118,15 +121,6 @@ pub enum SessionError {
         /// What came.
         got: String,
     },
-    /// A reply without ACK where the profile requires one.
-    #[error(
-        "`{line}` was answered without ACK, which the profile requires (ack = \"required\"): \
-         set ack = \"auto\" if this controller sends none"
-    )]
-    NoAck {
-        /// The line.
-        line: String,
-    },
     /// The controller did not answer Ctrl-C with its prompt: the session is lost.
     #[error(
         "the controller did not answer Ctrl-C with its prompt (after: {cause}); the session is lost"
@@ -169,6 +163,10 @@ enum State {
         reply_timeout: Duration,
         /// A pause before the terminator, in which the controller may complete the word.
         pause: Option<Duration>,
+        /// Typed through an XOFF (Halt).
+        urgent: bool,
+        /// Typing waits for the extra bytes after a number's first character until then.
+        hold_until: Option<Instant>,
         pause_until: Option<Instant>,
         extra: Vec<u8>,
         deadline: Instant,
@@ -196,6 +194,8 @@ pub struct Session {
     cfg: SessionConfig,
     state: State,
     xoff: bool,
+    xoff_since: Option<Instant>,
+    xoff_expired: u32,
     tx: VecDeque<u8>,
     events: VecDeque<Result<Reply, SessionError>>,
     stray: Vec<u8>,
@@ -216,6 +216,8 @@ impl Session {
             cfg,
             state: State::Idle,
             xoff: false,
+            xoff_since: None,
+            xoff_expired: 0,
             tx: VecDeque::new(),
             events: VecDeque::new(),
             stray: Vec::new(),
@@ -238,6 +240,11 @@ impl Session {
         self.xoff
     }
 
+    /// How many XOFFs were given up since the last call (no XON within [`XOFF_LIMIT`]).
+    pub fn take_xoff_expired(&mut self) -> u32 {
+        std::mem::take(&mut self.xoff_expired)
+    }
+
     /// Bytes that arrived while no command was under way (dropped; their presence means
     /// the next command must resynchronise first).
     pub fn take_stray(&mut self) -> Vec<u8> {
@@ -252,7 +259,18 @@ impl Session {
         reply_timeout: Duration,
         now: Instant,
     ) -> Result<(), SessionError> {
-        self.start(line, reply_timeout, None, now)
+        self.start(line, reply_timeout, None, false, now)
+    }
+
+    /// Like [`Session::send_line`], typed even while the controller says XOFF (Halt: a
+    /// controller whose XON was lost must still hear it).
+    pub fn send_urgent(
+        &mut self,
+        line: &str,
+        reply_timeout: Duration,
+        now: Instant,
+    ) -> Result<(), SessionError> {
+        self.start(line, reply_timeout, None, true, now)
     }
 
     /// Like [`Session::send_line`], pausing `pause` before the terminator and taking what
@@ -264,7 +282,7 @@ impl Session {
         reply_timeout: Duration,
         now: Instant,
     ) -> Result<(), SessionError> {
-        self.start(prefix, reply_timeout, Some(pause), now)
+        self.start(prefix, reply_timeout, Some(pause), false, now)
     }
 
     fn start(
@@ -272,6 +290,7 @@ impl Session {
         line: &str,
         reply_timeout: Duration,
         pause: Option<Duration>,
+        urgent: bool,
         now: Instant,
     ) -> Result<(), SessionError> {
         if !self.is_idle() {
@@ -289,6 +308,8 @@ impl Session {
             in_number: false,
             reply_timeout,
             pause,
+            urgent,
+            hold_until: None,
             pause_until: None,
             extra: Vec::new(),
             deadline,
@@ -321,8 +342,10 @@ impl Session {
             // Ctrl-C goes even when paused: it is how a stuck line is recovered.
             return Some(b);
         }
-        if self.xoff {
-            return None;
+        if self.xoff && self.xoff_since.is_some_and(|t| now >= t + XOFF_LIMIT) {
+            self.xoff = false;
+            self.xoff_since = None;
+            self.xoff_expired += 1;
         }
         let echo_timeout = self.cfg.echo_timeout;
         if let State::Typing {
@@ -330,9 +353,23 @@ impl Session {
             next,
             awaiting,
             pause_until,
+            urgent,
+            hold_until,
+            extras,
             ..
         } = &mut self.state
         {
+            if self.xoff && !*urgent {
+                return None;
+            }
+            if let Some(h) = *hold_until {
+                if now < h && *extras > 0 {
+                    return None;
+                }
+                // Extras that come later than this are not taken for echoes of what follows.
+                *hold_until = None;
+                *extras = 0;
+            }
             if awaiting.is_none() && *next < line.len() {
                 if let Some(t) = pause_until {
                     if now < *t {
@@ -351,6 +388,7 @@ impl Session {
         for &b in bytes {
             if self.cfg.flow == Flow::Xonxoff && (b == XON || b == XOFF) {
                 self.xoff = b == XOFF;
+                self.xoff_since = self.xoff.then_some(now);
                 continue;
             }
             self.feed_byte(b, now);
@@ -359,6 +397,7 @@ impl Session {
 
     fn feed_byte(&mut self, b: u8, now: Instant) {
         let extra_allowed = self.cfg.extra_after_digit;
+        let extra_wait = self.cfg.extra_wait;
         let terminator = self.cfg.terminator;
         let failure = match &mut self.state {
             State::Idle => {
@@ -376,6 +415,7 @@ impl Session {
                 pause,
                 pause_until,
                 extra,
+                hold_until,
                 ..
             } => {
                 let want = line.get(*next).copied();
@@ -389,6 +429,7 @@ impl Session {
                     } else {
                         0
                     };
+                    *hold_until = (*extras > 0).then(|| now + extra_wait);
                     *in_number = numeric;
                     if b == terminator {
                         let line = std::mem::take(line);
@@ -409,6 +450,9 @@ impl Session {
                     None
                 } else if *extras > 0 || in_pause {
                     *extras = extras.saturating_sub(1);
+                    if *extras == 0 {
+                        *hold_until = None;
+                    }
                     extra.push(b);
                     None
                 } else {
@@ -446,19 +490,12 @@ impl Session {
                             .collect::<Vec<_>>(),
                     )
                     .into_owned();
-                    let error = error_line(&text);
-                    let line_text = String::from_utf8_lossy(&line[..line.len() - 1]).into_owned();
-                    let ev = if error.is_none() && !ack && self.cfg.ack == Ack::Required {
-                        Err(SessionError::NoAck { line: line_text })
-                    } else {
-                        Ok(Reply {
-                            text,
-                            ack,
-                            error,
-                            extra: std::mem::take(extra),
-                        })
-                    };
-                    self.events.push_back(ev);
+                    let _ = line;
+                    self.events.push_back(Ok(Reply {
+                        text,
+                        ack,
+                        extra: std::mem::take(extra),
+                    }));
                     self.state = State::Idle;
                 }
                 None
@@ -480,16 +517,32 @@ impl Session {
 
     /// When [`Session::handle_timeout`] must next be called.
     pub fn next_timeout(&self) -> Option<Instant> {
+        let xoff = self
+            .xoff_since
+            .filter(|_| self.xoff)
+            .map(|t| t + XOFF_LIMIT);
+        let t = self.state_timeout();
+        match (t, xoff) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b.filter(|_| !self.is_idle())),
+        }
+    }
+
+    fn state_timeout(&self) -> Option<Instant> {
         match &self.state {
             State::Typing {
                 awaiting,
                 deadline,
                 pause_until,
+                hold_until,
                 ..
             } => {
                 let mut t = *deadline;
                 if let Some(a) = awaiting {
                     t = t.min(*a);
+                }
+                if let Some(h) = hold_until {
+                    t = t.min(*h);
                 }
                 if let Some(p) = pause_until {
                     t = t.min(*p);
@@ -560,7 +613,6 @@ impl Session {
                         None => Ok(Reply {
                             text: String::from_utf8_lossy(buf).into_owned(),
                             ack: false,
-                            error: None,
                             extra: Vec::new(),
                         }),
                     };
@@ -601,13 +653,13 @@ impl Session {
 mod tests {
     use super::*;
 
-    fn cfg(extra: u8, ack: Ack) -> SessionConfig {
+    fn cfg(extra: u8) -> SessionConfig {
         SessionConfig {
             terminator: b'\r',
             extra_after_digit: extra,
-            ack,
             flow: Flow::Xonxoff,
             echo_timeout: Duration::from_millis(500),
+            extra_wait: Duration::from_millis(20),
         }
     }
 
@@ -652,19 +704,52 @@ mod tests {
 
     #[test]
     fn a_reply_with_ack_and_four_extras() {
-        let mut s = Session::new(cfg(4, Ack::Auto));
+        let mut s = Session::new(cfg(4));
         s.send_line("SPEED 50", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         let (r, sent, _) = run(&mut s, 4, b"\x06\r\n>>", Instant::ZERO);
         let r = r.unwrap();
-        assert!(r.ack && r.error.is_none());
+        assert!(r.ack && r.text.trim().is_empty());
         assert_eq!(r.extra, vec![0; 4]);
         assert_eq!(sent, b"SPEED 50\r");
     }
 
     #[test]
+    fn spaces_after_a_digit_are_not_taken_for_the_echo_of_a_typed_space() {
+        // `T1 380`: four spaces after `1`, then the typed space's own echo.
+        let mut s = Session::new(cfg(4));
+        s.send_line("POINT T1 380", Duration::from_secs(3), Instant::ZERO)
+            .unwrap();
+        let mut now = Instant::ZERO;
+        let mut prev_numeric = false;
+        let mut sent = Vec::new();
+        while s.poll_event().is_none() {
+            if let Some(b) = s.poll_transmit(now) {
+                sent.push(b);
+                let mut echo = vec![b];
+                if is_numeric(b) && !prev_numeric {
+                    echo.extend_from_slice(b"    ");
+                }
+                prev_numeric = is_numeric(b);
+                if b == b'\r' {
+                    echo.extend_from_slice(b"\x06\r\n>>");
+                }
+                // The extras trickle in a byte at a time.
+                for e in echo {
+                    s.feed(&[e], now);
+                    now = now + Duration::from_millis(1);
+                }
+                continue;
+            }
+            now = s.next_timeout().unwrap();
+            s.handle_timeout(now);
+        }
+        assert_eq!(sent, b"POINT T1 380\r");
+    }
+
+    #[test]
     fn tolerant_of_fewer_extras_and_of_no_ack() {
-        let mut s = Session::new(cfg(4, Ack::Auto));
+        let mut s = Session::new(cfg(4));
         s.send_line("JOINT 1,-5", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         let (r, _, _) = run(&mut s, 0, b"\r\n>>", Instant::ZERO);
@@ -673,7 +758,7 @@ mod tests {
 
     #[test]
     fn extras_not_expected_cancel_the_line_before_it_runs() {
-        let mut s = Session::new(cfg(0, Ack::Auto));
+        let mut s = Session::new(cfg(0));
         s.send_line("SPEED 50", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         let (r, sent, _) = run(&mut s, 4, b"\x06\r\n>>", Instant::ZERO);
@@ -687,8 +772,8 @@ mod tests {
     }
 
     #[test]
-    fn an_error_line_and_a_required_ack() {
-        let mut s = Session::new(cfg(4, Ack::Required));
+    fn an_error_line_is_the_reply_s_text_without_ack() {
+        let mut s = Session::new(cfg(4));
         s.send_line("MOVE XX", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         let (r, _, _) = run(
@@ -697,16 +782,14 @@ mod tests {
             b"\r\n035-LOCATION NOT DEFINED.\r\n>>",
             Instant::ZERO,
         );
-        assert_eq!(r.unwrap().error, Some((35, "LOCATION NOT DEFINED".into())));
-        s.send_line("READY", Duration::from_secs(3), Instant::ZERO)
-            .unwrap();
-        let (r, _, _) = run(&mut s, 0, b"\r\n>>", Instant::ZERO);
-        assert!(matches!(r, Err(SessionError::NoAck { .. })));
+        let r = r.unwrap();
+        assert_eq!(r.text.trim(), "035-LOCATION NOT DEFINED.");
+        assert!(!r.ack);
     }
 
     #[test]
     fn a_silent_controller_times_out_and_is_lost() {
-        let mut s = Session::new(cfg(4, Ack::Auto));
+        let mut s = Session::new(cfg(4));
         s.send_line("W2", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         let mut now = Instant::ZERO;
@@ -729,8 +812,26 @@ mod tests {
     }
 
     #[test]
+    fn an_xoff_without_xon_is_given_up_and_halt_is_typed_through_it() {
+        let mut s = Session::new(cfg(4));
+        s.feed(&[XOFF], Instant::ZERO);
+        s.send_line("W2", Duration::from_secs(3), Instant::ZERO)
+            .unwrap();
+        assert_eq!(s.poll_transmit(Instant::ZERO), None);
+        assert_eq!(s.next_timeout(), Some(Instant::ZERO + XOFF_LIMIT));
+        assert_eq!(s.poll_transmit(Instant::ZERO + XOFF_LIMIT), Some(b'W'));
+        assert_eq!(s.take_xoff_expired(), 1);
+
+        let mut s = Session::new(cfg(4));
+        s.feed(&[XOFF], Instant::ZERO);
+        s.send_urgent("HALT", Duration::from_secs(3), Instant::ZERO)
+            .unwrap();
+        assert_eq!(s.poll_transmit(Instant::ZERO), Some(b'H'));
+    }
+
+    #[test]
     fn xoff_pauses_typing() {
-        let mut s = Session::new(cfg(4, Ack::Auto));
+        let mut s = Session::new(cfg(4));
         s.send_line("HERE A", Duration::from_secs(3), Instant::ZERO)
             .unwrap();
         s.feed(&[XOFF], Instant::ZERO);
@@ -741,7 +842,7 @@ mod tests {
 
     #[test]
     fn late_bytes_after_a_timeout_are_swallowed_by_the_resync() {
-        let mut s = Session::new(cfg(4, Ack::Auto));
+        let mut s = Session::new(cfg(4));
         s.send_line("READY", Duration::from_millis(100), Instant::ZERO)
             .unwrap();
         let mut now = Instant::ZERO;

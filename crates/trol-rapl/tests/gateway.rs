@@ -387,6 +387,7 @@ fn faults_on_the_rapl_line_end_in_defined_codes_and_get_status_tells_what_ran() 
         inner: port,
         prompt: lose_prompt.clone(),
         dropped: 0,
+        seen: Vec::new(),
     });
     let backend = RaplBackend::connect(port, profile).unwrap();
     let cfg = trol_proto::link::LinkConfig::default();
@@ -433,11 +434,13 @@ fn faults_on_the_rapl_line_end_in_defined_codes_and_get_status_tells_what_ran() 
     assert_eq!(ran("JOINT 6,6.8755"), 1, "{:?}", sim.ran());
 }
 
-/// A port whose incoming `>` bytes vanish while armed (two of them: one prompt).
+/// A port whose incoming `>` bytes vanish while armed (two of them: one prompt), once the
+/// echo of `JOINT 6` has come (the prompt of the motion line, not of the reads before it).
 struct Incoming {
     inner: Box<dyn Port>,
     prompt: Arc<AtomicBool>,
     dropped: u8,
+    seen: Vec<u8>,
 }
 
 impl Port for Incoming {
@@ -447,15 +450,19 @@ impl Port for Incoming {
     fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
         let n = self.inner.recv(buf, deadline)?;
         if !self.prompt.load(Ordering::SeqCst) {
+            self.seen.clear();
             return Ok(n);
         }
         let mut kept = 0;
         for i in 0..n {
             let b = buf[i];
-            if b == b'>' && self.prompt.load(Ordering::SeqCst) {
+            self.seen.push(b);
+            let after_joint = self.seen.windows(7).any(|w| w == b"JOINT 6");
+            if b == b'>' && after_joint && self.prompt.load(Ordering::SeqCst) {
                 self.dropped += 1;
                 if self.dropped == 2 {
                     self.dropped = 0;
+                    self.seen.clear();
                     self.prompt.store(false, Ordering::SeqCst);
                 }
                 continue;

@@ -88,14 +88,27 @@ const POSES_DEG: [[f64; 6]; 3] = [
 
 #[test]
 fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
+    // A controller unlike TROL's simulator on every point the probe can read: inches,
+    // another angle order, a tool frame turned 90 degrees, the G3000 driver's negative
+    // one-pulse-per-line table, refusals with a colon.
+    let (g3000, _) = trol_rapl::c500::variant("pulses-g3000").unwrap();
     let controller = Profile {
         units: Units::Inch,
         angles: "roll -pitch yaw".into(),
+        tool_rotation: [0.0, 90.0, 0.0],
+        pulse_scale: g3000.pulse_scale.clone(),
+        pulse_zero: g3000.pulse_zero.clone(),
+        twin: trol_rapl::profile::Twin {
+            refusal: ":NNN-TEXT.".into(),
+            ..Default::default()
+        },
         ..Profile::simulator()
     };
     let (port, sim) = start(controller);
     // The safe default profile: nothing settled but what opening a session needs.
-    let mut b = RaplBackend::connect_with(port, Profile::default(), None, true).unwrap();
+    let record = trol_rapl::backend::Recorder::default();
+    let mut b =
+        RaplBackend::connect_with(port, Profile::default(), None, Some(record.clone())).unwrap();
     let mut asked = Vec::new();
     let contact = probe::first_contact(&mut b, POSES_DEG.len(), &mut |k, n| {
         asked.push((k, n));
@@ -114,6 +127,7 @@ fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
     for (line, r) in &contact.replies {
         assert!(r.is_ok(), "{line}: {r:?}");
     }
+    assert_eq!(contact.refusal, Some(Ok(":NNN-TEXT.".to_string())));
     assert!(
         contact.replies[0]
             .1
@@ -125,9 +139,16 @@ fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
     let fit = contact.fit.unwrap().unwrap();
     assert_eq!(fit.units, Units::Inch);
     assert_eq!(fit.angles, "roll -pitch yaw");
-    assert_eq!(fit.joint_units, "degrees");
+    assert_eq!(fit.tool_rotation, [0.0, 90.0, 0.0]);
+    let (scale, zero) = fit.pulses.clone().unwrap();
+    for i in 0..6 {
+        assert!((scale[i] - g3000.pulse_scale[i]).abs() < 0.01, "{scale:?}");
+        assert_eq!(zero[i], g3000.pulse_zero[i], "{zero:?}");
+    }
     let written = fit.apply(&Profile::default());
     assert_eq!(written.angles, "roll -pitch yaw");
+    // MA and MI's units are not read off the JOINTS row.
+    assert_eq!(written.joint_units, "");
     assert_eq!(Profile::parse(&written.to_toml()).unwrap(), written);
 
     // Nothing ran that could move the arm or change a setting.
@@ -146,7 +167,7 @@ fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
         "closed with HELP"
     );
     // Every byte both ways is in the transcript, the close included.
-    let text = b.transcript().unwrap().to_text();
+    let text = record.lock().unwrap().to_text();
     assert!(text.contains(" H 57  W\n"), "W typed:\n{text}");
     assert!(text.contains(" C ") && text.contains("WORLD"));
     assert!(text.trim_end().ends_with("1a 1a  .."), "closed:\n{text}");

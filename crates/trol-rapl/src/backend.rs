@@ -48,7 +48,9 @@ use trol_proto::time::Instant;
 
 use crate::aci::{AciError, Master};
 use crate::frames::{Frames, Unsettled};
-use crate::profile::{Ack, Completion, Entry, Halt, JointUnits, Profile, RefusalForm, Units};
+use crate::profile::{
+    Ack, Completion, Entry, Halt, JointUnits, MotionAck, Profile, RefusalForm, Units,
+};
 use crate::session::{CTRL_Z, Reply, Session, SessionConfig, SessionError};
 use crate::text::{self, Listed};
 
@@ -300,6 +302,9 @@ pub struct RaplBackend {
     outstanding: Option<Outstanding>,
     queue: VecDeque<Motion>,
     deferred: Option<BackendError>,
+    /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
+    /// "end"`): the controller's interpreter is busy until then.
+    awaiting: Option<String>,
     unasked: String,
     scratch: usize,
     log: VecDeque<String>,
@@ -341,6 +346,7 @@ impl RaplBackend {
             outstanding: None,
             queue: VecDeque::new(),
             deferred: None,
+            awaiting: None,
             unasked: String::new(),
             scratch: 0,
             log: VecDeque::new(),
@@ -518,8 +524,8 @@ impl RaplBackend {
     /// Run the session until its next event.
     fn pump(&mut self) -> io::Result<Result<Reply, SessionError>> {
         Ok(self
-            .pump_unless(None)?
-            .expect("without a stop flag, pumping ends in an event"))
+            .pump_until(None, None)?
+            .expect("without a stop flag or a limit, pumping ends in an event"))
     }
 
     /// Run the session until its next event, or until `stop` is set (None).
@@ -527,8 +533,21 @@ impl RaplBackend {
         &mut self,
         stop: Option<&std::sync::atomic::AtomicBool>,
     ) -> io::Result<Option<Result<Reply, SessionError>>> {
+        self.pump_until(stop, None)
+    }
+
+    /// Run the session until its next event, `stop` is set, or `until` has come while a
+    /// reply is being read (None).
+    fn pump_until(
+        &mut self,
+        stop: Option<&std::sync::atomic::AtomicBool>,
+        until: Option<std::time::Instant>,
+    ) -> io::Result<Option<Result<Reply, SessionError>>> {
         loop {
             if stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst)) {
+                return Ok(None);
+            }
+            if until.is_some_and(|u| std::time::Instant::now() >= u) && self.session.is_reading() {
                 return Ok(None);
             }
             let now = self.now();
@@ -551,6 +570,7 @@ impl RaplBackend {
                 .map(|t| self.at(t))
                 .unwrap_or_else(|| std::time::Instant::now() + Duration::from_millis(50))
                 .min(std::time::Instant::now() + Duration::from_millis(50));
+            let wake = until.map_or(wake, |u| wake.min(u.max(std::time::Instant::now())));
             let got = self.recv(wake)?;
             let now = self.now();
             if !got.is_empty() {
@@ -603,6 +623,38 @@ impl RaplBackend {
         Ok(())
     }
 
+    /// Keep the lines that came in a resynchronisation after a surprise (an e-stop's line
+    /// can break the echo of the next command), but not the echo of `typed`, nor prompts.
+    fn keep_unasked(&mut self, typed: &str) {
+        let got = self.session.take_resync_text();
+        let text = String::from_utf8_lossy(&got).into_owned();
+        let typed = typed.trim();
+        let said: Vec<String> = lines(&text)
+            .into_iter()
+            .map(|l| {
+                l.trim_end_matches(">>")
+                    .trim_end_matches("O>")
+                    .trim()
+                    .to_string()
+            })
+            .filter(|l| {
+                !l.is_empty()
+                    && l.bytes().any(|b| b.is_ascii_alphanumeric())
+                    && !typed.starts_with(l.as_str())
+            })
+            .collect();
+        if !said.is_empty() {
+            self.note(format!(
+                "the C500 said, while a line was typed: {}",
+                said.join(" / ")
+            ));
+            if !self.unasked.is_empty() {
+                self.unasked.push_str(" / ");
+            }
+            self.unasked.push_str(&said.join(" / "));
+        }
+    }
+
     /// A line the controller printed unasked, reported once: a refusal form the profile maps
     /// gives its code; anything else is UNSURE with the text. A motion of ours that was under
     /// way or queued is given up (the queue is dropped: nothing more is sent after it).
@@ -651,6 +703,13 @@ impl RaplBackend {
                 "`{line}` not sent: the RAPL-II session is closed"
             )));
         }
+        if let Some(motion) = &self.awaiting {
+            return Err(BackendError::Link(format!(
+                "`{line}` not sent: this controller answers `{motion}` only at the motion's end \
+                 (motion_ack = \"end\"), and its interpreter takes nothing before: call \
+                 TROLFinish(FINISH_WAIT) first"
+            )));
+        }
         self.settle()?;
         let now = self.now();
         let started = if urgent {
@@ -663,6 +722,7 @@ impl RaplBackend {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => {
                 self.note(format!("`{line}`: {e}"));
+                self.keep_unasked(&format!("{line}\r"));
                 Err(if e.surely_not_run() {
                     BackendError::Link(e.to_string())
                 } else {
@@ -829,6 +889,9 @@ impl RaplBackend {
     /// Type a motion line; on the success form it is under way.
     fn launch(&mut self, m: Motion) -> BiosResult {
         self.last_poll = None;
+        if self.profile.motion_ack == MotionAck::End {
+            return self.launch_answered_at_end(m);
+        }
         match self.command(&m.line, None) {
             Ok(0) => {
                 self.outstanding = Some(Outstanding {
@@ -853,10 +916,128 @@ impl RaplBackend {
         }
     }
 
+    /// A motion on a controller that answers at the motion's end: typed whole (every echo
+    /// checked), then a refusal has the reply window to come; without one the motion runs,
+    /// and its answer is read by [`RaplBackend::poll`].
+    fn launch_answered_at_end(&mut self, m: Motion) -> BiosResult {
+        self.settle()?;
+        let now = self.now();
+        self.session
+            .send_line(&m.line, self.motion_timeout(), now)
+            .map_err(|e| BackendError::Link(e.to_string()))?;
+        let window = std::time::Instant::now() + self.reply_timeout().min(Duration::from_secs(1));
+        match self.pump_until(None, Some(window)) {
+            Ok(Some(Ok(r))) => {
+                // Answered within the window: a refusal, or a motion that already ended.
+                match self.answer(&m.line, r, false)? {
+                    Answer::Refused(n, _) => {
+                        self.queue.clear();
+                        Ok(match self.meaning(n) {
+                            Meaning::Code(c) => c,
+                            Meaning::Location => code_of("BIOS_BAD_ARGUMENT"),
+                        })
+                    }
+                    Answer::Done(_) => {
+                        self.outstanding = Some(Outstanding {
+                            motion: m,
+                            since: std::time::Instant::now(),
+                            seen_moving: true,
+                            still: None,
+                        });
+                        Ok(0)
+                    }
+                }
+            }
+            Ok(Some(Err(e))) => {
+                self.note(format!("`{}`: {e}", m.line));
+                self.queue.clear();
+                Err(if e.surely_not_run() {
+                    BackendError::Link(e.to_string())
+                } else {
+                    BackendError::Unsure(e.to_string())
+                })
+            }
+            Ok(None) => {
+                self.note(format!(
+                    "`{}` taken, no refusal within the reply window: under way (its answer \
+                     comes at its end)",
+                    m.line
+                ));
+                self.awaiting = Some(m.line.clone());
+                self.outstanding = Some(Outstanding {
+                    motion: m,
+                    since: std::time::Instant::now(),
+                    seen_moving: true,
+                    still: None,
+                });
+                Ok(0)
+            }
+            Err(e) => Err(BackendError::Unsure(format!("`{}`: {e}", m.line))),
+        }
+    }
+
+    /// The answer of a motion that answers at its end: still running (true), ended in its
+    /// success form (false), or its refusal or failure.
+    fn await_end(&mut self) -> Result<bool, BackendError> {
+        let Some(line) = self.awaiting.clone() else {
+            return Ok(false);
+        };
+        let until = std::time::Instant::now() + Duration::from_millis(self.profile.poll_ms);
+        let ev = self
+            .pump_until(None, Some(until))
+            .map_err(|e| BackendError::Unsure(format!("`{line}`: {e}")))?;
+        let Some(ev) = ev else {
+            let late = self
+                .outstanding
+                .as_ref()
+                .is_some_and(|o| o.since.elapsed() > self.motion_timeout());
+            if late {
+                self.awaiting = None;
+                self.outstanding = None;
+                self.queue.clear();
+                let _ = self.interrupt();
+                return Err(BackendError::Unsure(format!(
+                    "`{line}` was not answered within motion_timeout_s ({} s): Ctrl-C sent; \
+                     whether it ran to its end is not known",
+                    self.profile.motion_timeout_s
+                )));
+            }
+            return Ok(true);
+        };
+        self.awaiting = None;
+        match ev {
+            Ok(r) => match self.answer(&line, r, false) {
+                Ok(Answer::Done(_)) => Ok(false),
+                Ok(Answer::Refused(n, t)) => {
+                    self.outstanding = None;
+                    self.queue.clear();
+                    self.note(format!("`{line}` ended in a refusal: {n:03}-{t}"));
+                    Err(BackendError::Refused(match self.meaning(n) {
+                        Meaning::Code(c) => c,
+                        Meaning::Location => RAPL_ERROR,
+                    }))
+                }
+                Err(e) => {
+                    self.outstanding = None;
+                    self.queue.clear();
+                    Err(e)
+                }
+            },
+            Err(e) => {
+                self.outstanding = None;
+                self.queue.clear();
+                Err(BackendError::Unsure(format!("`{line}`: {e}")))
+            }
+        }
+    }
+
     /// One look at the arm: STATUS, and W2 when the controller says done while a motion of
     /// ours is under way; starts the next queued motion once the last has ended. Whether
     /// anything still moves.
     fn poll(&mut self) -> Result<bool, BackendError> {
+        if self.await_end()? {
+            return Ok(true);
+        }
         self.report_unasked()?;
         let st = match self.profile.completion {
             Completion::W5 if self.outstanding.is_none() && self.queue.is_empty() => {
@@ -869,7 +1050,17 @@ impl RaplBackend {
                 }
                 st
             }
-            _ => self.read_status()?,
+            _ => match self.read_status() {
+                Ok(st) => st,
+                // A read that met a surprise (an unasked line) and resynchronised: what the
+                // controller said is told first, then one more look.
+                Err(BackendError::Link(e)) => {
+                    self.note(format!("STATUS read again after: {e}"));
+                    self.report_unasked()?;
+                    self.read_status()?
+                }
+                Err(e) => return Err(e),
+            },
         };
         if st.limp.iter().any(|l| *l) {
             let ours = self.outstanding.take();
@@ -1549,7 +1740,10 @@ impl Backend for RaplBackend {
         let r = match self.profile.halt {
             Halt::Halt => self.command_as("HALT", None, true),
             Halt::Abort => self.command_as("ABORT", None, true),
-            Halt::CtrlC => self.interrupt().map(|_| 0),
+            Halt::CtrlC => {
+                self.awaiting = None;
+                self.interrupt().map(|_| 0)
+            }
         };
         if matches!(r, Ok(0)) {
             self.outstanding = None;

@@ -75,7 +75,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "refusals as `*** TEXT ***`, without a number",
     ),
     ("no-period", "refusals as `NNN-TEXT`, without the period"),
-    ("ack-at-end", "a motion's ACK and prompt come at its end"),
+    (
+        "ack-at-end",
+        "a motion's ACK and prompt come at its end; Ctrl-C halts",
+    ),
     (
         "done-lag",
         "the DONE row still says done for 0.3 s after a motion's ACK",
@@ -138,15 +141,13 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
             ..base
         },
         "ack-at-end" => Profile {
-            twin: crate::profile::Twin {
-                ack_at_end: true,
-                ..twin
-            },
+            motion_ack: crate::profile::MotionAck::End,
+            halt: Halt::CtrlC,
             ..base
         },
         "done-lag" => Profile {
             twin: crate::profile::Twin {
-                done_lag_ms: 300,
+                done_lag_ms: 3000,
                 ..twin
             },
             ..base
@@ -167,6 +168,10 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
         },
         "no-ack" => Profile {
             ack: Ack::Never,
+            twin: crate::profile::Twin {
+                refusal: "*** TEXT ***".into(),
+                ..twin
+            },
             ..base
         },
         "ma-radians" => Profile {
@@ -571,7 +576,7 @@ impl C500 {
             let w = format!("\r\n{}\r\n", self.profile.twin.motion_warning);
             self.out.extend(w.bytes());
         }
-        if self.profile.twin.ack_at_end && self.arm.is_moving(now) {
+        if self.profile.motion_ack == crate::profile::MotionAck::End && self.arm.is_moving(now) {
             self.waiting = Some(Waiting::Finish);
         } else {
             self.ack_prompt();

@@ -115,6 +115,18 @@ pub enum Completion {
     Finish,
 }
 
+/// When a motion's ACK and prompt come.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MotionAck {
+    /// At its start (RobWork's reading; the default): the motion call returns then.
+    Start,
+    /// At its end (the G3000 driver's reading): the call returns once the line was taken
+    /// and no refusal came within the reply window; Finish waits for the late ACK, and
+    /// Halt goes as Ctrl-C (the interpreter is busy), so `halt = "ctrl-c"` is required.
+    End,
+}
+
 /// How a motion is stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -242,6 +254,9 @@ pub struct Profile {
     pub completion: Completion,
     /// How a motion is stopped.
     pub halt: Halt,
+    /// When a motion's ACK comes: at its `start` or its `end` (`trol rapl probe` cannot
+    /// tell without a motion; docs/c500.md has the supervised step).
+    pub motion_ack: MotionAck,
     /// The prompt the controller writes after each command (`>>`; G3K also saw `O>`). The
     /// reader accepts both.
     pub prompt: String,
@@ -311,9 +326,8 @@ pub struct Twin {
     pub extra_byte: u8,
     /// Whether it echoes what is typed (RAPL-II's CONFIG has an ECHO setting).
     pub echo: bool,
-    /// Whether a motion's ACK and prompt come at its end instead of its start.
-    pub ack_at_end: bool,
-    /// How long after a motion's ACK its DONE row still says done, ms.
+    /// How long after a motion's ACK its DONE row still says done, ms of the controller's
+    /// time (`trol sim --time-scale` shortens it like every other time of the arm).
     pub done_lag_ms: u64,
     /// A line it prints unasked when the arm loses power ("": none).
     pub estop_line: String,
@@ -327,7 +341,6 @@ impl Default for Twin {
             refusal: "NNN-TEXT.".into(),
             extra_byte: b' ',
             echo: true,
-            ack_at_end: false,
             done_lag_ms: 0,
             estop_line: String::new(),
             motion_warning: String::new(),
@@ -454,6 +467,7 @@ impl Default for Profile {
             joint_units: String::new(),
             completion: Completion::Status,
             halt: Halt::Halt,
+            motion_ack: MotionAck::Start,
             prompt: ">>".into(),
             help_at_start: true,
             echo_timeout_ms: 500,
@@ -582,6 +596,13 @@ impl Profile {
                 "`settle_ms = {}`: expected 1 to 60000",
                 self.settle_ms
             ));
+        }
+        if self.motion_ack == MotionAck::End && self.halt != Halt::CtrlC {
+            return Err(
+                "`motion_ack = \"end\"` needs `halt = \"ctrl-c\"`: while a motion runs the \
+                 controller's interpreter is busy, and only Ctrl-C reaches it"
+                    .into(),
+            );
         }
         if self.completion == Completion::Finish {
             return Err(

@@ -199,6 +199,7 @@ pub struct Session {
     tx: VecDeque<u8>,
     events: VecDeque<Result<Reply, SessionError>>,
     stray: Vec<u8>,
+    resync_text: Vec<u8>,
 }
 
 fn is_numeric(b: u8) -> bool {
@@ -221,12 +222,18 @@ impl Session {
             tx: VecDeque::new(),
             events: VecDeque::new(),
             stray: Vec::new(),
+            resync_text: Vec::new(),
         }
     }
 
     /// Whether no command is under way.
     pub fn is_idle(&self) -> bool {
         matches!(self.state, State::Idle)
+    }
+
+    /// Whether a typed line's reply is being read (its terminator was echoed).
+    pub fn is_reading(&self) -> bool {
+        matches!(self.state, State::Reading { .. })
     }
 
     /// Whether Ctrl-C found no prompt: nothing more can be sent until [`Session::resync`]
@@ -249,6 +256,12 @@ impl Session {
     /// the next command must resynchronise first).
     pub fn take_stray(&mut self) -> Vec<u8> {
         std::mem::take(&mut self.stray)
+    }
+
+    /// What came from the controller between a surprise and the prompt that ended the
+    /// resynchronisation after it (a line it printed unasked may be there).
+    pub fn take_resync_text(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.resync_text)
     }
 
     /// Type `line` (its terminator is added) and read its reply, which may take
@@ -608,6 +621,9 @@ impl Session {
                 tries,
             } => {
                 if prompt_at.is_some_and(|p| now >= p + SETTLE) {
+                    if matches!(cause, Some(SessionError::Echo { .. })) {
+                        self.resync_text.extend_from_slice(buf);
+                    }
                     let ev = match cause.take() {
                         Some(e) => Err(e),
                         None => Ok(Reply {

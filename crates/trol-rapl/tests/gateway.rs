@@ -2,74 +2,20 @@
 //! profile's baud rate: the profile's variants configured alike and mismatched, the safe
 //! default, and faults on the line.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 
-use trol_a465::arm::{Arm, ArmSettings, Stored};
+use trol_a465::arm::{Arm, ArmSettings};
 use trol_controller::backend::{Backend, BackendError, PosMode, Target};
 use trol_port::Port;
 use trol_port::faulty::{FaultConfig, Faulty};
-use trol_port::memory;
 use trol_proto::application::{LocName, Location, Tag};
 use trol_rapl::backend::{NO_ANGLES, NO_JOINT_UNITS};
 use trol_rapl::profile::{Ack, Entry, Units};
 use trol_rapl::{C500, Profile, RaplBackend};
 
-/// A simulated C500 on a thread; stops when dropped. `lines` has every command line it ran.
-struct Sim {
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
-    lines: Arc<Mutex<Vec<String>>>,
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
-}
-
-impl Sim {
-    fn ran(&self) -> Vec<String> {
-        self.lines.lock().unwrap().clone()
-    }
-}
-
-fn start(profile: Profile, faults: Option<FaultConfig>) -> (Box<dyn Port>, Sim) {
-    let (host, ctl) = memory::pair(Some(profile.baud));
-    let stop = Arc::new(AtomicBool::new(false));
-    let lines = Arc::new(Mutex::new(Vec::new()));
-    let (flag, keep) = (stop.clone(), lines.clone());
-    let thread = std::thread::spawn(move || {
-        let arm = Arm::new(ArmSettings {
-            homed: true,
-            ..Default::default()
-        });
-        let locations = vec![(
-            "test_001".to_string(),
-            Stored::Cart([400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]),
-        )];
-        let mut c = C500::new(profile, arm, locations);
-        let mut port: Box<dyn Port> = match faults {
-            Some(f) => Box::new(Faulty::new(ctl, f)),
-            None => Box::new(ctl),
-        };
-        let _ = trol_rapl::c500::serve(port.as_mut(), &mut c, 20.0, &flag, &mut |l| {
-            keep.lock().unwrap().push(l.to_string())
-        });
-    });
-    (
-        Box::new(host),
-        Sim {
-            stop,
-            thread: Some(thread),
-            lines,
-        },
-    )
-}
+mod common;
+use common::start;
 
 fn wait_idle(b: &mut RaplBackend) {
     for _ in 0..2000 {

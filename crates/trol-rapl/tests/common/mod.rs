@@ -1,0 +1,125 @@
+//! The simulated C500 on a thread, over an in-memory line paced at the profile's baud rate,
+//! for the backend's tests: what it ran, where its arm is headed, and an emergency stop.
+
+#![allow(dead_code)]
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use trol_a465::arm::{Arm, ArmSettings, Stored};
+use trol_port::Port;
+use trol_port::faulty::{FaultConfig, Faulty};
+use trol_port::memory;
+use trol_rapl::{C500, Profile};
+
+/// The pick example's location.
+pub const TEST_001: [f64; 6] = [400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+
+/// A simulated C500 on a thread; stops when dropped.
+pub struct Sim {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    lines: Arc<Mutex<Vec<String>>>,
+    end: Arc<Mutex<[f64; 6]>>,
+    estop: Arc<AtomicBool>,
+    moving: Arc<AtomicBool>,
+    power: Arc<AtomicBool>,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Sim {
+    /// Every command line the controller ran.
+    pub fn ran(&self) -> Vec<String> {
+        self.lines.lock().unwrap().clone()
+    }
+
+    /// Where the arm will be once what the controller accepted has ended (radians).
+    pub fn planned_end(&self) -> [f64; 6] {
+        *self.end.lock().unwrap()
+    }
+
+    /// Whether the arm moves.
+    pub fn moving(&self) -> bool {
+        self.moving.load(Ordering::SeqCst)
+    }
+
+    /// Whether the arm has power.
+    pub fn has_power(&self) -> bool {
+        self.power.load(Ordering::SeqCst)
+    }
+
+    /// Cut the arm's power at the controller's next turn (an emergency stop).
+    pub fn emergency_stop(&self) {
+        self.estop.store(true, Ordering::SeqCst);
+    }
+}
+
+/// A simulated C500 as `profile` says, its arm homed or not, at time scale 20.
+pub fn start_with(
+    profile: Profile,
+    homed: bool,
+    faults: Option<FaultConfig>,
+) -> (Box<dyn Port>, Sim) {
+    let (host, ctl) = memory::pair(Some(profile.baud));
+    let stop = Arc::new(AtomicBool::new(false));
+    let lines = Arc::new(Mutex::new(Vec::new()));
+    let end = Arc::new(Mutex::new([0.0; 6]));
+    let estop = Arc::new(AtomicBool::new(false));
+    let moving = Arc::new(AtomicBool::new(false));
+    let power = Arc::new(AtomicBool::new(true));
+    let (flag, keep, ends, cut) = (stop.clone(), lines.clone(), end.clone(), estop.clone());
+    let (moves, powered) = (moving.clone(), power.clone());
+    let thread = std::thread::spawn(move || {
+        let arm = Arm::new(ArmSettings {
+            homed,
+            ..Default::default()
+        });
+        let locations = vec![("test_001".to_string(), Stored::Cart(TEST_001))];
+        let mut c = C500::new(profile, arm, locations);
+        let mut port: Box<dyn Port> = match faults {
+            Some(f) => Box::new(Faulty::new(ctl, f)),
+            None => Box::new(ctl),
+        };
+        let _ = trol_rapl::c500::serve_with(
+            port.as_mut(),
+            &mut c,
+            20.0,
+            &flag,
+            &mut |l| keep.lock().unwrap().push(l.to_string()),
+            &mut |c, now| {
+                if cut.swap(false, Ordering::SeqCst) {
+                    c.power_off(now);
+                }
+                *ends.lock().unwrap() = c.planned_end();
+                moves.store(c.arm_moving(now), Ordering::SeqCst);
+                powered.store(c.has_power(), Ordering::SeqCst);
+            },
+        );
+    });
+    (
+        Box::new(host),
+        Sim {
+            stop,
+            thread: Some(thread),
+            lines,
+            end,
+            estop,
+            moving,
+            power,
+        },
+    )
+}
+
+/// A simulated C500 as `profile` says, its arm homed.
+pub fn start(profile: Profile, faults: Option<FaultConfig>) -> (Box<dyn Port>, Sim) {
+    start_with(profile, true, faults)
+}

@@ -1,0 +1,456 @@
+//! The RAPL-II backend across every controller the public sources allow
+//! (`trol_rapl::c500::VARIANTS`: refusal forms, ACK at the end, DONE lag, an emergency stop
+//! with and without a line, not homed, MA/MI in radians, inches, a WORLD frame offset, another
+//! pulse table, the bytes after a digit, echo off), each driven through TROL's API twice: with
+//! the profile that matches it, and with the safe default a first contact starts from.
+//!
+//! Every call either works right or fails safe: a success (the call and the Finish after it)
+//! leaves the arm where the call asked; a refusal or a failure of the line leaves it where it
+//! was; an UNSURE leaves it at one of the two. Never a success for a failure, never a motion
+//! nobody asked for. Where TROL is meant to work (the matching profile on every variant but
+//! those it cannot drive safely), every step must also succeed as the user expects.
+
+mod common;
+
+use std::time::Duration;
+
+use common::{Sim, TEST_001, start_with};
+use trol::{Location, PosMode, Robot, Tag};
+use trol_a465::kinematics::{Kinematics, Pose};
+use trol_proto::application::code::TROL_ERR_ROBOT_UNSURE;
+use trol_rapl::backend::ARM_POWER;
+use trol_rapl::{C500, Profile, RAPL_CODES, RaplBackend};
+
+/// The line's speed in these tests (the paced in-memory line and the twin).
+const BAUD: u32 = 115_200;
+
+/// Where a call should leave the arm.
+#[derive(Clone, Copy, Debug)]
+enum Want {
+    /// At this tool pose (x y z mm, yaw pitch roll rad).
+    Pose([f64; 6]),
+    /// At these joints (rad).
+    Joints([f64; 6]),
+    /// Where it was: the call is refused.
+    Refused,
+    /// Motions one after the other: at the last on success; at any of them, or where it
+    /// was, on UNSURE.
+    Chain(&'static [Want]),
+}
+
+struct Run<'a> {
+    label: String,
+    sim: &'a Sim,
+    robot: Robot,
+    /// The twin's pulse convention.
+    pulses: trol_rapl::frames::Frames,
+    /// Where TROL is meant to work: every step must succeed as the user expects.
+    works: bool,
+    /// Halt must reach the arm while a motion runs.
+    halt_must_work: bool,
+    false_success: Vec<String>,
+    unasked: Vec<String>,
+    missed: Vec<String>,
+    outcomes: Vec<String>,
+}
+
+fn pose_of(q: &[f64; 6]) -> Pose {
+    Kinematics::new([0.0; 6]).fk(q)
+}
+
+fn near_pose(q: &[f64; 6], p: &[f64; 6]) -> bool {
+    let a = pose_of(q);
+    let b = Pose::from_xyzypr(*p);
+    let d = a.pos.distance(b.pos);
+    d < 1.0 && trol_rapl::probe::rotation_distance_deg(&a, &b) < 0.3
+}
+
+fn near_joints(a: &[f64; 6], b: &[f64; 6]) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < 0.005)
+}
+
+fn at(q: &[f64; 6], want: &Want, before: &[f64; 6]) -> bool {
+    match want {
+        Want::Pose(p) => near_pose(q, p),
+        Want::Joints(j) => near_joints(q, j),
+        Want::Refused => near_joints(q, before),
+        Want::Chain(all) => all.last().is_some_and(|w| at(q, w, before)),
+    }
+}
+
+/// Where an UNSURE may leave the arm: where it was, or where it was asked to go.
+fn unsure_at(q: &[f64; 6], want: &Want, before: &[f64; 6]) -> bool {
+    match want {
+        Want::Chain(all) => all.iter().any(|w| at(q, w, before)),
+        w => at(q, w, before),
+    }
+}
+
+impl Run<'_> {
+    /// A motion call and the Finish after it, checked against where the arm ends.
+    fn motion(
+        &mut self,
+        what: &str,
+        want: Want,
+        call: impl FnOnce(&mut Robot) -> trol::Result<()>,
+    ) {
+        let before = self.sim.planned_end();
+        let r = call(&mut self.robot);
+        let f = self.robot.finish();
+        let after = self.sim.planned_end();
+        let here = format!("{}: {what}", self.label);
+        let expect_refusal = matches!(want, Want::Refused);
+        self.outcomes.push(format!(
+            "{what}: {} / finish {}",
+            r.as_ref()
+                .map(|_| "ok".into())
+                .unwrap_or_else(|e| e.to_string()),
+            f.as_ref()
+                .map(|_| "ok".into())
+                .unwrap_or_else(|e| e.to_string())
+        ));
+        // Finish said the motion ended: the arm stands (or is within its last second of
+        // controller time: the twin's flag is read a moment after Finish answered).
+        if f.is_ok() && self.sim.moving() {
+            std::thread::sleep(Duration::from_millis(50));
+            if self.sim.moving() {
+                self.false_success.push(format!(
+                    "{here}: Finish succeeded while the arm still moves"
+                ));
+            }
+        }
+        match (&r, &f) {
+            (Ok(()), Ok(())) => {
+                if expect_refusal || !at(&after, &want, &before) {
+                    self.false_success.push(format!(
+                        "{here}: success, but the arm ends at {after:?} (wanted {want:?}, was at {before:?})"
+                    ));
+                }
+            }
+            (Ok(()), Err(e)) => {
+                // The motion was accepted and its end is not a success: a named code, and the
+                // arm nowhere else than before, partway or at the target. A motion the
+                // controller refused must not have been reported accepted.
+                if expect_refusal && !near_joints(&after, &before) {
+                    self.unasked
+                        .push(format!("{here}: the arm moved to {after:?}"));
+                }
+                if expect_refusal {
+                    // The arm cannot do it (below the table, past a limit): the call's 0 said
+                    // it was accepted.
+                    self.false_success.push(format!(
+                        "{here}: the call succeeded though the arm cannot do it ({e} at Finish)"
+                    ));
+                }
+                if self.works && !expect_refusal {
+                    self.missed.push(format!("{here}: finish failed: {e}"));
+                }
+            }
+            (Err(e), _) => {
+                let unsure = e.code() == TROL_ERR_ROBOT_UNSURE;
+                let stayed = near_joints(&after, &before);
+                if !stayed && !(unsure && unsure_at(&after, &want, &before)) {
+                    self.unasked.push(format!(
+                        "{here}: failed ({e}) but the arm went from {before:?} to {after:?}"
+                    ));
+                }
+                if self.works && !(expect_refusal && e.is_refusal()) {
+                    self.missed.push(format!("{here}: {e}"));
+                }
+            }
+        }
+        if self.works && expect_refusal && r.is_ok() {
+            self.missed.push(format!("{here}: not refused"));
+        }
+    }
+
+    /// A call that moves nothing.
+    fn plain(&mut self, what: &str, call: impl FnOnce(&mut Robot) -> trol::Result<()>) {
+        let before = self.sim.planned_end();
+        let r = call(&mut self.robot);
+        let after = self.sim.planned_end();
+        self.outcomes.push(format!(
+            "{what}: {}",
+            r.as_ref()
+                .map(|_| "ok".into())
+                .unwrap_or_else(|e| e.to_string())
+        ));
+        if !near_joints(&after, &before) {
+            self.unasked
+                .push(format!("{}: {what} moved the arm", self.label));
+        }
+        if let Err(e) = r {
+            if self.works {
+                self.missed.push(format!("{}: {what}: {e}", self.label));
+            }
+        }
+    }
+
+    /// Wait until the controller has taken a motion (its planned end moved), within 20 s.
+    fn accepted(&self, before: &[f64; 6]) -> bool {
+        for _ in 0..4000 {
+            if !near_joints(&self.sim.planned_end(), before) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        false
+    }
+
+    fn script(&mut self) {
+        self.plain("speed 50", |r| r.speed(50));
+        self.motion("home", Want::Joints([0.0; 6]), |r| r.home(0));
+        self.motion("move test_001", Want::Pose(TEST_001), |r| {
+            r.move_to("test_001", false)
+        });
+        let a = [380.0, 20.0, 200.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+        self.motion("moveii A straight", Want::Pose(a), |r| {
+            r.move_ii(&Location::from_array6(Tag::Cart, a), true)
+        });
+        let mut p = pose_of(&self.sim.planned_end()).to_xyzypr();
+        p[2] += 20.0;
+        self.motion("jog z+20 straight", Want::Pose(p), |r| {
+            r.jog(&[0.0, 0.0, 20.0], true)
+        });
+        // The manual's check: a move below the table is refused and the arm stays (no
+        // earlier target replayed).
+        let below = [380.0, 20.0, -40.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+        self.motion("moveii below the table", Want::Refused, |r| {
+            r.move_ii(&Location::from_array6(Tag::Cart, below), false)
+        });
+        let mut q = self.sim.planned_end();
+        q[5] += 0.2;
+        self.motion("joint 6 +0.2", Want::Joints(q), |r| r.joint(6, 0.2));
+        self.motion("joint 1 +3.3 (past its limit)", Want::Refused, |r| {
+            r.joint(1, 3.3)
+        });
+        let m = [0.1, 0.2, 0.3, 0.1, 0.5, 0.2];
+        self.motion("ma", Want::Joints(m), |r| r.ma(&m));
+        let mut q = self.sim.planned_end();
+        q[4] -= 0.1;
+        self.motion("mi", Want::Joints(q), |r| {
+            r.mi(&[0.0, 0.0, 0.0, 0.0, -0.1, 0.0])
+        });
+        // A precision point in this controller's own pulses.
+        let jt = [0.2, 0.3, 0.4, 0.0, 0.6, 0.0];
+        let pulses = self
+            .pulses
+            .joints_to_pulses(jt.map(f64::to_degrees))
+            .expect("the twin's pulses");
+        self.motion("moveii precision point", Want::Joints(jt), |r| {
+            r.move_ii(
+                &Location::Prec(pulses.iter().map(|p| *p as i32).collect()),
+                false,
+            )
+        });
+        // Three motions back to back: they queue, and Finish waits for the last.
+        static APPRO: std::sync::OnceLock<[Want; 2]> = std::sync::OnceLock::new();
+        let chain = APPRO.get_or_init(|| {
+            let appro = Pose::from_xyzypr(TEST_001)
+                .then(&Pose::from_xyzypr([-90.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+                .to_xyzypr();
+            [Want::Pose(appro), Want::Pose(TEST_001)]
+        });
+        self.motion(
+            "appro, appro straight, move straight",
+            Want::Chain(chain),
+            |r| {
+                r.appro("test_001", &[-90.0], false)?;
+                r.appro("test_001", &[-90.0], true)?;
+                r.move_to("test_001", true)
+            },
+        );
+        let depart = pose_of(&self.sim.planned_end())
+            .then(&Pose::from_xyzypr([-50.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+            .to_xyzypr();
+        self.motion("depart 50 straight", Want::Pose(depart), |r| {
+            r.depart(&[-50.0], true)
+        });
+        self.plain("close 60, finish", |r| {
+            r.close(60)?;
+            r.finish()
+        });
+        self.plain("open 50, finish", |r| {
+            r.open_gripper(50)?;
+            r.finish()
+        });
+        self.plain("getposition", |r| {
+            r.position(Tag::Joint, PosMode::Actual).map(|_| ())
+        });
+
+        // Halt gets through while a long motion runs, and stops it short.
+        self.plain("speed 2", |r| r.speed(2));
+        let before = self.sim.planned_end();
+        let r = self.robot.joint(1, 1.5);
+        let under_way = r.is_ok() && self.accepted(&before) && self.sim.moving();
+        if under_way {
+            let h = self.robot.halt();
+            let f = self.robot.finish();
+            let turned = (self.sim.planned_end()[0] - before[0]).abs();
+            self.outcomes.push(format!(
+                "halt: {h:?} / finish {f:?} / turned {turned:.3} rad"
+            ));
+            if h.is_ok() && f.is_ok() && turned > 1.4 {
+                self.false_success.push(format!(
+                    "{}: Halt said done but the joint turned {turned:.3} of 1.5 rad",
+                    self.label
+                ));
+            }
+            if self.halt_must_work && (h.is_err() || f.is_err() || turned > 1.4) {
+                self.missed.push(format!(
+                    "{}: halt {h:?}, finish {f:?}, turned {turned}",
+                    self.label
+                ));
+            }
+        } else {
+            let _ = self.robot.finish();
+            if self.halt_must_work {
+                self.missed.push(format!(
+                    "{}: joint 1 for the halt did not return while the arm moved: {r:?}",
+                    self.label
+                ));
+            }
+        }
+
+        // An emergency stop mid-motion: Finish fails with a named code.
+        let before = self.sim.planned_end();
+        let r = self.robot.joint(1, -1.0);
+        if r.is_ok() && self.accepted(&before) {
+            self.sim.emergency_stop();
+            while self.sim.has_power() {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            let f = self.robot.finish();
+            self.outcomes.push(format!("emergency stop: finish {f:?}"));
+            match &f {
+                Ok(()) => self.false_success.push(format!(
+                    "{}: Finish succeeded after an emergency stop mid-motion",
+                    self.label
+                )),
+                Err(e) => {
+                    let named = e.code().0 == ARM_POWER || e.code() == TROL_ERR_ROBOT_UNSURE;
+                    if !named {
+                        self.false_success
+                            .push(format!("{}: emergency stop gave {e}", self.label));
+                    }
+                }
+            }
+            // With the power off, a motion is refused before anything is sent.
+            self.motion("joint after the emergency stop", Want::Refused, |r| {
+                r.joint(2, 0.1)
+            });
+        } else if self.works {
+            self.missed
+                .push(format!("{}: joint 1 for the e-stop: {r:?}", self.label));
+        }
+    }
+}
+
+/// Variants the matching profile cannot drive in full: TROL must fail safe there. A controller
+/// that answers motions at their end takes nothing while one runs (motions back to back are
+/// refused, Halt goes as Ctrl-C); a warning line before ACK leaves every motion UNSURE; a
+/// controller that echoes nothing cannot be typed to.
+const FAIL_SAFE: &[&str] = &["ack-at-end", "warning-then-ack", "no-echo"];
+
+fn run_variant(name: &str) {
+    let (twin, homed) = trol_rapl::c500::variant(name).expect("a variant");
+    let twin = Profile { baud: BAUD, ..twin };
+    let alike = C500::new(
+        twin.clone(),
+        trol_a465::arm::Arm::new(Default::default()),
+        Vec::new(),
+    )
+    .describe();
+    let safe = Profile {
+        baud: BAUD,
+        ..Profile::default()
+    };
+    let mut report = Vec::new();
+    let mut bad = Vec::new();
+    for (which, gateway) in [("matching profile", alike), ("safe default", safe)] {
+        let label = format!("{name} with the {which}");
+        let (port, sim) = start_with(twin.clone(), homed, None);
+        let backend = match RaplBackend::connect(port, gateway) {
+            Ok(b) => b,
+            Err(e) => {
+                let text = e.to_string();
+                report.push(format!("{label}: no session: {text}"));
+                if name == "no-echo" {
+                    assert!(text.contains("echo"), "{label}: {text}");
+                } else {
+                    bad.push(format!("{label}: the session did not open: {text}"));
+                }
+                assert!(sim.ran().iter().all(|l| !l.starts_with("MOVE")));
+                continue;
+            }
+        };
+        let cfg = trol_proto::link::LinkConfig::default();
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+        let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.set_codes(RAPL_CODES);
+        let mut run = Run {
+            label: label.clone(),
+            sim: &sim,
+            robot,
+            pulses: trol_rapl::frames::Frames::of(&twin),
+            works: which == "matching profile" && !FAIL_SAFE.contains(&name),
+            halt_must_work: which == "matching profile"
+                && name != "no-echo"
+                && name != "warning-then-ack",
+            false_success: Vec::new(),
+            unasked: Vec::new(),
+            missed: Vec::new(),
+            outcomes: Vec::new(),
+        };
+        run.script();
+        report.push(format!("{label}:\n  {}", run.outcomes.join("\n  ")));
+        bad.extend(run.false_success);
+        bad.extend(run.unasked);
+        bad.extend(run.missed);
+    }
+    assert!(
+        bad.is_empty(),
+        "{}\n\nwhat happened:\n{}",
+        bad.join("\n"),
+        report.join("\n")
+    );
+}
+
+macro_rules! variants {
+    ($($test:ident => $name:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                run_variant($name);
+            }
+        )*
+
+        #[test]
+        fn every_variant_has_a_test() {
+            let tested = [$($name),*];
+            for (name, _) in trol_rapl::c500::VARIANTS {
+                assert!(tested.contains(name), "variant {name} has no test here");
+            }
+        }
+    };
+}
+
+variants! {
+    default => "default",
+    colon_refusal => "colon-refusal",
+    stars_refusal => "stars-refusal",
+    no_period => "no-period",
+    ack_at_end => "ack-at-end",
+    done_lag => "done-lag",
+    estop_line => "estop-line",
+    warning_then_ack => "warning-then-ack",
+    no_ack => "no-ack",
+    ma_radians => "ma-radians",
+    inch => "inch",
+    world_offset => "world-offset",
+    pulses_g3000 => "pulses-g3000",
+    nul_after_digit => "nul-after-digit",
+    no_echo => "no-echo",
+    not_homed => "not-homed",
+}

@@ -149,7 +149,8 @@ impl Run<'_> {
             (Err(e), _) => {
                 let unsure = e.code() == TROL_ERR_ROBOT_UNSURE;
                 let stayed = near_joints(&after, &before);
-                if !stayed && !(unsure && unsure_at(&after, &want, &before)) {
+                let explained = stayed || (unsure && unsure_at(&after, &want, &before));
+                if !explained {
                     self.unasked.push(format!(
                         "{here}: failed ({e}) but the arm went from {before:?} to {after:?}"
                     ));

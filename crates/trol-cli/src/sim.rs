@@ -71,6 +71,13 @@ pub struct SimArgs {
     /// docs/c500.md); default: the simulator's (mm, angles yaw pitch roll, MA/MI in degrees).
     #[arg(long, value_name = "FILE", requires = "rapl")]
     profile: Option<PathBuf>,
+    /// With --rapl: play one of the controllers the public sources allow, by name (the
+    /// backend's tests run across all of them; docs/c500.md, "What TROL assumes"):
+    /// default, colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
+    /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
+    /// nul-after-digit, no-echo, not-homed.
+    #[arg(long, value_name = "NAME", requires = "rapl", conflicts_with = "profile", value_parser = parse_variant)]
+    variant: Option<String>,
     /// With --rapl: print the profile that describes this simulated C500 (give it to
     /// `trol gateway --profile` or trol.cfg's rapl-profile) and exit.
     #[arg(long, requires = "rapl")]
@@ -84,6 +91,21 @@ pub struct SimArgs {
     /// does; the log says `pendant: at ...` once it stands (for `trol rapl probe --poses`).
     #[arg(long, requires = "rapl")]
     pendant: bool,
+}
+
+fn parse_variant(s: &str) -> Result<String, String> {
+    if trol_rapl::c500::variant(s).is_some() {
+        Ok(s.to_string())
+    } else {
+        Err(format!(
+            "no variant `{s}`: one of {}",
+            trol_rapl::c500::VARIANTS
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    }
 }
 
 /// Serve until the process is stopped (Ctrl-C) or the line fails.
@@ -240,10 +262,20 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
 
 /// `trol sim --rapl`: the simulated C500 in RAPL-II mode.
 fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
-    let profile = match &a.profile {
-        Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
-        None => trol_rapl::Profile::simulator(),
+    let (profile, homed) = match (&a.profile, &a.variant) {
+        (Some(p), _) => (
+            trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
+            a.homed,
+        ),
+        (None, Some(v)) => {
+            let (p, homed) =
+                trol_rapl::c500::variant(v).ok_or_else(|| format!("no variant {v}"))?;
+            (p, a.homed && homed)
+        }
+        (None, None) => (trol_rapl::Profile::simulator(), a.homed),
     };
+    let mut settings = settings;
+    settings.arm.homed = homed;
     let mut arm = trol_a465::arm::Arm::new(settings.arm);
     arm.set_tool(settings.tool);
     let mut c500 = trol_rapl::C500::new(profile, arm, settings.locations);
@@ -263,8 +295,16 @@ fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
         },
         c500.describe().baud,
         a.time_scale,
-        if a.homed { "homed" } else { "not homed" }
+        if homed { "homed" } else { "not homed" }
     );
+    if let Some(v) = &a.variant {
+        let what = trol_rapl::c500::VARIANTS
+            .iter()
+            .find(|(n, _)| n == v)
+            .map(|(_, w)| *w)
+            .unwrap_or_default();
+        say!("  variant {v}: {what}");
+    }
     say!("  drive it with: trol gateway --controller {name} --port pty");
     let stop = std::sync::atomic::AtomicBool::new(false);
     let pendant = a.pendant.then(|| {

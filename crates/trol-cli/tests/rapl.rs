@@ -25,19 +25,164 @@ fn rapl_sim(dir: &Path, extra: &[&str]) -> Background {
 }
 
 fn run_example(name: &str, dir: &Path) -> String {
+    let (ok, out, err) = try_example(name, dir);
+    assert!(ok, "{name}:\n{out}\n{err}");
+    out
+}
+
+/// Run a C example in `dir`: whether it succeeded, its stdout and stderr.
+fn try_example(name: &str, dir: &Path) -> (bool, String, String) {
     let exe = cbuild::compile(
         &cbuild::root().join("examples").join(format!("{name}.c")),
         &format!("{name}-rapl"),
         cbuild::Link::Static,
     );
     let run = cbuild::program(&exe).current_dir(dir).output().unwrap();
-    let out = String::from_utf8_lossy(&run.stdout).into_owned();
-    assert!(
+    (
         run.status.success(),
-        "{name}:\n{out}\n{}",
-        String::from_utf8_lossy(&run.stderr)
+        String::from_utf8_lossy(&run.stdout).into_owned(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
+/// The variants a 1998 program cannot run on in full: TROL must fail there, visibly.
+const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo"];
+
+/// The pick and position examples, unchanged, through `rapl:` against one variant of the
+/// simulated C500 with the profile that describes it: they run, or (where TROL cannot drive
+/// such a controller safely) they fail and say so; never `pick: done` there.
+fn c_examples_on_variant(variant: &str) {
+    let dir = scratch(&format!("rapl-variant-{variant}"));
+    let root = cbuild::root();
+    let locations = root.join("examples/locations.txt");
+    let out = trol(
+        &dir,
+        &["sim", "--rapl", "--variant", variant, "--print-profile"],
+        "",
     );
-    out
+    assert!(out.status.success(), "{}", text(&out).1);
+    std::fs::write(dir.join("c500.toml"), &out.stdout).unwrap();
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--variant",
+            variant,
+            "--locations",
+            locations.to_str().unwrap(),
+            "--time-scale",
+            "20",
+        ],
+        "serving on ",
+    );
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nrapl:{}\n0 0 0 0 0 0\nrapl-profile = c500.toml\n",
+            sim.name
+        ),
+    )
+    .unwrap();
+    let (ok, out, err) = try_example("pick", &dir);
+    if FAIL_SAFE.contains(&variant) {
+        assert!(
+            !ok && !out.contains("pick: done"),
+            "{variant}:\n{out}\n{err}"
+        );
+        return;
+    }
+    assert!(
+        ok,
+        "{variant}:\n{out}\n{err}\nsimulated C500:\n{}",
+        sim.output().join("\n")
+    );
+    check_pick(&out);
+    let out = run_example("position", &dir);
+    assert!(out.contains("position: done"), "{variant}: {out}");
+}
+
+macro_rules! c_examples_on_variants {
+    ($($test:ident => $name:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                c_examples_on_variant($name);
+            }
+        )*
+
+        #[test]
+        fn the_c_examples_run_on_every_variant() {
+            let tested = [$($name),*];
+            for (name, _) in trol_rapl::c500::VARIANTS {
+                assert!(tested.contains(name), "variant {name} has no C example run");
+            }
+        }
+    };
+}
+
+c_examples_on_variants! {
+    c_examples_default => "default",
+    c_examples_colon_refusal => "colon-refusal",
+    c_examples_stars_refusal => "stars-refusal",
+    c_examples_no_period => "no-period",
+    c_examples_ack_at_end => "ack-at-end",
+    c_examples_done_lag => "done-lag",
+    c_examples_estop_line => "estop-line",
+    c_examples_warning_then_ack => "warning-then-ack",
+    c_examples_no_ack => "no-ack",
+    c_examples_ma_radians => "ma-radians",
+    c_examples_inch => "inch",
+    c_examples_world_offset => "world-offset",
+    c_examples_pulses_g3000 => "pulses-g3000",
+    c_examples_nul_after_digit => "nul-after-digit",
+    c_examples_no_echo => "no-echo",
+    c_examples_not_homed => "not-homed",
+}
+
+#[test]
+fn in_process_rapl_logs_the_controller_s_texts() {
+    // A refusal the controller words its own way reaches `-v`'s log, word for word.
+    let dir = scratch("rapl-log");
+    let out = trol(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--variant",
+            "stars-refusal",
+            "--print-profile",
+        ],
+        "",
+    );
+    std::fs::write(dir.join("c500.toml"), &out.stdout).unwrap();
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--variant",
+            "stars-refusal",
+            "--homed",
+            "--time-scale",
+            "20",
+        ],
+        "serving on ",
+    );
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nrapl:{}\n0 0 0 0 0 0\nrapl-profile = c500.toml\n",
+            sim.name
+        ),
+    )
+    .unwrap();
+    let run = trol(&dir, &["interp", "-v", "-k"], "joint 1 3.3\n");
+    let (out, err) = text(&run);
+    assert!(err.contains("c500: "), "{out}\n{err}");
+    assert!(err.contains("*** JOINT LIMIT ***"), "{out}\n{err}");
+    // A form without a number maps to no code of its own: a refusal all the same.
+    assert!(out.contains("-10 (BIOS_RAPL_ERROR)"), "{out}\n{err}");
 }
 
 fn check_pick(out: &str) {
@@ -218,13 +363,17 @@ fn probe_records_first_contact_and_fits_the_conventions_of_pendant_poses() {
     let out = out.join("\n");
     assert!(out.contains("ENGLISH UNITS."), "{out}");
     assert!(
-        out.contains("fitted: units = \"inch\", angles = \"roll -pitch yaw\""),
+        out.contains("units = \"inch\", angles = \"roll -pitch yaw\""),
         "{out}"
     );
+    assert!(out.contains("refusal form: \"NNN-TEXT.\""), "{out}");
     let fitted = trol_rapl::Profile::from_file(&dir.join("fitted.toml")).unwrap();
     assert_eq!(fitted.angles, "roll -pitch yaw");
     assert_eq!(fitted.units, trol_rapl::profile::Units::Inch);
-    assert_eq!(fitted.joint_units, "degrees");
+    assert_eq!(fitted.refusal, vec!["NNN-TEXT.".to_string()]);
+    // The pulse convention is fitted; MA and MI's units are not read off the JOINTS row.
+    assert_eq!(fitted.pulse_scale.len(), 6);
+    assert_eq!(fitted.joint_units, "");
     let transcript = std::fs::read_to_string(dir.join("first.txt")).unwrap();
     assert!(
         transcript.contains(" H 52 21 05"),

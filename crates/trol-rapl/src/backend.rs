@@ -717,7 +717,10 @@ impl RaplBackend {
         } else {
             self.session.send_line(line, timeout, now)
         };
-        started.map_err(|e| BackendError::Link(e.to_string()))?;
+        if let Err(e) = started {
+            self.note(format!("`{line}` not sent: {e}"));
+            return Err(BackendError::Link(e.to_string()));
+        }
         match self.pump() {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => {
@@ -835,6 +838,13 @@ impl RaplBackend {
     /// Whether a motion may be sent now: power and homing checked, and whether the arm is
     /// busy (a motion of ours not seen to end, a queue, or the DONE row).
     fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
+        // A controller that answers a motion at its end takes nothing before: the next motion
+        // waits for that answer, as the controller itself would.
+        while self.awaiting.is_some() {
+            if !self.await_end()? {
+                break;
+            }
+        }
         self.report_unasked()?;
         if let Some(e) = self.deferred.take() {
             return Err(e);

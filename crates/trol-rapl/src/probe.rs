@@ -111,8 +111,25 @@ pub fn rotation_distance_deg(a: &Pose, b: &Pose) -> f64 {
     ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
-/// The pulse convention from the PULSES and JOINTS rows: per joint, a line through the
-/// readings (the two farthest apart give it; every reading must lie on it).
+/// At pitch +-90 degrees only yaw - roll (or yaw + roll) counts: the same rotation with roll 0,
+/// so a fitted offset reads the plain way (`[0, 90, 0]`, not `[-90, 90, -90]`).
+fn canonical(r: [f64; 3]) -> [f64; 3] {
+    let pose = |r: [f64; 3]| Pose::from_xyzypr([0.0, 0.0, 0.0, r[0], r[1], r[2]]);
+    if (r[1].abs() - std::f64::consts::FRAC_PI_2).abs() > 1e-6 || r[2] == 0.0 {
+        return r;
+    }
+    for yaw in [r[0] - r[2], r[0] + r[2]] {
+        let wrapped = trol_a465::kinematics::wrap(yaw);
+        let c = [if wrapped.abs() < 1e-9 { 0.0 } else { wrapped }, r[1], 0.0];
+        if rotation_distance_deg(&pose(c), &pose(r)) < 1e-6 {
+            return c;
+        }
+    }
+    r
+}
+
+/// The pulse convention from the PULSES and JOINTS rows: per joint, the least-squares line
+/// through the readings (every reading must lie on it within a few pulses).
 pub fn fit_pulses(readings: &[Position]) -> Result<([f64; 6], [f64; 6]), String> {
     let mut scale = [0.0; 6];
     let mut zero = [0.0; 6];
@@ -134,8 +151,17 @@ pub fn fit_pulses(readings: &[Position]) -> Result<([f64; 6], [f64; 6]), String>
                 j + 1
             ));
         }
-        let k = (hi.pulses[j] - lo.pulses[j]) as f64 / dj;
-        let z = lo.pulses[j] as f64 - k * lo.joints[j];
+        // Least squares over every reading.
+        let n = readings.len() as f64;
+        let mj = readings.iter().map(|r| r.joints[j]).sum::<f64>() / n;
+        let mp = readings.iter().map(|r| r.pulses[j] as f64).sum::<f64>() / n;
+        let sjj: f64 = readings.iter().map(|r| (r.joints[j] - mj).powi(2)).sum();
+        let sjp: f64 = readings
+            .iter()
+            .map(|r| (r.joints[j] - mj) * (r.pulses[j] as f64 - mp))
+            .sum();
+        let k = sjp / sjj;
+        let z = mp - k * mj;
         // The JOINTS row has four decimals: the line holds within its rounding.
         let tol = PULSE_TOLERANCE + k.abs() * 0.0001;
         if let Some(r) = readings
@@ -249,6 +275,7 @@ pub fn fit(readings: &[Position]) -> Result<Fit, String> {
                 *x = 0.0;
             }
         }
+        let rot = canonical(rot);
         let frames = Frames {
             tool_rotation: rot,
             ..plain

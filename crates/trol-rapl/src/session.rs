@@ -621,7 +621,10 @@ impl Session {
                 tries,
             } => {
                 if prompt_at.is_some_and(|p| now >= p + SETTLE) {
-                    if matches!(cause, Some(SessionError::Echo { .. })) {
+                    // Only before the terminator went out is what came not the line's answer.
+                    if cause.as_ref().is_some_and(|c| {
+                        matches!(c, SessionError::Echo { .. }) && c.surely_not_run()
+                    }) {
                         self.resync_text.extend_from_slice(buf);
                     }
                     let ev = match cause.take() {

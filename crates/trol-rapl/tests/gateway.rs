@@ -15,7 +15,7 @@ use trol_rapl::profile::{Ack, Entry, Units};
 use trol_rapl::{C500, Profile, RaplBackend};
 
 mod common;
-use common::start;
+use common::{Mangle, robot, start, start_scaled};
 
 fn wait_idle(b: &mut RaplBackend) {
     for _ in 0..2000 {
@@ -286,7 +286,8 @@ fn a_controller_that_goes_silent_mid_motion_ends_the_wait_with_a_link_error() {
     );
 }
 
-/// A port that, once armed, loses the next byte it sends (a byte lost on the line).
+/// A port that, once armed, loses the next `J` it sends (a byte of a JOINT line lost on the
+/// line; the reads before the motion line have none).
 struct LoseNextByte {
     inner: Box<dyn Port>,
     armed: Arc<AtomicBool>,
@@ -295,7 +296,7 @@ struct LoseNextByte {
 impl Port for LoseNextByte {
     fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         match bytes.split_first() {
-            Some((_, rest)) if self.armed.swap(false, Ordering::SeqCst) => self.inner.send(rest),
+            Some((b'J', rest)) if self.armed.swap(false, Ordering::SeqCst) => self.inner.send(rest),
             _ => self.inner.send(bytes),
         }
     }
@@ -427,4 +428,152 @@ impl Port for Incoming {
     fn name(&self) -> String {
         self.inner.name()
     }
+}
+
+/// A long motion at time scale 5 (about 10 s of wall time) that Halt must stop short.
+fn long_joint_motion(r: &mut trol::Robot, sim: &common::Sim) -> [f64; 6] {
+    r.speed(2).unwrap();
+    let before = sim.planned_end();
+    r.joint(1, 1.5).unwrap_or_else(|e| {
+        // The call itself may be the one whose answer is lost.
+        assert_eq!(
+            e.code(),
+            trol_proto::application::code::TROL_ERR_ROBOT_UNSURE,
+            "{e}"
+        );
+    });
+    for _ in 0..4000 {
+        if sim.moving() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(sim.moving(), "the motion did not start");
+    before
+}
+
+fn halted_short(r: &mut trol::Robot, sim: &common::Sim, before: [f64; 6]) {
+    assert!(
+        sim.moving(),
+        "Halt came after the motion ended: the test proves nothing"
+    );
+    r.halt().unwrap();
+    r.finish().unwrap();
+    let turned = (sim.planned_end()[0] - before[0]).abs();
+    assert!(
+        turned < 1.4,
+        "Halt did not stop the arm: joint 1 turned {turned} of 1.5 rad"
+    );
+}
+
+#[test]
+fn halt_gets_through_an_xoff_that_no_xon_follows() {
+    let profile = Profile {
+        reply_timeout_ms: 500,
+        ..Profile::simulator()
+    };
+    let (port, sim) = start_scaled(profile.clone(), true, None, 5.0);
+    let armed = Arc::new(AtomicBool::new(false));
+    let xoff = armed.clone();
+    let port = Box::new(Mangle {
+        inner: port,
+        f: Box::new(move |v: &mut Vec<u8>| {
+            if !v.is_empty() && xoff.swap(false, Ordering::SeqCst) {
+                v.push(trol_rapl::session::XOFF);
+            }
+        }),
+    });
+    let mut r = robot(port, profile);
+    let before = long_joint_motion(&mut r, &sim);
+    // One XOFF byte from the controller (noise, or an XON lost after it).
+    armed.store(true, Ordering::SeqCst);
+    r.position(Tag::Joint, PosMode::Actual).unwrap();
+    halted_short(&mut r, &sim, before);
+    // The XOFF is given up: the next commands go out.
+    r.speed(10).unwrap();
+    r.position(Tag::Joint, PosMode::Commanded).unwrap();
+}
+
+#[test]
+fn a_lost_prompt_after_a_motion_holds_halt_no_longer_than_a_short_command() {
+    // The profile's motion timeout stays at its default (120 s): the motion line waits only
+    // the short reply timeout, so Halt reaches the arm while it still moves.
+    let profile = Profile {
+        reply_timeout_ms: 500,
+        ..Profile::simulator()
+    };
+    let (port, sim) = start_scaled(profile.clone(), true, None, 5.0);
+    let (mut seen, mut dropped) = (Vec::new(), 0);
+    let port = Box::new(Mangle {
+        inner: port,
+        f: Box::new(move |v: &mut Vec<u8>| {
+            seen.extend_from_slice(v);
+            if dropped < 2 && seen.windows(7).any(|w| w == b"JOINT 1") {
+                v.retain(|b| {
+                    if *b == b'>' && dropped < 2 {
+                        dropped += 1;
+                        false
+                    } else {
+                        true
+                    }
+                });
+            }
+        }),
+    });
+    let mut r = robot(port, profile);
+    let before = long_joint_motion(&mut r, &sim);
+    assert!(sim.ran().iter().any(|l| l.starts_with("JOINT 1,")));
+    halted_short(&mut r, &sim, before);
+}
+
+#[test]
+fn a_scratch_location_not_confirmed_sends_no_move() {
+    let (port, sim) = start(Profile::simulator(), None);
+    let armed = Arc::new(AtomicBool::new(false));
+    let flag = armed.clone();
+    let mut seen = Vec::new();
+    let port = Box::new(Mangle {
+        inner: port,
+        f: Box::new(move |v: &mut Vec<u8>| {
+            seen.extend_from_slice(v);
+            // While armed: an answer to POINT that is not its success form.
+            if flag.load(Ordering::SeqCst) && seen.windows(6).any(|w| w == b"POINT ") {
+                if let Some(i) = v.iter().position(|b| *b == trol_rapl::session::ACK) {
+                    v.splice(i..i, b"\r\nWHAT?".iter().copied());
+                    flag.store(false, Ordering::SeqCst);
+                    seen.clear();
+                }
+            }
+            if !flag.load(Ordering::SeqCst) {
+                seen.clear();
+            }
+        }),
+    });
+    let mut r = robot(port, Profile::simulator());
+    let a = [380.0, 20.0, 200.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+    r.move_ii(&Location::from_array6(Tag::Cart, a), false)
+        .unwrap();
+    r.finish().unwrap();
+    let at_a = sim.planned_end();
+    let moves = |sim: &common::Sim| sim.ran().iter().filter(|l| l.starts_with("MOVE")).count();
+    let n = moves(&sim);
+    armed.store(true, Ordering::SeqCst);
+    let b = [420.0, -30.0, 180.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+    let e = r
+        .move_ii(&Location::from_array6(Tag::Cart, b), false)
+        .unwrap_err();
+    // Not run: the arm stays, and no MOVE went out (neither to B nor to A's old target).
+    assert_eq!(
+        e.code(),
+        trol_proto::application::code::TROL_ERR_ROBOT,
+        "{e}"
+    );
+    assert_eq!(moves(&sim), n, "{:?}", sim.ran());
+    r.finish().unwrap();
+    assert_eq!(sim.planned_end(), at_a);
+    // (The controller's words are in the log: `c500: ... printed `WHAT?` ...`.)
+    // The next call works.
+    r.move_ii(&Location::from_array6(Tag::Cart, b), false)
+        .unwrap();
+    r.finish().unwrap();
 }

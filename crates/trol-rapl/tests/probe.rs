@@ -142,8 +142,13 @@ fn first_contact_moves_nothing_records_every_byte_and_fits_the_conventions() {
     assert_eq!(fit.tool_rotation, [0.0, 90.0, 0.0]);
     let (scale, zero) = fit.pulses.clone().unwrap();
     for i in 0..6 {
-        assert!((scale[i] - g3000.pulse_scale[i]).abs() < 0.01, "{scale:?}");
-        assert_eq!(zero[i], g3000.pulse_zero[i], "{zero:?}");
+        // Within a few pulses over 180 degrees and at zero (the readings are
+        // whole pulses and four-decimal degrees).
+        assert!(
+            (scale[i] - g3000.pulse_scale[i]).abs() * 180.0 < 3.0,
+            "{scale:?}"
+        );
+        assert!((zero[i] - g3000.pulse_zero[i]).abs() <= 3.0, "{zero:?}");
     }
     let written = fit.apply(&Profile::default());
     assert_eq!(written.angles, "roll -pitch yaw");

@@ -347,11 +347,10 @@ impl Run<'_> {
     }
 }
 
-/// Variants the matching profile cannot drive in full: TROL must fail safe there. A controller
-/// that answers motions at their end takes nothing while one runs (motions back to back are
-/// refused, Halt goes as Ctrl-C); a warning line before ACK leaves every motion UNSURE; a
-/// controller that echoes nothing cannot be typed to.
-const FAIL_SAFE: &[&str] = &["ack-at-end", "warning-then-ack", "no-echo"];
+/// Variants the matching profile cannot drive in full: TROL must fail safe there. A warning
+/// line before ACK leaves every motion UNSURE; a controller that echoes nothing cannot be
+/// typed to.
+const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo"];
 
 fn run_variant(name: &str) {
     let (twin, homed) = trol_rapl::c500::variant(name).expect("a variant");

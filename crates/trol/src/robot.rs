@@ -296,8 +296,17 @@ impl Robot {
             ..PortSettings::default()
         };
         let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
-        let backend = trol_rapl::RaplBackend::connect(port, profile)
-            .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        // The controller's texts (refusals, what it says unasked, resynchronisations) go to the
+        // log as the gateway prints them: `-v` in the utilities, RUST_LOG=trol=info elsewhere.
+        let backend = trol_rapl::RaplBackend::connect_with(
+            port,
+            profile,
+            Some(Box::new(
+                |line: &str| tracing::info!(target: "trol::rapl", "c500: {line}"),
+            )),
+            None,
+        )
+        .map_err(|e| SetupError::NoServer(e.to_string()))?;
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));

@@ -123,7 +123,6 @@ fn run_with(link: Link) -> String {
     controller
         .join()
         .expect("the scripted controller saw what it expected");
-    let _ = std::fs::remove_file(&exe);
     text
 }
 
@@ -200,5 +199,4 @@ fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
     assert!(waited < 3.0, "{text}");
     let j1: f64 = text.split("j1 ").nth(1).unwrap().trim().parse().unwrap();
     assert!(j1 > 0.0 && j1 < 1.0, "{text}");
-    let _ = std::fs::remove_file(&exe);
 }

@@ -17,7 +17,6 @@ fn build_and_run(name: &str) -> String {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout).into_owned();
-    let _ = std::fs::remove_file(&out);
     assert!(
         run.status.success(),
         "{name} failed:\n{stdout}\n{}",

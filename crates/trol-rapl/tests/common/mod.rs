@@ -69,6 +69,16 @@ pub fn start_with(
     homed: bool,
     faults: Option<FaultConfig>,
 ) -> (Box<dyn Port>, Sim) {
+    start_scaled(profile, homed, faults, 20.0)
+}
+
+/// Like [`start_with`], at another time scale.
+pub fn start_scaled(
+    profile: Profile,
+    homed: bool,
+    faults: Option<FaultConfig>,
+    scale: f64,
+) -> (Box<dyn Port>, Sim) {
     let (host, ctl) = memory::pair(Some(profile.baud));
     let stop = Arc::new(AtomicBool::new(false));
     let lines = Arc::new(Mutex::new(Vec::new()));
@@ -92,7 +102,7 @@ pub fn start_with(
         let _ = trol_rapl::c500::serve_with(
             port.as_mut(),
             &mut c,
-            20.0,
+            scale,
             &flag,
             &mut |l| keep.lock().unwrap().push(l.to_string()),
             &mut |c, now| {
@@ -122,4 +132,53 @@ pub fn start_with(
 /// A simulated C500 as `profile` says, its arm homed.
 pub fn start(profile: Profile, faults: Option<FaultConfig>) -> (Box<dyn Port>, Sim) {
     start_with(profile, true, faults)
+}
+
+/// What a [`Mangle`] does to each incoming chunk.
+pub type ChunkFn = Box<dyn FnMut(&mut Vec<u8>) + Send>;
+
+/// A port whose incoming bytes pass through `f` (which sees every chunk, and may change it).
+pub struct Mangle {
+    pub inner: Box<dyn Port>,
+    pub f: ChunkFn,
+}
+
+impl Port for Mangle {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        let mut v = buf[..n].to_vec();
+        (self.f)(&mut v);
+        let n = v.len().min(buf.len());
+        buf[..n].copy_from_slice(&v[..n]);
+        Ok(n)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}
+
+/// TROL's API over the RAPL-II backend on `port`, as `rapl:` embeds it.
+pub fn robot(port: Box<dyn Port>, profile: Profile) -> trol::Robot {
+    // The backend's log goes to the test's output (shown when it fails).
+    let backend = trol_rapl::RaplBackend::connect_with(
+        port,
+        profile,
+        Some(Box::new(|l: &str| eprintln!("c500: {l}"))),
+        None,
+    )
+    .expect("the session opens");
+    let cfg = trol_proto::link::LinkConfig::default();
+    let (line, handle) = trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+    let mut robot = trol::Robot::over(Box::new(line), cfg, Some(handle));
+    robot.set_codes(trol_rapl::RAPL_CODES);
+    robot
 }

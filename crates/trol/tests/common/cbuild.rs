@@ -57,6 +57,20 @@ pub enum Link {
 
 /// Compile `source` into a program in the temporary folder; returns its path.
 pub fn compile(source: &Path, name: &str, link: Link) -> PathBuf {
+    // Once per name and link in this process, under a lock: parallel tests that run the same
+    // program must not rewrite it while another runs it (ETXTBSY).
+    static BUILT: std::sync::Mutex<Vec<(String, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+    let key = format!("{}|{name}|{link:?}", source.display());
+    let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, out)) = built.iter().find(|(k, _)| *k == key) {
+        return out.clone();
+    }
+    let out = compile_now(source, name, link);
+    built.push((key, out.clone()));
+    out
+}
+
+fn compile_now(source: &Path, name: &str, link: Link) -> PathBuf {
     build_libtrol();
     let lib = lib_dir();
     let out = std::env::temp_dir().join(format!("trol-{name}-{link:?}-{}", std::process::id()));

@@ -52,6 +52,9 @@ struct Run<'a> {
     unasked: Vec<String>,
     missed: Vec<String>,
     outcomes: Vec<String>,
+    /// Motion calls: succeeded (call and Finish), refused or not run, UNSURE, accepted but
+    /// ended in a named code at Finish.
+    tally: [usize; 4],
 }
 
 fn pose_of(q: &[f64; 6]) -> Pose {
@@ -119,6 +122,12 @@ impl Run<'_> {
                 ));
             }
         }
+        self.tally[match (&r, &f) {
+            (Ok(()), Ok(())) => 0,
+            (Err(e), _) if e.code() == TROL_ERR_ROBOT_UNSURE => 2,
+            (Err(_), _) => 1,
+            (Ok(()), Err(_)) => 3,
+        }] += 1;
         match (&r, &f) {
             (Ok(()), Ok(())) => {
                 if expect_refusal || !at(&after, &want, &before) {
@@ -402,8 +411,19 @@ fn run_variant(name: &str) {
             unasked: Vec::new(),
             missed: Vec::new(),
             outcomes: Vec::new(),
+            tally: [0; 4],
         };
         run.script();
+        let [ok, refused, unsure, at_finish] = run.tally;
+        // The figure docs/reliability.md cites (`-- --nocapture` shows it).
+        eprintln!(
+            "variant {label}: {} motion calls: {ok} succeeded, {refused} refused or not run, \
+             {unsure} UNSURE, {at_finish} ended at Finish with a named code; {} false \
+             successes, {} unasked motions",
+            ok + refused + unsure + at_finish,
+            run.false_success.len(),
+            run.unasked.len()
+        );
         report.push(format!("{label}:\n  {}", run.outcomes.join("\n  ")));
         bad.extend(run.false_success);
         bad.extend(run.unasked);

@@ -287,8 +287,18 @@ fn term(a: TermArgs) -> Result<(), String> {
             }
             Err(e) => say!("error: {e}"),
         }
-        if !QUIT.load(Ordering::SeqCst) {
-            STOP.store(false, Ordering::SeqCst);
+    };
+    // The controller's stop, once per Ctrl-C that no running line took (a motion under way
+    // after its line returned).
+    let mut stopped = false;
+    let stop_between = |b: &mut RaplBackend, stopped: &mut bool| {
+        if STOP.load(Ordering::SeqCst) && !*stopped {
+            *stopped = true;
+            match trol_controller::backend::Backend::halt(b) {
+                Ok(0) => say!("stopped (Ctrl-C again closes the session)"),
+                Ok(c) => say!("the stop was refused ({c})"),
+                Err(e) => say!("error: {e}"),
+            }
         }
     };
     if std::io::stdin().is_terminal() {
@@ -311,6 +321,8 @@ fn term(a: TermArgs) -> Result<(), String> {
                     }
                     STOP.store(false, Ordering::SeqCst);
                     run_line(&mut b, &line);
+                    // A Ctrl-C the line took has stopped the controller already.
+                    stopped = STOP.load(Ordering::SeqCst);
                     if QUIT.load(Ordering::SeqCst) {
                         break;
                     }
@@ -320,10 +332,7 @@ fn term(a: TermArgs) -> Result<(), String> {
                     if STOP.swap(true, Ordering::SeqCst) {
                         break;
                     }
-                    say!("stopping the controller (Ctrl-C again closes the session)");
-                    if let Err(e) = trol_controller::backend::Backend::halt(&mut b) {
-                        say!("error: {e}");
-                    }
+                    stop_between(&mut b, &mut stopped);
                     continue;
                 }
                 Err(ReadlineError::Eof) => break,
@@ -334,11 +343,28 @@ fn term(a: TermArgs) -> Result<(), String> {
             let _ = rl.save_history(h);
         }
     } else {
-        for line in std::io::stdin().lock().lines() {
-            let line = line.map_err(|e| format!("reading the input: {e}"))?;
-            run_line(&mut b, &line);
-            if QUIT.load(Ordering::SeqCst) {
-                break;
+        // Lines from a pipe, read on their own thread, so a Ctrl-C between two lines is
+        // acted on at once.
+        let (tx, rx) = std::sync::mpsc::channel::<std::io::Result<String>>();
+        std::thread::spawn(move || {
+            for line in std::io::stdin().lock().lines() {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        while !QUIT.load(Ordering::SeqCst) {
+            match rx.recv_timeout(Duration::from_millis(20)) {
+                Ok(line) => {
+                    let line = line.map_err(|e| format!("reading the input: {e}"))?;
+                    STOP.store(false, Ordering::SeqCst);
+                    run_line(&mut b, &line);
+                    stopped = STOP.load(Ordering::SeqCst);
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    stop_between(&mut b, &mut stopped)
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
             }
         }
     }

@@ -447,3 +447,57 @@ fn probe_records_first_contact_and_fits_the_conventions_of_pendant_poses() {
             .contains(" H ")
     );
 }
+
+#[test]
+fn term_ctrl_c_stops_the_controller_and_a_second_closes_the_session() {
+    use std::io::Write;
+    let dir = scratch("rapl-term-int");
+    // Real time: the motion takes many seconds.
+    let sim = rapl_sim(&dir, &["--homed"]);
+    let mut term = std::process::Command::new(common::TROL)
+        .args([
+            "rapl",
+            "term",
+            "--controller",
+            &sim.name,
+            "--profile",
+            "c500.toml",
+        ])
+        .current_dir(&dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = term.stdin.take().unwrap();
+    // A slow motion, then FINISH, which waits for it: Ctrl-C during the wait.
+    writeln!(input, "speed 5\njoint 1,90\nfinish").unwrap();
+    sim.wait_for("FINISH", 30);
+    let int = || {
+        let ok = std::process::Command::new("kill")
+            .args(["-INT", &term.id().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill -INT");
+    };
+    int();
+    sim.wait_for("HALT", 30);
+    // A second Ctrl-C closes the session cleanly (HELP, two Ctrl-Z) and leaves, with its
+    // input still open.
+    int();
+    sim.wait_for("HELP", 30);
+    let out = term.wait_with_output().unwrap();
+    drop(input);
+    let (o, e) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    );
+    assert!(out.status.success(), "{o}\n{e}");
+    assert!(
+        e.contains("interrupted: stopping the controller"),
+        "{o}\n{e}"
+    );
+    assert!(o.contains("interrupted: Ctrl-C sent"), "{o}\n{e}");
+    assert!(o.contains("session closed"), "{o}\n{e}");
+}

@@ -24,6 +24,7 @@ pub enum Rapl {
 Examples:
   trol rapl probe --controller /dev/ttyUSB0 --out first.txt
   trol rapl probe --controller /dev/ttyUSB0 --out poses.txt --poses 4 --profile-out c500.toml
+  trol rapl probe --controller /dev/ttyUSB0 --out steps.txt --measure --profile-out c500.toml
 
 At each pose the probe waits for Enter (end of input stops the poses early). Keep the
 controller's tool the bare flange while probing: the fit assumes it.")]
@@ -53,6 +54,13 @@ pub struct ProbeArgs {
     /// Ask for this many poses by pendant and fit the conventions from them.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=20))]
     poses: u16,
+    /// After first contact (and the poses), settle by supervised motions what no reading
+    /// tells: MA/MI's units (MI of 0.05 on joint 6), JOG's frame (JOG 0,0,1) and when a
+    /// motion's ACK comes (JOINT 6,20), each undone at once, at SPEED 5. The arm must be
+    /// homed, in free space, and someone's hand on the emergency stop: the probe asks for
+    /// `yes` first and moves nothing without it.
+    #[arg(long)]
+    measure: bool,
     /// Where to write the profile with what was learned (an existing file is not overwritten).
     #[arg(long, value_name = "FILE", default_value = "c500.toml")]
     profile_out: PathBuf,
@@ -138,6 +146,36 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
         let mut line = String::new();
         Ok(input.read_line(&mut line)? > 0)
     });
+    let measured = if a.measure {
+        say!(
+            "the arm will move: SPEED 5, then MI 0,0,0,0,0,0.05 and back, JOG 0,0,1 and back, \
+             JOINT 6,20 and back. It must be homed and in free space (not stretched out), with \
+             a hand on the emergency stop. Type yes to go on:"
+        );
+        let mut line = String::new();
+        let yes = input.read_line(&mut line).is_ok() && line.trim().eq_ignore_ascii_case("yes");
+        if yes {
+            let m = trol_rapl::probe::measure(&mut b, &mut |l| say!("  {l}"));
+            match &m {
+                Ok(m) => say!(
+                    "measured: joint_units = \"{}\", jog_frame = \"{}\", motion_ack = \"{}\"",
+                    m.joint_units,
+                    m.jog_frame,
+                    match m.motion_ack {
+                        trol_rapl::profile::MotionAck::Start => "start",
+                        trol_rapl::profile::MotionAck::End => "end",
+                    }
+                ),
+                Err(e) => say!("the supervised steps stopped: {e}"),
+            }
+            m.ok()
+        } else {
+            say!("not confirmed: nothing moved");
+            None
+        }
+    } else {
+        None
+    };
     b.close();
     write_transcript(&record, &a.out)?;
     for (line, r) in &contact.replies {
@@ -185,6 +223,10 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
         }
         None => None,
     };
+    if let Some(m) = &measured {
+        profile = m.apply(&profile);
+        learned.push("joint_units, jog_frame, motion_ack (supervised steps)".into());
+    }
     if learned.is_empty() {
         return Err("nothing was learned: no profile written".into());
     }
@@ -202,11 +244,14 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
             fit.angle_error_deg
         ));
     }
-    head.push_str(
-        "# Not learned by reading: the units of MA and MI (joint_units) and JOG's frame\n\
-         # (jog_frame); until they are set those commands are refused. docs/c500.md, \"Settle\n\
-         # the conventions\", has the supervised step at speed 5 that settles each.\n",
-    );
+    if measured.is_none() {
+        head.push_str(
+            "# Not learned by reading: the units of MA and MI (joint_units), JOG's frame\n\
+             # (jog_frame) and when a motion's ACK comes (motion_ack); until the first two are\n\
+             # set those commands are refused. `trol rapl probe --measure` settles them by\n\
+             # supervised motions (docs/c500.md, the first hour, step 5).\n",
+        );
+    }
     std::fs::write(&a.profile_out, format!("{head}{}", profile.to_toml()))
         .map_err(|e| format!("cannot write {}: {e}", a.profile_out.display()))?;
     say!(

@@ -501,3 +501,63 @@ fn term_ctrl_c_stops_the_controller_and_a_second_closes_the_session() {
     assert!(o.contains("interrupted: Ctrl-C sent"), "{o}\n{e}");
     assert!(o.contains("session closed"), "{o}\n{e}");
 }
+
+#[test]
+fn probe_measure_moves_only_after_yes_and_settles_what_no_reading_tells() {
+    let dir = scratch("rapl-measure");
+    // Real time: whether a motion's answer comes while it runs is the point.
+    let mut sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--variant",
+            "ma-radians",
+            "--homed",
+            "--pendant",
+        ],
+        "serving on ",
+    );
+    // The operator puts the arm in free space first.
+    sim.type_line("10 20 40 30 50 -20");
+    sim.wait_for("pendant: at", 60);
+    let probe = |answer: &str, out: &str| {
+        trol(
+            &dir,
+            &[
+                "rapl",
+                "probe",
+                "--controller",
+                &sim.name,
+                "--out",
+                "steps.txt",
+                "--measure",
+                "--profile-out",
+                out,
+            ],
+            answer,
+        )
+    };
+    let no = probe("no\n", "no.toml");
+    let (o, e) = text(&no);
+    assert!(o.contains("not confirmed: nothing moved"), "{o}\n{e}");
+    assert!(
+        !sim.output()
+            .iter()
+            .any(|l| l.starts_with("MI ") || l.starts_with("JOG")),
+        "{:?}",
+        sim.output()
+    );
+    let yes = probe("yes\n", "yes.toml");
+    let (o, e) = text(&yes);
+    assert!(yes.status.success(), "{o}\n{e}");
+    assert!(
+        o.contains(
+            "measured: joint_units = \"radians\", jog_frame = \"world\", motion_ack = \"start\""
+        ),
+        "{o}\n{e}"
+    );
+    let p = trol_rapl::Profile::from_file(&dir.join("yes.toml")).unwrap();
+    assert_eq!(p.joint_units, "radians");
+    assert_eq!(p.jog_frame, "world");
+}

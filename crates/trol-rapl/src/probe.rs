@@ -417,6 +417,150 @@ pub fn first_contact(
     c
 }
 
+/// What the supervised steps measured ([`measure`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measured {
+    /// MA and MI's units (`degrees` or `radians`).
+    pub joint_units: String,
+    /// JOG's frame (`world` or `tool`).
+    pub jog_frame: String,
+    /// When a motion's ACK comes.
+    pub motion_ack: crate::profile::MotionAck,
+}
+
+impl Measured {
+    /// `profile` with the measured keys set (a controller that answers at the end halts by
+    /// Ctrl-C).
+    pub fn apply(&self, profile: &Profile) -> Profile {
+        let end = self.motion_ack == crate::profile::MotionAck::End;
+        Profile {
+            joint_units: self.joint_units.clone(),
+            jog_frame: self.jog_frame.clone(),
+            motion_ack: self.motion_ack,
+            halt: if end {
+                crate::profile::Halt::CtrlC
+            } else {
+                profile.halt
+            },
+            ..profile.clone()
+        }
+    }
+}
+
+/// The lines the supervised steps send, in order (each motion undone by the next).
+pub const MEASURE: &[&str] = &[
+    "SPEED 5",
+    "MI 0,0,0,0,0,0.05",
+    "MI 0,0,0,0,0,-0.05",
+    "JOG 0,0,1",
+    "JOG 0,0,-1",
+    "JOINT 6,20",
+    "JOINT 6,-20",
+];
+
+/// Settle by supervised motions what no reading tells (c500-rapl.md §1.6; docs/c500.md step
+/// 5), once the operator has confirmed the arm is free to move: at SPEED 5, `MI` of 0.05 on
+/// joint 6 (0.05 degrees or 2.9: the units of MA and MI), `JOG 0,0,1` (one unit: along the
+/// world's z or not), `JOINT 6,20` (its answer while the joint still turns, or only when it
+/// stands), each undone at once. Every step needs the success form; the first failure stops
+/// them, and the arm is left where that step left it.
+pub fn measure(b: &mut RaplBackend, log: &mut dyn FnMut(&str)) -> Result<Measured, String> {
+    let short = std::time::Duration::from_millis(b.profile().reply_timeout_ms);
+    let long = std::time::Duration::from_secs(b.profile().motion_timeout_s);
+    let st = b.read_only("STATUS").map_err(|e| e.to_string())?;
+    let st = crate::text::read_status(&st.text)?;
+    if st.limp.iter().any(|l| *l) || !st.homed.iter().all(|h| *h) {
+        return Err("the arm must have power and be homed before the supervised steps".into());
+    }
+    let step = |b: &mut RaplBackend, line: &str, t| -> Result<(), String> {
+        let r = b.type_line(line, t).map_err(|e| format!("`{line}`: {e}"))?;
+        let printed: Vec<&str> = r
+            .text
+            .split(['\r', '\n'])
+            .map(|l| l.trim_matches(|c: char| c.is_whitespace() || c == '\0'))
+            .filter(|l| !l.is_empty())
+            .collect();
+        if !printed.is_empty() || (b.expects_ack() && !r.ack) {
+            return Err(format!(
+                "`{line}` was not answered with the success form ({printed:?}): steps stopped"
+            ));
+        }
+        Ok(())
+    };
+    let still = |b: &mut RaplBackend| -> Result<Position, String> {
+        let until = std::time::Instant::now() + long;
+        loop {
+            let st = b.read_only("STATUS").map_err(|e| e.to_string())?;
+            let st = crate::text::read_status(&st.text)?;
+            if st.done.iter().all(|d| *d) {
+                let a = read_position(&b.read_only("W2").map_err(|e| e.to_string())?.text)?;
+                std::thread::sleep(std::time::Duration::from_millis(200));
+                let c = read_position(&b.read_only("W2").map_err(|e| e.to_string())?.text)?;
+                if a.joints
+                    .iter()
+                    .zip(&c.joints)
+                    .all(|(x, y)| (x - y).abs() < 0.01)
+                {
+                    return Ok(c);
+                }
+            }
+            if std::time::Instant::now() > until {
+                return Err("the arm did not come to rest within motion_timeout_s".into());
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    };
+    step(b, "SPEED 5", short)?;
+
+    let before = still(b)?;
+    log("MI 0,0,0,0,0,0.05");
+    step(b, "MI 0,0,0,0,0,0.05", long)?;
+    let after = still(b)?;
+    step(b, "MI 0,0,0,0,0,-0.05", long)?;
+    still(b)?;
+    let turned = (after.joints[5] - before.joints[5]).abs();
+    let joint_units = if (turned - 0.05).abs() < 0.02 {
+        "degrees"
+    } else if (turned - 0.05f64.to_degrees()).abs() < 0.2 {
+        "radians"
+    } else {
+        return Err(format!(
+            "MI of 0.05 turned joint 6 by {turned:.4} degrees: neither degrees nor radians"
+        ));
+    };
+
+    log("JOG 0,0,1");
+    step(b, "JOG 0,0,1", long)?;
+    let jogged = still(b)?;
+    step(b, "JOG 0,0,-1", long)?;
+    still(b)?;
+    let d: Vec<f64> = (0..3).map(|i| jogged.world[i] - after.world[i]).collect();
+    let jog_frame = if (d[2] - 1.0).abs() < 0.2 && d[0].abs() < 0.2 && d[1].abs() < 0.2 {
+        "world"
+    } else {
+        "tool"
+    };
+
+    // Typed with the long timeout: a controller that answers at the end answers then. The
+    // next STATUS tells whether the joint still turned when the answer came.
+    log("JOINT 6,20");
+    step(b, "JOINT 6,20", long)?;
+    let st = b.read_only("STATUS").map_err(|e| e.to_string())?;
+    let moving = !crate::text::read_status(&st.text)?.done.iter().all(|d| *d);
+    still(b)?;
+    step(b, "JOINT 6,-20", long)?;
+    still(b)?;
+    Ok(Measured {
+        joint_units: joint_units.into(),
+        jog_frame: jog_frame.into(),
+        motion_ack: if moving {
+            crate::profile::MotionAck::Start
+        } else {
+            crate::profile::MotionAck::End
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

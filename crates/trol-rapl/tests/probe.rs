@@ -33,6 +33,11 @@ impl Drop for Sim {
 }
 
 fn start(profile: Profile) -> (Box<dyn Port>, Sim) {
+    start_at(profile, 20.0)
+}
+
+/// Like [`start`], at time scale `scale`.
+fn start_at(profile: Profile, scale: f64) -> (Box<dyn Port>, Sim) {
     let (host, mut ctl) = memory::pair(Some(profile.baud));
     let stop = Arc::new(AtomicBool::new(false));
     let lines = Arc::new(Mutex::new(Vec::new()));
@@ -49,7 +54,7 @@ fn start(profile: Profile) -> (Box<dyn Port>, Sim) {
         let _ = trol_rapl::c500::serve_with(
             &mut ctl,
             &mut c,
-            20.0,
+            scale,
             &flag,
             &mut |l| keep.lock().unwrap().push(l.to_string()),
             &mut |c, now| {
@@ -188,4 +193,60 @@ fn an_operator_who_stops_early_gets_a_fit_that_says_what_is_missing() {
     // A line that could move the arm is refused before it is sent.
     let e = b.read_only("MOVE T1").unwrap_err().to_string();
     assert!(e.contains("not sent"), "{e}");
+}
+
+#[test]
+fn the_supervised_steps_measure_what_no_reading_tells() {
+    for (variant, units, ack) in [
+        ("default", "degrees", trol_rapl::profile::MotionAck::Start),
+        (
+            "ma-radians",
+            "radians",
+            trol_rapl::profile::MotionAck::Start,
+        ),
+        ("ack-at-end", "degrees", trol_rapl::profile::MotionAck::End),
+    ] {
+        let (controller, _) = trol_rapl::c500::variant(variant).unwrap();
+        // Real time: the answer to JOINT 6,20 must come while the joint turns (2.3 s).
+        let (port, sim) = start_at(controller, 1.0);
+        let mut b = RaplBackend::connect(port, Profile::default()).unwrap();
+        // The operator puts the arm in free space first (all joints zero is full stretch).
+        sim.pendant.send(POSES_DEG[0].map(f64::to_radians)).unwrap();
+        let code = sim
+            .arrived
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .unwrap();
+        assert_eq!(code, 0);
+        let before = {
+            let r = b.read_only("W2").unwrap();
+            trol_rapl::text::read_position(&r.text).unwrap()
+        };
+        let m = probe::measure(&mut b, &mut |_| {}).unwrap_or_else(|e| panic!("{variant}: {e}"));
+        assert_eq!(m.joint_units, units, "{variant}");
+        assert_eq!(m.jog_frame, "world", "{variant}");
+        assert_eq!(m.motion_ack, ack, "{variant}");
+        // Every step undone: the arm is back where it was.
+        let after = {
+            let r = b.read_only("W2").unwrap();
+            trol_rapl::text::read_position(&r.text).unwrap()
+        };
+        for i in 0..6 {
+            assert!(
+                (after.joints[i] - before.joints[i]).abs() < 0.02,
+                "{variant}: {after:?}"
+            );
+        }
+        // Only the steps' lines moved it.
+        let ran = sim.lines.lock().unwrap().clone();
+        for line in ran {
+            let word = line.split_whitespace().next().unwrap_or("");
+            assert!(
+                READ_ONLY.contains(&word)
+                    || ["NOH", "NOHELP", "HELP"].contains(&word)
+                    || probe::MEASURE.contains(&line.as_str()),
+                "{variant}: {line}"
+            );
+        }
+        b.close();
+    }
 }

@@ -801,6 +801,15 @@ impl RaplBackend {
         Duration::from_secs(self.profile.motion_timeout_s)
     }
 
+    /// The BIOS code of a refusal numbered `number` (a location the controller does not
+    /// know, after LISTL found it, is a bad argument).
+    fn code_of_refusal(&self, number: u16) -> i16 {
+        match self.meaning(number) {
+            Meaning::Code(c) => c,
+            Meaning::Location => code_of("BIOS_BAD_ARGUMENT"),
+        }
+    }
+
     fn meaning(&self, number: u16) -> Meaning {
         match self.profile.error_target(number) {
             Some("TROL_ERR_LOCATION") => Meaning::Location,
@@ -809,22 +818,18 @@ impl RaplBackend {
         }
     }
 
-    /// A command whose answer is the success form or a refusal; `name` is the location it
-    /// names. Its timeout is the short one: nothing here waits for a motion's end.
-    fn command(&mut self, line: &str, name: Option<LocName>) -> BiosResult {
-        self.command_as(line, name, false)
+    /// A command whose answer is the success form or a refusal. Its timeout is the short
+    /// one: nothing here waits for a motion's end (a name is looked up with LISTL before).
+    fn command(&mut self, line: &str) -> BiosResult {
+        self.command_as(line, false)
     }
 
-    fn command_as(&mut self, line: &str, name: Option<LocName>, urgent: bool) -> BiosResult {
+    fn command_as(&mut self, line: &str, urgent: bool) -> BiosResult {
         let t = self.reply_timeout();
         let r = self.exchange_as(line, t, urgent)?;
         match self.answer(line, r, false)? {
             Answer::Done(_) => Ok(0),
-            Answer::Refused(n, _) => match (self.meaning(n), name) {
-                (Meaning::Location, Some(name)) => Err(BackendError::UnknownLocation(name)),
-                (Meaning::Location, None) => Ok(code_of("BIOS_BAD_ARGUMENT")),
-                (Meaning::Code(c), _) => Ok(c),
-            },
+            Answer::Refused(n, _) => Ok(self.code_of_refusal(n)),
         }
     }
 
@@ -902,7 +907,7 @@ impl RaplBackend {
         if self.profile.motion_ack == MotionAck::End {
             return self.launch_answered_at_end(m);
         }
-        match self.command(&m.line, None) {
+        match self.command(&m.line) {
             Ok(0) => {
                 self.outstanding = Some(Outstanding {
                     motion: m,
@@ -942,10 +947,7 @@ impl RaplBackend {
                 match self.answer(&m.line, r, false)? {
                     Answer::Refused(n, _) => {
                         self.queue.clear();
-                        Ok(match self.meaning(n) {
-                            Meaning::Code(c) => c,
-                            Meaning::Location => code_of("BIOS_BAD_ARGUMENT"),
-                        })
+                        Ok(self.code_of_refusal(n))
                     }
                     Answer::Done(_) => {
                         self.outstanding = Some(Outstanding {
@@ -1426,7 +1428,7 @@ impl RaplBackend {
             format!("POINT {name} {}", join(&values))
         };
         // POINT changes a scratch location only: whatever happened to it, no motion was sent.
-        match self.command(&line, None).map_err(not_run)? {
+        match self.command(&line).map_err(not_run)? {
             0 => {}
             c => return Ok(Err(c)),
         }
@@ -1706,7 +1708,7 @@ impl Backend for RaplBackend {
     }
     fn close(&mut self, force: u8) -> BiosResult {
         self.report_unasked()?;
-        let r = self.command(&format!("CLOSE {force}"), None)?;
+        let r = self.command(&format!("CLOSE {force}"))?;
         self.last_poll = None;
         Ok(r)
     }
@@ -1735,7 +1737,7 @@ impl Backend for RaplBackend {
             Ok(d) => d,
             Err(u) => return Ok(self.unsettled(u)),
         };
-        let r = self.command(&format!("GRIP {}", text::num(d)), None)?;
+        let r = self.command(&format!("GRIP {}", text::num(d)))?;
         self.last_poll = None;
         Ok(r)
     }
@@ -1748,8 +1750,8 @@ impl Backend for RaplBackend {
             self.note(format!("Halt: {n} queued motion(s) dropped, not sent"));
         }
         let r = match self.profile.halt {
-            Halt::Halt => self.command_as("HALT", None, true),
-            Halt::Abort => self.command_as("ABORT", None, true),
+            Halt::Halt => self.command_as("HALT", true),
+            Halt::Abort => self.command_as("ABORT", true),
             Halt::CtrlC => {
                 self.awaiting = None;
                 self.interrupt().map(|_| 0)
@@ -1874,24 +1876,10 @@ impl Backend for RaplBackend {
                         Listed::Cart(v) => Expect::World(v),
                         Listed::Prec(p) => Expect::Pulses(p),
                     };
+                    // LISTL found it: a refusal now is the motion's, not the name's.
                     let upper = n.as_str().to_ascii_uppercase();
                     let line = format!("{} {upper}", mv(straight));
-                    if busy {
-                        return b.submit(Motion { line, expect }, true);
-                    }
-                    b.last_poll = None;
-                    match b.command(&line, Some(*n))? {
-                        0 => {
-                            b.outstanding = Some(Outstanding {
-                                motion: Motion { line, expect },
-                                since: std::time::Instant::now(),
-                                seen_moving: false,
-                                still: None,
-                            });
-                            Ok(0)
-                        }
-                        c => Ok(c),
-                    }
+                    b.submit(Motion { line, expect }, busy)
                 }
                 None => Err(BackendError::UnknownLocation(*n)),
             },
@@ -1909,7 +1897,7 @@ impl Backend for RaplBackend {
     }
     fn open(&mut self, force: u8) -> BiosResult {
         self.report_unasked()?;
-        let r = self.command(&format!("OPEN {force}"), None)?;
+        let r = self.command(&format!("OPEN {force}"))?;
         self.last_poll = None;
         Ok(r)
     }
@@ -1938,11 +1926,11 @@ impl Backend for RaplBackend {
             Ok(v) => v,
             Err(u) => return Ok(self.unsettled(u)),
         };
-        match self.command(&format!("POINT TL {}", join(&v)), None)? {
+        match self.command(&format!("POINT TL {}", join(&v)))? {
             0 => {}
             c => return Ok(c),
         }
-        let r = self.command("TOOL TL", None)?;
+        let r = self.command("TOOL TL")?;
         if r == 0 {
             self.tool = tool;
         }
@@ -1953,7 +1941,7 @@ impl Backend for RaplBackend {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
         self.report_unasked()?;
-        self.command(&format!("SPEED {percent}"), None)
+        self.command(&format!("SPEED {percent}"))
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let p = self.read_position(mode)?;
@@ -1967,10 +1955,9 @@ impl Backend for RaplBackend {
         })
     }
     fn idle(&mut self) {
-        if self.closed || (self.queue.is_empty() && self.deferred.is_none()) {
-            return;
-        }
-        if self.deferred.is_some() {
+        // Only a queue waiting for the motion under way to end needs a look; an error
+        // already kept is told by the next call.
+        if self.closed || self.queue.is_empty() || self.deferred.is_some() {
             return;
         }
         if self

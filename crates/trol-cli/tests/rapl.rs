@@ -48,34 +48,19 @@ fn try_example(name: &str, dir: &Path) -> (bool, String, String) {
 /// The variants a 1998 program cannot run on in full: TROL must fail there, visibly.
 const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo"];
 
-/// The pick and position examples, unchanged, through `rapl:` against one variant of the
-/// simulated C500 with the profile that describes it: they run, or (where TROL cannot drive
-/// such a controller safely) they fail and say so; never `pick: done` there.
-fn c_examples_on_variant(variant: &str) {
-    let dir = scratch(&format!("rapl-variant-{variant}"));
-    let root = cbuild::root();
-    let locations = root.join("examples/locations.txt");
+/// `trol sim --rapl --variant NAME` on a new pty, the profile that describes it in `dir`
+/// (c500.toml), and a trol.cfg that drives it in-process through `rapl:`.
+fn variant_sim(dir: &Path, variant: &str, extra: &[&str]) -> Background {
     let out = trol(
-        &dir,
+        dir,
         &["sim", "--rapl", "--variant", variant, "--print-profile"],
         "",
     );
     assert!(out.status.success(), "{}", text(&out).1);
     std::fs::write(dir.join("c500.toml"), &out.stdout).unwrap();
-    let sim = Background::start(
-        &dir,
-        &[
-            "sim",
-            "--rapl",
-            "--variant",
-            variant,
-            "--locations",
-            locations.to_str().unwrap(),
-            "--time-scale",
-            "20",
-        ],
-        "serving on ",
-    );
+    let mut args = vec!["sim", "--rapl", "--variant", variant, "--time-scale", "20"];
+    args.extend_from_slice(extra);
+    let sim = Background::start(dir, &args, "serving on ");
     std::fs::write(
         dir.join("trol.cfg"),
         format!(
@@ -84,6 +69,16 @@ fn c_examples_on_variant(variant: &str) {
         ),
     )
     .unwrap();
+    sim
+}
+
+/// The pick and position examples, unchanged, through `rapl:` against one variant of the
+/// simulated C500 with the profile that describes it: they run, or (where TROL cannot drive
+/// such a controller safely) they fail and say so; never `pick: done` there.
+fn c_examples_on_variant(variant: &str) {
+    let dir = scratch(&format!("rapl-variant-{variant}"));
+    let locations = cbuild::root().join("examples/locations.txt");
+    let sim = variant_sim(&dir, variant, &["--locations", locations.to_str().unwrap()]);
     let (ok, out, err) = try_example("pick", &dir);
     if FAIL_SAFE.contains(&variant) {
         assert!(
@@ -144,39 +139,7 @@ c_examples_on_variants! {
 fn in_process_rapl_logs_the_controller_s_texts() {
     // A refusal the controller words its own way reaches `-v`'s log, word for word.
     let dir = scratch("rapl-log");
-    let out = trol(
-        &dir,
-        &[
-            "sim",
-            "--rapl",
-            "--variant",
-            "stars-refusal",
-            "--print-profile",
-        ],
-        "",
-    );
-    std::fs::write(dir.join("c500.toml"), &out.stdout).unwrap();
-    let sim = Background::start(
-        &dir,
-        &[
-            "sim",
-            "--rapl",
-            "--variant",
-            "stars-refusal",
-            "--homed",
-            "--time-scale",
-            "20",
-        ],
-        "serving on ",
-    );
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!(
-            "9600\nrapl:{}\n0 0 0 0 0 0\nrapl-profile = c500.toml\n",
-            sim.name
-        ),
-    )
-    .unwrap();
+    let _sim = variant_sim(&dir, "stars-refusal", &["--homed"]);
     let run = trol(&dir, &["interp", "-v", "-k"], "joint 1 3.3\n");
     let (out, err) = text(&run);
     assert!(err.contains("c500: "), "{out}\n{err}");

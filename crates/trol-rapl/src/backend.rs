@@ -266,6 +266,17 @@ struct Outstanding {
     still: Option<(std::time::Instant, [f64; 6])>,
 }
 
+impl Outstanding {
+    fn new(motion: Motion, seen_moving: bool) -> Outstanding {
+        Outstanding {
+            motion,
+            since: std::time::Instant::now(),
+            seen_moving,
+            still: None,
+        }
+    }
+}
+
 /// How a reply reads.
 enum Answer {
     /// The exact success form.
@@ -909,12 +920,7 @@ impl RaplBackend {
         }
         match self.command(&m.line) {
             Ok(0) => {
-                self.outstanding = Some(Outstanding {
-                    motion: m,
-                    since: std::time::Instant::now(),
-                    seen_moving: false,
-                    still: None,
-                });
+                self.outstanding = Some(Outstanding::new(m, false));
                 Ok(0)
             }
             other => {
@@ -950,12 +956,7 @@ impl RaplBackend {
                         Ok(self.code_of_refusal(n))
                     }
                     Answer::Done(_) => {
-                        self.outstanding = Some(Outstanding {
-                            motion: m,
-                            since: std::time::Instant::now(),
-                            seen_moving: true,
-                            still: None,
-                        });
+                        self.outstanding = Some(Outstanding::new(m, true));
                         Ok(0)
                     }
                 }
@@ -976,12 +977,7 @@ impl RaplBackend {
                     m.line
                 ));
                 self.awaiting = Some(m.line.clone());
-                self.outstanding = Some(Outstanding {
-                    motion: m,
-                    since: std::time::Instant::now(),
-                    seen_moving: true,
-                    still: None,
-                });
+                self.outstanding = Some(Outstanding::new(m, true));
                 Ok(0)
             }
             Err(e) => Err(BackendError::Unsure(format!("`{}`: {e}", m.line))),

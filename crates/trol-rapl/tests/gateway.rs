@@ -330,11 +330,31 @@ fn faults_on_the_rapl_line_end_in_defined_codes_and_get_status_tells_what_ran() 
         inner: port,
         armed: lose_byte.clone(),
     });
-    let port = Box::new(Incoming {
+    // While armed, the prompt (two `>`) after the echo of `JOINT 6` vanishes: the motion
+    // line's answer, not that of the reads before it.
+    let armed = lose_prompt.clone();
+    let (mut seen, mut dropped) = (Vec::new(), 0);
+    let port = Box::new(Mangle {
         inner: port,
-        prompt: lose_prompt.clone(),
-        dropped: 0,
-        seen: Vec::new(),
+        f: Box::new(move |v: &mut Vec<u8>| {
+            if !armed.load(Ordering::SeqCst) {
+                seen.clear();
+                return;
+            }
+            seen.extend_from_slice(v);
+            if seen.windows(7).any(|w| w == b"JOINT 6") {
+                v.retain(|b| {
+                    let drop = *b == b'>' && dropped < 2;
+                    dropped += usize::from(drop);
+                    !drop
+                });
+                if dropped == 2 {
+                    dropped = 0;
+                    seen.clear();
+                    armed.store(false, Ordering::SeqCst);
+                }
+            }
+        }),
     });
     let backend = RaplBackend::connect(port, profile).unwrap();
     let cfg = trol_proto::link::LinkConfig::default();
@@ -379,55 +399,6 @@ fn faults_on_the_rapl_line_end_in_defined_codes_and_get_status_tells_what_ran() 
     robot.joint(6, 0.12).unwrap();
     robot.finish().unwrap();
     assert_eq!(ran("JOINT 6,6.8755"), 1, "{:?}", sim.ran());
-}
-
-/// A port whose incoming `>` bytes vanish while armed (two of them: one prompt), once the
-/// echo of `JOINT 6` has come (the prompt of the motion line, not of the reads before it).
-struct Incoming {
-    inner: Box<dyn Port>,
-    prompt: Arc<AtomicBool>,
-    dropped: u8,
-    seen: Vec<u8>,
-}
-
-impl Port for Incoming {
-    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
-        self.inner.send(bytes)
-    }
-    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
-        let n = self.inner.recv(buf, deadline)?;
-        if !self.prompt.load(Ordering::SeqCst) {
-            self.seen.clear();
-            return Ok(n);
-        }
-        let mut kept = 0;
-        for i in 0..n {
-            let b = buf[i];
-            self.seen.push(b);
-            let after_joint = self.seen.windows(7).any(|w| w == b"JOINT 6");
-            if b == b'>' && after_joint && self.prompt.load(Ordering::SeqCst) {
-                self.dropped += 1;
-                if self.dropped == 2 {
-                    self.dropped = 0;
-                    self.seen.clear();
-                    self.prompt.store(false, Ordering::SeqCst);
-                }
-                continue;
-            }
-            buf[kept] = b;
-            kept += 1;
-        }
-        Ok(kept)
-    }
-    fn available(&mut self) -> std::io::Result<usize> {
-        self.inner.available()
-    }
-    fn flush_input(&mut self) -> std::io::Result<()> {
-        self.inner.flush_input()
-    }
-    fn name(&self) -> String {
-        self.inner.name()
-    }
 }
 
 /// A long motion at time scale 5 (about 10 s of wall time) that Halt must stop short.

@@ -180,8 +180,86 @@ pub fn sleep_unless_interrupted(d: Duration) -> bool {
 /// Set when a write to stdout failed (the reader went away).
 static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
 
-/// One line to stdout (the [`say!`] macro); a closed stdout is noted, not a panic.
+/// The writer of a serving process's log: lines go through a bounded queue to a thread that
+/// writes them, so serving never waits for a reader of stdout ([`log_in_background`]).
+struct Background {
+    tx: std::sync::mpsc::SyncSender<String>,
+    done: std::sync::mpsc::Receiver<()>,
+}
+
+static BACKGROUND: std::sync::Mutex<Option<Background>> = std::sync::Mutex::new(None);
+/// Lines dropped because the queue was full (stdout not read), not yet reported.
+static DROPPED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+/// How many log lines may wait for stdout.
+const LOG_QUEUE: usize = 4096;
+
+/// From now on, [`say`] never blocks: for `trol sim` and `trol gateway`, whose log must not
+/// stop them serving (a Halt included) when nobody reads their stdout. Lines that find the
+/// queue full are dropped, counted, and the count is logged once there is room again.
+pub fn log_in_background() {
+    let mut slot = BACKGROUND.lock().unwrap_or_else(|e| e.into_inner());
+    if slot.is_some() {
+        return;
+    }
+    let (tx, rx) = std::sync::mpsc::sync_channel::<String>(LOG_QUEUE);
+    let (done_tx, done) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in rx {
+            write_line(&line);
+        }
+        let _ = done_tx.send(());
+    });
+    *slot = Some(Background { tx, done });
+}
+
+/// Write out what the background log still holds, waiting at most a second (stdout may not
+/// be read at all); nothing when the log is not in the background.
+pub fn finish_log() {
+    let taken = BACKGROUND.lock().unwrap_or_else(|e| e.into_inner()).take();
+    if let Some(Background { tx, done }) = taken {
+        drop(tx);
+        let _ = done.recv_timeout(Duration::from_secs(1));
+    }
+}
+
+fn write_line(line: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
+        STDOUT_CLOSED.store(true, Ordering::SeqCst);
+    }
+}
+
+/// One line to stdout (the [`say!`] macro); a closed stdout is noted, not a panic. In a
+/// serving process ([`log_in_background`]) it never blocks.
 pub fn say(line: std::fmt::Arguments) {
+    use std::sync::mpsc::TrySendError;
+    {
+        let slot = BACKGROUND.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(bg) = slot.as_ref() {
+            let dropped = DROPPED.load(Ordering::SeqCst);
+            if dropped > 0 {
+                let note = format!(
+                    "({dropped} log line(s) dropped: standard output was not read; serving went on)"
+                );
+                match bg.tx.try_send(note) {
+                    Ok(()) => {
+                        DROPPED.fetch_sub(dropped, Ordering::SeqCst);
+                    }
+                    Err(_) => {
+                        DROPPED.fetch_add(1, Ordering::SeqCst);
+                        return;
+                    }
+                }
+            }
+            if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) =
+                bg.tx.try_send(line.to_string())
+            {
+                DROPPED.fetch_add(1, Ordering::SeqCst);
+            }
+            return;
+        }
+    }
     use std::io::Write;
     let mut out = std::io::stdout().lock();
     if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {

@@ -52,6 +52,8 @@ fn parse_check(s: &str) -> Result<BlockCheck, String> {
 
 /// Open the C500's session, then serve TROL until the line fails.
 pub fn run(a: GatewayArgs) -> Result<(), String> {
+    // Serving must never wait for a reader of the log (docs/reliability.md).
+    crate::common::log_in_background();
     let profile = match &a.profile {
         Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
         None => trol_rapl::Profile::default(),

@@ -167,6 +167,8 @@ fn main() -> ExitCode {
         Command::Completions { shell } => completions(shell).map(|()| ExitCode::SUCCESS),
         Command::Man { out } => man(&out).map(|()| ExitCode::SUCCESS),
     };
+    // What a serving process's log still holds goes out before it ends.
+    common::finish_log();
     match result {
         Ok(code) => code,
         Err(e) => {

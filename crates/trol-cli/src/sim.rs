@@ -110,6 +110,8 @@ fn parse_variant(s: &str) -> Result<String, String> {
 
 /// Serve until the process is stopped (Ctrl-C) or the line fails.
 pub fn run(a: SimArgs) -> Result<(), String> {
+    // Serving must never wait for a reader of the log (docs/reliability.md).
+    crate::common::log_in_background();
     let locations = match &a.locations {
         Some(p) => {
             let text = std::fs::read_to_string(p)

@@ -1429,3 +1429,61 @@ fn trol_urdf_prints_the_arm_with_trols_joints() {
         assert!(out.contains(&format!("name=\"{name}\"")), "{name}");
     }
 }
+
+#[test]
+fn trol_sim_keeps_serving_when_nobody_reads_its_log() {
+    use std::io::BufRead;
+    let dir = scratch("sim-unread-log");
+    let mut child = std::process::Command::new(common::TROL)
+        .args(["sim", "--port", "pty", "--server", "--time-scale", "20"])
+        .current_dir(&dir)
+        .env_remove("TROL_CONFIG")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let name = loop {
+        let mut line = String::new();
+        assert!(out.read_line(&mut line).unwrap() > 0, "trol sim ended");
+        if let Some(rest) = line.trim().strip_prefix("trol sim: serving on ") {
+            break rest.split_whitespace().next().unwrap().to_string();
+        }
+    };
+    // From here on nobody reads: the pipe (64 KiB) and the log queue (4096 lines) hold
+    // fewer lines than the calls log.
+    let mut robot = trol::Robot::open(&name, 9600).unwrap();
+    for i in 0..7000u32 {
+        robot
+            .speed(10 + (i % 90) as u16)
+            .unwrap_or_else(|e| panic!("call {i}: {e}"));
+    }
+    // Reading again: the queued lines come, and the count of those dropped.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in out.lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let mut said = Vec::new();
+    while std::time::Instant::now() < deadline {
+        robot.speed(50).unwrap();
+        while let Ok(line) = rx.recv_timeout(std::time::Duration::from_millis(20)) {
+            said.push(line);
+        }
+        if said.iter().any(|l| l.contains("log line(s) dropped")) {
+            break;
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(
+        said.iter()
+            .any(|l| l.contains("log line(s) dropped: standard output was not read")),
+        "{:?}",
+        said.last()
+    );
+}

@@ -127,6 +127,9 @@ impl std::fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
+/// The largest trol.cfg read, bytes.
+pub const MAX_FILE: usize = 64 * 1024;
+
 impl Config {
     /// Where trol.cfg is: `$TROL_CONFIG`, else `./trol.cfg`.
     pub fn default_path() -> PathBuf {
@@ -160,9 +163,25 @@ impl Config {
         }
     }
 
-    /// Read a configuration file.
+    /// Read a configuration file (at most [`MAX_FILE`] bytes: a trol.cfg is a few lines, and
+    /// a device such as /dev/zero must not be read for ever).
     pub fn from_file(path: &Path) -> Result<Config, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+        use std::io::Read;
+        let mut text = String::new();
+        let read = std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_FILE as u64 + 1).read_to_string(&mut text));
+        if read.as_ref().is_ok_and(|n| *n > MAX_FILE) {
+            return Err(ConfigError {
+                file: path.to_path_buf(),
+                line: None,
+                message: format!(
+                    "it is larger than {} KiB: not a trol.cfg (three lines: the baud rate, the \
+                     port, the tool transform); set {ENV_VAR} to the right file",
+                    MAX_FILE / 1024
+                ),
+            });
+        }
+        read.map_err(|e| ConfigError {
             file: path.to_path_buf(),
             line: None,
             message: format!(
@@ -214,7 +233,7 @@ impl Config {
                         ))?;
                 }
                 1 => {
-                    if line.contains(char::is_whitespace) {
+                    if line.contains(|c: char| c.is_whitespace() || c.is_control()) {
                         return Err((
                             n,
                             format!(
@@ -389,6 +408,21 @@ mod tests {
         }
         let c = Config::parse("9600\nsim\n0 0 0 0 0 0\nview = 0.0.0.0:8465\n").unwrap();
         assert_eq!(c.view.as_deref(), Some("0.0.0.0:8465"));
+        // A control character in the port's name.
+        let e = Config::parse("9600\n/dev/tty\u{1b}USB0\n0 0 0 0 0 0\n").unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.contains("expected the port"), "{e:?}");
+    }
+
+    #[test]
+    fn a_file_that_never_ends_is_refused_not_read_for_ever() {
+        let e = Config::from_file(Path::new("/dev/zero")).unwrap_err();
+        assert!(e.message.contains("not a trol.cfg"), "{e}");
+        let dir = std::env::temp_dir().join(format!("trol-big-cfg-{}", std::process::id()));
+        std::fs::write(&dir, "9600\nsim\n0 0 0 0 0 0\n".repeat(10_000)).unwrap();
+        let e = Config::from_file(&dir).unwrap_err();
+        let _ = std::fs::remove_file(&dir);
+        assert!(e.message.contains("larger than 64 KiB"), "{e}");
     }
 
     #[test]

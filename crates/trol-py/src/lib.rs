@@ -460,9 +460,10 @@ impl Robot {
     #[pyo3(signature = (timeout = None))]
     fn finish(&self, py: Python<'_>, timeout: Option<f64>) -> PyResult<()> {
         let deadline = match timeout {
-            Some(t) if t.is_finite() && t >= 0.0 => {
-                Some(Instant::now() + Duration::from_secs_f64(t))
-            }
+            // A timeout beyond what the clock can add (1e300 s) is no limit at all.
+            Some(t) if t.is_finite() && t >= 0.0 => Duration::try_from_secs_f64(t)
+                .ok()
+                .and_then(|d| Instant::now().checked_add(d)),
             Some(t) => {
                 return Err(argument_error(
                     py,

@@ -215,6 +215,16 @@ def test_finish_times_out_while_the_arm_keeps_moving() -> None:
         assert not robot.is_moving()
 
 
+def test_a_timeout_too_large_for_the_clock_is_no_limit_and_no_panic() -> None:
+    with trol.Robot.open("sim", time_scale=20) as robot:
+        robot.home()
+        robot.joint(6, 0.1)
+        robot.finish(timeout=1e300)
+        assert not robot.is_moving()
+        with pytest.raises(trol.ArgumentError):
+            robot.finish(timeout=float("inf"))
+
+
 def test_other_threads_run_while_one_waits_in_finish() -> None:
     with trol.Robot.open("sim", time_scale=5) as robot:
         robot.home()

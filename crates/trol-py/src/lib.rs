@@ -124,26 +124,63 @@ impl Robot {
     }
 }
 
-/// Any sequence of numbers (list, tuple, numpy array) as f64s.
+/// Any sequence of real numbers (list, tuple, numpy array of a real dtype) as f64s. Text,
+/// bytes (a sequence of small ints to Python), booleans, complex numbers and numpy arrays of
+/// another dtype are refused: each would become a motion nobody meant (`mi(b"abcdef")` was an
+/// MI of 97..102 rad).
 fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
-    if obj.is_instance_of::<pyo3::types::PyString>() {
-        return Err(argument_error(
-            py,
-            format!("{what}: expected a sequence of numbers, got a string"),
-        ));
-    }
-    obj.extract::<Vec<f64>>().map_err(|_| {
+    use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString};
+    let type_name = |o: &Bound<'_, PyAny>| {
+        o.get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_default()
+    };
+    let bad = |got: String| {
         argument_error(
             py,
-            format!(
-                "{what}: expected a sequence of up to 6 numbers, got {}",
-                obj.get_type()
-                    .name()
-                    .map(|n| n.to_string())
-                    .unwrap_or_default()
-            ),
+            format!("{what}: expected a sequence of up to 6 real numbers, got {got}"),
         )
-    })
+    };
+    if obj.is_instance_of::<PyString>()
+        || obj.is_instance_of::<PyBytes>()
+        || obj.is_instance_of::<PyByteArray>()
+    {
+        return Err(bad(type_name(obj)));
+    }
+    // numpy: the array's (or scalar's) dtype kind: f float, i int, u unsigned.
+    let real_dtype = |o: &Bound<'_, PyAny>| -> Option<Result<(), String>> {
+        let dtype = o.getattr("dtype").ok()?;
+        let kind: String = dtype.getattr("kind").ok()?.extract().ok()?;
+        Some(if matches!(kind.as_str(), "f" | "i" | "u") {
+            Ok(())
+        } else {
+            Err(format!(
+                "a numpy array of dtype {}",
+                dtype.str().map(|s| s.to_string()).unwrap_or(kind)
+            ))
+        })
+    };
+    if let Some(Err(got)) = real_dtype(obj) {
+        return Err(bad(got));
+    }
+    let items = obj.try_iter().map_err(|_| bad(type_name(obj)))?;
+    let mut out = Vec::new();
+    for item in items {
+        let item = item?;
+        let real = if item.is_instance_of::<PyBool>() {
+            false
+        } else if item.is_instance_of::<PyFloat>() || item.is_instance_of::<PyInt>() {
+            true
+        } else {
+            matches!(real_dtype(&item), Some(Ok(())))
+        };
+        if !real {
+            return Err(bad(format!("an element of type {}", type_name(&item))));
+        }
+        out.push(item.extract::<f64>().map_err(|_| bad(type_name(&item)))?);
+    }
+    Ok(out)
 }
 
 fn is_precision(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<bool> {

@@ -92,6 +92,7 @@ def test_poses_and_joints_are_immutable_sequences_numpy_reads(sim_robot: trol.Ro
         (0.2, 0.4, 0.8),
         np.array([0.2, 0.4, 0.8]),
         np.array([0.2, 0.4, 0.8], dtype=np.float32),
+        [np.float64(0.2), np.float32(0.4), 0.8],
     ],
 )
 def test_lists_tuples_and_numpy_arrays_are_accepted(sim_robot: trol.Robot, joints: object) -> None:
@@ -100,6 +101,34 @@ def test_lists_tuples_and_numpy_arrays_are_accepted(sim_robot: trol.Robot, joint
     sim_robot.finish()
     # Missing values are 0, as numDims allows.
     assert list(sim_robot.joints()) == pytest.approx([0.2, 0.4, 0.8, 0, 0, 0], abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    "joints",
+    [
+        b"abcdef",  # a sequence of small ints to Python: an MI of 97..102 rad
+        bytearray(b"ab"),
+        "0.1",
+        [True, False, True],
+        [0.1, 1j],
+        np.array([0.1, 0.2], dtype=np.complex128),
+        np.array([0.1, 0.2], dtype=object),
+        np.array([True, False]),
+        [0.1, "0.2"],
+        [0.1, None],
+    ],
+)
+def test_values_that_are_not_real_numbers_are_refused_and_nothing_moves(
+    sim_robot: trol.Robot, joints: object
+) -> None:
+    sim_robot.home()
+    sim_robot.finish()
+    before = list(sim_robot.joints())
+    for call in (sim_robot.mi, sim_robot.ma):
+        with pytest.raises(trol.ArgumentError):
+            call(joints)  # type: ignore[arg-type]
+    sim_robot.finish()
+    assert list(sim_robot.joints()) == pytest.approx(before, abs=1e-9)
 
 
 def test_refused_calls_raise_refused_error_with_the_code_and_its_name(robot: trol.Robot) -> None:

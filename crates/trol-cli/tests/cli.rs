@@ -422,8 +422,7 @@ fn sim_init_link_interp_cleanup_across_processes() {
 
     let o = trol(&dir, &["cleanup", "--port", &link.name], "");
     assert!(o.status.success(), "{:?}", text(&o));
-    std::thread::sleep(Duration::from_millis(300));
-    let log = sim.output().join("\n");
+    let log = sim.output_until("back in terminal mode", 1, 30).join("\n");
     assert!(log.contains("activated: serving TROL"), "{log}");
     assert!(log.contains("TROLHome 0 -> 0 (success)"), "{log}");
     assert!(log.contains("TROLTerminatePCP -> 0 (success)"), "{log}");
@@ -563,8 +562,7 @@ fn sim_objects_are_picked_up_and_the_log_says_where_they_are() {
          finish\nclose 60\nfinish\ndepart c(-90) straight\nfinish\nopen 50\nfinish\n",
     );
     assert!(o.status.success(), "{:?}", text(&o));
-    std::thread::sleep(Duration::from_millis(300));
-    let log = sim.output().join("\n");
+    let log = sim.output_until("z 0.0 mm, resting", 1, 30).join("\n");
     assert!(
         log.contains("world: cube at x 400.0 y 0.0 z 150.0 mm, resting"),
         "{log}"
@@ -919,8 +917,9 @@ fn link_activates_the_controller_as_trol_cfg_says() {
     let o = trol(&dir, &["interp", "--port", &link.name], "getstatus\n");
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
-    std::thread::sleep(Duration::from_millis(300));
-    let log = sim.output().join("\n");
+    let log = sim
+        .output_until("TROLSetToolTransform c(10, 0, 0, 0, 0, 0) -> 0", 1, 30)
+        .join("\n");
     assert!(
         log.contains("activated: serving TROL (LRC block check)"),
         "{log}"
@@ -1009,8 +1008,7 @@ fn the_same_c_program_carries_on_after_the_controller_restarts() {
     for l in rest.iter().filter(|l| l.starts_with("while restarting")) {
         assert!(l.contains("-32001"), "{l}");
     }
-    std::thread::sleep(Duration::from_millis(200));
-    let log = sim.output().join("\n");
+    let log = sim.output_until("TROLJoint", 1, 30).join("\n");
     assert!(
         log.contains("TROLJoint"),
         "the new controller ran the move: {log}"

@@ -168,15 +168,12 @@ fn check_pick(out: &str) {
 #[test]
 fn the_c_examples_run_unchanged_in_process_through_rapl_pty() {
     let dir = scratch("rapl-inproc");
-    let sim = rapl_sim(&dir, &["--time-scale", "20"]);
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!(
-            "9600\nrapl:{}\n0 0 0 0 0 0\nrapl-profile = c500.toml\n",
-            sim.name
-        ),
-    )
-    .unwrap();
+    let locations = cbuild::root().join("examples/locations.txt");
+    let sim = variant_sim(
+        &dir,
+        "default",
+        &["--locations", locations.to_str().unwrap()],
+    );
     check_pick(&run_example("pick", &dir));
     let out = run_example("position", &dir);
     assert!(
@@ -185,7 +182,7 @@ fn the_c_examples_run_unchanged_in_process_through_rapl_pty() {
     );
     assert!(out.contains("position: done"), "{out}");
     // What the C500 was told, in RAPL-II.
-    let said = sim.output().join("\n");
+    let said = sim.output_until("LISTL NOWHERE", 1, 30).join("\n");
     assert!(said.contains("MOVES TEST_001"), "{said}");
     assert!(said.contains("LISTL NOWHERE"), "{said}");
 }
@@ -220,7 +217,7 @@ fn the_pick_example_runs_through_trol_gateway_with_init_and_cleanup() {
     assert!(init.status.success(), "{o}{e}");
     let cleanup = trol(&dir, &["cleanup", "--port", &gw.name], "");
     let (o, e) = text(&cleanup);
-    let log = gw.output().join("\n");
+    let log = gw.output_until("back in terminal mode", 2, 30).join("\n");
     assert!(cleanup.status.success(), "{o}{e}\ngateway:\n{log}");
     assert_eq!(log.matches("back in terminal mode").count(), 2, "{log}");
 }
@@ -248,7 +245,7 @@ fn halt_reaches_the_arm_while_the_application_waits_for_the_motion() {
         .unwrap();
     let j1 = q.to_array6()[0];
     assert!(j1 > 0.01 && j1 < 2.4, "halted on the way: joint 1 at {j1}");
-    let said = sim.output().join("\n");
+    let said = sim.output_until("HALT", 1, 30).join("\n");
     assert!(said.contains("HALT"), "{said}");
 }
 

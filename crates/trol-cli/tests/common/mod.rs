@@ -131,6 +131,22 @@ impl Background {
         self.lines.try_iter().collect()
     }
 
+    /// The output lines not taken yet, waiting (up to `secs`) until `count` of them contain
+    /// `marker`: a process logs after it answered, so a log is read for what it must hold,
+    /// not after a guessed pause.
+    pub fn output_until(&self, marker: &str, count: usize, secs: u64) -> Vec<String> {
+        let deadline = Instant::now() + Duration::from_secs(secs);
+        let mut seen: Vec<String> = self.lines.try_iter().collect();
+        while seen.iter().filter(|l| l.contains(marker)).count() < count {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => seen.push(line),
+                Err(_) => break,
+            }
+        }
+        seen
+    }
+
     /// Write `line` to the program's standard input.
     pub fn type_line(&mut self, line: &str) {
         let input = self.input.as_mut().expect("standard input open");

@@ -377,6 +377,36 @@ impl Arm {
             .unwrap_or(now)
     }
 
+    /// Put the arm where it is (a real arm's encoders, read by a backend that plans with this
+    /// model): every accepted motion is dropped and the arm stands at `q`.
+    pub fn place(&mut self, q: Joints) {
+        self.motions.clear();
+        self.base = q;
+    }
+
+    /// Set which axes count as homed (a real arm's homing, done by its controller).
+    pub fn set_homed(&mut self, homed: [bool; 6]) {
+        self.homed = homed;
+    }
+
+    /// The last accepted motion: its start and end time, and whether every joint moves
+    /// linearly in its path parameter (a joint-interpolated motion; a straight line or a
+    /// spline is not). A backend that drives a real arm samples it with [`Arm::planned_at`].
+    pub fn last_motion(&self) -> Option<(f64, f64, bool)> {
+        self.motions.back().map(|m| {
+            (
+                m.profile.start(),
+                m.profile.end(),
+                matches!(m.path, Path::Joint { .. }),
+            )
+        })
+    }
+
+    /// The commanded joints at `t` as planned, without retiring anything.
+    pub fn planned_at(&self, t: f64) -> Joints {
+        self.commanded_at(t)
+    }
+
     /// The commanded joints at `t`.
     pub fn commanded(&mut self, now: f64) -> Joints {
         self.retire(now);

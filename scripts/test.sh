@@ -34,6 +34,12 @@ PY="$PWD/target/py/bin/python"
 (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" "$PY" -m pytest -q)
 (cd /tmp && "$PY" -m mypy.stubtest trol)
 
+# CTU Prague's own MARS 8 client (ctu-crs, from the package registry; its camera import
+# stubbed) drives `trol sim --mars` across the unit's variants (tests/ctu, docs/mars.md).
+"$PY" -m pip install --quiet --no-deps ctu-crs==1.0.6 ctu-mars-control-unit==0.1.3
+"$PY" -m pip install --quiet pyyaml pyserial
+TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/ctu
+
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).
 bash scripts/readme.sh

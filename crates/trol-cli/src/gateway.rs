@@ -1,5 +1,6 @@
-//! `trol gateway`: TROL's controller side on this PC, driving a real C500 in RAPL-II over a
-//! second line (docs/c500.md). A program that speaks TROL's wire protocol (a 1998 TROL
+//! `trol gateway`: TROL's controller side on this PC, driving a real C500 in RAPL-II
+//! (docs/c500.md) or an A465 on a MARS 8 (`--controller mars:DEVICE`, docs/mars.md) over a
+//! second line. A program that speaks TROL's wire protocol (a 1998 TROL
 //! application, or a second PC) uses it as it would a PCP server; `trol init` and
 //! `trol cleanup` work against it as against `trol sim`.
 
@@ -19,12 +20,13 @@ Examples:
   trol gateway --controller /dev/ttyUSB0 --port listen://127.0.0.1:7000
   trol sim --rapl &                                                      # a simulated C500 ...
   trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
+  trol gateway --controller mars:/dev/ttyUSB0 --profile docs/mars/crs93.toml  # a MARS 8
 
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]
 pub struct GatewayArgs {
     /// The C500's host port: a serial device (or socket://HOST:PORT to a networked one),
-    /// opened at the profile's baud rate.
+    /// opened at the profile's baud rate; or mars:DEVICE for an A465 on a MARS 8.
     #[arg(long, value_name = "DEVICE")]
     controller: String,
     /// Where to serve TROL: `pty` (a new pseudo-terminal), a serial device, or
@@ -35,7 +37,8 @@ pub struct GatewayArgs {
     #[arg(long, default_value_t = 9600)]
     baud: u32,
     /// The C500's RAPL-II profile (docs/c500.md); default: the safe one, which refuses
-    /// cartesian commands and MA/MI until their conventions are set.
+    /// cartesian commands and MA/MI until their conventions are set. With mars:DEVICE: the
+    /// arm profile (docs/mars.md), which it needs.
     #[arg(long, value_name = "FILE")]
     profile: Option<PathBuf>,
     /// The block check until an activation line names one: crc16 (TROL's) or lrc.
@@ -54,6 +57,9 @@ fn parse_check(s: &str) -> Result<BlockCheck, String> {
 pub fn run(a: GatewayArgs) -> Result<(), String> {
     // Serving must never wait for a reader of the log (docs/reliability.md).
     crate::common::log_in_background();
+    if let Some(device) = a.controller.strip_prefix(trol_mars::PREFIX) {
+        return run_mars(&a, device);
+    }
     let profile = match &a.profile {
         Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
         None => trol_rapl::Profile::default(),
@@ -70,11 +76,49 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
         None,
     )
     .map_err(|e| e.to_string())?;
+    serve_backend(&a, backend, "the C500", trol_rapl::RAPL_CODES)
+}
+
+/// `--controller mars:DEVICE`: an A465 on a MARS 8.
+fn run_mars(a: &GatewayArgs, device: &str) -> Result<(), String> {
+    let profile = match &a.profile {
+        Some(p) => trol_mars::Profile::from_file(p).map_err(|e| e.to_string())?,
+        None => {
+            return Err(format!(
+                "--controller {}: an A465 on a MARS 8 needs its arm profile: --profile FILE \
+                 (docs/mars/crs93.toml is CTU's CRS93; docs/mars.md)",
+                a.controller
+            ));
+        }
+    };
+    let settings = trol_port::PortSettings {
+        baud: profile.baud,
+        rts_cts: true,
+        ..Default::default()
+    };
+    let port = trol_port::open(device, &settings).map_err(|e| e.to_string())?;
+    let backend = trol_mars::MarsBackend::connect(
+        port,
+        profile,
+        Some(Box::new(|line: &str| say!("  mars: {line}"))),
+        None,
+        Vec::new(),
+    )
+    .map_err(|e| e.to_string())?;
+    serve_backend(a, backend, "the MARS 8", trol_mars::MARS_CODES)
+}
+
+fn serve_backend<B: trol_controller::Backend>(
+    a: &GatewayArgs,
+    backend: B,
+    what: &str,
+    codes: &'static trol_proto::application::CodeTable,
+) -> Result<(), String> {
     let opened = open_side(&a.port, a.baud, Side::Application)?;
     let name = opened.name.clone();
     say!("trol gateway: serving on {name}");
     say!(
-        "  driving the C500 on {}; {} mode",
+        "  driving {what} on {}; {} mode",
         a.controller,
         if a.server { "server" } else { "terminal" }
     );
@@ -94,6 +138,6 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
     crate::sim::serve(
         controller,
         trol_proto::application::Catalog::builtin(),
-        trol_rapl::RAPL_CODES,
+        codes,
     )
 }

@@ -17,6 +17,7 @@ mod gateway;
 mod init;
 mod interp;
 mod link;
+mod mars;
 mod rapl;
 mod sim;
 mod trace;
@@ -58,11 +59,15 @@ enum Command {
     Cleanup(common::Conn),
     /// The simulated controller (C500 with an A465) as its own process.
     Sim(sim::SimArgs),
-    /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md).
+    /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md) or
+    /// an A465 on a MARS 8 (docs/mars.md).
     Gateway(gateway::GatewayArgs),
     /// A real C500 in RAPL-II: first contact (probe) and a plain terminal (term).
     #[command(subcommand)]
     Rapl(rapl::Rapl),
+    /// An A465 on a PiKRON MARS 8: first contact that only reads (docs/mars.md).
+    #[command(subcommand)]
+    Mars(mars::Mars),
     /// Relay between the controller's port and an application's (the manual's link.exe).
     Link(link::LinkArgs),
     /// Show the traffic layer by layer, live between two ports or from a capture.
@@ -155,6 +160,7 @@ fn main() -> ExitCode {
         Command::Link(a) => link::run(a).map(|()| ExitCode::SUCCESS),
         Command::Gateway(a) => gateway::run(a).map(|()| ExitCode::SUCCESS),
         Command::Rapl(r) => rapl::run(r).map(|()| ExitCode::SUCCESS),
+        Command::Mars(m) => mars::run(m).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),

@@ -67,24 +67,34 @@ pub struct SimArgs {
     /// The line runs at the profile's baud rate; --baud, --server and --check do not apply.
     #[arg(long)]
     rapl: bool,
+    /// Be a PiKRON MARS 8 with an A465 on its axes instead (what `mars:DEVICE` and
+    /// `trol gateway --controller mars:DEVICE` drive, and CTU's ctu-crs client): the unit's
+    /// line at the profile's baud rate (docs/mars.md); --baud, --server and --check do not
+    /// apply.
+    #[arg(long, conflicts_with = "rapl")]
+    mars: bool,
     /// With --rapl: how the simulated C500 behaves on each open point (a RAPL-II profile,
     /// docs/c500.md); default: the simulator's (mm, angles yaw pitch roll, MA/MI in degrees).
-    #[arg(long, value_name = "FILE", requires = "rapl")]
+    /// With --mars: the arm profile (docs/mars.md); default: CTU's CRS93
+    /// (docs/mars/crs93.toml).
+    #[arg(long, value_name = "FILE")]
     profile: Option<PathBuf>,
-    /// With --rapl: play one of the controllers the public sources allow, by name (the
-    /// backend's tests run across all of them; docs/c500.md, "What TROL assumes"):
-    /// default, colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
+    /// Play one of the controllers the public sources allow, by name (the backend's tests
+    /// run across all of them). With --rapl (docs/c500.md, "What TROL assumes"): default,
+    /// colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
     /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
-    /// nul-after-digit, no-echo, not-homed.
-    #[arg(long, value_name = "NAME", requires = "rapl", conflicts_with = "profile", value_parser = parse_variant)]
+    /// nul-after-digit, no-echo, not-homed. With --mars (docs/mars.md): default, echo,
+    /// noise, moving-lag, refusal-line, refusal-error-bit, stop-latches, lf-only, r-blocks.
+    #[arg(long, value_name = "NAME")]
     variant: Option<String>,
-    /// With --rapl: print the profile that describes this simulated C500 (give it to
-    /// `trol gateway --profile` or trol.cfg's rapl-profile) and exit.
-    #[arg(long, requires = "rapl")]
+    /// With --rapl or --mars: print the profile that describes this simulated controller
+    /// (give it to `trol gateway --profile` or trol.cfg's rapl-profile / mars-profile) and
+    /// exit.
+    #[arg(long)]
     print_profile: bool,
     /// Serve the live 3D view of the arm at ADDR (default 127.0.0.1:8465, this machine only;
     /// name an address to serve others): open it in a browser. Not with --rapl.
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with = "rapl")]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with_all = ["rapl", "mars"])]
     view: Option<String>,
     /// With --rapl: a teach pendant on standard input. Each line `J1 J2 J3 J4 J5 J6`
     /// (degrees) moves the arm there as an operator would by hand, whatever the host port
@@ -93,18 +103,24 @@ pub struct SimArgs {
     pendant: bool,
 }
 
-fn parse_variant(s: &str) -> Result<String, String> {
-    if trol_rapl::c500::variant(s).is_some() {
-        Ok(s.to_string())
+fn check_variant(a: &SimArgs) -> Result<(), String> {
+    let Some(v) = &a.variant else {
+        return Ok(());
+    };
+    let names: Vec<&str> = if a.rapl {
+        trol_rapl::c500::VARIANTS.iter().map(|(n, _)| *n).collect()
+    } else if a.mars {
+        trol_mars::mars8::VARIANTS.iter().map(|(n, _)| *n).collect()
     } else {
-        Err(format!(
-            "no variant `{s}`: one of {}",
-            trol_rapl::c500::VARIANTS
-                .iter()
-                .map(|(n, _)| *n)
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
+        return Err("--variant needs --rapl or --mars".into());
+    };
+    if a.profile.is_some() && a.rapl {
+        return Err("--variant and --profile: give one".into());
+    }
+    if names.contains(&v.as_str()) {
+        Ok(())
+    } else {
+        Err(format!("no variant `{v}`: one of {}", names.join(", ")))
     }
 }
 
@@ -112,6 +128,16 @@ fn parse_variant(s: &str) -> Result<String, String> {
 pub fn run(a: SimArgs) -> Result<(), String> {
     // Serving must never wait for a reader of the log (docs/reliability.md).
     crate::common::log_in_background();
+    check_variant(&a)?;
+    if (a.profile.is_some() || a.print_profile) && !(a.rapl || a.mars) {
+        return Err("--profile and --print-profile need --rapl or --mars".into());
+    }
+    if a.pendant && !a.rapl {
+        return Err("--pendant needs --rapl".into());
+    }
+    if a.mars {
+        return run_mars(&a);
+    }
     let locations = match &a.locations {
         Some(p) => {
             let text = std::fs::read_to_string(p)
@@ -260,6 +286,49 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             }
         }
     }
+}
+
+/// `trol sim --mars`: the simulated MARS 8 with an A465.
+fn run_mars(a: &SimArgs) -> Result<(), String> {
+    let profile = match &a.profile {
+        Some(p) => trol_mars::Profile::from_file(p).map_err(|e| e.to_string())?,
+        None => trol_mars::Profile::crs93(),
+    };
+    if a.print_profile {
+        say!("{}", profile.to_toml().trim_end());
+        return Ok(());
+    }
+    let variant = a.variant.as_deref().unwrap_or("default");
+    let sw = trol_mars::mars8::variant(variant).ok_or_else(|| format!("no variant {variant}"))?;
+    let mut unit = trol_mars::Mars8::new(profile.clone(), sw, a.homed, a.time_scale);
+    if let Some(mm) = a.object {
+        unit.set_object(profile.gripper_position(mm));
+    }
+    let opened = open_side(&a.port, profile.baud, Side::Application)?;
+    let name = opened.name.clone();
+    say!("trol sim: serving on {name}");
+    say!(
+        "  a MARS 8 with {} on its axes ({}), {} baud, time scale {}, {}",
+        profile.name,
+        if profile.source.is_empty() {
+            "profile"
+        } else {
+            profile.source.as_str()
+        },
+        profile.baud,
+        a.time_scale,
+        if a.homed { "homed" } else { "not homed" }
+    );
+    let what = trol_mars::mars8::VARIANTS
+        .iter()
+        .find(|(n, _)| *n == variant)
+        .map(|(_, w)| *w)
+        .unwrap_or_default();
+    say!("  variant {variant}: {what}");
+    say!("  drive it with: port mars:{name} in trol.cfg (mars-profile: the arm's profile)");
+    let unit = std::sync::Arc::new(std::sync::Mutex::new(unit));
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    trol_mars::mars8::serve(opened.port, unit, stop).map_err(|e| format!("the line failed: {e}"))
 }
 
 /// `trol sim --rapl`: the simulated C500 in RAPL-II mode.

@@ -126,17 +126,15 @@ pub mod st {
     pub const MOTION_STOP: u32 = 0x2_0000;
 }
 
-/// Parse `COORDAP`'s value: comma-separated integers whose last six are the joint axes' IRC
-/// (the public clients take them from index 3 on, or as the last six).
+/// Parse `COORDAP`'s value: nine comma-separated integers, the last six the joint axes' IRC.
+/// The public clients agree on nine only: ctu-crs takes the six from index 3 on, pyrocon
+/// the last six; any other count is refused, since TROL could not tell which are the axes.
 pub fn coordap(value: &str) -> Result<[f64; 6], String> {
     let v: Result<Vec<i64>, _> = value.split(',').map(|s| s.trim().parse::<i64>()).collect();
     match v {
-        Ok(v) if v.len() >= 6 => {
-            let n = v.len();
-            Ok(std::array::from_fn(|i| v[n - 6 + i] as f64))
-        }
+        Ok(v) if v.len() == 9 => Ok(std::array::from_fn(|i| v[3 + i] as f64)),
         _ => Err(format!(
-            "COORDAP={value}: expected at least six whole numbers"
+            "COORDAP={value}: expected nine whole numbers (three, then the six axes)"
         )),
     }
 }
@@ -174,7 +172,7 @@ mod tests {
             coordap("7,0,0,1,-2,3,4,5,6").unwrap(),
             [1.0, -2.0, 3.0, 4.0, 5.0, 6.0]
         );
-        assert_eq!(coordap("1,-2,3,4,5,6").unwrap()[1], -2.0);
+        assert!(coordap("1,-2,3,4,5,6").is_err());
         assert!(coordap("1,2,3").is_err());
         assert!(coordap("1,2,x,4,5,6").is_err());
         assert_eq!(query("ST"), b"\nST?\n");

@@ -41,12 +41,11 @@ pub struct Switches {
     pub moving_lag_ms: u64,
     /// What a refused command does.
     pub refusal: Refusal,
-    /// STOP: leaves the error bit set until PURGE: or RELEASE:.
+    /// STOP: while an axis moves leaves the error bit set until PURGE: or RELEASE: (on an
+    /// idle arm it does not: ctu-crs's initialize() sends STOP: and then requires no error).
     pub stop_latches: bool,
     /// Replies end in `\n` instead of `\r\n`.
     pub lf_only: bool,
-    /// Numbers before the six axes in COORDAP's answer.
-    pub coordap_lead: usize,
     /// R: holds every later command until it is answered.
     pub r_blocks: bool,
 }
@@ -60,7 +59,6 @@ impl Default for Switches {
             refusal: Refusal::Silent,
             stop_latches: false,
             lf_only: false,
-            coordap_lead: 3,
             r_blocks: false,
         }
     }
@@ -70,7 +68,7 @@ impl Default for Switches {
 pub const VARIANTS: &[(&str, &str)] = &[
     (
         "default",
-        "no echo, refusals silent, the moving bit at once, COORDAP with 3 leading numbers",
+        "no echo, refusals silent, the moving bit at once",
     ),
     ("echo", "echoes every line until ECHO:0"),
     ("noise", "prints noise at power-up"),
@@ -82,13 +80,9 @@ pub const VARIANTS: &[(&str, &str)] = &[
     ("refusal-error-bit", "a refused command sets the error bit"),
     (
         "stop-latches",
-        "STOP: leaves the error bit set until PURGE:",
+        "STOP: while the arm moves leaves the error bit set until PURGE:",
     ),
     ("lf-only", "replies end in LF alone"),
-    (
-        "coordap-lead-1",
-        "COORDAP's answer has one number before the axes",
-    ),
     (
         "r-blocks",
         "R: holds every later command until it is answered",
@@ -119,10 +113,6 @@ pub fn variant(name: &str) -> Option<Switches> {
             ..d
         },
         "lf-only" => Switches { lf_only: true, ..d },
-        "coordap-lead-1" => Switches {
-            coordap_lead: 1,
-            ..d
-        },
         "r-blocks" => Switches {
             r_blocks: true,
             ..d
@@ -518,10 +508,10 @@ impl Mars8 {
                 }
             }
             "STOP" if ints.is_empty() => {
-                self.stop_all(t);
-                if self.sw.stop_latches {
+                if self.sw.stop_latches && self.axes_moving(t) {
                     self.error = true;
                 }
+                self.stop_all(t);
             }
             "R" if ints.is_empty() => self.waiters.push_back(String::new()),
             "IDLEREL" | "SPDTB" | "COORDISCONT" => {}
@@ -633,10 +623,10 @@ impl Mars8 {
             "COORDAP" => {
                 let mut v: Vec<String> = Vec::new();
                 v.push(format!("{}", (t * 1000.0) as i64 & 0x7fff_ffff));
-                for _ in 1..self.sw.coordap_lead {
-                    v.push("0".into());
-                }
-                v.truncate(self.sw.coordap_lead);
+                // Three numbers before the axes: ctu-crs reads the axes from index 3 on,
+                // pyrocon as the last six. What the two after the time are is not known.
+                v.push("0".into());
+                v.push("0".into());
                 for j in 0..6 {
                     v.push(format!("{}", self.counter(j, t) as i64));
                 }

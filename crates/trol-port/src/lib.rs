@@ -71,6 +71,8 @@ pub struct PortSettings {
     pub baud: u32,
     /// How long opening (connecting, waiting for a client) may take.
     pub open_timeout: Duration,
+    /// RTS/CTS hardware flow control on a serial device (a MARS 8's line).
+    pub rts_cts: bool,
 }
 
 impl Default for PortSettings {
@@ -78,6 +80,7 @@ impl Default for PortSettings {
         PortSettings {
             baud: 9600,
             open_timeout: Duration::from_secs(10),
+            rts_cts: false,
         }
     }
 }
@@ -149,7 +152,7 @@ pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenEr
         });
     }
     Ok(Box::new(
-        serial::SerialLine::open(name, settings.baud).map_err(|source| {
+        serial::SerialLine::open_with(name, settings.baud, settings.rts_cts).map_err(|source| {
             // EBUSY: the device was opened for exclusive use by another process.
             if source.kind() == io::ErrorKind::ResourceBusy || source.raw_os_error() == Some(16) {
                 OpenError::Busy {

@@ -25,11 +25,20 @@ impl std::fmt::Debug for SerialLine {
 impl SerialLine {
     /// Open the device at `path` at `baud`, 8N1, raw.
     pub fn open(path: &str, baud: u32) -> io::Result<SerialLine> {
+        SerialLine::open_with(path, baud, false)
+    }
+
+    /// Like [`SerialLine::open`], with RTS/CTS hardware flow control if `rts_cts`.
+    pub fn open_with(path: &str, baud: u32, rts_cts: bool) -> io::Result<SerialLine> {
         let port = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
             .parity(Parity::None)
             .stop_bits(StopBits::One)
-            .flow_control(FlowControl::None)
+            .flow_control(if rts_cts {
+                FlowControl::Hardware
+            } else {
+                FlowControl::None
+            })
             .timeout(Duration::from_millis(100))
             .open()
             .map_err(io::Error::from)?;

@@ -56,6 +56,8 @@ pub struct Config {
     pub homed: bool,
     /// The RAPL-II profile (port `rapl:DEVICE`).
     pub rapl_profile: Option<PathBuf>,
+    /// The MARS 8 arm profile (port `mars:DEVICE`).
+    pub mars_profile: Option<PathBuf>,
     /// Object width between the fingers, mm.
     pub object: Option<f64>,
     /// Where the embedded simulator serves its live view (`host:port`).
@@ -76,6 +78,7 @@ impl Default for Config {
             homed: false,
             object: None,
             rapl_profile: None,
+            mars_profile: None,
             view: None,
         }
     }
@@ -195,9 +198,14 @@ impl Config {
             message,
         })?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        for file in [&mut cfg.locations, &mut cfg.objects, &mut cfg.rapl_profile]
-            .into_iter()
-            .flatten()
+        for file in [
+            &mut cfg.locations,
+            &mut cfg.objects,
+            &mut cfg.rapl_profile,
+            &mut cfg.mars_profile,
+        ]
+        .into_iter()
+        .flatten()
         {
             if file.is_relative() {
                 *file = dir.join(&*file);
@@ -323,6 +331,9 @@ impl Config {
                         "rapl-profile" | "rapl_profile" => {
                             cfg.rapl_profile = Some(PathBuf::from(value))
                         }
+                        "mars-profile" | "mars_profile" => {
+                            cfg.mars_profile = Some(PathBuf::from(value))
+                        }
                         "check" => {
                             cfg.check = trol_proto::link::BlockCheck::from_word(value).ok_or((
                                 n,
@@ -347,7 +358,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile, view"
+                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile, mars-profile, view"
                                 ),
                             ));
                         }

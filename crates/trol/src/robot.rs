@@ -231,6 +231,14 @@ impl Robot {
         if let Some(device) = port.strip_prefix(RAPL_PREFIX) {
             return Robot::rapl(device, trol_rapl::Profile::default(), cfg);
         }
+        if port.starts_with(trol_mars::PREFIX) {
+            return Err(SetupError::Config(format!(
+                "{port}: an A465 on a MARS 8 needs its arm profile: name it in trol.cfg \
+                 (`mars-profile = FILE`; docs/mars/crs93.toml is CTU's CRS93) or call \
+                 Robot::mars"
+            ))
+            .into());
+        }
         let settings = PortSettings {
             baud,
             ..PortSettings::default()
@@ -245,6 +253,27 @@ impl Robot {
     /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
     /// `rapl-profile`).
     pub fn from_config(cfg: &Config) -> Result<Robot> {
+        if let Some(device) = cfg.port.strip_prefix(trol_mars::PREFIX) {
+            let profile = match &cfg.mars_profile {
+                Some(path) => trol_mars::Profile::from_file(path)
+                    .map_err(|e| SetupError::Config(e.to_string()))?,
+                None => {
+                    return Err(SetupError::Config(format!(
+                        "port {}: an A465 on a MARS 8 needs its arm profile: add \
+                         `mars-profile = FILE` to trol.cfg (docs/mars/crs93.toml is CTU's \
+                         CRS93; docs/mars.md)",
+                        cfg.port
+                    ))
+                    .into());
+                }
+            };
+            let link = LinkConfig {
+                check: cfg.check,
+                ..LinkConfig::default()
+            };
+            let locations = crate::sim_settings(cfg)?.locations;
+            return Robot::mars(device, profile, locations, link);
+        }
         if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
             let profile = match &cfg.rapl_profile {
                 Some(path) => trol_rapl::Profile::from_file(path)
@@ -311,6 +340,39 @@ impl Robot {
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
         robot.codes = trol_rapl::RAPL_CODES;
+        Ok(robot)
+    }
+
+    /// Embed the controller with the MARS 8 backend: open DEVICE (a serial device with
+    /// RTS/CTS, or `socket://HOST:PORT`) at the profile's baud rate, read the unit's state
+    /// (nothing moves), and serve TROL to this process over an in-memory line
+    /// (docs/mars.md). TROL's own location table starts with `locations`.
+    pub fn mars(
+        device: &str,
+        profile: trol_mars::Profile,
+        locations: Vec<(String, trol_a465::arm::Stored)>,
+        link: LinkConfig,
+    ) -> Result<Robot> {
+        let settings = PortSettings {
+            baud: profile.baud,
+            rts_cts: true,
+            ..PortSettings::default()
+        };
+        let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let backend = trol_mars::MarsBackend::connect(
+            port,
+            profile,
+            Some(Box::new(
+                |line: &str| tracing::info!(target: "trol::mars", "mars: {line}"),
+            )),
+            None,
+            locations,
+        )
+        .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.codes = trol_mars::MARS_CODES;
         Ok(robot)
     }
 
@@ -868,6 +930,7 @@ impl Robot {
         }
         self.codes = match v.kind.as_str() {
             "C500 over RAPL-II" => trol_rapl::RAPL_CODES,
+            "MARS 8" => trol_mars::MARS_CODES,
             _ => SIM_CODES,
         };
         Ok(v)

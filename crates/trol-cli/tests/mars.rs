@@ -1,0 +1,222 @@
+//! An A465 on a MARS 8: a 1998 TROL program, unchanged, `trol interp` and `trol mars probe`
+//! against `trol sim --mars` over a pty pair, in-process (`mars:PTY` in trol.cfg, on every
+//! variant of the unit) and through `trol gateway --controller mars:PTY`.
+
+#[path = "../../trol/tests/common/cbuild.rs"]
+mod cbuild;
+mod common;
+
+use std::path::Path;
+
+use common::{Background, scratch, text, trol};
+
+/// `trol sim --mars --variant NAME` on a new pty, its profile in `dir` (arm.toml), and a
+/// trol.cfg that drives it in-process through `mars:` with the examples' locations.
+fn mars_sim(dir: &Path, variant: &str) -> Background {
+    let out = trol(dir, &["sim", "--mars", "--print-profile"], "");
+    assert!(out.status.success(), "{}", text(&out).1);
+    std::fs::write(dir.join("arm.toml"), &out.stdout).unwrap();
+    let sim = Background::start(
+        dir,
+        &["sim", "--mars", "--variant", variant, "--time-scale", "20"],
+        "serving on ",
+    );
+    let locations = cbuild::root().join("examples/locations.txt");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nmars:{}\n0 0 0 0 0 0\nmars-profile = arm.toml\nlocations = {}\n",
+            sim.name,
+            locations.display()
+        ),
+    )
+    .unwrap();
+    sim
+}
+
+fn try_example(name: &str, dir: &Path) -> (bool, String, String) {
+    let exe = cbuild::compile(
+        &cbuild::root().join("examples").join(format!("{name}.c")),
+        &format!("{name}-mars"),
+        cbuild::Link::Static,
+    );
+    let run = cbuild::program(&exe).current_dir(dir).output().unwrap();
+    (
+        run.status.success(),
+        String::from_utf8_lossy(&run.stdout).into_owned(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
+fn check_pick(out: &str) {
+    for step in [
+        "TROLHome(0)",
+        "TROLAppro(test_001, -90, 1)",
+        "TROLMove(test_001, 1)",
+        "TROLClose(60)",
+        "TROLDepart(&loc, 1)",
+    ] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(step))
+            .unwrap_or_else(|| panic!("{step} missing:\n{out}"));
+        assert!(line.ends_with("-> 0"), "{line}");
+    }
+    assert!(out.contains("pick: done"), "{out}");
+}
+
+fn pick_on_variant(variant: &str) {
+    let dir = scratch(&format!("mars-{variant}"));
+    let sim = mars_sim(&dir, variant);
+    let (ok, out, err) = try_example("pick", &dir);
+    assert!(
+        ok,
+        "{variant}:\n{out}\n{err}\nsimulated MARS 8:\n{}",
+        sim.output().join("\n")
+    );
+    check_pick(&out);
+}
+
+macro_rules! pick_on_variants {
+    ($($test:ident => $name:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                pick_on_variant($name);
+            }
+        )*
+
+        #[test]
+        fn the_pick_example_runs_on_every_variant() {
+            let tested = [$($name),*];
+            for (name, _) in trol_mars::mars8::VARIANTS {
+                assert!(tested.contains(name), "variant {name} has no C example run");
+            }
+        }
+    };
+}
+
+pick_on_variants! {
+    pick_default => "default",
+    pick_echo => "echo",
+    pick_noise => "noise",
+    pick_moving_lag => "moving-lag",
+    pick_refusal_line => "refusal-line",
+    pick_refusal_error_bit => "refusal-error-bit",
+    pick_stop_latches => "stop-latches",
+    pick_lf_only => "lf-only",
+    pick_r_blocks => "r-blocks",
+}
+
+#[test]
+fn the_position_example_and_interp_run_through_mars_pty() {
+    let dir = scratch("mars-inproc");
+    let _sim = mars_sim(&dir, "default");
+    let (ok, out, err) = try_example("position", &dir);
+    assert!(ok, "{out}\n{err}");
+    assert!(out.contains("position: done"), "{out}");
+    // The interpreter, with trol.cfg's port: Home, a joint move, where the arm is.
+    let o = trol(
+        &dir,
+        &["interp"],
+        "home 0\nma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\ngetposition joint actual\ngetstatus\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("home 0  ->  0 (success)"), "{out}");
+    let at = out
+        .lines()
+        .find(|l| l.starts_with("getposition"))
+        .unwrap_or_else(|| panic!("{out}"));
+    // Where the encoders say the arm is: at the target, to a few IRC counts.
+    let j: Vec<f64> = at
+        .split("j(")
+        .nth(1)
+        .and_then(|r| r.strip_suffix(')'))
+        .unwrap_or_else(|| panic!("{at}"))
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let want = [0.2, 0.1, 0.8, 0.0, 0.6, 0.0];
+    assert!((0..6).all(|i| (j[i] - want[i]).abs() < 1e-3), "{at}");
+}
+
+#[test]
+fn without_a_profile_mars_is_refused_with_what_to_do() {
+    let dir = scratch("mars-noprofile");
+    std::fs::write(dir.join("trol.cfg"), "9600\nmars:/dev/null\n0 0 0 0 0 0\n").unwrap();
+    let o = trol(&dir, &["interp"], "home 0\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("mars-profile = FILE"), "{err}");
+}
+
+#[test]
+fn the_position_example_runs_through_trol_gateway_with_init_and_cleanup() {
+    let dir = scratch("mars-gateway");
+    let sim = mars_sim(&dir, "default");
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &format!("mars:{}", sim.name),
+            "--profile",
+            "arm.toml",
+        ],
+        "serving on ",
+    );
+    let init = trol(&dir, &["init", "--port", &gw.name], "");
+    let (o, e) = text(&init);
+    assert!(init.status.success(), "{o}{e}");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
+    )
+    .unwrap();
+    let (ok, out, err) = try_example("position", &dir);
+    assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
+    assert!(out.contains("position: done"), "{out}");
+    // CleanupTROL ended the server (manual); init and cleanup again.
+    let init = trol(&dir, &["init", "--port", &gw.name], "");
+    let (o, e) = text(&init);
+    assert!(init.status.success(), "{o}{e}");
+    let cleanup = trol(&dir, &["cleanup", "--port", &gw.name], "");
+    let (o, e) = text(&cleanup);
+    assert!(cleanup.status.success(), "{o}{e}");
+}
+
+#[test]
+fn the_probe_only_reads_and_records_every_byte() {
+    let dir = scratch("mars-probe");
+    let sim = mars_sim(&dir, "echo");
+    let o = trol(
+        &dir,
+        &[
+            "mars",
+            "probe",
+            "--controller",
+            &sim.name,
+            "--out",
+            "first.txt",
+        ],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("VER? -> VER=TROL simulated MARS 8"), "{out}");
+    assert!(out.contains("status: ready, no fault"), "{out}");
+    let t = std::fs::read_to_string(dir.join("first.txt")).unwrap();
+    let sent: Vec<&str> = t.lines().filter(|l| l.starts_with("> ")).collect();
+    assert_eq!(
+        sent,
+        [
+            "> \\x0aVER?\\x0a",
+            "> \\x0aST?\\x0a",
+            "> \\x0aCOORDAP?\\x0a"
+        ],
+        "{t}"
+    );
+    // The unit echoes (this variant): the transcript shows it.
+    assert!(t.contains("< "), "{t}");
+}

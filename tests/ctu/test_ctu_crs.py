@@ -1,0 +1,70 @@
+"""CTU Prague's own client, ctu-crs (from the package registry), drives the simulated MARS 8.
+
+ctu-crs and ctu-mars-control-unit drove CTU's two A465-type arms on real MARS 8 units for
+years; `trol sim --mars` must satisfy them byte for byte (docs/mars.md). Each test starts
+`trol sim --mars` on a pty (a variant for each point the public sources leave open that the
+client does not settle), and runs the client's own code against it: initialize with hard
+and soft home, move_to_q, wait_for_motion_stop, get_q, in_motion and the gripper.
+
+Only the camera import is stubbed (tests/ctu/stub/pypylon): there is no camera here.
+"""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "stub"))
+
+from ctu_crs import CRS93  # noqa: E402
+
+TROL = os.environ.get("TROL_BIN", "target/debug/trol")
+VARIANTS = ["default", "echo", "noise", "moving-lag", "refusal-line",
+            "refusal-error-bit", "stop-latches", "lf-only", "r-blocks"]
+
+
+@pytest.fixture
+def unit(request):
+    proc = subprocess.Popen(
+        [TROL, "sim", "--mars", "--time-scale", "20", "--variant", request.param],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    first = proc.stdout.readline()
+    assert first.startswith("trol sim: serving on "), first
+    yield first.split()[-1]
+    proc.kill()
+    proc.wait()
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("unit", VARIANTS, indirect=True)
+def test_ctu_crs_drives_the_simulated_mars8(unit, capsys):
+    robot = CRS93(tty_dev=unit)
+    assert "Firmware version : TROL simulated MARS 8" in capsys.readouterr().out
+    robot.initialize(home=True)
+    # After the hard home the soft home: CTU's q_home.
+    assert np.allclose(robot.get_q(), robot.q_home, atol=np.deg2rad(0.05))
+    assert not robot.in_motion()
+
+    q = np.deg2rad([10, 20, -30, 5, -40, 15])
+    assert robot.in_limits(q)
+    robot.move_to_q(q)
+    robot.wait_for_motion_stop()
+    assert np.allclose(robot.get_q(), q, atol=np.deg2rad(0.05)), np.rad2deg(robot.get_q())
+
+    # 25 moves in a row: the client checks the queue-full bit every 20 (throttle_coordmv).
+    last = None
+    for k in range(25):
+        last = np.deg2rad([k, -k / 2, -20 + k, 0, -30, k * 2])
+        robot.move_to_q(last)
+    robot.wait_for_motion_stop()
+    assert np.allclose(robot.get_q(), last, atol=np.deg2rad(0.05))
+
+    # The gripper: closing waits for the fingers (R<axis>: then AP<axis>? polls).
+    robot.gripper.control_position_relative(1.0)
+    assert robot._mars.query("APG") == str(robot.gripper.bounds[1])
+    robot.gripper.control_position_relative(0.0)
+    robot.gripper.wait_for_motion_stop()
+    assert robot._mars.query("APG") == str(robot.gripper.bounds[0])
+    robot.close()

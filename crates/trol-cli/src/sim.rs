@@ -250,6 +250,10 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             ServerEvent::ReceiveFailed(err) => {
                 say!("a request could not be received: {err}")
             }
+            ServerEvent::UnknownRepeat => say!(
+                "{req} -> {reply} (a repeat of a request sent before this controller started: \
+                 whether it ran before cannot be told, so it was not run)"
+            ),
             ServerEvent::Idle | ServerEvent::Pending => {}
         }
         // Where the world's objects are, whenever that changed.

@@ -4,6 +4,8 @@ use std::io;
 use std::time::Duration;
 
 use trol_port::Port;
+use trol_proto::application::Reply;
+use trol_proto::application::code::TROL_ERR_ROBOT_UNSURE;
 use trol_proto::link::{LinkConfig, LinkError};
 use trol_proto::transaction::{Decision, Failure, Responder, ResponderEvent};
 
@@ -35,6 +37,10 @@ pub enum ServerEvent {
     },
     /// A request could not be received (TRANS_ERR_RECEIVE); nothing was executed.
     ReceiveFailed(LinkError),
+    /// A request marked REPEAT arrived while the controller remembered no request: it
+    /// (re)started after the PC first sent it, and whether its earlier run executed it cannot
+    /// be told. It was not run; the reply is TROL_ERR_ROBOT_UNSURE (docs/reliability.md).
+    UnknownRepeat,
     /// Nothing arrived in the time given.
     Idle,
     /// A request arrived and `execute` deferred its reply: send it with [`Server::respond`],
@@ -126,6 +132,7 @@ impl<P: Port> Server<P> {
         let give_up = self.driver.clock().now() + idle;
         let mut attempts = 0u32;
         let answered_before = self.responder.repeats_answered();
+        let mut unknown_repeat = false;
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -141,6 +148,14 @@ impl<P: Port> Server<P> {
             match event {
                 None if self.responder.in_transaction() => continue,
                 None => return Ok(ServerEvent::Idle),
+                Some(ResponderEvent::Request) if self.responder.request_is_unknown_repeat() => {
+                    unknown_repeat = true;
+                    let reply = Reply::Code(TROL_ERR_ROBOT_UNSURE).encode();
+                    self.responder.respond(&reply, now);
+                }
+                Some(ResponderEvent::Done) if unknown_repeat => {
+                    return Ok(ServerEvent::UnknownRepeat);
+                }
                 Some(ResponderEvent::Request) => {
                     let pci = self.responder.request_pci();
                     let Some(reply) = execute(self.responder.request(), pci) else {

@@ -576,3 +576,65 @@ fn a_repeat_answered_from_memory_whose_reply_is_lost_again_is_not_reported_as_ru
         "{events:?}"
     );
 }
+
+#[test]
+fn a_controller_that_restarted_never_runs_a_repeat_it_cannot_place() {
+    // The controller executes a relative move, then restarts before its reply goes out (a
+    // killed gateway started again). The host, hearing nothing, sends the request again
+    // marked REPEAT. The new controller remembers nothing: whether its earlier run executed
+    // the move cannot be told, so it must not run it (the move would run twice) and answers
+    // TROL_ERR_ROBOT_UNSURE. A request after that is executed as usual.
+    let (a, b) = memory::pair(None);
+    let runs = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
+    let counted = runs.clone();
+    let controller = std::thread::spawn(move || {
+        // The first run: executes, then dies with the reply unsent.
+        let mut first = Server::new(b, quick_link());
+        let ev = loop {
+            let ev = first
+                .serve_deferrable(Duration::from_millis(100), &mut |_req, _pci| {
+                    counted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    None
+                })
+                .unwrap();
+            if ev != ServerEvent::Idle {
+                break ev;
+            }
+        };
+        assert_eq!(ev, ServerEvent::Pending);
+        // The restart: a new server on the same line, with no memory.
+        let mut second = Server::new(first.into_port(), quick_link());
+        let mut events = Vec::new();
+        let started = Instant::now();
+        while events.len() < 2 && started.elapsed() < Duration::from_secs(20) {
+            let ev = second
+                .serve(Duration::from_millis(100), &mut |req| {
+                    counted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    execute(req)
+                })
+                .unwrap();
+            if ev != ServerEvent::Idle {
+                events.push(ev);
+            }
+        }
+        events
+    });
+    let mut t = Transactor::new(a, quick_link());
+    t.set_repeats(1);
+    t.initiator_mut()
+        .set_reply_timeout(Duration::from_millis(800));
+    let reply = t.trans_sr(b"mi 0.5").expect("the repeat is answered");
+    let unsure =
+        trol_proto::application::Reply::Code(trol_proto::application::code::TROL_ERR_ROBOT_UNSURE)
+            .encode();
+    assert_eq!(reply, unsure);
+    assert_eq!(t.trans_sr(b"next").unwrap(), b"txen");
+    let events = controller.join().unwrap();
+    assert_eq!(
+        events,
+        [ServerEvent::UnknownRepeat, ServerEvent::Executed],
+        "{events:?}"
+    );
+    // The move ran once (before the restart), "next" once.
+    assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 2);
+}

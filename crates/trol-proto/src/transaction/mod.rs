@@ -26,7 +26,10 @@
 //! again: so the PC may send a request again whenever it does not know whether the first one
 //! arrived (its reply was lost, or its EOT), and the command runs exactly once. A request
 //! not marked REPEAT is always executed, whatever its number (a PC that restarted counts from
-//! 1 again).
+//! 1 again). A request marked REPEAT that reaches a controller remembering no request at all
+//! (it started after the PC first sent it) is not executed: whether its earlier run executed
+//! it cannot be told ([`Responder::request_is_unknown_repeat`]); the server answers
+//! TROL_ERR_ROBOT_UNSURE.
 //!
 //! # Delivery
 //!

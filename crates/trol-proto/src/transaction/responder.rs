@@ -63,6 +63,14 @@ impl Responder {
         self.repeats_answered
     }
 
+    /// Whether the request in hand is marked REPEAT while this responder remembers no request
+    /// at all: it started (or restarted) after the PC first sent it, so whether an earlier run
+    /// of the controller executed it cannot be told. It must not run (a relative move would
+    /// run twice); the server answers TROL_ERR_ROBOT_UNSURE.
+    pub fn request_is_unknown_repeat(&self) -> bool {
+        pci_is_repeat(self.request_pci) && self.memory.is_none()
+    }
+
     /// Forget the last executed request (the manual's behaviour: every request executes).
     pub fn forget(&mut self) {
         self.memory = None;

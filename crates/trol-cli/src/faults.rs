@@ -343,6 +343,26 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
         rss_start_kb: rss_kb(),
         ..Report::default()
     };
+    // First contact (InitTROL makes one with GetStatus): the controller then remembers a
+    // transaction, so a repeat of the first move is placed. A repeat that reaches a
+    // controller remembering nothing is answered TROL_ERR_ROBOT_UNSURE and not run.
+    if !soak {
+        let args = [Value::Int(100)];
+        let request = record::encode(&table::SPEED, &args).map_err(|e| e.to_string())?;
+        let mut contact = Err(String::new());
+        for _ in 0..20 {
+            contact = robot.call(&table::SPEED, &args).map_err(|e| e.to_string());
+            if contact.is_ok() {
+                break;
+            }
+        }
+        contact.map_err(|e| format!("first contact failed 20 times: {e}"))?;
+        asked.push(Asked {
+            request,
+            accepted: None,
+            relative: false,
+        });
+    }
     let deadline = started + Duration::from_secs_f64(plan.seconds);
     let mut n = 0u64;
     while if soak {

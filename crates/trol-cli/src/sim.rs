@@ -96,6 +96,12 @@ pub struct SimArgs {
     /// name an address to serve others): open it in a browser. Not with --rapl.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with_all = ["rapl", "mars"])]
     view: Option<String>,
+    /// With --mars: faults on standard input, one per line, to try a program's handling:
+    /// `power off`, `power on`, `stop on` (the motion stop), `stop off`, `silent on` (the unit
+    /// stops answering), `silent off`, `say TEXT` (a line the unit prints unasked),
+    /// `object POS` (closing the gripper stops at axis position POS), `object none`.
+    #[arg(long)]
+    console: bool,
     /// With --rapl: a teach pendant on standard input. Each line `J1 J2 J3 J4 J5 J6`
     /// (degrees) moves the arm there as an operator would by hand, whatever the host port
     /// does; the log says `pendant: at ...` once it stands (for `trol rapl probe --poses`).
@@ -134,6 +140,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     if a.pendant && !a.rapl {
         return Err("--pendant needs --rapl".into());
+    }
+    if a.console && !a.mars {
+        return Err("--console needs --mars".into());
     }
     if a.mars {
         return run_mars(&a);
@@ -331,8 +340,68 @@ fn run_mars(a: &SimArgs) -> Result<(), String> {
     say!("  variant {variant}: {what}");
     say!("  drive it with: port mars:{name} in trol.cfg (mars-profile: the arm's profile)");
     let unit = std::sync::Arc::new(std::sync::Mutex::new(unit));
+    if a.console {
+        say!("  console: power off|on, stop on|off, silent on|off, say TEXT, object POS|none");
+        let unit = unit.clone();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::stdin().lock().lines().map_while(Result::ok) {
+                let mut u = unit.lock().unwrap_or_else(|e| e.into_inner());
+                match console(&mut u, line.trim()) {
+                    Ok(done) => say!("console: {done}"),
+                    Err(e) => say!("console: {e}"),
+                }
+            }
+        });
+    }
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     trol_mars::mars8::serve(opened.port, unit, stop).map_err(|e| format!("the line failed: {e}"))
+}
+
+/// One line of `trol sim --mars --console`.
+fn console(u: &mut trol_mars::Mars8, line: &str) -> Result<String, String> {
+    let (word, rest) = line.split_once(' ').unwrap_or((line, ""));
+    let on_off = |v: &str| match v.trim() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => Err(format!("`{line}`: expected on or off, found `{other}`")),
+    };
+    match word {
+        "power" => {
+            let on = on_off(rest)?;
+            u.set_power_off(!on);
+            Ok(format!("arm power {}", if on { "on" } else { "off" }))
+        }
+        "stop" => {
+            let on = on_off(rest)?;
+            u.set_motion_stop(on);
+            Ok(format!("motion stop {}", if on { "on" } else { "off" }))
+        }
+        "silent" => {
+            let on = on_off(rest)?;
+            u.set_silent(on);
+            Ok(format!("silent {}", if on { "on" } else { "off" }))
+        }
+        "say" if !rest.is_empty() => {
+            u.say(rest);
+            Ok(format!("said `{rest}`"))
+        }
+        "object" if rest.trim() == "none" => {
+            u.set_object(None);
+            Ok("no object".into())
+        }
+        "object" => {
+            let pos: f64 = rest
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{line}`: expected object POS (a number) or none"))?;
+            u.set_object(Some(pos));
+            Ok(format!("an object at gripper position {pos}"))
+        }
+        _ => Err(format!(
+            "`{line}`: expected power on|off, stop on|off, silent on|off, say TEXT, object POS|none"
+        )),
+    }
 }
 
 /// `trol sim --rapl`: the simulated C500 in RAPL-II mode.

@@ -13,14 +13,16 @@ use common::{Background, scratch, text, trol};
 /// `trol sim --mars --variant NAME` on a new pty, its profile in `dir` (arm.toml), and a
 /// trol.cfg that drives it in-process through `mars:` with the examples' locations.
 fn mars_sim(dir: &Path, variant: &str) -> Background {
+    mars_sim_with(dir, variant, &[])
+}
+
+fn mars_sim_with(dir: &Path, variant: &str, extra: &[&str]) -> Background {
     let out = trol(dir, &["sim", "--mars", "--print-profile"], "");
     assert!(out.status.success(), "{}", text(&out).1);
     std::fs::write(dir.join("arm.toml"), &out.stdout).unwrap();
-    let sim = Background::start(
-        dir,
-        &["sim", "--mars", "--variant", variant, "--time-scale", "20"],
-        "serving on ",
-    );
+    let mut args = vec!["sim", "--mars", "--variant", variant, "--time-scale", "20"];
+    args.extend_from_slice(extra);
+    let sim = Background::start(dir, &args, "serving on ");
     let locations = cbuild::root().join("examples/locations.txt");
     std::fs::write(
         dir.join("trol.cfg"),
@@ -219,4 +221,27 @@ fn the_probe_only_reads_and_records_every_byte() {
     );
     // The unit echoes (this variant): the transcript shows it.
     assert!(t.contains("< "), "{t}");
+}
+
+#[test]
+fn faults_typed_at_the_simulated_unit_reach_the_program_by_name() {
+    let dir = scratch("mars-console");
+    let mut sim = mars_sim_with(&dir, "default", &["--console"]);
+    sim.type_line("power off");
+    sim.wait_for("console: arm power off", 30);
+    let o = trol(&dir, &["interp"], "home 0\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("-8 (BIOS_ARM_POWER)"), "{err}");
+    sim.type_line("power on");
+    sim.wait_for("console: arm power on", 30);
+    sim.type_line("power sideways");
+    sim.wait_for("expected on or off", 30);
+    let o = trol(
+        &dir,
+        &["interp"],
+        "home 0\nma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
 }

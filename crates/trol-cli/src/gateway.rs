@@ -105,7 +105,8 @@ fn run_mars(a: &GatewayArgs, device: &str) -> Result<(), String> {
         Vec::new(),
     )
     .map_err(|e| e.to_string())?;
-    serve_backend(a, backend, "the MARS 8", trol_mars::MARS_CODES)
+    let what = format!("the MARS 8 ({})", backend.version());
+    serve_backend(a, backend, &what, trol_mars::MARS_CODES)
 }
 
 fn serve_backend<B: trol_controller::Backend>(

@@ -179,10 +179,22 @@ fn the_position_example_runs_through_trol_gateway_with_init_and_cleanup() {
     let (ok, out, err) = try_example("position", &dir);
     assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
     assert!(out.contains("position: done"), "{out}");
-    // CleanupTROL ended the server (manual); init and cleanup again.
+    // CleanupTROL ended the server (manual); init again, the interpreter through the
+    // gateway, and cleanup.
     let init = trol(&dir, &["init", "--port", &gw.name], "");
     let (o, e) = text(&init);
     assert!(init.status.success(), "{o}{e}");
+    let o = trol(
+        &dir,
+        &["interp"],
+        "home 0\nma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\ngetposition joint actual\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.contains("getposition joint actual  ->  j(0.199"),
+        "{out}"
+    );
     let cleanup = trol(&dir, &["cleanup", "--port", &gw.name], "");
     let (o, e) = text(&cleanup);
     assert!(cleanup.status.success(), "{o}{e}");

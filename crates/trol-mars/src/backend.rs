@@ -192,7 +192,6 @@ impl Fail {
 /// The MARS 8 backend.
 pub struct MarsBackend {
     port: Box<dyn Port>,
-    name: String,
     lines: Lines,
     rx: VecDeque<String>,
     profile: Profile,
@@ -232,7 +231,6 @@ impl MarsBackend {
         }
         let mut b = MarsBackend {
             port,
-            name: name.clone(),
             lines: Lines::default(),
             rx: VecDeque::new(),
             profile,
@@ -286,8 +284,6 @@ impl MarsBackend {
         b.status().map_err(fail)?;
         let q = b.actual().map_err(fail)?;
         b.planner.place(q);
-        let v = b.version.clone();
-        b.say(&format!("MARS 8 on {}: {v}", b.name));
         Ok(b)
     }
 

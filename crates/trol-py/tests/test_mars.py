@@ -59,3 +59,38 @@ def test_a_python_script_drives_the_arm_on_a_mars8(mars_robot: trol.Robot) -> No
     assert (e.value.code, e.value.name) == (-3, "BIOS_JOINT_LIMIT")
     mars_robot.close_gripper(50)
     mars_robot.finish()
+
+
+@pytest.mark.timeout(120)
+def test_a_python_script_drives_the_mars8_through_trol_gateway(tmp_path: Path) -> None:
+    profile = subprocess.run(
+        [str(trol_binary()), "sim", "--mars", "--print-profile"],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    (tmp_path / "arm.toml").write_text(profile)
+    procs = []
+    try:
+        def start(args: list[str]) -> str:
+            proc = subprocess.Popen([str(trol_binary()), *args], stdout=subprocess.PIPE,
+                                    stdin=subprocess.DEVNULL, text=True)
+            procs.append(proc)
+            assert proc.stdout is not None
+            line = proc.stdout.readline()
+            assert "serving on " in line, line
+            threading.Thread(target=proc.stdout.read, daemon=True).start()
+            return line.split("serving on ", 1)[1].split()[0]
+
+        unit = start(["sim", "--mars", "--time-scale", "20"])
+        gateway = start(["gateway", "--controller", f"mars:{unit}", "--profile",
+                         str(tmp_path / "arm.toml"), "--server"])
+        with trol.Robot.open(gateway) as robot:
+            assert robot.version()[1] == "MARS 8"
+            robot.home()
+            robot.ma([0.2, 0.1, 0.8, 0.0, 0.6, 0.0])
+            robot.finish()
+            assert list(robot.joints(actual=True)) == pytest.approx(
+                [0.2, 0.1, 0.8, 0.0, 0.6, 0.0], abs=1e-3)
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()

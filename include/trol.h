@@ -175,6 +175,10 @@ TUINT InitTROL(TUINT serOnly);
 TUINT CleanupTROL(void);
 void SetL3_TO_Intervall(TUINT TO_Intervall);
 void SetDelay(TUINT delay);           /* milliseconds between two bytes sent */
+/* How often a request whose reply was lost is sent again, marked REPEAT, so that it runs
+ * exactly once; 0..10, default 2 (an addition: 0 is the manual's behaviour). An error
+ * handler that returns RECOVERY_FAIL ends the call without a repeat. */
+void TROLSetRepeats(TUINT repeats);
 TUINT GetLastCommErr(void);           /* the last call's layer-2 failure, 0 if none */
 /* Added: which service that failure belongs to (ERR_LIMIT_EXCEEDED is 0x07 on both sides),
  * and the code of a port that failed outright (an I/O error: the process behind a pty or a

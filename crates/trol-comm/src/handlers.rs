@@ -35,8 +35,12 @@ pub enum Recovery {
         /// The message.
         message: Vec<u8>,
     },
-    /// RECOVERY_FAIL: give up.
+    /// RECOVERY_FAIL: give up this attempt. The library's own handlers say this; layer 3
+    /// may still send the request again, marked REPEAT (exactly once, docs/protocol.md).
     Fail,
+    /// RECOVERY_FAIL from the application's own handler: the application decided, so the
+    /// call ends now with the manual's code and nothing is sent again (no repeat).
+    Abort,
 }
 
 /// What ErrAppTimeOut decided.

@@ -199,7 +199,7 @@ impl<P: Port> Server<P> {
                     attempts += 1;
                     let decision = match recovery {
                         Recovery::Success | Recovery::Received { .. } => Decision::Retry,
-                        Recovery::Fail => Decision::GiveUp,
+                        Recovery::Fail | Recovery::Abort => Decision::GiveUp,
                     };
                     self.responder.decide(decision, now);
                     if decision == Decision::GiveUp {

@@ -207,6 +207,8 @@ impl<P: Port> Transactor<P> {
             .map_err(|e| TransError::Request(e.to_string()))?;
         let mut attempts = 0u32;
         let mut repeated = 0u8;
+        // The application's handler said RECOVERY_FAIL: its word is final, no repeat.
+        let mut aborted = false;
         // The failure that started the repeats: what the caller hears if they fail too.
         let mut first_failure = None;
         loop {
@@ -233,7 +235,7 @@ impl<P: Port> Transactor<P> {
                         self.last_comm_error(),
                         Some(LinkError::Send(SendError::Nak(_)))
                     );
-                    if !refused && repeated < self.repeats {
+                    if !refused && !aborted && repeated < self.repeats {
                         first_failure.get_or_insert(code);
                         repeated += 1;
                         let now = self.driver.clock().now();
@@ -253,6 +255,10 @@ impl<P: Port> Transactor<P> {
                             // The handler received the reply itself.
                             self.initiator.abort();
                             return Ok(message);
+                        }
+                        Asked::Abort => {
+                            aborted = true;
+                            Decision::GiveUp
                         }
                     };
                     attempts += 1;
@@ -276,7 +282,10 @@ impl<P: Port> Transactor<P> {
                     pci: self.initiator.current_pci(),
                     attempts,
                 };
-                recovery(self.handlers.err_on_send_on(&ctx, &mut line))
+                match self.handlers.err_on_send_on(&ctx, &mut line) {
+                    Recovery::Abort => return Ok(Asked::Abort),
+                    other => recovery(other),
+                }
             }
             Failure::Receive(e) => {
                 let ctx = FailureContext {
@@ -287,6 +296,7 @@ impl<P: Port> Transactor<P> {
                 };
                 match self.handlers.err_on_receive_on(&ctx, &mut line) {
                     Recovery::Received { message, .. } => return Ok(Asked::Received(message)),
+                    Recovery::Abort => return Ok(Asked::Abort),
                     other => recovery(other),
                 }
             }
@@ -320,11 +330,13 @@ impl<P: Port> Transactor<P> {
 enum Asked {
     Decision(Decision),
     Received(Vec<u8>),
+    /// The application's handler gave up for good ([`Recovery::Abort`]).
+    Abort,
 }
 
 fn recovery(r: Recovery) -> Decision {
     match r {
         Recovery::Success | Recovery::Received { .. } => Decision::Retry,
-        Recovery::Fail => Decision::GiveUp,
+        Recovery::Fail | Recovery::Abort => Decision::GiveUp,
     }
 }

@@ -95,6 +95,7 @@ struct State {
     callbacks: Callbacks,
     reply_tenths: u16,
     delay: Duration,
+    repeats: u8,
 }
 
 static STATE: Mutex<State> = Mutex::new(State {
@@ -107,6 +108,7 @@ static STATE: Mutex<State> = Mutex::new(State {
     },
     reply_tenths: trol_proto::transaction::DEFAULT_REPLY_TIMEOUT_TENTHS,
     delay: Duration::ZERO,
+    repeats: trol_comm::DEFAULT_REPEATS,
 });
 
 static LAST_COMM_ERR: AtomicU16 = AtomicU16::new(0);
@@ -217,7 +219,8 @@ impl ErrorHandlers for CHandlers {
         // SAFETY: the application's handler gets pointers to live locals.
         match with_line(line, || unsafe { f(&mut data, &mut pci) }) {
             RECOVERY_SUCCESS => Recovery::Success,
-            _ => Recovery::Fail,
+            // The application decided: the call ends, nothing is sent again.
+            _ => Recovery::Abort,
         }
     }
     fn err_on_receive_on(&mut self, ctx: &FailureContext<'_>, line: &mut dyn Channel) -> Recovery {
@@ -241,7 +244,8 @@ impl ErrorHandlers for CHandlers {
                 Recovery::Received { pci, message }
             }
             RECOVERY_SUCCESS => Recovery::Success,
-            _ => Recovery::Fail,
+            // The application decided: the call ends, nothing is sent again.
+            _ => Recovery::Abort,
         }
     }
     fn err_app_timeout_on(
@@ -725,11 +729,12 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
                 return INITTROL_FAILURE;
             }
         };
-        let (callbacks, tenths, delay) = {
+        let (callbacks, tenths, delay, repeats) = {
             let st = state();
-            (st.callbacks, st.reply_tenths, st.delay)
+            (st.callbacks, st.reply_tenths, st.delay, st.repeats)
         };
         robot.set_handlers(Box::new(CHandlers(callbacks)));
+        robot.transactor_mut().set_repeats(repeats);
         // Both were checked when they were set.
         let _ = robot.set_reply_timeout_tenths(tenths);
         let _ = robot.set_delay(delay);
@@ -782,6 +787,27 @@ pub extern "C" fn SetL3_TO_Intervall(TO_Intervall: TUINT) {
         st.reply_tenths = tenths;
         if let Some(r) = st.robot.as_mut() {
             let _ = r.set_reply_timeout_tenths(tenths);
+        }
+    })
+}
+
+/// TROLSetRepeats: how often a request whose reply was lost is sent again, marked REPEAT, so
+/// that it runs exactly once (docs/protocol.md, "Exactly once"); 0..10, default 2. 0 is the
+/// manual's behaviour: the call fails, and the application decides with TROLGetStatus. An
+/// error handler of the application's that returns RECOVERY_FAIL ends the call without a
+/// repeat whatever this says. A value out of range changes nothing and is reported on stderr.
+#[unsafe(no_mangle)]
+pub extern "C" fn TROLSetRepeats(repeats: TUINT) {
+    guard((), || {
+        if repeats > 10 {
+            eprintln!("TROLSetRepeats({repeats}): out of range 0..10, ignored");
+            return;
+        }
+        let n = repeats as u8;
+        let mut st = state();
+        st.repeats = n;
+        if let Some(r) = st.robot.as_mut() {
+            r.transactor_mut().set_repeats(n);
         }
     })
 }

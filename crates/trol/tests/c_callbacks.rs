@@ -92,6 +92,23 @@ fn scripted_controller(line: TcpLine) {
     let (pci, req) = receive(&mut driver);
     assert_eq!(req[0], table::TROL_MOVE);
     reply(&mut driver, pci, Reply::Code(TROL_ERR_LOCATION));
+    // 5: TROLOpen: a stray byte where ENQ belongs, and no reply. The application's
+    // ErrOnReceive gives up (RECOVERY_FAIL): its word is final, so no repeat may come.
+    let (_pci, req) = receive(&mut driver);
+    assert_eq!(req[0], table::TROL_OPEN);
+    driver.port_mut().send(&[0x00]).unwrap();
+    let quiet_until = Instant::now() + Duration::from_secs(4);
+    let mut after = Vec::new();
+    while Instant::now() < quiet_until {
+        match driver.port_mut().recv(&mut buf, quiet_until) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => after.extend_from_slice(&buf[..n]),
+        }
+    }
+    assert!(
+        !after.contains(&ENQ),
+        "the request was sent again after RECOVERY_FAIL: {after:02x?}"
+    );
 }
 
 fn run_with(link: Link) -> String {
@@ -147,8 +164,10 @@ fn check(out: &str) {
     // 4: FatalError got the controller's refusal.
     assert!(out.contains("FatalError: command 12, code -32102"), "{out}");
     assert!(out.contains("TROLMove -> -32102"), "{out}");
+    // 5: ErrOnReceive said RECOVERY_FAIL: the call ended with TROL_ERR_COMM, no repeat.
+    assert!(out.contains("TROLOpen -> -32001"), "{out}");
     assert!(
-        out.contains("calls: send 1 receive 1 timeout ") && out.contains(" fatal 2;"),
+        out.contains("calls: send 1 receive 2 timeout ") && out.contains(" fatal 3;"),
         "{out}"
     );
     assert!(out.contains("buffer empty at first timeout 1"), "{out}");

@@ -63,6 +63,9 @@ int main(void)
     SetL3_TO_Intervall(150);
     /* 4: the controller refuses: FatalError(TROL_MOVE, TROL_ERR_LOCATION). */
     printf("TROLMove -> %d\n", TROLMove("nowhere", 0));
+    /* 5: the reply starts with garbage and never comes: ErrOnReceive's RECOVERY_FAIL ends
+     * the call; the request is not sent again (the controller checks). */
+    printf("TROLOpen -> %d\n", TROLOpen(50));
     printf("calls: send %d receive %d timeout %d fatal %d; buffer empty at first timeout %d\n",
            sends, receives, timeouts, fatals, buffer_was_empty);
     return 0;

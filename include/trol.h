@@ -161,6 +161,12 @@ TINT TROLGetPosition(SLocData *pos, TINT mode);
 /* CAT4 */
 TINT TROLTerminatePCP(void);
 TINT TROLGetStatus(int *lastBIOSRetVal);
+/* Additions for the manual's GetStatus method: which transaction the status belongs to and
+ * the controller's epoch (it changes when the controller restarts); and the number of the
+ * last request sent. After a failed call: n = TROLLastTransaction(); then
+ * TROLGetStatusOf(&last, &t, &e); if t == n, the status is the failed call's. */
+TINT TROLGetStatusOf(int *lastBIOSRetVal, TUINT *transaction, TUINT *epoch);
+TUINT TROLLastTransaction(void);
 /* Added (docs/protocol.md "Version and kind", "Watchdog"). TROLGetVersion: the protocol
  * version the controller speaks (TROL_PROTOCOL_VERSION on both ends) and, in kind (kindSize
  * bytes, NUL-terminated, cut if longer), what drives its arm; InitTROL checks it.

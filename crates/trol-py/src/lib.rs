@@ -559,6 +559,22 @@ impl Robot {
         self.with(py, |r| r.status().map(|(b, c)| (b, c.0)))
     }
 
+    /// TROLGetStatus in full: (bios_called, last_code, transaction, epoch). The manual's
+    /// method after a failed call: ``n = robot.last_transaction()`` first, then this; if its
+    /// transaction is ``n``, the status is the failed call's. The epoch changes when the
+    /// controller restarts.
+    fn status_record(&self, py: Python<'_>) -> PyResult<(bool, i16, u8, u16)> {
+        self.with(py, |r| {
+            r.status_record()
+                .map(|s| (s.bios_called, s.last.0, s.transaction, s.epoch))
+        })
+    }
+
+    /// The number of the last request this connection sent (0..255).
+    fn last_transaction(&self, py: Python<'_>) -> PyResult<u8> {
+        self.with(py, |r| Ok(r.last_transaction()))
+    }
+
     /// TROLGetVersion, checked: (the protocol version, what drives the arm). Raises
     /// ``trol.SetupError`` for a controller that speaks another protocol than this library.
     fn version(&self, py: Python<'_>) -> PyResult<(u16, String)> {

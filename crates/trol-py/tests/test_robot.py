@@ -370,3 +370,17 @@ def test_version_and_watchdog(sim_robot: trol.Robot) -> None:
     sim_robot.speed(50)
     assert not sim_robot.is_moving()
     sim_robot.set_watchdog(0)
+
+
+def test_the_getstatus_method_knows_which_call_a_status_belongs_to(sim_robot: trol.Robot) -> None:
+    with pytest.raises(trol.RefusedError):
+        sim_robot.joint(1, 0.1)
+    n = sim_robot.last_transaction()
+    called, last, transaction, epoch = sim_robot.status_record()
+    assert (called, last, transaction) == (True, -1, n)
+    assert epoch != 0
+    sim_robot.home()
+    sim_robot.joint(1, 0.1)
+    n = sim_robot.last_transaction()
+    sim_robot.status()  # a transaction of its own: the status still belongs to the joint
+    assert sim_robot.status_record()[:3] == (True, 0, n)

@@ -661,6 +661,63 @@ pub unsafe extern "C" fn TROLGetStatus(lastBIOSRetVal: *mut std::ffi::c_int) -> 
     r
 }
 
+/// TROLGetStatusOf: TROLGetStatus, and which transaction the status belongs to (*transaction)
+/// and the controller's epoch (*epoch; it changes when the controller restarts). The manual's
+/// method after a failed call: read TROLLastTransaction() first, then call this; if
+/// *transaction is that number, the status is the failed call's (1: it ran). Any pointer may
+/// be NULL except lastBIOSRetVal (TROL_ERR_ARG_RANGE, nothing sent).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLGetStatusOf(
+    lastBIOSRetVal: *mut std::ffi::c_int,
+    transaction: *mut TUINT,
+    epoch: *mut TUINT,
+) -> TINT {
+    if lastBIOSRetVal.is_null() {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::GET_STATUS,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Status {
+                last,
+                transaction,
+                epoch,
+                ..
+            } = reply
+            {
+                got = Some((last, transaction, epoch));
+            }
+        },
+    );
+    if let Some((l, t, e)) = got {
+        // SAFETY: the caller's variables, each checked for NULL.
+        unsafe {
+            *lastBIOSRetVal = std::ffi::c_int::from(l.0);
+            if !transaction.is_null() {
+                *transaction = TUINT::from(t);
+            }
+            if !epoch.is_null() {
+                *epoch = TUINT::from(e);
+            }
+        }
+    }
+    r
+}
+
+/// TROLLastTransaction: the number of the last request this host sent (0..255; 0 before the
+/// first), to compare with TROLGetStatusOf's *transaction after a failed call.
+#[unsafe(no_mangle)]
+pub extern "C" fn TROLLastTransaction() -> TUINT {
+    guard(0, || {
+        state()
+            .robot
+            .as_ref()
+            .map_or(0, |r| TUINT::from(r.last_transaction()))
+    })
+}
+
 /// TROLGetVersion: the controller's protocol version in *protocol and its kind in `kind`
 /// (at most kindSize - 1 bytes and a NUL). A NULL pointer or a kindSize of 0 is
 /// TROL_ERR_ARG_RANGE, and nothing is sent.

@@ -219,3 +219,42 @@ fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
     let j1: f64 = text.split("j1 ").nth(1).unwrap().trim().parse().unwrap();
     assert!(j1 > 0.0 && j1 < 1.0, "{text}");
 }
+
+/// The manual's GetStatus method from C, exact: TROLLastTransaction, then TROLGetStatusOf.
+#[test]
+fn the_getstatus_method_tells_from_c_which_call_a_status_belongs_to() {
+    let exe = compile(
+        &root().join("crates/trol/tests/c/status_of.c"),
+        "status_of",
+        Link::Static,
+    );
+    let dir = std::env::temp_dir().join(format!("trol-status-of-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\n",
+    )
+    .unwrap();
+    let out = program(&exe).current_dir(&dir).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{text}");
+    let lines: Vec<&str> = text.lines().collect();
+    // The refused Joint: its own request's status, BIOS called, BIOS_NOT_HOMED.
+    let n: Vec<&str> = lines[0].split(&[' ', ';', ':'][..]).collect();
+    let request = n[n.iter().position(|w| *w == "request").unwrap() + 1];
+    let of = n[n.iter().position(|w| *w == "of").unwrap() + 1];
+    assert_eq!(request, of, "{text}");
+    assert!(
+        lines[0].starts_with("TROLJoint -> -1;")
+            && lines[0].contains("called 1, last -1; epoch set"),
+        "{text}"
+    );
+    // The Joint that ran: the first GetStatusOf (a transaction of its own) does not change
+    // which command the status belongs to.
+    let n: Vec<&str> = lines[1].split(&[' ', ';', ':'][..]).collect();
+    let request = n[n.iter().position(|w| *w == "request").unwrap() + 1];
+    let of = n[n.iter().position(|w| *w == "of").unwrap() + 1];
+    assert_eq!(request, of, "{text}");
+    assert!(lines[1].contains("called 1, last 0"), "{text}");
+    assert_eq!(lines[2], "NULL -> -32003", "{text}");
+}

@@ -1485,3 +1485,32 @@ fn trol_sim_keeps_serving_when_nobody_reads_its_log() {
         said.last()
     );
 }
+
+#[test]
+fn a_block_check_mismatch_is_named_not_blamed_on_the_cable() {
+    // A controller that checks blocks with the manual's LRC (as a 1998 one does) and a host
+    // with TROL's default CRC-16: every block is refused as damaged; the message says which
+    // setting to change.
+    let dir = scratch("check-mismatch");
+    let sim = Background::start(&dir, &["sim", "--server", "--check", "lrc"], "serving on ");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", sim.name),
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp"], "ready\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("add `check = lrc` to trol.cfg"), "{err}");
+    // With the setting it names, the same kind of controller works (a fresh one: the first
+    // is still riding out the refused blocks).
+    let sim = Background::start(&dir, &["sim", "--server", "--check", "lrc"], "serving on ");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\ncheck = lrc\n", sim.name),
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp"], "home 0\nready\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+}

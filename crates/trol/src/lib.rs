@@ -103,6 +103,33 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
             "{e}; only one application at a time can drive the controller"
         ))));
     }
+    // Every block refused as damaged: the two ends check blocks differently, as a 1998
+    // controller (LRC) and TROL's default (CRC-16) do; a noisy line or another baud rate can
+    // do the same.
+    let damaged = matches!(
+        &e,
+        Error::Link {
+            error: trol_comm::TransError::Failed {
+                last_comm: Some(trol_proto::link::LinkError::Send(
+                    trol_proto::link::codes::SendError::LimitExceeded
+                )),
+                ..
+            },
+            ..
+        }
+    );
+    if damaged {
+        let check = robot.transactor_mut().initiator().link().config().check;
+        let other = match check {
+            trol_proto::link::BlockCheck::Crc16 => "lrc",
+            trol_proto::link::BlockCheck::Lrc => "crc16",
+        };
+        return Err(Error::Setup(SetupError::NoServer(format!(
+            "the controller refused every block this end sent as damaged ({e}): it checks \
+             blocks another way (a 1998 TROL controller uses the manual's LRC: add `check = \
+             {other}` to trol.cfg), or the line is noisy, or the baud rate differs"
+        ))));
+    }
     Err(Error::Setup(SetupError::NoServer(
         match shared_port(robot) {
             Some(shared) => format!("the controller's TROL server does not answer ({e}); {shared}"),

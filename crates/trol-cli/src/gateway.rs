@@ -47,6 +47,11 @@ pub struct GatewayArgs {
     /// Start in server mode, as if `trol init` had run.
     #[arg(long)]
     server: bool,
+    /// Serve the live 3D view of the arm at ADDR (default 127.0.0.1:8465, this machine only),
+    /// as the controller reports it: the joints it reads (W2 on a C500, COORDAP on a MARS 8)
+    /// about ten times a second, between requests and during waits.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR)]
+    view: Option<String>,
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {
@@ -115,9 +120,26 @@ fn serve_backend<B: trol_controller::Backend>(
     what: &str,
     codes: &'static trol_proto::application::CodeTable,
 ) -> Result<(), String> {
+    // The view first: an address in use ends the start before anything is served. It reads
+    // what the backend reports, and lives as long as the gateway serves.
+    let view = match &a.view {
+        Some(addr) => {
+            let slot = trol_controller::SharedReport::default();
+            let view = trol_view::serve_reported(addr, slot.clone())
+                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
+            Some((slot, view))
+        }
+        None => None,
+    };
     let opened = open_side(&a.port, a.baud, Side::Application)?;
     let name = opened.name.clone();
     say!("trol gateway: serving on {name}");
+    if let Some((_, v)) = &view {
+        say!("  the view: {}", v.url());
+        if let Some(w) = v.exposure() {
+            tracing::warn!("{w}");
+        }
+    }
     say!(
         "  driving {what} on {}; {} mode",
         a.controller,
@@ -135,7 +157,10 @@ fn serve_backend<B: trol_controller::Backend>(
     } else {
         Mode::Terminal
     };
-    let controller = Controller::new(opened.port, cfg, Pcp::new(backend), mode);
+    let mut controller = Controller::new(opened.port, cfg, Pcp::new(backend), mode);
+    if let Some((slot, _)) = &view {
+        controller.report_into(slot.clone(), Duration::from_millis(100));
+    }
     crate::sim::serve(
         controller,
         trol_proto::application::Catalog::builtin(),

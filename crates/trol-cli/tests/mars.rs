@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{Background, scratch, text, trol};
+use common::{Background, http_get, scratch, text, trol};
 
 /// `trol sim --mars --variant NAME` on a new pty, its profile in `dir` (arm.toml), and a
 /// trol.cfg that drives it in-process through `mars:` with the examples' locations.
@@ -256,4 +256,69 @@ fn faults_typed_at_the_simulated_unit_reach_the_program_by_name() {
     );
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
+}
+
+#[test]
+fn the_gateway_s_view_shows_the_arm_the_mars8_reports() {
+    let dir = scratch("mars-gateway-view");
+    let sim = mars_sim(&dir, "default");
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &format!("mars:{}", sim.name),
+            "--profile",
+            "arm.toml",
+            "--server",
+            "--view",
+            "127.0.0.1:0",
+        ],
+        "serving on ",
+    );
+    let url = gw
+        .wait_for("the view: ", 30)
+        .last()
+        .and_then(|l| l.split("the view: ").nth(1))
+        .expect("the view's address")
+        .trim()
+        .to_string();
+    // Before Home the unit's counters mean nothing: no arm to show yet.
+    assert_eq!(http_get(&url, "/state").trim(), "no arm yet", "{url}");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
+    )
+    .unwrap();
+    let o = trol(
+        &dir,
+        &["interp"],
+        "home 0\nma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    // The report is renewed about ten times a second: wait for one after the motion.
+    let want = [0.2, 0.1, 0.8, 0.0, 0.6, 0.0];
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    loop {
+        let body = http_get(&url, "/state");
+        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
+            let q: Vec<f64> = s["joints"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            if (0..6).all(|i| (q[i] - want[i]).abs() < 1e-3) && s["moving"] == false {
+                assert_eq!(s["reported"], true, "{s}");
+                assert_eq!(s["gripper_mm"], 50.0, "{s}");
+                break;
+            }
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the view never showed the arm at the target: {body}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
 }

@@ -521,3 +521,66 @@ fn probe_measure_moves_only_after_yes_and_settles_what_no_reading_tells() {
     assert_eq!(p.joint_units, "radians");
     assert_eq!(p.jog_frame, "world");
 }
+
+#[test]
+fn the_gateway_s_view_shows_the_arm_the_c500_reports() {
+    let dir = scratch("rapl-gateway-view");
+    let sim = rapl_sim(&dir, &["--time-scale", "20", "--homed"]);
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &sim.name,
+            "--profile",
+            "c500.toml",
+            "--server",
+            "--view",
+            "127.0.0.1:0",
+        ],
+        "serving on ",
+    );
+    let url = gw
+        .wait_for("the view: ", 30)
+        .last()
+        .and_then(|l| l.split("the view: ").nth(1))
+        .expect("the view's address")
+        .trim()
+        .to_string();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
+    )
+    .unwrap();
+    let o = trol(
+        &dir,
+        &["interp"],
+        "ma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    // W2's joints, read about ten times a second, in the view's form.
+    let want = [0.2, 0.1, 0.8, 0.0, 0.6, 0.0];
+    let deadline = std::time::Instant::now() + Duration::from_secs(30);
+    loop {
+        let body = common::http_get(&url, "/state");
+        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
+            let q: Vec<f64> = s["joints"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            if (0..6).all(|i| (q[i] - want[i]).abs() < 1e-3) {
+                assert_eq!(s["reported"], true, "{s}");
+                assert!(s["gripper_mm"].is_null(), "{s}");
+                break;
+            }
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the view never showed the arm at the target: {body}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}

@@ -39,6 +39,25 @@ pub enum PosMode {
     Actual,
 }
 
+/// The arm as a backend reports it (what its controller says), for a view of any backend:
+/// `trol gateway --view` shows a real arm from these ([`Backend::report`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmReport {
+    /// Where the encoders say the arm is, radians.
+    pub joints: [f64; 6],
+    /// Whether it moves (or a motion of TROL's has not ended).
+    pub moving: bool,
+    /// Where the motion under way ends, radians, where the backend knows it.
+    pub target: Option<[f64; 6]>,
+    /// The finger distance, mm, where the backend knows it.
+    pub gripper_mm: Option<f64>,
+    /// The tool transform in force.
+    pub tool: [f64; 6],
+}
+
+/// The latest report and when it was taken, shared with a view.
+pub type SharedReport = std::sync::Arc<std::sync::Mutex<Option<(ArmReport, std::time::Instant)>>>;
+
 /// A call the backend could not make.
 #[derive(Debug, thiserror::Error)]
 pub enum BackendError {
@@ -130,6 +149,13 @@ pub trait Backend: Send {
     /// Called after each request the controller served and after its watchdog halted the
     /// arm: a moment to share the arm's state (the simulator renews its live view's copy).
     fn after_request(&mut self) {}
+    /// The arm as the controller reports it now, for a view (`None`: nothing to report, or
+    /// not now). Called between requests and during long waits, at most as often as the
+    /// controller was told ([`crate::Controller::share_reports`]); it may ask the controller,
+    /// so it must be as quick as one short read-only command.
+    fn report(&mut self) -> Option<ArmReport> {
+        None
+    }
     /// Called when the line has been quiet for a moment (no request arrived): a backend that
     /// keeps motions of its own for later (the RAPL-II backend's queue behind a motion under
     /// way) starts them here. It must return within the time one short command takes, so a

@@ -9,7 +9,7 @@ use trol_port::Port;
 use trol_proto::application::Catalog;
 use trol_proto::link::LinkConfig;
 
-use crate::backend::Backend;
+use crate::backend::{Backend, SharedReport};
 use crate::pcp::{Handled, Pcp};
 use crate::terminal::{PROMPT, Terminal};
 
@@ -68,6 +68,8 @@ pub struct Controller<P, B> {
     tripped: bool,
     /// The watchdog's last trip, not yet taken.
     trip: Option<WatchdogTrip>,
+    /// Where the backend's reports go, how often, and when the last was taken.
+    reports: Option<(SharedReport, Duration, Instant)>,
 }
 
 impl<P: Port, B: Backend> Controller<P, B> {
@@ -83,6 +85,37 @@ impl<P: Port, B: Backend> Controller<P, B> {
             last_seen: Instant::now(),
             tripped: false,
             trip: None,
+            reports: None,
+        }
+    }
+
+    /// Have the backend report its arm ([`Backend::report`]) at most every `every`, between
+    /// requests and during long waits, into the returned slot (a view reads it).
+    pub fn share_reports(&mut self, every: Duration) -> SharedReport {
+        let slot = SharedReport::default();
+        self.report_into(slot.clone(), every);
+        slot
+    }
+
+    /// Like [`Controller::share_reports`], into a slot made before (a view already
+    /// serving it).
+    pub fn report_into(&mut self, slot: SharedReport, every: Duration) {
+        self.reports = Some((slot, every, Instant::now() - every));
+    }
+
+    fn refresh_report(&mut self) {
+        let Some((slot, every, last)) = &mut self.reports else {
+            return;
+        };
+        if last.elapsed() < *every {
+            return;
+        }
+        *last = Instant::now();
+        let slot = slot.clone();
+        if let Some(r) = self.pcp.backend_mut().report() {
+            if let Ok(mut s) = slot.lock() {
+                *s = Some((r, Instant::now()));
+            }
         }
     }
 
@@ -148,6 +181,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     link.set_config(cfg);
                     self.mode = Mode::Server;
                     self.last_seen = Instant::now();
+                } else if n == 0 {
+                    // Quiet in terminal mode: a view still follows the arm.
+                    self.refresh_report();
                 }
             }
             Mode::Server => {
@@ -163,6 +199,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                         None => {
                             // A long call under way counts as a transaction for the watchdog.
                             self.last_seen = Instant::now();
+                            self.refresh_report();
                             self.server.wait(POLL.min(slice))?;
                             return Ok(());
                         }
@@ -191,6 +228,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 self.watch();
                 if matches!(ev, ServerEvent::Idle) {
                     self.pcp.backend_mut().idle();
+                    self.refresh_report();
                 }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     self.pcp.backend_mut().after_request();

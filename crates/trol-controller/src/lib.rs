@@ -21,7 +21,7 @@ pub mod pcp;
 pub mod sim;
 pub mod terminal;
 
-pub use backend::{Backend, BackendError, BiosResult, PosMode, Target};
+pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};
 pub use controller::{Controller, Embedded, LogEntry, LogFn, Mode, WatchdogTrip};
 pub use pcp::{Call, Context, Executed, Handled, Handler, Pcp, RegisterError, Status};
 pub use sim::{ArmView, SIM_CODES, SharedArm, SimBackend, SimSettings};

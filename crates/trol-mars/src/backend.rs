@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
 use trol_a465::model::joints_to_counts;
-use trol_controller::{Backend, BackendError, BiosResult, PosMode, SIM_CODES, Target};
+use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, SIM_CODES, Target};
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
 
@@ -206,6 +206,7 @@ pub struct MarsBackend {
     homing: Option<Homing>,
     gripper: Option<GripWait>,
     version: String,
+    tool: [f64; 6],
     log: Option<LogFn>,
     record: Option<Recorder>,
 }
@@ -245,6 +246,7 @@ impl MarsBackend {
             homing: None,
             gripper: None,
             version: String::new(),
+            tool: [0.0; 6],
             log,
             record,
         };
@@ -900,6 +902,7 @@ impl Backend for MarsBackend {
         self.motion(|a, now| a.ready(now))
     }
     fn set_tool(&mut self, tool: [f64; 6]) -> BiosResult {
+        self.tool = tool;
         Ok(self.planner.set_tool(tool))
     }
     fn speed(&mut self, percent: u8) -> BiosResult {
@@ -923,5 +926,36 @@ impl Backend for MarsBackend {
         if !self.pending.is_empty() {
             let _ = self.pump();
         }
+    }
+    fn report(&mut self) -> Option<ArmReport> {
+        // The counters mean nothing before the arm is homed: nothing to show.
+        if !self.homed.iter().all(|h| *h) {
+            return None;
+        }
+        // Read-only: ST?, COORDAP? and the gripper's AP<g>?. A line the unit printed unasked
+        // stays kept for the next call.
+        let s = self.status().ok()?;
+        let c = self.counters().ok()?;
+        let gripper_mm = match self.profile.gripper.clone() {
+            Some(g) => {
+                let v = self.query(&format!("AP{}", g.axis)).ok()?;
+                let p: f64 = v.parse().ok()?;
+                Some(
+                    ((p - g.closed) / (g.open - g.closed) * trol_a465::arm::FINGER_MAX)
+                        .clamp(0.0, trol_a465::arm::FINGER_MAX),
+                )
+            }
+            None => None,
+        };
+        Some(ArmReport {
+            joints: self.profile.irc_to_joints(&c),
+            moving: s & st::MOVING != 0 || self.busy(),
+            target: self
+                .motion
+                .as_ref()
+                .map(|m| self.profile.irc_to_joints(&m.target)),
+            gripper_mm,
+            tool: self.tool,
+        })
     }
 }

@@ -40,7 +40,7 @@ use std::time::Duration;
 
 use trol_a465::arm::code as sim_code;
 use trol_a465::kinematics::{Kinematics, Pose};
-use trol_controller::backend::{Backend, BackendError, BiosResult, PosMode, Target};
+use trol_controller::backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_controller::sim::SIM_CODES;
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
@@ -1948,6 +1948,21 @@ impl Backend for RaplBackend {
                 Ok(v) => Location::from_array6(Tag::Cart, v),
                 Err(u) => return Err(BackendError::Refused(self.unsettled(u))),
             },
+        })
+    }
+    fn report(&mut self) -> Option<ArmReport> {
+        // W2 is read-only; not while a motion answered at its end holds the session, nor
+        // once the session failed.
+        if self.closed || self.awaiting.is_some() || self.deferred.is_some() {
+            return None;
+        }
+        let p = self.read_position(PosMode::Actual).ok()?;
+        Some(ArmReport {
+            joints: p.joints.map(f64::to_radians),
+            moving: self.outstanding.is_some() || !self.queue.is_empty(),
+            target: None,
+            gripper_mm: None,
+            tool: self.tool,
         })
     }
     fn idle(&mut self) {

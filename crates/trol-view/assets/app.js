@@ -194,11 +194,14 @@ function update(s) {
   document.getElementById('tcp').textContent =
     `x ${x.toFixed(1)}, y ${y.toFixed(1)}, z ${z.toFixed(1)} mm; yaw ${(yaw * 180 / Math.PI).toFixed(1)}, ` +
     `pitch ${(pitch * 180 / Math.PI).toFixed(1)}, roll ${(roll * 180 / Math.PI).toFixed(1)}°`;
-  document.getElementById('gripper').textContent = `fingers ${s.gripper_mm.toFixed(1)} mm apart`;
-  for (const f of fingers) f.position.y = f.userData.side * (s.gripper_mm / 2000 + 0.004);
+  // A real controller may not report the fingers (null).
+  const g = s.gripper_mm;
+  document.getElementById('gripper').textContent =
+    g == null ? 'fingers: not reported' : `fingers ${g.toFixed(1)} mm apart`;
+  if (g != null) for (const f of fingers) f.position.y = f.userData.side * (g / 2000 + 0.004);
   showObjects(s.objects);
   status.textContent = `${s.moving ? 'moving' : 'still'}, t = ${s.time.toFixed(2)} s` +
-    (renderer ? '' : ' (no WebGL here)');
+    (s.reported ? ' (as the controller reports it)' : '') + (renderer ? '' : ' (no WebGL here)');
   document.body.dataset.moving = String(s.moving);
   if (scene) {
     table.position.z = s.table_z / 1000;

@@ -33,7 +33,7 @@ use std::time::Duration;
 use serde_json::json;
 use trol_a465::arm::Which;
 use trol_a465::model::LIMITS_RAD;
-use trol_controller::SharedArm;
+use trol_controller::{SharedArm, SharedReport};
 
 /// The address the view listens on by default: this machine only.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
@@ -94,6 +94,51 @@ pub fn state(shared: &SharedArm) -> Option<serde_json::Value> {
     }))
 }
 
+/// The state of the arm as its backend last reported it ([`trol_controller::ArmReport`]:
+/// a real arm behind `trol gateway`), in the same form as [`state`]; `None` before the first
+/// report. `time` counts seconds from when this process first served a report; `objects` is
+/// empty (a real controller knows of none).
+pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
+    static EPOCH: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    let epoch = *EPOCH.get_or_init(std::time::Instant::now);
+    let slot = shared.lock().ok()?;
+    let (r, at) = slot.as_ref()?;
+    let kin = trol_a465::kinematics::Kinematics::new(r.tool);
+    let tcp = kin.fk_xyzypr(&r.joints);
+    let target_tcp = r.target.map(|t| kin.fk_xyzypr(&t));
+    Some(json!({
+        "joints": r.joints,
+        "tcp": tcp,
+        "moving": r.moving,
+        "gripper_mm": r.gripper_mm,
+        "objects": [],
+        "time": at.saturating_duration_since(epoch).as_secs_f64(),
+        "target": r.target,
+        "target_tcp": target_tcp,
+        "limits": LIMITS_RAD,
+        "table_z": 0.0,
+        "reported": true,
+    }))
+}
+
+/// What a view shows: the simulated arm itself, or what a backend reports of a real one.
+#[derive(Clone)]
+pub enum Source {
+    /// The simulated arm's shared copy.
+    Sim(SharedArm),
+    /// A backend's reports (`trol gateway --view`).
+    Reported(SharedReport),
+}
+
+impl Source {
+    fn state(&self) -> Option<serde_json::Value> {
+        match self {
+            Source::Sim(s) => state(s),
+            Source::Reported(r) => reported_state(r),
+        }
+    }
+}
+
 /// A running view server; it stops when dropped.
 pub struct ViewServer {
     addr: SocketAddr,
@@ -135,6 +180,17 @@ impl Drop for ViewServer {
 /// Serve the view of `shared` on `addr` (`host:port`; port 0 picks a free one) on threads
 /// of its own.
 pub fn serve(addr: &str, shared: SharedArm) -> std::io::Result<ViewServer> {
+    serve_source(addr, Source::Sim(shared))
+}
+
+/// Serve the view of what a backend reports ([`trol_controller::Controller::share_reports`])
+/// on `addr`: the same page, following a real arm.
+pub fn serve_reported(addr: &str, shared: SharedReport) -> std::io::Result<ViewServer> {
+    serve_source(addr, Source::Reported(shared))
+}
+
+/// Serve the view of `source` on `addr`.
+pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
     let listener = TcpListener::bind(addr).map_err(|e| {
         let hint = match e.kind() {
             std::io::ErrorKind::AddrInUse => {
@@ -231,7 +287,7 @@ fn read_head(reader: impl BufRead) -> std::io::Result<Option<(String, String)>> 
 }
 
 /// Read one request and answer it.
-fn answer(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io::Result<()> {
+fn answer(mut conn: TcpStream, shared: &Source, stop: &AtomicBool) -> std::io::Result<()> {
     conn.set_read_timeout(Some(Duration::from_secs(5)))?;
     // A client that stops reading is dropped: every write must go through within a second.
     conn.set_write_timeout(Some(Duration::from_secs(1)))?;
@@ -277,7 +333,7 @@ fn answer(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io
             "application/xml",
             trol_a465::urdf::urdf().as_bytes(),
         ),
-        "/state" => match state(shared) {
+        "/state" => match shared.state() {
             Some(s) => respond(
                 &mut conn,
                 "200 OK",
@@ -297,7 +353,7 @@ fn answer(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io
 }
 
 /// Server-sent events: the state while the arm moves, once when it stops, then quiet.
-fn events(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io::Result<()> {
+fn events(mut conn: TcpStream, shared: &Source, stop: &AtomicBool) -> std::io::Result<()> {
     write!(
         conn,
         "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
@@ -308,7 +364,7 @@ fn events(mut conn: TcpStream, shared: &SharedArm, stop: &AtomicBool) -> std::io
     while !stop.load(Ordering::Relaxed) {
         // One round each EVENT_INTERVAL, whatever the round itself takes.
         let next = std::time::Instant::now() + EVENT_INTERVAL;
-        if let Some(s) = state(shared) {
+        if let Some(s) = shared.state() {
             let moving = s["moving"].as_bool().unwrap_or(false);
             // Still: only a change is sent (a new tool, an object put down), not the time or
             // the servo's dither of a count or two.

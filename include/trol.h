@@ -233,6 +233,56 @@ void TROLSetErrOnReceive(TROLErrOnReceiveFn handler);
 void TROLSetErrAppTimeOut(TROLErrAppTimeOutFn handler);
 void TROLSetFatalError(TROLFatalErrorFn handler);
 
+/* Connections, libmodbus-style (an addition): any number of arms in one process, each
+ * connection with its own settings and error handlers, each usable from its own thread.
+ * trol_connect: the port as trol.cfg's second line names it (a serial device,
+ * socket://HOST:PORT, "sim", "rapl:DEVICE"), checked as InitTROL(1) checks; NULL on failure,
+ * with the reason from trol_connect_error() (this thread's last). trol_disconnect closes and
+ * frees it (the controller stays in server mode; trol_terminate_pcp ends that).
+ * trol_strerror: a return code as "NAME: meaning", a static string. Every manual function
+ * TROLName(args) has trol_name(TROL *, args) (NULL: TROL_ERR_ARG_RANGE, nothing sent). The
+ * manual's functions above drive one default connection, as before. An error handler that
+ * calls TROL on its own connection gets TROL_ERR_COMM at once; other connections work. */
+typedef struct TROL TROL;
+TROL *trol_connect(const char *port, TLONG baud);
+const char *trol_connect_error(void);
+void trol_disconnect(TROL *c);
+const char *trol_strerror(int code);
+TINT trol_appro(TROL *c, TLocName locName, SLocData *pDisp, TUINT straight);
+TINT trol_appro_ii(TROL *c, SLocData *pTarget, SLocData *pDisp, TUINT straight);
+TINT trol_close(TROL *c, TUINT perForce);
+TINT trol_depart(TROL *c, SLocData *pDisp, TUINT straight);
+TINT trol_finish(TROL *c, TUINT mode);
+TINT trol_grip(TROL *c, TUINT dist);
+TINT trol_halt(TROL *c);
+TINT trol_home(TROL *c, TUINT axis);
+TINT trol_jog(TROL *c, SLocData *pDisp, TUINT straight);
+TINT trol_joint(TROL *c, TUINT jointNum, float radians);
+TINT trol_ma(TROL *c, SLocData *pTarget);
+TINT trol_mi(TROL *c, SLocData *pDisp);
+TINT trol_move(TROL *c, TLocName locName, TUINT straight);
+TINT trol_move_ii(TROL *c, SLocData *pTarget, TUINT straight);
+TINT trol_open(TROL *c, TUINT perForce);
+TINT trol_ready(TROL *c);
+TINT trol_set_tool_transform(TROL *c, SLocData *md);
+TINT trol_speed(TROL *c, TUINT perMaxSpeed);
+TINT trol_get_position(TROL *c, SLocData *pos, TINT mode);
+TINT trol_terminate_pcp(TROL *c);
+TINT trol_get_status(TROL *c, int *lastBIOSRetVal);
+TINT trol_get_status_of(TROL *c, int *lastBIOSRetVal, TUINT *transaction, TUINT *epoch);
+TUINT trol_last_transaction(TROL *c);
+TINT trol_get_version(TROL *c, TUINT *protocol, char *kind, TUINT kindSize);
+TINT trol_set_watchdog(TROL *c, TUINT tenths);
+void trol_set_reply_timeout(TROL *c, TUINT tenths);   /* SetL3_TO_Intervall */
+void trol_set_repeats(TROL *c, TUINT repeats);
+void trol_set_delay(TROL *c, TUINT delay);            /* SetDelay */
+TUINT trol_trans_sr(TROL *c, SInData *req, SOutData *resp);
+TINT trol_cat1_transaction(TROL *c, SInData *req);
+void trol_set_err_on_send(TROL *c, TROLErrOnSendFn handler);
+void trol_set_err_on_receive(TROL *c, TROLErrOnReceiveFn handler);
+void trol_set_err_app_timeout(TROL *c, TROLErrAppTimeOutFn handler);
+void trol_set_fatal_error(TROL *c, TROLFatalErrorFn handler);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,9 +1,14 @@
 //! The manual's C API (`include/trol.h`): the same names, types and return codes.
 //!
-//! One connection per process, as in the original. Every function returns the manual's
-//! codes; no panic crosses the C boundary (each entry point catches it and returns
-//! TROL_ERR_COMM). Error handlers installed from C are called on the caller's thread while a
-//! transaction runs; they may call GetLastCommErr() but no other TROL function.
+//! The manual's functions drive one default connection per process, as in the original.
+//! Beside them, libmodbus-style, any number of connections: `TROL *trol_connect(port,
+//! baud)`, and for every manual function `TROLName(args)` a `trol_name(TROL *, args)` (see
+//! [`per_connection`] below); each connection has its own error handlers. Every function
+//! returns the manual's codes; no panic crosses the C boundary (each entry point catches it
+//! and returns TROL_ERR_COMM). Error handlers are called on the caller's thread while a
+//! transaction runs; a handler that calls TROL on its own connection gets TROL_ERR_COMM at
+//! once (that connection is busy with the call that failed), never a deadlock; other
+//! connections work.
 
 //!
 //! # Safety
@@ -98,7 +103,7 @@ struct State {
     repeats: u8,
 }
 
-static STATE: Mutex<State> = Mutex::new(State {
+const FRESH: State = State {
     robot: None,
     callbacks: Callbacks {
         on_send: None,
@@ -109,7 +114,12 @@ static STATE: Mutex<State> = Mutex::new(State {
     reply_tenths: trol_proto::transaction::DEFAULT_REPLY_TIMEOUT_TENTHS,
     delay: Duration::ZERO,
     repeats: trol_comm::DEFAULT_REPEATS,
-});
+};
+
+/// The default connection: the manual's functions drive it.
+static STATE: TROL = TROL {
+    inner: Mutex::new(FRESH),
+};
 
 static LAST_COMM_ERR: AtomicU16 = AtomicU16::new(0);
 /// Which service failed last: 0 none, [`COMM_SIDE_SEND`], [`COMM_SIDE_RECEIVE`].
@@ -135,8 +145,69 @@ fn note_code(code: u16, side: TUINT) {
     LAST_COMM_SIDE.store(side, Ordering::Relaxed);
 }
 
+/// The C type `TROL`: one connection with its settings and handlers (opaque to C).
+pub struct TROL {
+    inner: Mutex<State>,
+}
+
+thread_local! {
+    /// The connection the calls on this thread use while a `trol_*` function runs; `None`:
+    /// the default one (the manual's functions).
+    static CONN: Cell<Option<&'static TROL>> = const { Cell::new(None) };
+    /// The connections whose lock this thread holds (a call on it is under way, and its
+    /// error handler runs): a call on one of them from here would wait for itself.
+    static HOLDING: RefCell<Vec<usize>> = const { RefCell::new(Vec::new()) };
+}
+
+fn conn() -> &'static TROL {
+    CONN.get().unwrap_or(&STATE)
+}
+
 fn state() -> std::sync::MutexGuard<'static, State> {
-    STATE.lock().unwrap_or_else(|p| p.into_inner())
+    conn().inner.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// The connection locked for a call, released when dropped.
+struct Held {
+    guard: std::sync::MutexGuard<'static, State>,
+    addr: usize,
+}
+
+impl std::ops::Deref for Held {
+    type Target = State;
+    fn deref(&self) -> &State {
+        &self.guard
+    }
+}
+
+impl std::ops::DerefMut for Held {
+    fn deref_mut(&mut self) -> &mut State {
+        &mut self.guard
+    }
+}
+
+impl Drop for Held {
+    fn drop(&mut self) {
+        HOLDING.with_borrow_mut(|h| {
+            if let Some(i) = h.iter().rposition(|a| *a == self.addr) {
+                h.remove(i);
+            }
+        });
+    }
+}
+
+/// Lock the connection for a call; `None` when this thread holds it already (an error
+/// handler calling TROL on its own connection): the caller returns at once instead of
+/// waiting for itself.
+fn state_for_call() -> Option<Held> {
+    let c = conn();
+    let addr = c as *const TROL as usize;
+    if HOLDING.with_borrow(|h| h.contains(&addr)) {
+        return None;
+    }
+    let guard = c.inner.lock().unwrap_or_else(|p| p.into_inner());
+    HOLDING.with_borrow_mut(|h| h.push(addr));
+    Some(Held { guard, addr })
 }
 
 unsafe extern "C" {
@@ -287,7 +358,9 @@ fn run(
             Err(code) => return code,
         };
         let (result, fatal) = {
-            let mut st = state();
+            let Some(mut st) = state_for_call() else {
+                return COMM;
+            };
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
                 return fatal_or(fatal, def.code, COMM);
@@ -932,7 +1005,9 @@ pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT
             return TransCode::ErrSend as TUINT;
         }
         let result = {
-            let mut st = state();
+            let Some(mut st) = state_for_call() else {
+                return TransCode::ErrSend as TUINT;
+            };
             let Some(robot) = st.robot.as_mut() else {
                 return TransCode::ErrSend as TUINT;
             };
@@ -964,7 +1039,9 @@ pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
             return ARG_RANGE;
         };
         let (result, fatal) = {
-            let mut st = state();
+            let Some(mut st) = state_for_call() else {
+                return COMM;
+            };
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
                 return fatal_or(fatal, code, COMM);
@@ -1088,4 +1165,169 @@ pub extern "C" fn TROLSetErrAppTimeOut(handler: ErrAppTimeOutFn) {
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLSetFatalError(handler: FatalErrorFn) {
     set_callbacks(|c| c.fatal = handler)
+}
+
+// ---------------------------------------------------------------------------------------
+// Connections, libmodbus-style: `TROL *trol_connect(port, baud)`, `trol_disconnect`,
+// `trol_strerror`, and `trol_name(TROL *, args)` for every manual function.
+
+thread_local! {
+    /// Why the last trol_connect on this thread failed.
+    static CONNECT_ERROR: RefCell<std::ffi::CString> = RefCell::new(std::ffi::CString::default());
+}
+
+/// Run `f` (a manual function) on connection `c`. NULL: `fallback`.
+fn on_conn<R>(c: *mut TROL, fallback: R, f: impl FnOnce() -> R) -> R {
+    if c.is_null() {
+        return fallback;
+    }
+    // SAFETY: a handle from trol_connect, not yet given to trol_disconnect (the caller's
+    // promise, as with every C handle); it lives in a Box until then.
+    let conn: &'static TROL = unsafe { &*c };
+    let previous = CONN.replace(Some(conn));
+    let r = f();
+    CONN.set(previous);
+    r
+}
+
+/// trol_connect: connect to the controller on `port` (as trol.cfg's second line names it:
+/// a serial device, socket://HOST:PORT, `sim` for an embedded simulated A465, `rapl:DEVICE`)
+/// at `baud`, and check it as InitTROL(1) does (one GetStatus, then the protocol version).
+/// NULL on failure, with the reason from trol_connect_error().
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG) -> *mut TROL {
+    let fail = |why: String| {
+        let text = std::ffi::CString::new(why.replace('\0', " ")).unwrap_or_default();
+        CONNECT_ERROR.with_borrow_mut(|e| *e = text);
+        std::ptr::null_mut()
+    };
+    guard(std::ptr::null_mut(), || {
+        if port.is_null() {
+            return fail("trol_connect: the port is NULL".into());
+        }
+        // SAFETY: the caller's NUL-terminated string.
+        let Ok(name) = unsafe { std::ffi::CStr::from_ptr(port) }.to_str() else {
+            return fail("trol_connect: the port's name is not UTF-8".into());
+        };
+        let Ok(baud) = u32::try_from(baud) else {
+            return fail(format!("trol_connect: baud rate {baud} is negative"));
+        };
+        let mut robot = match Robot::open(name, baud) {
+            Ok(r) => r,
+            Err(e) => return fail(format!("trol_connect({name}): {e}")),
+        };
+        let fresh = FRESH;
+        robot.set_handlers(Box::new(CHandlers(fresh.callbacks)));
+        if let Err(e) = crate::check_server(&mut robot) {
+            return fail(format!("trol_connect({name}): {e}"));
+        }
+        CONNECT_ERROR.with_borrow_mut(|e| *e = std::ffi::CString::default());
+        Box::into_raw(Box::new(TROL {
+            inner: Mutex::new(State {
+                robot: Some(robot),
+                ..fresh
+            }),
+        }))
+    })
+}
+
+/// trol_connect_error: why the last trol_connect on this thread returned NULL (empty after a
+/// success). Valid until the next trol_connect on this thread.
+#[unsafe(no_mangle)]
+pub extern "C" fn trol_connect_error() -> *const std::ffi::c_char {
+    CONNECT_ERROR.with_borrow(|e| e.as_ptr())
+}
+
+/// trol_disconnect: close the connection and free it (the controller's server stays in
+/// server mode; trol_terminate_pcp ends it). NULL is ignored.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_disconnect(c: *mut TROL) {
+    if c.is_null() {
+        return;
+    }
+    guard((), || {
+        // SAFETY: a handle from trol_connect, given back once.
+        drop(unsafe { Box::from_raw(c) });
+    })
+}
+
+/// trol_strerror: a return code as text, "NAME: meaning" (TROL's codes and the simulated
+/// A465's BIOS codes; a controller's own BIOS codes by number). The string is static.
+#[unsafe(no_mangle)]
+pub extern "C" fn trol_strerror(code: std::ffi::c_int) -> *const std::ffi::c_char {
+    static TEXTS: Mutex<Vec<(std::ffi::c_int, std::ffi::CString)>> = Mutex::new(Vec::new());
+    guard(c"TROL_ERR_COMM".as_ptr(), || {
+        let mut texts = TEXTS.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some((_, t)) = texts.iter().find(|(c, _)| *c == code) {
+            return t.as_ptr();
+        }
+        let text = match i16::try_from(code) {
+            Ok(v) => {
+                let c = trol_proto::application::code::Code(v);
+                let table = trol_controller::SIM_CODES;
+                match (c.name(table), c.meaning(table)) {
+                    (Some(n), Some(m)) => format!("{n}: {m}"),
+                    (Some(n), None) => n.to_string(),
+                    _ if v == 0 => "success".to_string(),
+                    _ => format!("code {v}: not one of TROL's (a controller's own BIOS code?)"),
+                }
+            }
+            Err(_) => format!("code {code}: out of range for a TROL code"),
+        };
+        let text = std::ffi::CString::new(text).unwrap_or_default();
+        texts.push((code, text));
+        texts.last().map_or(std::ptr::null(), |(_, t)| t.as_ptr())
+    })
+}
+
+/// For every manual function `TROLName(args)` a `trol_name(TROL *c, args)`: the same call on
+/// connection `c` (NULL: the fallback value, and nothing is sent).
+macro_rules! per_connection {
+    ($( fn $new:ident($($arg:ident : $ty:ty),*) -> $ret:ty = $old:ident else $fallback:expr; )*) => {
+        $(
+            #[doc = concat!("`", stringify!($old), "` on connection `c`.")]
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn $new(c: *mut TROL, $($arg: $ty),*) -> $ret {
+                #[allow(unused_unsafe)]
+                on_conn(c, $fallback, || unsafe { $old($($arg),*) })
+            }
+        )*
+    };
+}
+
+per_connection! {
+    fn trol_appro(locName: *const TUCHAR, pDisp: *const SLocData, straight: TUINT) -> TINT = TROLAppro else ARG_RANGE;
+    fn trol_appro_ii(pTarget: *const SLocData, pDisp: *const SLocData, straight: TUINT) -> TINT = TROLApproII else ARG_RANGE;
+    fn trol_close(perForce: TUINT) -> TINT = TROLClose else ARG_RANGE;
+    fn trol_depart(pDisp: *const SLocData, straight: TUINT) -> TINT = TROLDepart else ARG_RANGE;
+    fn trol_finish(mode: TUINT) -> TINT = TROLFinish else ARG_RANGE;
+    fn trol_grip(dist: TUINT) -> TINT = TROLGrip else ARG_RANGE;
+    fn trol_halt() -> TINT = TROLHalt else ARG_RANGE;
+    fn trol_home(axis: TUINT) -> TINT = TROLHome else ARG_RANGE;
+    fn trol_jog(pDisp: *const SLocData, straight: TUINT) -> TINT = TROLJog else ARG_RANGE;
+    fn trol_joint(jointNum: TUINT, radians: f32) -> TINT = TROLJoint else ARG_RANGE;
+    fn trol_ma(pTarget: *const SLocData) -> TINT = TROLMA else ARG_RANGE;
+    fn trol_mi(pDisp: *const SLocData) -> TINT = TROLMI else ARG_RANGE;
+    fn trol_move(locName: *const TUCHAR, straight: TUINT) -> TINT = TROLMove else ARG_RANGE;
+    fn trol_move_ii(pTarget: *const SLocData, straight: TUINT) -> TINT = TROLMoveII else ARG_RANGE;
+    fn trol_open(perForce: TUINT) -> TINT = TROLOpen else ARG_RANGE;
+    fn trol_ready() -> TINT = TROLReady else ARG_RANGE;
+    fn trol_set_tool_transform(md: *const SLocData) -> TINT = TROLSetToolTransform else ARG_RANGE;
+    fn trol_speed(perMaxSpeed: TUINT) -> TINT = TROLSpeed else ARG_RANGE;
+    fn trol_get_position(pos: *mut SLocData, mode: TINT) -> TINT = TROLGetPosition else ARG_RANGE;
+    fn trol_terminate_pcp() -> TINT = TROLTerminatePCP else ARG_RANGE;
+    fn trol_get_status(lastBIOSRetVal: *mut std::ffi::c_int) -> TINT = TROLGetStatus else ARG_RANGE;
+    fn trol_get_status_of(lastBIOSRetVal: *mut std::ffi::c_int, transaction: *mut TUINT, epoch: *mut TUINT) -> TINT = TROLGetStatusOf else ARG_RANGE;
+    fn trol_last_transaction() -> TUINT = TROLLastTransaction else 0;
+    fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
+    fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
+    fn trol_set_reply_timeout(tenths: TUINT) -> () = SetL3_TO_Intervall else ();
+    fn trol_set_repeats(repeats: TUINT) -> () = TROLSetRepeats else ();
+    fn trol_set_delay(delay: TUINT) -> () = SetDelay else ();
+    fn trol_trans_sr(req: *mut SInData, resp: *mut SInData) -> TUINT = TransSR else TransCode::ErrSend as TUINT;
+    fn trol_cat1_transaction(req: *mut SInData) -> TINT = Cat1Transaction else ARG_RANGE;
+    fn trol_set_err_on_send(handler: ErrOnFn) -> () = TROLSetErrOnSend else ();
+    fn trol_set_err_on_receive(handler: ErrOnFn) -> () = TROLSetErrOnReceive else ();
+    fn trol_set_err_app_timeout(handler: ErrAppTimeOutFn) -> () = TROLSetErrAppTimeOut else ();
+    fn trol_set_fatal_error(handler: FatalErrorFn) -> () = TROLSetFatalError else ();
 }

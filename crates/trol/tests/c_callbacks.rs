@@ -258,3 +258,93 @@ fn the_getstatus_method_tells_from_c_which_call_a_status_belongs_to() {
     assert!(lines[1].contains("called 1, last 0"), "{text}");
     assert_eq!(lines[2], "NULL -> -32003", "{text}");
 }
+
+/// A simulated controller in server mode on a new pty, on a thread: (the path, the flag
+/// that stops it, its thread; the other end kept open, as a cable).
+fn sim_on_pty() -> (
+    String,
+    std::sync::Arc<std::sync::atomic::AtomicBool>,
+    std::thread::JoinHandle<()>,
+    trol_port::serial::SerialLine,
+) {
+    let (master, other, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let backend = trol_controller::SimBackend::new(trol_controller::SimSettings {
+        time_scale: 20.0,
+        ..Default::default()
+    });
+    let mut controller = trol_controller::Controller::new(
+        master,
+        LinkConfig::for_line(38400, Duration::ZERO),
+        trol_controller::Pcp::new(backend),
+        trol_controller::Mode::Server,
+    );
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = stop.clone();
+    let thread = std::thread::spawn(move || {
+        let _ = controller.run(&flag);
+    });
+    (path, stop, thread, other)
+}
+
+/// Two arms in one process, each from its own thread through trol_connect; a handler that
+/// calls TROL on its own connection gets TROL_ERR_COMM at once, and the other works.
+#[test]
+fn two_arms_from_two_threads_and_a_handler_that_calls_trol() {
+    use std::io::{BufRead, BufReader, Write};
+    let exe = compile(
+        &root().join("crates/trol/tests/c/two_arms.c"),
+        "two_arms",
+        Link::Static,
+    );
+    let (a, stop_a, thread_a, _keep_a) = sim_on_pty();
+    let (b, stop_b, thread_b, _keep_b) = sim_on_pty();
+    let mut child = program(&exe)
+        .args([&a, &b])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut text = String::new();
+    loop {
+        let mut line = String::new();
+        assert!(
+            out.read_line(&mut line).unwrap() > 0,
+            "it ended early:\n{text}"
+        );
+        text.push_str(&line);
+        if line.starts_with("kill the first") {
+            break;
+        }
+    }
+    // The first controller goes away (its pty closes).
+    stop_a.store(true, std::sync::atomic::Ordering::Relaxed);
+    thread_a.join().unwrap();
+    writeln!(child.stdin.as_mut().unwrap()).unwrap();
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut out, &mut rest).unwrap();
+    text.push_str(&rest);
+    let status = child.wait().unwrap();
+    stop_b.store(true, std::sync::atomic::Ordering::Relaxed);
+    thread_b.join().unwrap();
+    assert!(status.success(), "{text}");
+    assert!(text.contains("arm 0: 0, joint 1 at 0.400"), "{text}");
+    assert!(text.contains("arm 1: 0, joint 1 at -0.700"), "{text}");
+    assert!(
+        text.contains("strerror(-1): BIOS_NOT_HOMED: the arm must be homed first"),
+        "{text}"
+    );
+    assert!(
+        text.contains("strerror(-32102): TROL_ERR_LOCATION"),
+        "{text}"
+    );
+    assert!(text.contains("NULL handle: -32003"), "{text}");
+    // In its handler: its own connection TROL_ERR_COMM (no deadlock), the other one's
+    // GetStatus answered (1: the last command called the BIOS).
+    assert!(
+        text.contains("in its handler: own -32001, other 1"),
+        "{text}"
+    );
+    assert!(text.contains("halt on the dead one: -32001"), "{text}");
+    assert!(text.ends_with("done\n"), "{text}");
+}

@@ -267,6 +267,13 @@ pub fn say(line: std::fmt::Arguments) {
     }
 }
 
+/// A line to standard error; a failed write (nobody reads it) is dropped, never a panic.
+pub fn tell(line: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(err, "{line}").and_then(|()| err.flush());
+}
+
 /// Whether nobody reads stdout any more: the demo and the interpreter then halt the arm and
 /// stop, rather than move it unwatched; the simulator goes on serving.
 pub fn stdout_closed() -> bool {

@@ -9,6 +9,15 @@ macro_rules! say {
     };
 }
 
+/// `eprintln!` that never panics: a message to a standard error nobody reads any more (`trol
+/// demo 2>&1 | head -3`) is dropped instead of ending the program with a panic. It shadows
+/// std's macro in every module of the binary.
+macro_rules! eprintln {
+    ($($arg:tt)*) => {
+        $crate::common::tell(format_args!($($arg)*))
+    };
+}
+
 mod bench;
 mod common;
 mod demo;

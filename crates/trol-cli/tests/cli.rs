@@ -1514,3 +1514,24 @@ fn a_block_check_mismatch_is_named_not_blamed_on_the_cable() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
 }
+
+#[test]
+fn an_output_nobody_reads_any_more_ends_the_demo_without_a_panic() {
+    // `trol demo 2>&1 | head -3`: both streams into one pipe whose reader goes away.
+    let dir = scratch("closed-output");
+    let (reader, writer) = std::io::pipe().unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trol"))
+        .arg("demo")
+        .current_dir(&dir)
+        .stdin(std::process::Stdio::null())
+        .stdout(writer.try_clone().unwrap())
+        .stderr(writer)
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(&reader), &mut first).unwrap();
+    drop(reader);
+    let status = child.wait().unwrap();
+    // 1: it stopped (and halted the arm) because nobody reads; 101 would be a panic.
+    assert_eq!(status.code(), Some(1), "{first}");
+}

@@ -8,38 +8,71 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Every stage runs, even after one failed; the failures are listed at the end (and the
+# script exits 1), so one flaky stage never hides the others.
+FAILED=()
+stage() {
+  local name=$1
+  shift
+  local started=$SECONDS
+  echo "== scripts/test.sh: $name"
+  if "$@"; then
+    echo "== scripts/test.sh: $name: passed ($((SECONDS - started)) s)"
+  else
+    echo "== scripts/test.sh: $name: FAILED ($((SECONDS - started)) s)"
+    FAILED+=("$name")
+  fi
+}
+
 # The live view's browser test (crates/trol-cli/tests/view.rs): headless Chromium driven by
 # Playwright.
-if [ ! -x /usr/bin/chromium ]; then
-  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-    apt-get update && apt-get install -y --no-install-recommends chromium
-  else
-    echo "scripts/test.sh: the view's test needs Chromium at /usr/bin/chromium:" \
-      "sudo apt-get install chromium" >&2
-    exit 1
+browser_setup() {
+  if [ ! -x /usr/bin/chromium ]; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+      apt-get update && apt-get install -y --no-install-recommends chromium
+    else
+      echo "scripts/test.sh: the view's test needs Chromium at /usr/bin/chromium:" \
+        "sudo apt-get install chromium" >&2
+      return 1
+    fi
   fi
-fi
-(cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
+  (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
+}
+stage "browser set-up (Chromium, Playwright)" browser_setup
 
-cargo test --workspace
+stage "cargo test --workspace" cargo test --workspace
 
 # TROL for Python (crates/trol-py, outside the cargo workspace): build and install the
 # package, run its tests against the embedded simulator and `trol sim` over a pty, and check
 # its type stubs against the module.
-python3 -m venv target/py
 PY="$PWD/target/py/bin/python"
-"$PY" -m pip install --quiet --upgrade pip
-"$PY" -m pip install --quiet maturin pytest pytest-timeout numpy mypy
-"$PY" -m pip install --quiet ./crates/trol-py
-(cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" "$PY" -m pytest -q)
-(cd /tmp && "$PY" -m mypy.stubtest trol)
+python_setup() {
+  python3 -m venv target/py &&
+    "$PY" -m pip install --quiet --upgrade pip &&
+    "$PY" -m pip install --quiet maturin pytest pytest-timeout numpy mypy &&
+    echo "   building TROL for Python (the Rust extension: a minute or two)" &&
+    "$PY" -m pip install --quiet ./crates/trol-py
+}
+stage "Python: virtual environment and TROL for Python" python_setup
+stage "Python: pytest" bash -c "cd crates/trol-py && TROL_BIN='$PWD/target/debug/trol' '$PY' -m pytest -q"
+stage "Python: stubs (mypy.stubtest)" bash -c "cd /tmp && '$PY' -m mypy.stubtest trol"
 
 # CTU Prague's own MARS 8 client (ctu-crs, from the package registry; its camera import
 # stubbed) drives `trol sim --mars` across the unit's variants (tests/ctu, docs/mars.md).
-"$PY" -m pip install --quiet --no-deps ctu-crs==1.0.6 ctu-mars-control-unit==0.1.3
-"$PY" -m pip install --quiet pyyaml pyserial
-TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/ctu
+ctu() {
+  "$PY" -m pip install --quiet --no-deps ctu-crs==1.0.6 ctu-mars-control-unit==0.1.3 &&
+    "$PY" -m pip install --quiet pyyaml pyserial &&
+    TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/ctu
+}
+stage "CTU's ctu-crs against trol sim --mars" ctu
 
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).
-bash scripts/readme.sh
+stage "the README's walk-through" bash scripts/readme.sh
+
+if [ ${#FAILED[@]} -gt 0 ]; then
+  echo "scripts/test.sh: ${#FAILED[@]} stage(s) failed:"
+  printf '  - %s\n' "${FAILED[@]}"
+  exit 1
+fi
+echo "scripts/test.sh: every stage passed"

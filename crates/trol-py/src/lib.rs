@@ -67,6 +67,9 @@ fn to_py(py: Python<'_>, f: Failure) -> PyErr {
         Error::Argument(_) => exception(py, "ArgumentError", (message, code)),
         Error::Link { .. } => exception(py, "LinkError", (message, code, f.last_comm)),
         Error::BadReply { .. } => exception(py, "BadReplyError", (message, code)),
+        Error::Setup(trol::SetupError::Incompatible { ours, theirs, .. }) => {
+            exception(py, "IncompatibleError", (message, code, ours, theirs))
+        }
         Error::Setup(_) => exception(py, "SetupError", (message, code)),
     }
 }

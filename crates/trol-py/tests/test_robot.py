@@ -201,8 +201,10 @@ def test_open_checks_the_servers_protocol_version(scripted: tuple[str, list[byte
     status = bytes([1, 0, 0, 0, 0, 0, 7, 0])  # called, last 0, transaction 0, epoch 7
     version = bytes([0, 0, 2, 0]) + b"an older TROL"  # protocol 2
     replies.extend([status, version])
-    with pytest.raises(trol.SetupError) as e:
+    with pytest.raises(trol.IncompatibleError) as e:
         trol.Robot.open(port)
+    assert isinstance(e.value, trol.SetupError)
+    assert (e.value.ours, e.value.theirs) == (3, 2)
     text = str(e.value)
     assert "version 2" in text and "same TROL release" in text, text
 

@@ -90,7 +90,7 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
     robot.transactor_mut().set_repeats(repeats);
     let e = match status.and_then(|_| robot.check_version()) {
         Ok(_) => return Ok(()),
-        Err(e @ Error::Setup(SetupError::Incompatible(_))) => return Err(e),
+        Err(e @ Error::Setup(SetupError::Incompatible { .. })) => return Err(e),
         Err(e) => e,
     };
     let busy = matches!(

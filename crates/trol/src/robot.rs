@@ -82,8 +82,30 @@ pub enum SetupError {
     #[error("{0}")]
     Command(#[from] CatalogError),
     /// The controller speaks another protocol version than this library (GetVersion).
-    #[error("{0}")]
-    Incompatible(String),
+    #[error("{}", incompatible_text(*ours, *theirs, kind))]
+    Incompatible {
+        /// This library's protocol version.
+        ours: u16,
+        /// The controller's, or `None` when it does not know TROLGetVersion (older than
+        /// version 1 of the handshake).
+        theirs: Option<u16>,
+        /// What drives its arm, as it says.
+        kind: Option<String>,
+    },
+}
+
+fn incompatible_text(ours: u16, theirs: Option<u16>, kind: &Option<String>) -> String {
+    match theirs {
+        None => format!(
+            "the controller does not know TROLGetVersion, so it speaks an older TROL protocol \
+             than version {ours} of this library: run the same TROL release on both sides"
+        ),
+        Some(theirs) => format!(
+            "the controller ({}) speaks TROL protocol version {theirs}, this library version \
+             {ours}: run the same TROL release on both sides (`trol --version`)",
+            kind.as_deref().unwrap_or("of an unknown kind")
+        ),
+    }
 }
 
 /// What TROLGetVersion says of the controller.
@@ -908,24 +930,21 @@ impl Robot {
         let v = match self.version() {
             Ok(v) => v,
             Err(e) if e.code() == trol_proto::application::code::TROL_ERR_UNKNOWN => {
-                return Err(SetupError::Incompatible(format!(
-                    "the controller does not know TROLGetVersion, so it speaks an older TROL \
-                     protocol than version {} of this library: run the same TROL release \
-                     on both sides",
-                    table::PROTOCOL_VERSION
-                ))
+                return Err(SetupError::Incompatible {
+                    ours: table::PROTOCOL_VERSION,
+                    theirs: None,
+                    kind: None,
+                }
                 .into());
             }
             Err(e) => return Err(e),
         };
         if v.protocol != table::PROTOCOL_VERSION {
-            return Err(SetupError::Incompatible(format!(
-                "the controller ({}) speaks TROL protocol version {}, this library version {}: \
-                 run the same TROL release on both sides (`trol --version`)",
-                v.kind,
-                v.protocol,
-                table::PROTOCOL_VERSION
-            ))
+            return Err(SetupError::Incompatible {
+                ours: table::PROTOCOL_VERSION,
+                theirs: Some(v.protocol),
+                kind: Some(v.kind),
+            }
             .into());
         }
         self.codes = match v.kind.as_str() {

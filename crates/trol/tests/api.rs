@@ -739,8 +739,16 @@ fn the_host_checks_the_controllers_version_and_kind() {
     // Another protocol version: refused with both numbers and what to do.
     let mut robot = controller_of_version(Some(2));
     let e = trol::check_server(&mut robot).unwrap_err();
+    // Typed: both numbers, for a program to act on.
     assert!(
-        matches!(e, Error::Setup(trol::SetupError::Incompatible(_))),
+        matches!(
+            &e,
+            Error::Setup(trol::SetupError::Incompatible {
+                ours: 3,
+                theirs: Some(2),
+                ..
+            })
+        ),
         "{e:?}"
     );
     let text = e.to_string();

@@ -16,6 +16,7 @@ See docs/python.md.
 from trol._errors import (
     ArgumentError,
     BadReplyError,
+    IncompatibleError,
     LinkError,
     RefusedError,
     SetupError,
@@ -28,6 +29,7 @@ from trol._types import Joints, Pose, Precision
 __all__ = [
     "ArgumentError",
     "BadReplyError",
+    "IncompatibleError",
     "Joints",
     "LinkError",
     "Pose",

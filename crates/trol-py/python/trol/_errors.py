@@ -56,5 +56,21 @@ class SetupError(TrolError):
     """The port could not be opened, the configuration is wrong, or the robot is closed."""
 
 
+class IncompatibleError(SetupError):
+    """The controller speaks another TROL protocol version than this library.
+
+    ``ours`` is this library's version, ``theirs`` the controller's (None: it does not know
+    TROLGetVersion, so it is older). Run the same TROL release on both sides.
+    """
+
+    ours: int
+    theirs: int | None
+
+    def __init__(self, message: str, code: int, ours: int, theirs: int | None) -> None:
+        super().__init__(message, code)
+        self.ours = ours
+        self.theirs = theirs
+
+
 class TimeoutError(TrolError, builtins.TimeoutError):
     """A wait ran out (``finish(timeout=...)``); the arm keeps moving."""

@@ -124,7 +124,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
             r.move_to("test_001", true)
         }),
         ("TROLFinish(FINISH_WAIT)", finish),
-        ("TROLClose(60)", |r| r.close(60)),
+        ("TROLClose(60)", |r| r.close_gripper(60)),
         ("TROLFinish(FINISH_WAIT)", finish),
         ("TROLDepart(x -90, straight)", |r| r.depart(&[-90.0], true)),
         ("TROLFinish(FINISH_WAIT)", finish),

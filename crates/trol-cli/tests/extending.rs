@@ -168,7 +168,7 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
     match code {
         TROL_APPRO => robot.appro("p1", &[-10.0], false),
         TROL_APPRO_II => robot.appro_ii(&cart, &[-10.0], false),
-        TROL_CLOSE => robot.close(50),
+        TROL_CLOSE => robot.close_gripper(50),
         TROL_DEPART => robot.depart(&[-10.0], false),
         TROL_FINISH => robot.finish(),
         TROL_GRIP => robot.grip(20),

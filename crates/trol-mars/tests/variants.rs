@@ -196,7 +196,7 @@ fn the_variant(name: &str) {
 
     // The gripper: closing on an object stops at it, and Finish waits for it.
     twin.with(|u| u.set_object(Some(400.0)));
-    assert_eq!(code(r.close(50)), 0, "{name}");
+    assert_eq!(code(r.close_gripper(50)), 0, "{name}");
     assert_eq!(code(r.finish()), 0, "{name}");
     assert_eq!(
         twin.with(|u| u.feed(b"\nAPG?\n")),

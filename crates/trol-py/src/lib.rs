@@ -475,7 +475,7 @@ impl Robot {
     /// TROLClose: close the gripper with ``force`` percent (1..100).
     #[pyo3(signature = (force = 50))]
     fn close_gripper(&self, py: Python<'_>, force: u16) -> PyResult<()> {
-        self.with(py, move |r| r.close(force))
+        self.with(py, move |r| r.close_gripper(force))
     }
 
     /// TROLHalt: stop all motion.

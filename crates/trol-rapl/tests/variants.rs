@@ -277,7 +277,7 @@ impl Run<'_> {
             r.depart(&[-50.0], true)
         });
         self.plain("close 60, finish", |r| {
-            r.close(60)?;
+            r.close_gripper(60)?;
             r.finish()
         });
         self.plain("open 50, finish", |r| {

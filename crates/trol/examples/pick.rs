@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     step("Move(test_001, straight)", robot.move_to("test_001", true))?;
     step("Finish(FINISH_WAIT)", robot.finish())?;
-    step("Close(60)", robot.close(60))?;
+    step("Close(60)", robot.close_gripper(60))?;
     step("Finish(FINISH_WAIT)", robot.finish())?;
     step("Depart(-90, straight)", robot.depart(&[-90.0], true))?;
     step("Finish(FINISH_WAIT)", robot.finish())?;

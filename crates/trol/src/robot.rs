@@ -716,9 +716,16 @@ impl Robot {
     }
 
     /// TROLClose: close the gripper with `force` percent (1..100).
-    pub fn close(&mut self, force: u16) -> Result<()> {
+    pub fn close_gripper(&mut self, force: u16) -> Result<()> {
         let args = [small(&table::CLOSE, force)?];
         self.cat1(&table::CLOSE, &args).map(drop)
+    }
+
+    /// TROLClose under its old name, which read as closing the connection (as Python's
+    /// `Robot.close()` does).
+    #[deprecated(note = "use close_gripper: close reads as closing the connection")]
+    pub fn close(&mut self, force: u16) -> Result<()> {
+        self.close_gripper(force)
     }
 
     /// TROLDepart: move by `disp` in the tool frame from where the arm is.

@@ -240,7 +240,7 @@ fn every_api_function_over_the_whole_stack() {
     assert_eq!(joints(r), stopped);
     assert!(stopped[0] < start_j1 + 0.5, "{stopped:?}");
     // Gripper.
-    r.close(60).unwrap();
+    r.close_gripper(60).unwrap();
     r.finish().unwrap();
     r.open_gripper(100).unwrap();
     r.grip(25).unwrap();
@@ -269,7 +269,7 @@ fn every_error_code_on_the_side_that_detects_it() {
     let r = &mut rig.robot;
     // Host: TROL_ERR_ARG_RANGE, nothing sent.
     for e in [
-        r.close(0).unwrap_err(),
+        r.close_gripper(0).unwrap_err(),
         r.open_gripper(101).unwrap_err(),
         r.grip(51).unwrap_err(),
         r.speed(151).unwrap_err(),
@@ -576,7 +576,7 @@ fn robots_from_a_config_file() {
         .to_array6();
     assert!((c[0] - 420.0).abs() < 1e-2, "{c:?}");
     // The objects file's cube is at p2: closing there picks it up.
-    r.close(50).unwrap();
+    r.close_gripper(50).unwrap();
     r.finish().unwrap();
     let world = r.world().unwrap();
     assert!(

@@ -216,6 +216,9 @@ pub fn timeout_policy(catalog: Catalog) -> trol_comm::TimeoutPolicy {
 pub struct Robot {
     transactor: Transactor<Box<dyn Port>>,
     catalog: Catalog,
+    /// The application installed its own error handlers ([`Robot::set_handlers`]): adding a
+    /// command keeps them.
+    own_handlers: bool,
     codes: &'static CodeTable,
     _embedded: Option<Embedded>,
     /// Where the port came from, to open it again after it failed.
@@ -446,6 +449,7 @@ impl Robot {
         Robot {
             transactor,
             catalog,
+            own_handlers: false,
             codes: SIM_CODES,
             _embedded: embedded,
             origin: None,
@@ -518,14 +522,16 @@ impl Robot {
     }
 
     /// Know a command an application added (docs/extending.md): [`Robot::call`] takes it,
-    /// and the default ErrAppTimeOut waits for its reply as its description says. Call this
-    /// before [`Robot::set_handlers`] if you replace the handlers.
+    /// and the default ErrAppTimeOut waits for its reply as its description says. Handlers
+    /// the application installed ([`Robot::set_handlers`]) stay as they are.
     pub fn add_command(&mut self, def: CommandDef) -> Result<()> {
         self.catalog.add(def).map_err(SetupError::from)?;
-        self.transactor
-            .set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
-                self.catalog.clone(),
-            ))));
+        if !self.own_handlers {
+            self.transactor
+                .set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
+                    self.catalog.clone(),
+                ))));
+        }
         Ok(())
     }
 
@@ -553,6 +559,7 @@ impl Robot {
 
     /// Replace the layer-3 error handlers (ErrOnSend, ErrOnReceive, ErrAppTimeOut).
     pub fn set_handlers(&mut self, handlers: Box<dyn ErrorHandlers>) {
+        self.own_handlers = true;
         self.transactor.set_handlers(handlers);
     }
 

@@ -871,3 +871,29 @@ fn a_reply_that_comes_after_the_timeout_is_dropped_and_the_next_calls_work() {
         std::thread::sleep(Duration::from_millis(300));
     }
 }
+
+/// Counts the layer-3 failures it is told of, and gives up.
+struct Counting(Arc<std::sync::atomic::AtomicUsize>);
+
+impl trol_comm::ErrorHandlers for Counting {
+    fn err_on_send(&mut self, _ctx: &trol_comm::FailureContext<'_>) -> trol_comm::Recovery {
+        self.0.fetch_add(1, Ordering::SeqCst);
+        trol_comm::Recovery::Fail
+    }
+}
+
+#[test]
+fn adding_a_command_keeps_the_handlers_the_application_installed() {
+    // A controller that never answers: every send fails, and the handler is told.
+    let (host, _silent) = trol_port::memory::pair(None);
+    let cfg = LinkConfig {
+        timeouts: Timeouts::uniform(Duration::from_millis(100)),
+        ..LinkConfig::default()
+    };
+    let mut r = Robot::over(Box::new(host), cfg, None);
+    let told = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    r.set_handlers(Box::new(Counting(told.clone())));
+    r.add_command(GET_FINGERS).unwrap();
+    assert!(r.status().is_err());
+    assert!(told.load(Ordering::SeqCst) >= 1, "the handler was replaced");
+}

@@ -207,6 +207,9 @@ impl<P: Port> Transactor<P> {
             .map_err(|e| TransError::Request(e.to_string()))?;
         let mut attempts = 0u32;
         let mut repeated = 0u8;
+        // What the peer had sent before the latest attempt: a peer that sends not one byte
+        // during an attempt is silent, and another repeat cannot help.
+        let mut heard_before = self.initiator.link().stats().bytes_in;
         // The application's handler said RECOVERY_FAIL: its word is final, no repeat.
         let mut aborted = false;
         // The failure that started the repeats: what the caller hears if they fail too.
@@ -235,9 +238,18 @@ impl<P: Port> Transactor<P> {
                         self.last_comm_error(),
                         Some(LinkError::Send(SendError::Nak(_)))
                     );
-                    if !refused && !aborted && repeated < self.repeats {
+                    // ENQ unanswered and not one byte from the peer since this attempt began:
+                    // the request never left (nothing can run twice), and the peer is silent
+                    // (dead, or its cable cut with the far end still open); a repeat would
+                    // only add the manual's reset and another ENQ timeout, 3 s each.
+                    let silent = matches!(
+                        self.last_comm_error(),
+                        Some(LinkError::Send(SendError::TimeoutEnq))
+                    ) && self.initiator.link().stats().bytes_in == heard_before;
+                    if !refused && !aborted && !silent && repeated < self.repeats {
                         first_failure.get_or_insert(code);
                         repeated += 1;
+                        heard_before = self.initiator.link().stats().bytes_in;
                         let now = self.driver.clock().now();
                         if self.initiator.repeat(now) {
                             continue;

@@ -171,6 +171,12 @@ pub type Result<T> = std::result::Result<T, Error>;
 /// How often a wait for the arm asks whether it still moves.
 pub const POLL: Duration = Duration::from_millis(20);
 
+/// The reply timeout of one poll of a wait (TROLFinish(FINISH_STATUS)): the controller
+/// answers it at once (a C500 gateway after one STATUS, 0.7 s at 9600 Bd), so a controller
+/// that dies during a wait is noticed within about 3 s (this, then one unanswered ENQ),
+/// whatever the reply timeout of other calls.
+pub const POLL_REPLY_TIMEOUT: Duration = Duration::from_secs(2);
+
 /// Wait until the arm is done, for a robot shared between threads: the lock is taken for each
 /// poll only, so another thread's `halt()` gets through between two polls.
 pub fn wait_idle(robot: &std::sync::Mutex<Robot>) -> Result<()> {
@@ -668,7 +674,20 @@ impl Robot {
             "request {}",
             self.catalog.request_text(&request)
         );
-        let bytes = self.trans(def.name, &request).inspect_err(|e| {
+        // A poll of a wait: a short reply timeout (POLL_REPLY_TIMEOUT).
+        let poll = def.code == table::FINISH.code
+            && matches!(args.first(), Some(Value::Int(v)) if *v == FINISH_STATUS);
+        let usual = self.transactor.initiator().reply_timeout();
+        if poll && usual > POLL_REPLY_TIMEOUT {
+            self.transactor
+                .initiator_mut()
+                .set_reply_timeout(POLL_REPLY_TIMEOUT);
+        }
+        let sent = self.trans(def.name, &request);
+        if poll {
+            self.transactor.initiator_mut().set_reply_timeout(usual);
+        }
+        let bytes = sent.inspect_err(|e| {
             tracing::info!("{}: {e}", def.name);
         })?;
         let reply = Reply::decode(def, &bytes)?;

@@ -862,9 +862,16 @@ fn a_reply_that_comes_after_the_timeout_is_dropped_and_the_next_calls_work() {
     let e = rig.robot.call(&SLOW, &[]).unwrap_err();
     assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
     rig.robot.transactor_mut().set_repeats(repeats);
-    // The next calls are made at once, while the controller still works and then while its
-    // late reply lands: each of them works (the repeats ride over the busy controller), and
-    // gets its own answer, not the late one.
+    // A call made at once finds the controller silent for longer than an ENQ timeout (it
+    // still runs the slow handler): it fails with TROL_ERR_COMM rather than repeating into
+    // the silence, or works if the controller answered in time; never the late reply.
+    match rig.robot.status() {
+        Ok(s) => assert_eq!(s, (true, SUCCESS)),
+        Err(e) => assert_eq!(e.code(), TROL_ERR_COMM, "{e}"),
+    }
+    // The next calls, while the late reply lands and after: each works and gets its own
+    // answer, not the late one.
+    std::thread::sleep(Duration::from_millis(700));
     for _ in 0..3 {
         assert_eq!(rig.robot.status().unwrap(), (true, SUCCESS));
         rig.robot.speed(40).unwrap();
@@ -896,4 +903,50 @@ fn adding_a_command_keeps_the_handlers_the_application_installed() {
     r.add_command(GET_FINGERS).unwrap();
     assert!(r.status().is_err());
     assert!(told.load(Ordering::SeqCst) >= 1, "the handler was replaced");
+}
+
+/// A controller that answers `polls` FINISH_STATUS polls with "moving", then takes the next
+/// request (`answer_last`: false, and goes silent with it; true: goes silent before it) and
+/// never says another byte, its end of the line still open (as a cable whose far end died).
+fn dies_during_a_wait(polls: usize, take_last: bool) -> Robot {
+    let (host, ctl) = trol_port::memory::pair(None);
+    std::thread::spawn(move || {
+        let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
+        let mut answered = 0;
+        while answered < polls {
+            if let Ok(trol_comm::ServerEvent::Executed) = server
+                .serve(Duration::from_secs(5), &mut |_| {
+                    Reply::Code(Code(1)).encode()
+                })
+            {
+                answered += 1;
+            }
+        }
+        if take_last {
+            let _ = server.serve_deferrable(Duration::from_secs(5), &mut |_, _| None);
+        }
+        // Silent, the line kept open.
+        std::thread::sleep(Duration::from_secs(60));
+        drop(server);
+    });
+    Robot::over(Box::new(host), LinkConfig::default(), None)
+}
+
+#[test]
+fn a_controller_that_goes_silent_during_a_wait_is_noticed_within_seconds() {
+    // Silent between two polls: one unanswered ENQ (1 s), no repeat into silence; the old
+    // repeats took 7 s.
+    let mut r = dies_during_a_wait(3, false);
+    let t = Instant::now();
+    let e = r.finish().unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    // Silent with a poll in hand: the poll's short reply timeout (2 s), then one unanswered
+    // ENQ; the old wait was the usual reply timeout, 15 s, and more.
+    let mut r = dies_during_a_wait(3, true);
+    let t = Instant::now();
+    let e = r.finish().unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
+    eprintln!("noticed after {:?}", t.elapsed());
 }

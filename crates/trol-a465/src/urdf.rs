@@ -23,6 +23,12 @@ use crate::model::{A2, D1, D4, D6, LIMITS_RAD, max_speeds};
 /// The joints' effort limits, N·m: not published; an assumption of ours (URDF needs a value).
 pub const EFFORT_NM: [f64; 6] = [60.0, 60.0, 60.0, 20.0, 20.0, 20.0];
 
+/// The links' masses, kg, `base_link`, `link_1` .. `link_6`, `tool0`: **assumptions** (the
+/// A465's weight is not published; about 31 kg in all is ours), so that simulators that
+/// need mass and inertia (MuJoCo, pybullet) load the arm. Each link's inertia is that of its
+/// cylinder (or sphere), solid, of this mass.
+pub const MASS_KG: [f64; 8] = [10.0, 7.0, 6.0, 4.0, 2.0, 1.0, 0.5, 0.5];
+
 /// One DH step's fixed part (after the joint's rotation): Tz(d)·Tx(a)·Rx(α).
 fn dh_fixed(d: f64, a: f64, alpha: f64) -> Pose {
     Pose {
@@ -97,15 +103,20 @@ fn origin_attrs(p: &Pose) -> String {
     )
 }
 
-/// A cylinder from this link's origin to `to` (mm, in the link's frame), as a visual.
-fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str) {
+/// A cylinder from this link's origin to `to` (mm, in the link's frame): its visual, the
+/// same shape as its collision, and its inertia as a solid of `mass` kg.
+fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64) {
     let len = to.length();
     if len < 1e-6 {
+        let r = radius_mm * 1.2 / 1000.0;
+        let shape = format!("<geometry><sphere radius=\"{r:.4}\"/></geometry>");
+        let i = 0.4 * mass * r * r;
         let _ = writeln!(
             out,
-            "    <visual><geometry><sphere radius=\"{:.4}\"/></geometry>\
-             <material name=\"{colour}\"/></visual>",
-            radius_mm * 1.2 / 1000.0
+            "    <visual>{shape}<material name=\"{colour}\"/></visual>\n    \
+             <collision>{shape}</collision>\n    \
+             <inertial><mass value=\"{mass}\"/><inertia ixx=\"{i:.6}\" ixy=\"0\" \
+             ixz=\"0\" iyy=\"{i:.6}\" iyz=\"0\" izz=\"{i:.6}\"/></inertial>"
         );
         return;
     }
@@ -118,13 +129,17 @@ fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str) {
         rot: DMat3::from_cols(x, y, z),
         pos: to / 2.0,
     };
+    let (r, l) = (radius_mm / 1000.0, len / 1000.0);
+    let origin = origin_attrs(&pose);
+    let shape = format!("<geometry><cylinder radius=\"{r:.4}\" length=\"{l:.4}\"/></geometry>");
+    // A solid cylinder about its own axis (z) and across it.
+    let (across, along) = (mass * (3.0 * r * r + l * l) / 12.0, mass * r * r / 2.0);
     let _ = writeln!(
         out,
-        "    <visual><origin {}/><geometry><cylinder radius=\"{:.4}\" length=\"{:.4}\"/>\
-         </geometry><material name=\"{colour}\"/></visual>",
-        origin_attrs(&pose),
-        radius_mm / 1000.0,
-        len / 1000.0
+        "    <visual><origin {origin}/>{shape}<material name=\"{colour}\"/></visual>\n    \
+         <collision><origin {origin}/>{shape}</collision>\n    \
+         <inertial><origin {origin}/><mass value=\"{mass}\"/><inertia ixx=\"{across:.6}\" \
+         ixy=\"0\" ixz=\"0\" iyy=\"{across:.6}\" iyz=\"0\" izz=\"{along:.6}\"/></inertial>"
     );
 }
 
@@ -144,7 +159,13 @@ pub fn urdf() -> String {
     );
     // base_link: the foot plate (its size is ours); link_1 is the column up to the shoulder.
     s.push_str("  <link name=\"base_link\">\n");
-    segment(&mut s, DVec3::new(0.0, 0.0, 30.0), 100.0, "joint");
+    segment(
+        &mut s,
+        DVec3::new(0.0, 0.0, 30.0),
+        100.0,
+        "joint",
+        MASS_KG[0],
+    );
     s.push_str("  </link>\n");
     let names = [
         "base_link",
@@ -169,6 +190,7 @@ pub fn urdf() -> String {
             next,
             radius,
             if i % 2 == 0 { "body" } else { "joint" },
+            MASS_KG[i + 1],
         );
         s.push_str("  </link>\n");
         let _ = writeln!(
@@ -199,12 +221,20 @@ pub fn urdf() -> String {
     };
     let _ = writeln!(
         s,
-        "  <link name=\"tool0\">\n    <visual><origin {}/><geometry><box size=\"0.08 0.06 \
-         0.04\"/></geometry><material name=\"gripper\"/></visual>\n  </link>\n  \
+        "  <link name=\"tool0\">\n    <visual><origin {g}/><geometry><box size=\"0.08 0.06 \
+         0.04\"/></geometry><material name=\"gripper\"/></visual>\n    <collision><origin \
+         {g}/><geometry><box size=\"0.08 0.06 0.04\"/></geometry></collision>\n    \
+         <inertial><origin {g}/><mass value=\"{m}\"/><inertia ixx=\"{ix:.6}\" ixy=\"0\" \
+         ixz=\"0\" iyy=\"{iy:.6}\" iyz=\"0\" izz=\"{iz:.6}\"/></inertial>\n  </link>\n  \
          <joint name=\"tool0_joint\" type=\"fixed\">\n    <parent link=\"flange\"/>\n    \
-         <child link=\"tool0\"/>\n    <origin {}/>\n  </joint>",
-        origin_attrs(&gripper),
-        origin_attrs(&tool_in_flange())
+         <child link=\"tool0\"/>\n    <origin {t}/>\n  </joint>",
+        g = origin_attrs(&gripper),
+        m = MASS_KG[7],
+        // A solid box 0.08 x 0.06 x 0.04 m.
+        ix = MASS_KG[7] * (0.06f64.powi(2) + 0.04f64.powi(2)) / 12.0,
+        iy = MASS_KG[7] * (0.08f64.powi(2) + 0.04f64.powi(2)) / 12.0,
+        iz = MASS_KG[7] * (0.08f64.powi(2) + 0.06f64.powi(2)) / 12.0,
+        t = origin_attrs(&tool_in_flange())
     );
     s.push_str("</robot>\n");
     s
@@ -219,6 +249,15 @@ mod tests {
         (0..3)
             .map(|c| (a.rot.col(c) - b.rot.col(c)).abs().max_element())
             .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn every_link_has_a_collision_shape_and_a_mass() {
+        let u = urdf();
+        // base_link, link_1 .. link_6, tool0 (the flange is a frame only).
+        assert_eq!(u.matches("<collision>").count(), 8, "{u}");
+        assert_eq!(u.matches("<inertial>").count(), 8, "{u}");
+        assert!(!u.contains("<mass value=\"0\""), "{u}");
     }
 
     #[test]

@@ -16,6 +16,7 @@ use glam::DQuat;
 use crate::kinematics::{IkError, Joints, Kinematics, Pose, wrap};
 use crate::model::{
     self, READY, counts_to_joints, first_outside_limits, joints_to_counts, max_accels, max_speeds,
+    snap_to_limits,
 };
 use crate::motion::{Path, Profile};
 
@@ -638,7 +639,7 @@ impl Arm {
 
     fn joints_for(&self, target: &Target) -> Result<Joints, i16> {
         let q = match target {
-            Target::Joints(q) => *q,
+            Target::Joints(q) => snap_to_limits(q),
             Target::Prec(c) => counts_to_joints(c),
             Target::Cart(v) => {
                 let pose = Pose::from_xyzypr(*v);
@@ -661,6 +662,7 @@ impl Arm {
         if to.iter().any(|x| !x.is_finite()) {
             return code::BAD_ARGUMENT;
         }
+        let to = snap_to_limits(&to);
         if first_outside_limits(&to).is_some() {
             return code::JOINT_LIMIT;
         }

@@ -92,6 +92,24 @@ pub fn within_limits(q: &[f64; 6]) -> bool {
     q.iter().zip(LIMITS_RAD).all(|(x, l)| x.abs() <= l + 1e-9)
 }
 
+/// How far past a limit a joint value may come and still mean the limit, rad: a value sent as
+/// a C `float` (the manual's SLocData) rounds up to 1.2e-7 past it (175 deg as f32 is
+/// 3.05432630, the limit 3.05432619).
+pub const LIMIT_SLACK: f64 = 1e-6;
+
+/// The joint values with each one within [`LIMIT_SLACK`] past its limit set to the limit
+/// (the rest unchanged, so a value truly beyond is still refused).
+pub fn snap_to_limits(q: &[f64; 6]) -> [f64; 6] {
+    std::array::from_fn(|i| {
+        let l = LIMITS_RAD[i];
+        if q[i].abs() > l && q[i].abs() <= l + LIMIT_SLACK {
+            l.copysign(q[i])
+        } else {
+            q[i]
+        }
+    })
+}
+
 /// Index of the first joint outside its limit.
 pub fn first_outside_limits(q: &[f64; 6]) -> Option<usize> {
     let lim = limits();

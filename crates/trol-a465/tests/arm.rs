@@ -473,3 +473,38 @@ fn a_full_motion_queue_refuses_the_next_motion_and_changes_nothing() {
     assert_eq!(arm.joint(1, 0.01, done), code::OK);
     assert!((arm.planned_end()[0] - (MOTION_QUEUE as f64 + 1.0) * 0.01).abs() < 1e-9);
 }
+
+#[test]
+fn a_joint_at_its_limit_sent_as_a_c_float_is_the_limit() {
+    // 175, 90, 110, 180, 105, 180 degrees, as the manual's SLocData carries them (float):
+    // each rounds up to 1.2e-7 rad past its limit. They mean the limit, and the arm ends
+    // exactly there, never beyond.
+    let limits = trol_a465::model::LIMITS_RAD;
+    let as_f32: [f64; 6] = std::array::from_fn(|i| f64::from(limits[i] as f32));
+    assert!(
+        (0..6).any(|i| as_f32[i] > limits[i]),
+        "the test needs a value past a limit"
+    );
+    let mut arm = homed_arm();
+    let at_the_limit = |end: [f64; 6], sign: f64| {
+        (0..6).all(|i| end[i] * sign <= limits[i] && (end[i] * sign - limits[i]).abs() < 1e-6)
+    };
+    assert_eq!(arm.ma(as_f32, 0.0), code::OK);
+    assert!(
+        at_the_limit(arm.planned_end(), 1.0),
+        "{:?}",
+        arm.planned_end()
+    );
+    let negative = as_f32.map(|v| -v);
+    assert_eq!(arm.ma(negative, 0.0), code::OK);
+    assert!(
+        at_the_limit(arm.planned_end(), -1.0),
+        "{:?}",
+        arm.planned_end()
+    );
+    // A value truly past a limit is still refused.
+    let mut beyond = limits;
+    beyond[1] += 1e-4;
+    let mut arm = homed_arm();
+    assert_eq!(arm.ma(beyond, 0.0), code::JOINT_LIMIT);
+}

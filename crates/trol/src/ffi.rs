@@ -363,6 +363,7 @@ fn run(
             };
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
+                not_connected(def.name);
                 return fatal_or(fatal, def.code, COMM);
             };
             let r = robot.call(def, &args);
@@ -379,6 +380,21 @@ fn run(
             Err(e) => fatal_or(fatal, def.code, e.code().0),
         }
     })
+}
+
+/// A call with no connection (before InitTROL, after CleanupTROL, or on a handle not
+/// connected): TROL_ERR_COMM, and once per process a line on stderr that tells it apart from
+/// a failed line.
+fn not_connected(command: &str) {
+    static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    if !SAID.swap(true, Ordering::Relaxed) {
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
+            "TROL: {command} called with no connection (before InitTROL, or after \
+             CleanupTROL): nothing was sent; it returns TROL_ERR_COMM"
+        );
+    }
 }
 
 fn fatal_or(fatal: FatalErrorFn, command: u8, code: TINT) -> TINT {
@@ -1044,6 +1060,7 @@ pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
             };
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
+                not_connected("Cat1Transaction");
                 return fatal_or(fatal, code, COMM);
             };
             let r = robot.cat1_transaction(request);

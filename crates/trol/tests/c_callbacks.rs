@@ -348,3 +348,22 @@ fn two_arms_from_two_threads_and_a_handler_that_calls_trol() {
     assert!(text.contains("halt on the dead one: -32001"), "{text}");
     assert!(text.ends_with("done\n"), "{text}");
 }
+
+/// A call before InitTROL: TROL_ERR_COMM, told apart from a failed line by one stderr line.
+#[test]
+fn a_call_before_inittrol_says_so_once() {
+    let exe = compile(
+        &root().join("crates/trol/tests/c/before_init.c"),
+        "before_init",
+        Link::Static,
+    );
+    let out = program(&exe).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(text, "-32001\n-32001\n", "{err}");
+    assert_eq!(err.matches("called with no connection").count(), 1, "{err}");
+    assert!(
+        err.contains("TROLHome called with no connection (before InitTROL"),
+        "{err}"
+    );
+}

@@ -974,6 +974,19 @@ pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| err(&format!("{v:?} is not a number")))?;
             }
+            // Angles are radians; one past a full turn was almost surely written in degrees.
+            for (k, label) in [(3, "yaw"), (4, "pitch"), (5, "roll")] {
+                if c[k].abs() > 2.0 * std::f64::consts::PI + 1e-9 {
+                    return Err(format!(
+                        "line {}: {label} {} is more than a full turn: angles are radians \
+                         here ({} degrees would be {:.7})",
+                        n + 1,
+                        c[k],
+                        c[k],
+                        c[k].to_radians()
+                    ));
+                }
+            }
             Stored::Cart(c)
         };
         out.push((name.to_string(), loc));

@@ -508,3 +508,18 @@ fn a_joint_at_its_limit_sent_as_a_c_float_is_the_limit() {
     let mut arm = homed_arm();
     assert_eq!(arm.ma(beyond, 0.0), code::JOINT_LIMIT);
 }
+
+#[test]
+fn a_location_file_in_degrees_is_refused_with_the_line_and_the_radians() {
+    use trol_a465::arm::parse_locations;
+    let ok = parse_locations("test_001 400 0 150 0 1.5707963 0\n").unwrap();
+    assert_eq!(ok.len(), 1);
+    let e = parse_locations("; a comment\ntest_001 400 0 150 0 90 0\n").unwrap_err();
+    assert!(
+        e.starts_with("line 2: pitch 90 is more than a full turn"),
+        "{e}"
+    );
+    assert!(e.contains("1.5707963"), "{e}");
+    // A precision point's counts are not angles.
+    assert!(parse_locations("#park 1000 -2000 3000 0 0 9000\n").is_ok());
+}

@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{Background, http_get, scratch, text, trol};
+use common::{Background, check_pick, http_get, scratch, text, trol, view_state_at};
 
 /// `trol sim --mars --variant NAME` on a new pty, its profile in `dir` (arm.toml), and a
 /// trol.cfg that drives it in-process through `mars:` with the examples' locations.
@@ -48,23 +48,6 @@ fn try_example(name: &str, dir: &Path) -> (bool, String, String) {
         String::from_utf8_lossy(&run.stdout).into_owned(),
         String::from_utf8_lossy(&run.stderr).into_owned(),
     )
-}
-
-fn check_pick(out: &str) {
-    for step in [
-        "TROLHome(0)",
-        "TROLAppro(test_001, -90, 1)",
-        "TROLMove(test_001, 1)",
-        "TROLClose(60)",
-        "TROLDepart(&loc, 1)",
-    ] {
-        let line = out
-            .lines()
-            .find(|l| l.starts_with(step))
-            .unwrap_or_else(|| panic!("{step} missing:\n{out}"));
-        assert!(line.ends_with("-> 0"), "{line}");
-    }
-    assert!(out.contains("pick: done"), "{out}");
 }
 
 fn pick_on_variant(variant: &str) {
@@ -298,27 +281,7 @@ fn the_gateway_s_view_shows_the_arm_the_mars8_reports() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     // The report is renewed about ten times a second: wait for one after the motion.
-    let want = [0.2, 0.1, 0.8, 0.0, 0.6, 0.0];
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
-    loop {
-        let body = http_get(&url, "/state");
-        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
-            let q: Vec<f64> = s["joints"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
-            if (0..6).all(|i| (q[i] - want[i]).abs() < 1e-3) && s["moving"] == false {
-                assert_eq!(s["reported"], true, "{s}");
-                assert_eq!(s["gripper_mm"], 50.0, "{s}");
-                break;
-            }
-        }
-        assert!(
-            std::time::Instant::now() < deadline,
-            "the view never showed the arm at the target: {body}"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
+    let s = view_state_at(&url, [0.2, 0.1, 0.8, 0.0, 0.6, 0.0]);
+    assert_eq!(s["reported"], true, "{s}");
+    assert_eq!(s["gripper_mm"], 50.0, "{s}");
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use common::{Background, scratch, text, trol};
+use common::{Background, check_pick, scratch, text, trol, view_state_at};
 
 /// `trol sim --rapl` on a new pty, with the examples' locations, and its profile in `dir`.
 fn rapl_sim(dir: &Path, extra: &[&str]) -> Background {
@@ -146,23 +146,6 @@ fn in_process_rapl_logs_the_controller_s_texts() {
     assert!(err.contains("*** JOINT LIMIT ***"), "{out}\n{err}");
     // A form without a number maps to no code of its own: a refusal all the same.
     assert!(out.contains("-10 (BIOS_RAPL_ERROR)"), "{out}\n{err}");
-}
-
-fn check_pick(out: &str) {
-    for step in [
-        "TROLHome(0)",
-        "TROLAppro(test_001, -90, 1)",
-        "TROLMove(test_001, 1)",
-        "TROLClose(60)",
-        "TROLDepart(&loc, 1)",
-    ] {
-        let line = out
-            .lines()
-            .find(|l| l.starts_with(step))
-            .unwrap_or_else(|| panic!("{step} missing:\n{out}"));
-        assert!(line.ends_with("-> 0"), "{line}");
-    }
-    assert!(out.contains("pick: done"), "{out}");
 }
 
 #[test]
@@ -560,27 +543,7 @@ fn the_gateway_s_view_shows_the_arm_the_c500_reports() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     // W2's joints, read about ten times a second, in the view's form.
-    let want = [0.2, 0.1, 0.8, 0.0, 0.6, 0.0];
-    let deadline = std::time::Instant::now() + Duration::from_secs(30);
-    loop {
-        let body = common::http_get(&url, "/state");
-        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
-            let q: Vec<f64> = s["joints"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
-            if (0..6).all(|i| (q[i] - want[i]).abs() < 1e-3) {
-                assert_eq!(s["reported"], true, "{s}");
-                assert!(s["gripper_mm"].is_null(), "{s}");
-                break;
-            }
-        }
-        assert!(
-            std::time::Instant::now() < deadline,
-            "the view never showed the arm at the target: {body}"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    let s = view_state_at(&url, [0.2, 0.1, 0.8, 0.0, 0.6, 0.0]);
+    assert_eq!(s["reported"], true, "{s}");
+    assert!(s["gripper_mm"].is_null(), "{s}");
 }

@@ -159,17 +159,24 @@ impl SimBackend {
     }
 
     fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
-        Ok(match t {
-            Target::Name(name) => match self.arm.location(name.as_str()) {
-                Some(Stored::Cart(v)) => arm::Target::Cart(v),
-                Some(Stored::Prec(c)) => arm::Target::Prec(c.map(f64::from)),
-                None => return Err(BackendError::UnknownLocation(*name)),
-            },
-            Target::Location(loc @ Location::Cart(_)) => arm::Target::Cart(loc.to_array6()),
-            Target::Location(loc @ Location::Prec(_)) => arm::Target::Prec(loc.to_array6()),
-            Target::Location(loc @ Location::Joint(_)) => arm::Target::Joints(loc.to_array6()),
-        })
+        arm_target(&self.arm, t)
     }
+}
+
+/// A backend's target as the A465 model takes it: a name from `arm`'s location table
+/// (TROL_ERR_LOCATION if it has none), or the coordinates. For every backend that plans with
+/// the model (the simulator, the MARS 8).
+pub fn arm_target(arm: &Arm, t: &Target) -> Result<arm::Target, BackendError> {
+    Ok(match t {
+        Target::Name(name) => match arm.location(name.as_str()) {
+            Some(Stored::Cart(v)) => arm::Target::Cart(v),
+            Some(Stored::Prec(c)) => arm::Target::Prec(c.map(f64::from)),
+            None => return Err(BackendError::UnknownLocation(*name)),
+        },
+        Target::Location(loc @ Location::Cart(_)) => arm::Target::Cart(loc.to_array6()),
+        Target::Location(loc @ Location::Prec(_)) => arm::Target::Prec(loc.to_array6()),
+        Target::Location(loc @ Location::Joint(_)) => arm::Target::Joints(loc.to_array6()),
+    })
 }
 
 impl Backend for SimBackend {

@@ -742,16 +742,7 @@ impl MarsBackend {
     }
 
     fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
-        Ok(match t {
-            Target::Name(name) => match self.planner.location(name.as_str()) {
-                Some(Stored::Cart(v)) => arm::Target::Cart(v),
-                Some(Stored::Prec(c)) => arm::Target::Prec(c.map(f64::from)),
-                None => return Err(BackendError::UnknownLocation(*name)),
-            },
-            Target::Location(loc @ Location::Cart(_)) => arm::Target::Cart(loc.to_array6()),
-            Target::Location(loc @ Location::Prec(_)) => arm::Target::Prec(loc.to_array6()),
-            Target::Location(loc @ Location::Joint(_)) => arm::Target::Joints(loc.to_array6()),
-        })
+        trol_controller::sim::arm_target(&self.planner, t)
     }
 }
 

@@ -196,3 +196,44 @@ pub fn http_get(url: &str, path: &str) -> String {
         .map(|(_, b)| b.to_string())
         .unwrap_or(all)
 }
+
+/// The pick example's output: each step returned 0, and it ended `pick: done`.
+pub fn check_pick(out: &str) {
+    for step in [
+        "TROLHome(0)",
+        "TROLAppro(test_001, -90, 1)",
+        "TROLMove(test_001, 1)",
+        "TROLClose(60)",
+        "TROLDepart(&loc, 1)",
+    ] {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(step))
+            .unwrap_or_else(|| panic!("{step} missing:\n{out}"));
+        assert!(line.ends_with("-> 0"), "{line}");
+    }
+    assert!(out.contains("pick: done"), "{out}");
+}
+
+/// Poll a view's `/state` at `url` until its joints are `want` (within 1e-3 rad); that
+/// state. Panics after 30 s.
+pub fn view_state_at(url: &str, want: [f64; 6]) -> serde_json::Value {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let body = http_get(url, "/state");
+        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
+            let q: Vec<f64> = s["joints"]
+                .as_array()
+                .map(|a| a.iter().filter_map(|v| v.as_f64()).collect())
+                .unwrap_or_default();
+            if q.len() == 6 && (0..6).all(|i| (q[i] - want[i]).abs() < 1e-3) {
+                return s;
+            }
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the view never showed the arm at {want:?}: {body}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}

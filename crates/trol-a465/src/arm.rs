@@ -614,9 +614,17 @@ impl Arm {
         self.held.map(|h| self.objects[h.index].name.as_str())
     }
 
+    /// Every axis homed, or being homed by a homing already accepted (a motion then queues
+    /// behind it; a Halt drops both).
     fn need_homed(&mut self, now: f64) -> Result<(), i16> {
         self.retire(now);
-        if !self.homed.iter().all(|h| *h) {
+        let mut will_be = self.homed;
+        for m in &self.motions {
+            for &a in m.homes.iter().flatten() {
+                will_be[a] = true;
+            }
+        }
+        if !will_be.iter().all(|h| *h) {
             Err(code::NOT_HOMED)
         } else {
             self.need_room()

@@ -16,12 +16,22 @@ fn motion_needs_home_first() {
     assert_eq!(arm.commanded(10.0), [0.0; 6]);
     assert_eq!(arm.home(0, 0.0), code::OK);
     assert_eq!(arm.finish_status(0.1), code::MOVING);
-    // Axes count as homed when homing ends, not when it is accepted.
-    assert_eq!(arm.joint(1, 0.5, 0.1), code::NOT_HOMED);
+    // Axes count as homed when homing ends, not when it is accepted; a motion sent during
+    // the homing queues behind it (the controller answers Home at once, and a program that
+    // does not wait for it still moves only a homed arm).
     let done = arm.done_at(0.1);
     assert!(done >= 12.0, "six axes take at least 2 s each: {done}");
-    assert_eq!(arm.joint(1, 0.5, done), code::OK);
+    assert_eq!(arm.homed(), [false; 6]);
+    assert_eq!(arm.joint(1, 0.5, 0.1), code::OK);
+    assert_eq!(
+        arm.commanded(done - 0.01)[0],
+        0.0,
+        "it waits for the homing"
+    );
+    let end = arm.done_at(done);
+    assert!(end > done);
     assert_eq!(arm.homed(), [true; 6]);
+    assert!((arm.commanded(end + 1.0)[0] - 0.5).abs() < 1e-12);
 }
 
 #[test]

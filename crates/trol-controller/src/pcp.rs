@@ -410,10 +410,9 @@ fn builtin_cat1<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<Executed, Code> {
             .map_err(Code::from),
         TROL_GRIP => now(b.grip(c.int(0)?)),
         TROL_HALT => now(b.halt()),
-        TROL_HOME => b
-            .home(c.int(0)?)
-            .map(Executed::WhenIdle)
-            .map_err(Code::from),
+        // Answered at once: the host waits by polling FINISH_STATUS (as for a motion), so a
+        // Halt from another thread gets through while the arm homes.
+        TROL_HOME => now(b.home(c.int(0)?)),
         TROL_JOG => {
             let d = c.six(0)?;
             now(b.jog([d[0], d[1], d[2]], c.flag(1)?))

@@ -950,3 +950,24 @@ fn a_controller_that_goes_silent_during_a_wait_is_noticed_within_seconds() {
     assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
     eprintln!("noticed after {:?}", t.elapsed());
 }
+
+#[test]
+fn a_halt_reaches_the_arm_while_it_homes() {
+    // Real time: homing all axes takes 12 s. The controller answers Home at once and the
+    // API waits by polling, so another thread's Halt gets through; the axes stay unhomed.
+    let robot = std::sync::Mutex::new(Robot::embedded(SimSettings::default()));
+    robot
+        .lock()
+        .unwrap()
+        .call(&trol::table::HOME, &[trol::Value::Int(0)])
+        .unwrap();
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(Duration::from_millis(300));
+            robot.lock().unwrap().halt().unwrap();
+        });
+        trol::wait_idle(&robot).unwrap();
+    });
+    let e = robot.lock().unwrap().joint(1, 0.1).unwrap_err();
+    assert_eq!(e.code(), Code(-1), "{e}");
+}

@@ -210,6 +210,9 @@ impl<P: Port> Transactor<P> {
         // What the peer had sent before the latest attempt: a peer that sends not one byte
         // during an attempt is silent, and another repeat cannot help.
         let mut heard_before = self.initiator.link().stats().bytes_in;
+        // The previous attempt ended without a byte of reply (TRANS_TIMEOUT): the controller
+        // took the request and went quiet.
+        let mut went_quiet = false;
         // The application's handler said RECOVERY_FAIL: its word is final, no repeat.
         let mut aborted = false;
         // The failure that started the repeats: what the caller hears if they fail too.
@@ -238,18 +241,22 @@ impl<P: Port> Transactor<P> {
                         self.last_comm_error(),
                         Some(LinkError::Send(SendError::Nak(_)))
                     );
-                    // ENQ unanswered and not one byte from the peer since this attempt began:
-                    // the request never left (nothing can run twice), and the peer is silent
-                    // (dead, or its cable cut with the far end still open); a repeat would
-                    // only add the manual's reset and another ENQ timeout, 3 s each.
+                    // ENQ unanswered and not one byte from the peer since this attempt began,
+                    // on the first attempt or after the controller went quiet with the
+                    // request in hand: the peer is silent (dead, or its cable cut with the far
+                    // end still open), this request never left (nothing can run twice), and a
+                    // repeat would only add the manual's reset and another ENQ timeout, 3 s
+                    // each. (A silent attempt after a damaged reply is noise: repeat.)
                     let silent = matches!(
                         self.last_comm_error(),
                         Some(LinkError::Send(SendError::TimeoutEnq))
-                    ) && self.initiator.link().stats().bytes_in == heard_before;
+                    ) && self.initiator.link().stats().bytes_in == heard_before
+                        && (repeated == 0 || went_quiet);
                     if !refused && !aborted && !silent && repeated < self.repeats {
                         first_failure.get_or_insert(code);
                         repeated += 1;
                         heard_before = self.initiator.link().stats().bytes_in;
+                        went_quiet = code == TransCode::Timeout;
                         let now = self.driver.clock().now();
                         if self.initiator.repeat(now) {
                             continue;

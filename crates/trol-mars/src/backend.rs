@@ -670,21 +670,29 @@ impl MarsBackend {
         self.sync()
     }
 
+    /// The gripper's axis letter (only called with a gripper in the profile).
+    fn gripper_axis(&self) -> String {
+        self.profile
+            .gripper
+            .as_ref()
+            .map(|g| g.axis.clone())
+            .unwrap_or_default()
+    }
+
+    /// The gripper's axis position (`AP<g>?`).
+    fn read_gripper(&mut self) -> Result<f64, BackendError> {
+        let axis = self.gripper_axis();
+        let v = self.query(&format!("AP{axis}")).map_err(|f| f.not_run())?;
+        v.parse()
+            .map_err(|_| BackendError::Unsure(format!("AP{axis}={v}: not a number")))
+    }
+
     fn gripper_step(&mut self) -> Result<bool, BackendError> {
         let Some(w) = self.gripper.clone() else {
             return Ok(false);
         };
-        let axis = self
-            .profile
-            .gripper
-            .as_ref()
-            .expect("a gripper")
-            .axis
-            .clone();
-        let v = self.query(&format!("AP{axis}")).map_err(|f| f.not_run())?;
-        let p: f64 = v
-            .parse()
-            .map_err(|_| BackendError::Unsure(format!("AP{axis}={v}: not a number")))?;
+        let axis = self.gripper_axis();
+        let p = self.read_gripper()?;
         let now = self.now();
         let arrived = (p - w.target).abs() <= 10.0;
         let stalled = match w.last {
@@ -718,13 +726,7 @@ impl MarsBackend {
             return Ok(c);
         }
         self.set_up()?;
-        let axis = self
-            .profile
-            .gripper
-            .as_ref()
-            .expect("a gripper")
-            .axis
-            .clone();
+        let axis = self.gripper_axis();
         let mut bytes = line::command(&format!("RELEASE{axis}:"));
         bytes.extend(line::command(&format!("G{axis}:{pos}")));
         self.send(&bytes)
@@ -929,8 +931,7 @@ impl Backend for MarsBackend {
         let c = self.counters().ok()?;
         let gripper_mm = match self.profile.gripper.clone() {
             Some(g) => {
-                let v = self.query(&format!("AP{}", g.axis)).ok()?;
-                let p: f64 = v.parse().ok()?;
+                let p = self.read_gripper().ok()?;
                 Some(
                     ((p - g.closed) / (g.open - g.closed) * trol_a465::arm::FINGER_MAX)
                         .clamp(0.0, trol_a465::arm::FINGER_MAX),

@@ -50,10 +50,10 @@ const MAX_HEAD: u64 = 16 * 1024;
 
 const INDEX: &str = include_str!("../assets/index.html");
 const APP: &str = include_str!("../assets/app.js");
-const THREE_MODULE: &str = include_str!("../assets/three.module.js");
-const THREE_CORE: &str = include_str!("../assets/three.core.js");
-const ORBIT: &str = include_str!("../assets/OrbitControls.js");
-const THREE_LICENCE: &str = include_str!("../assets/LICENSE-three.js.txt");
+const THREE_MODULE: &str = include_str!("../vendor/three/three.module.js");
+const THREE_CORE: &str = include_str!("../vendor/three/three.core.js");
+const ORBIT: &str = include_str!("../vendor/three/OrbitControls.js");
+const THREE_LICENCE: &str = include_str!("../vendor/three/LICENSE-three.js.txt");
 
 /// The state of the arm now, as `/state` and `/events` give it; `None` before the controller
 /// shared its arm.

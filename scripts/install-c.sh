@@ -8,7 +8,7 @@
 # (with a prefix pkg-config does not search: PKG_CONFIG_PATH=PREFIX/lib/pkgconfig; and at
 # run time LD_LIBRARY_PATH=PREFIX/lib, or link PREFIX/lib/libtrol.a statically).
 #
-# It builds the libraries with `cargo build --release -p trol` first; TROL_LIB_DIR names a
+# It builds the libraries with `cargo build --release -p trol-c` first; TROL_LIB_DIR names a
 # folder that has them already (the tests use target/debug).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,7 +25,7 @@ done
 
 libs="${TROL_LIB_DIR:-}"
 if [ -z "$libs" ]; then
-  cargo build --release -p trol --lib
+  cargo build --release -p trol-c
   libs=target/release
 fi
 for f in libtrol.so libtrol.a; do

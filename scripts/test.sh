@@ -41,6 +41,8 @@ browser_setup() {
 stage "browser set-up (Chromium, Playwright)" browser_setup
 
 stage "cargo test --workspace" cargo test --workspace
+# The client with its live view (a feature the utilities and libtrol leave out).
+stage "cargo test -p trol --features view" cargo test -p trol --features view --test api
 
 # TROL for Python (crates/trol-py, outside the cargo workspace): build and install the
 # package, run its tests against the embedded simulator and `trol sim` over a pty, and check

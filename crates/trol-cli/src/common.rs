@@ -83,7 +83,7 @@ impl Conn {
     /// (InitTROL(1)).
     pub fn robot(&self) -> Result<(Robot, Config), String> {
         let cfg = self.config()?;
-        let mut robot = Robot::from_config(&cfg).map_err(|e| e.to_string())?;
+        let mut robot = robot_from_config(&cfg)?;
         // The embedded controller starts in server mode with the tool of trol.cfg.
         if cfg.port != "sim" {
             trol::check_server(&mut robot).map_err(|e| e.to_string())?;
@@ -91,6 +91,59 @@ impl Conn {
         tracing::info!(port = %cfg.port, baud = cfg.baud, "connected");
         Ok((robot, cfg))
     }
+}
+
+/// Connect as `cfg` says, as [`Robot::from_config`] does; with `view = ADDR` and the embedded
+/// simulator, the live view is the utilities' own (the client library and libtrol carry no
+/// view): served here and kept with the connection.
+pub fn robot_from_config(cfg: &Config) -> Result<Robot, String> {
+    match &cfg.view {
+        Some(addr) if cfg.port == "sim" => {
+            let settings = trol::sim_settings(cfg).map_err(|e| e.to_string())?;
+            let link = trol_proto::link::LinkConfig {
+                check: cfg.check,
+                ..Default::default()
+            };
+            let viewed = embedded_viewed(settings, link, addr)?;
+            crate::tell!("trol: the view of the simulated arm: {}", viewed.url);
+            if let Some(w) = &viewed.exposure {
+                crate::tell!("trol: warning: {w}");
+            }
+            Ok(viewed.robot)
+        }
+        _ => Robot::from_config(cfg).map_err(|e| e.to_string()),
+    }
+}
+
+/// An embedded simulator with its live view.
+pub struct Viewed {
+    /// The connection; it keeps the view alive.
+    pub robot: Robot,
+    /// Where the view is.
+    pub url: String,
+    /// A warning when the view is open to other machines.
+    pub exposure: Option<String>,
+}
+
+/// Start the embedded simulator with its live view served at `addr`, and connect to it.
+pub fn embedded_viewed(
+    settings: trol_sim::SimSettings,
+    link: trol_proto::link::LinkConfig,
+    addr: &str,
+) -> Result<Viewed, String> {
+    let mut backend = trol_sim::SimBackend::new(settings);
+    let shared = backend.share();
+    let view = trol_view::serve(addr, shared)
+        .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
+    let (url, exposure) = (view.url(), view.exposure());
+    let (line, handle) = trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+    let mut robot = Robot::over(Box::new(line), link, Some(handle));
+    robot.keep(view);
+    Ok(Viewed {
+        robot,
+        url,
+        exposure,
+    })
 }
 
 /// Logs to stderr: `RUST_LOG` if set, else warnings, and more with each `-v`.
@@ -142,10 +195,10 @@ static INTERRUPT: AtomicBool = AtomicBool::new(false);
 pub fn catch_interrupts() {
     let installed = ctrlc::set_handler(|| {
         if INTERRUPT.swap(true, Ordering::SeqCst) {
-            eprintln!("\ninterrupted twice: quitting");
+            crate::tell!("\ninterrupted twice: quitting");
             std::process::exit(130);
         }
-        eprintln!("\ninterrupted: halting the arm (Ctrl-C again quits)");
+        crate::tell!("\ninterrupted: halting the arm (Ctrl-C again quits)");
     });
     if let Err(e) = installed {
         tracing::warn!("Ctrl-C will end the program without halting the arm: {e}");
@@ -297,7 +350,7 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         ConfigSource::Found(p) => format!("{} (in the current folder)", p.display()),
         ConfigSource::Defaults => "none: no trol.cfg here and no $TROL_CONFIG".to_string(),
     };
-    say!("file: {file}");
+    crate::say!("file: {file}");
     // The first three entries are the file's whenever there is one; a key counts as the
     // file's when a line sets it.
     let in_file = |keys: &[&str]| {
@@ -383,7 +436,7 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         ),
     ];
     for (key, value, src) in rows {
-        say!("{key:<13} {value:<30} ({src})");
+        crate::say!("{key:<13} {value:<30} ({src})");
     }
     Ok(())
 }

@@ -57,6 +57,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
     }
     // --view, or trol.cfg's `view = ADDR`.
     let view = a.view.clone().or_else(|| cfg.view.clone());
+    let mut viewing = false;
     let mut robot = if cfg.port == "sim" {
         let mut settings = trol::sim_settings(&cfg).map_err(|e| e.to_string())?;
         if !settings.locations.iter().any(|(n, _)| n == "test_001") {
@@ -86,15 +87,13 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                     check: cfg.check,
                     ..Default::default()
                 };
-                let robot =
-                    Robot::embedded_viewed(settings, link, addr).map_err(|e| e.to_string())?;
-                if let Some(url) = robot.view_url() {
-                    say!("  the view: {url}");
-                }
-                if let Some(w) = robot.view_exposure() {
+                let viewed = crate::common::embedded_viewed(settings, link, addr)?;
+                say!("  the view: {}", viewed.url);
+                if let Some(w) = &viewed.exposure {
                     tracing::warn!("{w}");
                 }
-                robot
+                viewing = true;
+                viewed.robot
             }
             None => Robot::embedded(settings),
         }
@@ -175,7 +174,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
     if let Some(world) = robot.world() {
         say!("trol demo: {world}");
     }
-    if a.linger > 0.0 && robot.view_url().is_some() {
+    if a.linger > 0.0 && viewing {
         say!("trol demo: the view stays for {} s", a.linger);
         let _ = sleep_unless_interrupted(std::time::Duration::from_secs_f64(a.linger));
     }

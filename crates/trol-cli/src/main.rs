@@ -5,7 +5,7 @@
 /// the line is dropped and [`common::stdout_closed`] says so from then on.
 macro_rules! say {
     ($($arg:tt)*) => {
-        $crate::common::say(format_args!($($arg)*))
+        trol_cli::common::say(format_args!($($arg)*))
     };
 }
 
@@ -14,14 +14,12 @@ macro_rules! say {
 /// std's macro in every module of the binary.
 macro_rules! eprintln {
     ($($arg:tt)*) => {
-        $crate::common::tell(format_args!($($arg)*))
+        trol_cli::common::tell(format_args!($($arg)*))
     };
 }
 
 mod bench;
-mod common;
 mod demo;
-mod faults;
 mod gateway;
 mod init;
 mod interp;
@@ -32,6 +30,8 @@ mod sim;
 mod trace;
 
 use std::process::ExitCode;
+
+use trol_cli::common;
 
 use clap::{Parser, Subcommand};
 
@@ -90,9 +90,18 @@ enum Command {
     Config(common::Conn),
     /// List the serial ports of this machine.
     Ports,
-    /// Measure: link throughput, transactions, inverse kinematics.
-    #[command(subcommand)]
-    Bench(bench::Bench),
+    /// Measure: link throughput, transactions, inverse kinematics, faults, the view (runs
+    /// the `trol-bench` program beside this one; `trol bench --help` lists the benchmarks).
+    #[command(disable_help_flag = true)]
+    Bench {
+        /// The benchmark and its arguments, as `trol-bench` takes them.
+        #[arg(
+            trailing_var_arg = true,
+            allow_hyphen_values = true,
+            value_name = "ARGS"
+        )]
+        args: Vec<std::ffi::OsString>,
+    },
     /// The manual's pick example on the embedded simulator, step by step.
     Demo(demo::DemoArgs),
     /// Print the A465's URDF (links base_link, link_1..link_6, flange, tool0; joints
@@ -173,7 +182,7 @@ fn main() -> ExitCode {
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports => ports().map(|()| ExitCode::SUCCESS),
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
-        Command::Bench(b) => bench::run(b).map(|()| ExitCode::SUCCESS),
+        Command::Bench { args } => bench::run(&args),
         Command::Demo(a) => demo::run(a),
         Command::Urdf => {
             say!("{}", trol_a465::urdf::urdf().trim_end());

@@ -7,8 +7,9 @@ use std::time::Duration;
 use clap::Args;
 use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
 use trol_comm::ServerEvent;
-use trol_controller::{Controller, Mode, Pcp, SimBackend, SimSettings};
+use trol_controller::{Controller, Mode, Pcp};
 use trol_proto::link::{BlockCheck, LinkConfig};
+use trol_sim::{SimBackend, SimSettings};
 
 use crate::common::positive;
 use crate::link::{Side, open_side};
@@ -220,7 +221,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         Mode::Terminal
     };
     let controller = Controller::new(opened.port, cfg, pcp, mode);
-    serve(controller, described, trol_controller::SIM_CODES)
+    serve(controller, described, trol_sim::SIM_CODES)
 }
 
 /// Serve TROL with `controller` until the line fails, logging each transaction (names of

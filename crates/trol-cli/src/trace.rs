@@ -312,8 +312,7 @@ impl<W: Write> Decoder<W> {
             Dir::Ctl => {
                 let (text, after) = match &self.last_request {
                     Some((req, t0)) => (
-                        self.catalog
-                            .reply_text(req, &bytes, trol_controller::SIM_CODES),
+                        self.catalog.reply_text(req, &bytes, trol_sim::SIM_CODES),
                         format!(" ({:.1} ms after the request)", (t - t0) * 1e3),
                     ),
                     None => (format!("{bytes:02x?}"), String::new()),

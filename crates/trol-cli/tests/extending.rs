@@ -4,7 +4,7 @@
 //! through `trol interp` and through `trol trace`. And every surface knows every built-in
 //! command.
 
-#[path = "../../trol/tests/common/cbuild.rs"]
+#[path = "../../trol-c/tests/common/cbuild.rs"]
 mod cbuild;
 mod common;
 

@@ -2,7 +2,7 @@
 //! against `trol sim --mars` over a pty pair, in-process (`mars:PTY` in trol.cfg, on every
 //! variant of the unit) and through `trol gateway --controller mars:PTY`.
 
-#[path = "../../trol/tests/common/cbuild.rs"]
+#[path = "../../trol-c/tests/common/cbuild.rs"]
 mod cbuild;
 mod common;
 

@@ -3,7 +3,7 @@
 //! `trol gateway`; `trol init` and `trol cleanup` against the gateway; Halt while the
 //! application waits for the motion to end.
 
-#[path = "../../trol/tests/common/cbuild.rs"]
+#[path = "../../trol-c/tests/common/cbuild.rs"]
 mod cbuild;
 mod common;
 

@@ -5,37 +5,32 @@
 //!   arguments, GetStatus bookkeeping, replies that wait for an idle arm), sans-IO;
 //! - [`terminal`]: terminal mode and the activation sequence;
 //! - [`controller`]: the loop that runs both modes over a port, and the embedded controller;
-//! - [`sim`]: the simulated A465 as a backend.
+//! - [`a465`]: what the backends that plan with the A465 model share (codes, targets).
+//!
+//! The simulated A465 is a backend in its own crate, `trol-sim`.
 //!
 //! A controller program of an application's own adds commands with [`Pcp::register`] and
 //! runs the server with [`embedded_with`] or [`Controller`] (docs/extending.md).
-//!
-//! [`embedded`] starts the controller the host's port `sim` talks to.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod a465;
 pub mod backend;
 pub mod controller;
 pub mod pcp;
-pub mod sim;
 pub mod terminal;
 
+pub use a465::{A465_CODES, arm_target};
 pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};
 pub use controller::{Controller, Embedded, LogEntry, LogFn, Mode, WatchdogTrip};
 pub use pcp::{Call, Context, Executed, Handled, Handler, Pcp, RegisterError, Status};
-pub use sim::{ArmView, SIM_CODES, SharedArm, SimBackend, SimSettings};
 
 use trol_port::memory::{self, MemoryLine};
 use trol_proto::link::LinkConfig;
 
-/// Start the embedded controller (port `sim`): the simulated A465 behind the PCP server, in
-/// server mode, on a thread, over an in-memory line. Returns the host's end of the line.
-pub fn embedded(settings: SimSettings, cfg: LinkConfig) -> (MemoryLine, Embedded) {
-    embedded_with(Pcp::new(SimBackend::new(settings)), cfg)
-}
-
-/// Like [`embedded`], with a server of the caller's: any backend, commands added.
+/// Start an embedded controller: `pcp` (any backend, commands added) in server mode, on a
+/// thread, over an in-memory line. Returns the host's end of the line.
 pub fn embedded_with<B: Backend + 'static>(pcp: Pcp<B>, cfg: LinkConfig) -> (MemoryLine, Embedded) {
     let (host, ctl) = memory::pair(None);
     let controller = Controller::new(ctl, cfg, pcp, Mode::Server);

@@ -487,10 +487,7 @@ fn new_epoch() -> u16 {
     ((nanos ^ (nanos >> 16)) as u16).max(1)
 }
 
-/// The longest tool the server accepts: the offset of the tool centre point from the flange,
-/// mm (assumption: twice the A465's reach of about 711 mm would put the tool centre point
-/// where no arm of the kind can take it).
-pub const MAX_TOOL_MM: f64 = 1000.0;
+pub use trol_proto::application::table::MAX_TOOL_MM;
 
 /// A tool transform the arm can carry: a finite offset of at most [`MAX_TOOL_MM`], finite
 /// angles.

@@ -4,21 +4,8 @@
 
 use trol_proto::link::BlockCheck;
 
-/// The line that starts server mode, followed by the block check's word (`PCP TROL CRC16`);
-/// bare, it means the manual's LRC.
-pub const ACTIVATE: &str = "PCP TROL";
-/// The controller's answer to it, followed by the block check it agreed to.
-pub const ACTIVATED: &str = "PCP TROL ACTIVE";
+pub use trol_proto::activation::{ACTIVATE, ACTIVATED, activated_line, activation_line};
 
-/// The activation line for `check`.
-pub fn activation_line(check: BlockCheck) -> String {
-    format!("{ACTIVATE} {}", check.word())
-}
-
-/// The controller's answer for `check`.
-pub fn activated_line(check: BlockCheck) -> String {
-    format!("{ACTIVATED} {}", check.word())
-}
 /// The prompt.
 pub const PROMPT: &str = "\r\n>>";
 

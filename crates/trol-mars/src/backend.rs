@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
 use trol_a465::model::joints_to_counts;
-use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, SIM_CODES, Target};
+use trol_controller::{A465_CODES, ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
 
@@ -82,7 +82,7 @@ pub static MARS_CODES: &CodeTable = &{
     let mut all = [EXTRA[0]; 14];
     let mut i = 0;
     while i < 8 {
-        all[i] = SIM_CODES[i];
+        all[i] = A465_CODES[i];
         i += 1;
     }
     while i < 14 {
@@ -744,7 +744,7 @@ impl MarsBackend {
     }
 
     fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
-        trol_controller::sim::arm_target(&self.planner, t)
+        trol_controller::arm_target(&self.planner, t)
     }
 }
 

@@ -7,7 +7,8 @@
 //!
 //! - [`link`]: layer 2, the BSC-like link (SendData / ReceiveData);
 //! - [`transaction`]: layer 3, transactions (TransSR on the PC, TransRS on the controller);
-//! - [`application`]: layer 4, the command records of every API call and their replies.
+//! - [`application`]: layer 4, the command records of every API call and their replies;
+//! - [`activation`]: the line that turns a controller's terminal into the TROL server.
 //!
 //! Layer 1 (ports) and the drivers that run these machines live in `trol-port` and
 //! `trol-comm`. The byte-exact specification is docs/protocol.md.
@@ -15,6 +16,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod activation;
 pub mod application;
 pub mod link;
 pub mod time;

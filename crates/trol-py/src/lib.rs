@@ -686,7 +686,7 @@ impl Robot {
 /// A return value's name and meaning: ``-1 (BIOS_NOT_HOMED): the arm must be homed first``.
 #[pyfunction]
 fn describe(code: i16) -> String {
-    let codes = trol_controller::SIM_CODES;
+    let codes = trol::default_codes();
     let c = Code(code);
     match c.meaning(codes) {
         Some(m) => format!("{}: {m}", c.describe(codes)),

@@ -40,8 +40,8 @@ use std::time::Duration;
 
 use trol_a465::arm::code as sim_code;
 use trol_a465::kinematics::{Kinematics, Pose};
+use trol_controller::A465_CODES;
 use trol_controller::backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
-use trol_controller::sim::SIM_CODES;
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 use trol_proto::time::Instant;
@@ -133,7 +133,7 @@ pub static RAPL_CODES: &CodeTable = &{
     let mut all = [EXTRA[0]; 17];
     let mut i = 0;
     while i < 8 {
-        all[i] = SIM_CODES[i];
+        all[i] = A465_CODES[i];
         i += 1;
     }
     while i < 17 {

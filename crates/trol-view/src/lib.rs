@@ -13,7 +13,7 @@
 //! | `/three.module.js`, `/three.core.js`, `/OrbitControls.js` | three.js 0.187.0 from the npm registry, embedded (MIT licence: `/LICENSE-three.js.txt`, THIRD_PARTY.md) |
 //!
 //! The view never slows the controller: the controller only renews a copy of the arm after
-//! each request ([`trol_controller::SimBackend::share`]); this server's threads compute
+//! each request ([`trol_sim::SimBackend::share`]); this server's threads compute
 //! the state from that copy and the simulation's clock. A client that stops reading is
 //! dropped once its socket's buffer is full and a write has waited a second; one that closes
 //! is noticed within a round; at most [`MAX_CLIENTS`] connections are served at once.
@@ -33,7 +33,8 @@ use std::time::Duration;
 use serde_json::json;
 use trol_a465::arm::Which;
 use trol_a465::model::LIMITS_RAD;
-use trol_controller::{SharedArm, SharedReport};
+use trol_controller::SharedReport;
+use trol_sim::SharedArm;
 
 /// The address the view listens on by default: this machine only.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";

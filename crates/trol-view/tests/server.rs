@@ -7,7 +7,8 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use trol_controller::{Backend, SimBackend, SimSettings};
+use trol_controller::Backend;
+use trol_sim::{SimBackend, SimSettings};
 
 fn viewed() -> (SimBackend, trol_view::ViewServer) {
     let mut settings = SimSettings::default();

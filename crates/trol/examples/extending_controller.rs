@@ -10,8 +10,9 @@ mod extending;
 use std::sync::atomic::AtomicBool;
 
 use extending::commands::server;
-use trol_controller::{Controller, Mode, SimSettings};
+use trol_controller::{Controller, Mode};
 use trol_proto::link::LinkConfig;
+use trol_sim::SimSettings;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let settings = SimSettings {
@@ -33,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut controller = Controller::new(port, LinkConfig::default(), pcp, Mode::Server);
     controller.set_log(Box::new(|e| {
-        let codes = trol_controller::SIM_CODES;
+        let codes = trol_sim::SIM_CODES;
         println!(
             "{} -> {}",
             e.catalog.request_text(e.request),

@@ -265,7 +265,7 @@ impl Config {
                         Some(v)
                             if v.len() == 6
                                 && (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-                                    <= trol_controller::pcp::MAX_TOOL_MM =>
+                                    <= trol_proto::application::table::MAX_TOOL_MM =>
                         {
                             cfg.tool.copy_from_slice(&v)
                         }
@@ -276,7 +276,7 @@ impl Config {
                                     "the tool transform's offset is {:.0} mm: a tool longer than \
                                      {} mm is beyond what the arm can carry",
                                     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt(),
-                                    trol_controller::pcp::MAX_TOOL_MM
+                                    trol_proto::application::table::MAX_TOOL_MM
                                 ),
                             ));
                         }

@@ -19,45 +19,68 @@
 //! # Ok::<(), trol::Error>(())
 //! ```
 //!
-//! The C API of the manual (`include/trol.h`) is in [`ffi`]; `cargo build --release` builds
-//! it as `libtrol.so` and `libtrol.a`.
+//! # Cargo features
+//!
+//! The client itself needs only the protocol core, the ports and the link. Each backend an
+//! in-process controller can have is a feature:
+//!
+//! | feature | default | what it adds |
+//! |---|---|---|
+//! | `sim` | yes | the embedded simulated A465: port `sim`, [`Robot::embedded`] |
+//! | `rapl` | yes | a real C500 in RAPL-II: port `rapl:DEVICE`, `Robot::rapl` |
+//! | `mars` | yes | an A465 on a MARS 8: port `mars:DEVICE`, `Robot::mars` |
+//! | `view` | no | the live 3D view of the embedded simulator (`view =` in trol.cfg) |
+//!
+//! The manual's C API (`include/trol.h`, `libtrol.so`, `libtrol.a`) is the crate `trol-c`
+//! over this one.
 
 #![warn(missing_docs)]
 
 pub mod config;
 pub mod described;
-pub mod ffi;
 mod robot;
 
 pub use config::{Config, ConfigError};
 pub use robot::{
-    ControllerVersion, Error, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result, Robot,
-    SetupError, StatusRecord, Waited, timeout_policy, wait_idle,
+    ControllerVersion, Error, MARS_PREFIX, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result,
+    Robot, SetupError, StatusRecord, Waited, timeout_policy, wait_idle,
 };
-pub use trol_controller::SimSettings;
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;
 pub use trol_proto::application::table;
 pub use trol_proto::application::{
     Arg, ArgKind, Catalog, Choice, CommandDef, LocName, Location, Reply, ReplyKind, Tag, Wait,
 };
+#[cfg(feature = "sim")]
+pub use trol_sim::SimSettings;
 
-use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
+#[cfg(any(feature = "sim", feature = "mars"))]
+use trol_a465::arm::parse_locations;
+#[cfg(feature = "sim")]
+use trol_a465::arm::{ArmSettings, parse_objects};
+
+#[cfg(any(feature = "sim", feature = "mars"))]
+fn read_config_file(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path)
+        .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into())
+}
+
+/// The locations trol.cfg's `locations =` file holds (none without one).
+#[cfg(any(feature = "sim", feature = "mars"))]
+pub fn config_locations(cfg: &Config) -> Result<Vec<(String, trol_a465::arm::Stored)>> {
+    match &cfg.locations {
+        Some(path) => parse_locations(&read_config_file(path)?)
+            .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into()),
+        None => Ok(Vec::new()),
+    }
+}
 
 /// The settings of the embedded controller from trol.cfg.
+#[cfg(feature = "sim")]
 pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
-    let read = |path: &std::path::Path| {
-        std::fs::read_to_string(path)
-            .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))
-    };
-    let bad =
-        |path: &std::path::Path, e: String| SetupError::Config(format!("{}: {e}", path.display()));
-    let locations = match &cfg.locations {
-        Some(path) => parse_locations(&read(path)?).map_err(|e| bad(path, e))?,
-        None => Vec::new(),
-    };
     let objects = match &cfg.objects {
-        Some(path) => parse_objects(&read(path)?).map_err(|e| bad(path, e))?,
+        Some(path) => parse_objects(&read_config_file(path)?)
+            .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())))?,
         None => Vec::new(),
     };
     Ok(SimSettings {
@@ -68,7 +91,7 @@ pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
             homed: cfg.homed,
         },
         time_scale: cfg.time_scale,
-        locations,
+        locations: config_locations(cfg)?,
         tool: cfg.tool,
     })
 }
@@ -77,7 +100,16 @@ pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
 /// `0 (success)`, `-32102 (TROL_ERR_LOCATION)`, `-1 (BIOS_NOT_HOMED)`. A [`Robot`] names
 /// them from its controller's table ([`Robot::codes`]).
 pub fn describe(value: i16) -> String {
-    Code(value).describe(trol_controller::SIM_CODES)
+    Code(value).describe(default_codes())
+}
+
+/// The BIOS codes a connection names before its controller has told its own: the simulated
+/// A465's (with the feature `sim`; otherwise none, and BIOS codes go by number).
+pub fn default_codes() -> &'static CodeTable {
+    #[cfg(feature = "sim")]
+    return trol_sim::SIM_CODES;
+    #[cfg(not(feature = "sim"))]
+    &[]
 }
 
 /// Check that the server answers (InitTROL(1)): one GetStatus transaction, then its protocol
@@ -163,8 +195,8 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
     if check_server(robot).is_err() {
         // The block check this end uses: the activation line makes the controller use it too.
         let check = robot.transactor_mut().initiator().link().config().check;
-        let line = trol_controller::terminal::activation_line(check);
-        let answer = trol_controller::terminal::activated_line(check);
+        let line = trol_proto::activation::activation_line(check);
+        let answer = trol_proto::activation::activated_line(check);
         let port = robot.transactor_mut().driver_mut().port_mut();
         let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
         port.send(b"\x03\r").map_err(io)?;

@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use trol_comm::{DefaultHandlers, ErrorHandlers, ExtraWait, TransError, Transactor};
-use trol_controller::{Embedded, SIM_CODES, SimSettings};
+use trol_controller::Embedded;
 use trol_port::{Port, PortSettings};
 use trol_proto::application::code::{
     Code, CodeTable, TROL_ERR_ARG_RANGE, TROL_ERR_BAD_RSIZE, TROL_ERR_COMM,
@@ -17,6 +17,8 @@ use trol_proto::application::{
     Catalog, CatalogError, CommandDef, LocName, Location, Reply, ReplyError, Tag,
 };
 use trol_proto::link::{BlockCheck, LinkConfig, LinkError};
+#[cfg(feature = "sim")]
+use trol_sim::SimSettings;
 
 use crate::config::Config;
 
@@ -236,11 +238,26 @@ pub struct Robot {
     /// The controller's epoch when last seen (GetStatus).
     epoch: Option<u16>,
     /// The live view of an embedded simulator, served while the connection lives.
+    #[cfg(feature = "view")]
     view: Option<trol_view::ViewServer>,
+    /// What lives as long as the connection ([`Robot::keep`]).
+    kept: Vec<Box<dyn std::any::Any + Send>>,
 }
 
 /// The port prefix that embeds the controller with the RAPL-II backend (`rapl:/dev/ttyUSB0`).
 pub const RAPL_PREFIX: &str = "rapl:";
+/// The port prefix that embeds the controller with the MARS 8 backend (`mars:/dev/ttyUSB0`).
+pub const MARS_PREFIX: &str = "mars:";
+
+/// The error for a port this build cannot serve: the cargo feature it needs.
+#[allow(dead_code)]
+fn not_built(port: &str, feature: &str, what: &str) -> Error {
+    SetupError::Config(format!(
+        "port {port}: {what} needs TROL built with the cargo feature `{feature}` (this build \
+         has no {what}: add `features = [\"{feature}\"]` to the trol dependency)"
+    ))
+    .into()
+}
 
 impl Robot {
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
@@ -257,12 +274,18 @@ impl Robot {
             ..LinkConfig::for_line(baud, Duration::ZERO)
         };
         if port == "sim" {
+            #[cfg(feature = "sim")]
             return Ok(Robot::embedded_on(SimSettings::default(), cfg));
+            #[cfg(not(feature = "sim"))]
+            return Err(not_built(port, "sim", "the embedded simulator"));
         }
         if let Some(device) = port.strip_prefix(RAPL_PREFIX) {
+            #[cfg(feature = "rapl")]
             return Robot::rapl(device, trol_rapl::Profile::default(), cfg);
+            #[cfg(not(feature = "rapl"))]
+            return Err(not_built(device, "rapl", "the RAPL-II backend"));
         }
-        if port.starts_with(trol_mars::PREFIX) {
+        if port.starts_with(MARS_PREFIX) {
             return Err(SetupError::Config(format!(
                 "{port}: an A465 on a MARS 8 needs its arm profile: name it in trol.cfg \
                  (`mars-profile = FILE`; docs/mars/crs93.toml is CTU's CRS93) or call \
@@ -284,7 +307,12 @@ impl Robot {
     /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
     /// `rapl-profile`).
     pub fn from_config(cfg: &Config) -> Result<Robot> {
-        if let Some(device) = cfg.port.strip_prefix(trol_mars::PREFIX) {
+        #[cfg(not(feature = "mars"))]
+        if cfg.port.starts_with(MARS_PREFIX) {
+            return Err(not_built(&cfg.port, "mars", "the MARS 8 backend"));
+        }
+        #[cfg(feature = "mars")]
+        if let Some(device) = cfg.port.strip_prefix(MARS_PREFIX) {
             let profile = match &cfg.mars_profile {
                 Some(path) => trol_mars::Profile::from_file(path)
                     .map_err(|e| SetupError::Config(e.to_string()))?,
@@ -302,9 +330,10 @@ impl Robot {
                 check: cfg.check,
                 ..LinkConfig::default()
             };
-            let locations = crate::sim_settings(cfg)?.locations;
+            let locations = crate::config_locations(cfg)?;
             return Robot::mars(device, profile, locations, link);
         }
+        #[cfg(feature = "rapl")]
         if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
             let profile = match &cfg.rapl_profile {
                 Some(path) => trol_rapl::Profile::from_file(path)
@@ -317,6 +346,7 @@ impl Robot {
             };
             return Robot::rapl(device, profile, link);
         }
+        #[cfg(feature = "sim")]
         if cfg.port == "sim" {
             let link = LinkConfig {
                 check: cfg.check,
@@ -324,6 +354,15 @@ impl Robot {
             };
             let settings = crate::sim_settings(cfg)?;
             return match &cfg.view {
+                #[cfg(not(feature = "view"))]
+                Some(_) => Err(SetupError::Config(
+                    "trol.cfg asks for the live view (`view =`), and this build of TROL has \
+                     none (the C library leaves it out): run `trol sim --view ADDR --port \
+                     listen://127.0.0.1:PORT` and name `socket://127.0.0.1:PORT` as the port"
+                        .into(),
+                )
+                .into()),
+                #[cfg(feature = "view")]
                 Some(addr) => {
                     let robot = Robot::embedded_viewed(settings, link, addr)?;
                     // trol.cfg asked for it: say where it is (port 0 picks one).
@@ -347,6 +386,7 @@ impl Robot {
         Robot::from_config(&cfg)
     }
 
+    #[cfg(feature = "rapl")]
     /// Embed the controller with the RAPL-II backend: open DEVICE (a serial device, or
     /// `socket://HOST:PORT`) at the profile's baud rate, open the RAPL-II session, and serve
     /// TROL to this process over an in-memory line (docs/c500.md).
@@ -374,6 +414,7 @@ impl Robot {
         Ok(robot)
     }
 
+    #[cfg(feature = "mars")]
     /// Embed the controller with the MARS 8 backend: open DEVICE (a serial device with
     /// RTS/CTS, or `socket://HOST:PORT`) at the profile's baud rate, read the unit's state
     /// (nothing moves), and serve TROL to this process over an in-memory line
@@ -408,6 +449,7 @@ impl Robot {
     }
 
     /// Start an embedded controller (simulated A465) and connect to it.
+    #[cfg(feature = "sim")]
     pub fn embedded(settings: SimSettings) -> Robot {
         Robot::embedded_on(settings, LinkConfig::default())
     }
@@ -415,8 +457,9 @@ impl Robot {
     /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`
     /// (`host:port`; docs: crates/trol-view), and connect to it. The view lives as long as the
     /// connection; [`Robot::view_url`] says where it is.
+    #[cfg(feature = "view")]
     pub fn embedded_viewed(settings: SimSettings, cfg: LinkConfig, addr: &str) -> Result<Robot> {
-        let mut backend = trol_controller::SimBackend::new(settings);
+        let mut backend = trol_sim::SimBackend::new(settings);
         let shared = backend.share();
         let view = trol_view::serve(addr, shared)
             .map_err(|e| SetupError::Config(format!("cannot serve the view at {addr}: {e}")))?;
@@ -429,17 +472,24 @@ impl Robot {
 
     /// Where the live view of an embedded simulator is served, if it is.
     pub fn view_url(&self) -> Option<String> {
-        self.view.as_ref().map(|v| v.url())
+        #[cfg(feature = "view")]
+        return self.view.as_ref().map(|v| v.url());
+        #[cfg(not(feature = "view"))]
+        None
     }
 
     /// A warning when the live view is open to other machines (see
     /// [`trol_view::ViewServer::exposure`]).
     pub fn view_exposure(&self) -> Option<String> {
-        self.view.as_ref().and_then(|v| v.exposure())
+        #[cfg(feature = "view")]
+        return self.view.as_ref().and_then(|v| v.exposure());
+        #[cfg(not(feature = "view"))]
+        None
     }
 
+    #[cfg(feature = "sim")]
     fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
-        let (line, handle) = trol_controller::embedded(settings, cfg);
+        let (line, handle) = trol_sim::embedded(settings, cfg);
         Robot::over(Box::new(line), cfg, Some(handle))
     }
 
@@ -456,14 +506,22 @@ impl Robot {
             transactor,
             catalog,
             own_handlers: false,
-            codes: SIM_CODES,
+            codes: crate::default_codes(),
             _embedded: embedded,
             origin: None,
             broken: false,
             reactivate: None,
             epoch: None,
+            #[cfg(feature = "view")]
             view: None,
+            kept: Vec::new(),
         }
+    }
+
+    /// Keep `thing` alive as long as the connection: a live view served next to an embedded
+    /// controller, a log, anything whose life is the connection's.
+    pub fn keep(&mut self, thing: impl std::any::Any + Send) {
+        self.kept.push(Box::new(thing));
     }
 
     /// On reconnecting after a port failure, activate a controller found in terminal mode
@@ -981,9 +1039,11 @@ impl Robot {
             .into());
         }
         self.codes = match v.kind.as_str() {
+            #[cfg(feature = "rapl")]
             "C500 over RAPL-II" => trol_rapl::RAPL_CODES,
+            #[cfg(feature = "mars")]
             "MARS 8" => trol_mars::MARS_CODES,
-            _ => SIM_CODES,
+            _ => crate::default_codes(),
         };
         Ok(v)
     }

@@ -10,10 +10,11 @@ use std::time::{Duration, Instant};
 use trol::code::*;
 use trol::{Code, Error, Location, PosMode, Robot, SimSettings, Tag};
 use trol_a465::arm::Stored;
-use trol_controller::{Call, Context, Executed, Handler, Pcp, SimBackend};
+use trol_controller::{Call, Context, Executed, Handler, Pcp};
 use trol_port::Port;
 use trol_proto::application::{CommandDef, Reply, ReplyKind, Wait};
 use trol_proto::link::{LinkConfig, Timeouts};
+use trol_sim::SimBackend;
 
 fn quick() -> LinkConfig {
     LinkConfig {
@@ -560,12 +561,29 @@ fn robots_from_a_config_file() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
     std::fs::write(dir.join("objs.txt"), "cube 420 0 400 30\n").unwrap();
+    // With the feature `view`, trol.cfg's `view = ADDR` serves the live view; without it,
+    // saying so is a clear error.
+    let view = "view = 127.0.0.1:0\n";
     std::fs::write(
         dir.join("trol.cfg"),
         "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = locs.txt\nhomed = yes\n\
-         objects = objs.txt\nview = 127.0.0.1:0\n",
+         objects = objs.txt\n"
+            .to_string()
+            + if cfg!(feature = "view") { view } else { "" },
     )
     .unwrap();
+    if !cfg!(feature = "view") {
+        std::fs::write(
+            dir.join("viewed.cfg"),
+            format!("9600\nsim\n0 0 0 0 0 0\n{view}"),
+        )
+        .unwrap();
+        let cfg = trol::Config::from_file(&dir.join("viewed.cfg")).unwrap();
+        let e = Robot::from_config(&cfg)
+            .err()
+            .expect("no view in this build");
+        assert!(e.to_string().contains("`view =`"), "{e}");
+    }
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
     let mut r = Robot::from_config(&cfg).unwrap();
     r.move_to("p2", false).unwrap();
@@ -584,23 +602,26 @@ fn robots_from_a_config_file() {
         "{world}"
     );
     // `view = ADDR`: the embedded controller serves the live view; /state tells the same.
-    let url = r.view_url().expect("trol.cfg's view is served");
-    let state = view_state(&url);
-    let q = r.position(Tag::Joint, PosMode::Actual).unwrap().to_array6();
-    for (i, qi) in q.iter().enumerate() {
-        let shown = state["joints"][i].as_f64().unwrap();
+    #[cfg(feature = "view")]
+    {
+        let url = r.view_url().expect("trol.cfg's view is served");
+        let state = view_state(&url);
+        let q = r.position(Tag::Joint, PosMode::Actual).unwrap().to_array6();
+        for (i, qi) in q.iter().enumerate() {
+            let shown = state["joints"][i].as_f64().unwrap();
+            assert!(
+                (shown - qi).abs() < 1e-3,
+                "joint {}: {shown} against {qi}",
+                i + 1
+            );
+        }
+        assert_eq!(state["objects"][0]["name"], "cube");
+        assert_eq!(state["objects"][0]["held"], true);
         assert!(
-            (shown - qi).abs() < 1e-3,
-            "joint {}: {shown} against {qi}",
-            i + 1
+            (state["tcp"][0].as_f64().unwrap() - 420.0).abs() < 0.1,
+            "{state}"
         );
     }
-    assert_eq!(state["objects"][0]["name"], "cube");
-    assert_eq!(state["objects"][0]["held"], true);
-    assert!(
-        (state["tcp"][0].as_f64().unwrap() - 420.0).abs() < 0.1,
-        "{state}"
-    );
     std::fs::write(dir.join("bad.cfg"), "9600\nsim\n1 2 3\n").unwrap();
     let e = trol::Config::from_file(&dir.join("bad.cfg")).unwrap_err();
     assert_eq!(e.line, Some(3));
@@ -769,6 +790,7 @@ fn the_host_checks_the_controllers_version_and_kind() {
 }
 
 #[test]
+#[cfg(feature = "view")]
 fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
     let mut robot = Robot::embedded_viewed(
         SimSettings {
@@ -822,6 +844,7 @@ fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
 }
 
 /// `/state` of the live view at `url`.
+#[cfg(feature = "view")]
 fn view_state(url: &str) -> serde_json::Value {
     use std::io::{Read, Write};
     let addr = url.trim_start_matches("http://").trim_end_matches('/');

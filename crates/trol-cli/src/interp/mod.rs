@@ -171,7 +171,7 @@ impl Session {
     fn init(&mut self) -> Result<(), String> {
         let cfg = self.conn.config()?;
         if self.robot.is_none() {
-            let mut robot = Robot::from_config(&cfg).map_err(|e| e.to_string())?;
+            let mut robot = crate::common::robot_from_config(&cfg)?;
             for def in self.catalog.iter() {
                 if robot.catalog().get(def.code).is_none() {
                     robot.add_command(*def).map_err(|e| e.to_string())?;
@@ -298,7 +298,7 @@ impl Session {
                 let j = failure_json(
                     def,
                     Some(trol::code::TROL_ERR_COMM),
-                    trol_controller::SIM_CODES,
+                    trol_sim::SIM_CODES,
                     &e,
                 );
                 return Err((e, j));

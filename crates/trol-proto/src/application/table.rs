@@ -247,6 +247,11 @@ commands! {
 /// same.
 pub const PROTOCOL_VERSION: u16 = 3;
 
+/// The longest tool the server accepts: the offset of the tool centre point from the flange,
+/// mm (assumption: twice the A465's reach of about 711 mm would put the tool centre point
+/// where no arm of the kind can take it).
+pub const MAX_TOOL_MM: f64 = 1000.0;
+
 /// The largest built-in code of `class` (`LAST_CATx_CODE`); one below its base if it has
 /// none.
 pub const fn last_code(class: Class) -> u8 {

@@ -1,9 +1,8 @@
 //! The commands of docs/extending.md, described once and used by both sides.
 
 use trol::{Arg, ArgKind, Code, CommandDef, Location, Reply, ReplyKind, Robot, Tag, Value, Wait};
-use trol_controller::{
-    Backend, Call, Context, Executed, Handler, Pcp, PosMode, RegisterError, SimBackend, SimSettings,
-};
+use trol_controller::{Backend, Call, Context, Executed, Handler, Pcp, PosMode, RegisterError};
+use trol_sim::{SimBackend, SimSettings};
 
 /// Step 1: the descriptions. CAT2 (code 64, the first of its class): the cartesian pose of
 /// given joint angles, a float vector, as the manual's CAT2 suggests.

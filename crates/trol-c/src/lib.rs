@@ -35,8 +35,8 @@ use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT, POS_ACT, 
 use trol_proto::application::{Catalog, CommandDef, LocName, Location, Reply, Tag};
 use trol_proto::transaction::TransCode;
 
-use crate::config::Config;
-use crate::robot::{Error, Robot, timeout_policy};
+use trol_client::config::Config;
+use trol_client::{Error, Robot, timeout_policy};
 
 const ARG_RANGE: TINT = TROL_ERR_ARG_RANGE.0;
 const COMM: TINT = TROL_ERR_COMM.0;
@@ -537,7 +537,7 @@ fn wait_idle() -> TINT {
     loop {
         let status = FINISH_STATUS;
         match run(&table::FINISH, || Ok(vec![Value::Int(status)]), drop) {
-            1 => std::thread::sleep(crate::POLL),
+            1 => std::thread::sleep(trol_client::POLL),
             code => return code,
         }
     }
@@ -885,11 +885,11 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         let _ = robot.set_reply_timeout_tenths(tenths);
         let _ = robot.set_delay(delay);
         let ok = if serOnly == 0 {
-            crate::activate(&mut robot, &cfg.tool)
+            trol_client::activate(&mut robot, &cfg.tool)
                 .map_err(|e| eprintln!("InitTROL: {e}"))
                 .is_ok()
         } else {
-            crate::check_server(&mut robot)
+            trol_client::check_server(&mut robot)
                 .map_err(|e| eprintln!("InitTROL: {e}"))
                 .is_ok()
         };
@@ -925,7 +925,7 @@ pub extern "C" fn CleanupTROL() -> TUINT {
 pub extern "C" fn SetL3_TO_Intervall(TO_Intervall: TUINT) {
     guard((), || {
         let tenths = TO_Intervall;
-        if !(1..=crate::robot::MAX_REPLY_TENTHS).contains(&tenths) {
+        if !(1..=trol_client::MAX_REPLY_TENTHS).contains(&tenths) {
             eprintln!("SetL3_TO_Intervall({TO_Intervall}): out of range 1..6000, ignored");
             return;
         }
@@ -963,7 +963,7 @@ pub extern "C" fn TROLSetRepeats(repeats: TUINT) {
 #[unsafe(no_mangle)]
 pub extern "C" fn SetDelay(delay: TUINT) {
     guard((), || {
-        if u64::from(delay) > crate::robot::MAX_DELAY_MS {
+        if u64::from(delay) > trol_client::MAX_DELAY_MS {
             eprintln!("SetDelay({delay}): out of range 0..50 ms, ignored");
             return;
         }
@@ -1235,7 +1235,7 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
         };
         let fresh = FRESH;
         robot.set_handlers(Box::new(CHandlers(fresh.callbacks)));
-        if let Err(e) = crate::check_server(&mut robot) {
+        if let Err(e) = trol_client::check_server(&mut robot) {
             return fail(format!("trol_connect({name}): {e}"));
         }
         CONNECT_ERROR.with_borrow_mut(|e| *e = std::ffi::CString::default());
@@ -1281,7 +1281,7 @@ pub extern "C" fn trol_strerror(code: std::ffi::c_int) -> *const std::ffi::c_cha
         let text = match i16::try_from(code) {
             Ok(v) => {
                 let c = trol_proto::application::code::Code(v);
-                let table = trol_controller::SIM_CODES;
+                let table = trol_client::default_codes();
                 match (c.name(table), c.meaning(table)) {
                     (Some(n), Some(m)) => format!("{n}: {m}"),
                     (Some(n), None) => n.to_string(),

@@ -1,12 +1,33 @@
-//! The simulated A465 as a robot backend, on a clock that may run faster than real time.
+//! The simulated A465: the arm model ([`trol_a465::arm`]) as a robot backend of the PCP server,
+//! on a clock that may run faster than real time, and the embedded controller (port `sim`).
+//!
+//! - [`SimBackend`]: the backend ([`trol_controller::Backend`]);
+//! - [`ArmView`] / [`SharedArm`]: the copy of the arm a live view draws;
+//! - [`embedded`]: the controller the host's port `sim` talks to, on a thread.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
 use std::time::Instant;
 
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, Which, code};
 use trol_a465::model::joints_to_counts;
-use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
+use trol_controller::{
+    A465_CODES, Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, Target, arm_target,
+    embedded_with,
+};
+use trol_port::memory::MemoryLine;
+use trol_proto::application::{CodeTable, Location, Tag};
+use trol_proto::link::LinkConfig;
 
-use crate::backend::{Backend, BackendError, BiosResult, PosMode, Target};
+/// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's.
+pub const SIM_CODES: &CodeTable = A465_CODES;
+
+/// Start the embedded controller (port `sim`): the simulated A465 behind the PCP server, in
+/// server mode, on a thread, over an in-memory line. Returns the host's end of the line.
+pub fn embedded(settings: SimSettings, cfg: LinkConfig) -> (MemoryLine, Embedded) {
+    embedded_with(Pcp::new(SimBackend::new(settings)), cfg)
+}
 
 /// Settings of the simulated controller.
 #[derive(Clone, Debug)]
@@ -31,50 +52,6 @@ impl Default for SimSettings {
         }
     }
 }
-
-/// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes").
-pub const SIM_CODES: &CodeTable = &[
-    CodeInfo {
-        value: code::MOVING,
-        name: "BIOS_MOVING",
-        meaning: "the arm or the gripper still moves",
-    },
-    CodeInfo {
-        value: code::NOT_HOMED,
-        name: "BIOS_NOT_HOMED",
-        meaning: "the arm must be homed first (TROLHome)",
-    },
-    CodeInfo {
-        value: code::OUT_OF_REACH,
-        name: "BIOS_OUT_OF_REACH",
-        meaning: "the target or path is out of reach",
-    },
-    CodeInfo {
-        value: code::JOINT_LIMIT,
-        name: "BIOS_JOINT_LIMIT",
-        meaning: "the target or path passes a joint limit",
-    },
-    CodeInfo {
-        value: code::BELOW_TABLE,
-        name: "BIOS_BELOW_TABLE",
-        meaning: "the tool tip would go below the table",
-    },
-    CodeInfo {
-        value: code::SINGULAR_PATH,
-        name: "BIOS_SINGULAR_PATH",
-        meaning: "the straight line passes a singularity and cannot be followed",
-    },
-    CodeInfo {
-        value: code::BAD_ARGUMENT,
-        name: "BIOS_BAD_ARGUMENT",
-        meaning: "an axis number out of range or a value that is not a number",
-    },
-    CodeInfo {
-        value: code::QUEUE_FULL,
-        name: "BIOS_QUEUE_FULL",
-        meaning: "the motion queue is full: wait with TROLFinish, then send the motion again",
-    },
-];
 
 /// The simulated A465 as a backend.
 pub struct SimBackend {
@@ -161,22 +138,6 @@ impl SimBackend {
     fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
         arm_target(&self.arm, t)
     }
-}
-
-/// A backend's target as the A465 model takes it: a name from `arm`'s location table
-/// (TROL_ERR_LOCATION if it has none), or the coordinates. For every backend that plans with
-/// the model (the simulator, the MARS 8).
-pub fn arm_target(arm: &Arm, t: &Target) -> Result<arm::Target, BackendError> {
-    Ok(match t {
-        Target::Name(name) => match arm.location(name.as_str()) {
-            Some(Stored::Cart(v)) => arm::Target::Cart(v),
-            Some(Stored::Prec(c)) => arm::Target::Prec(c.map(f64::from)),
-            None => return Err(BackendError::UnknownLocation(*name)),
-        },
-        Target::Location(loc @ Location::Cart(_)) => arm::Target::Cart(loc.to_array6()),
-        Target::Location(loc @ Location::Prec(_)) => arm::Target::Prec(loc.to_array6()),
-        Target::Location(loc @ Location::Joint(_)) => arm::Target::Joints(loc.to_array6()),
-    })
 }
 
 impl Backend for SimBackend {

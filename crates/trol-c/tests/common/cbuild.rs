@@ -29,8 +29,10 @@ pub fn build_libtrol() {
         cmd.args([
             "build",
             "-p",
-            "trol",
+            "trol-c",
             "--lib",
+            "-p",
+            "trol",
             "--example",
             "extending_controller",
             "--example",

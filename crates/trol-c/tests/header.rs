@@ -5,8 +5,8 @@
 mod common;
 
 use common::cbuild::{Link, compile, program};
-use trol::code::TROL_CODES;
-use trol::table::{self, BUILTIN};
+use trol_client::code::TROL_CODES;
+use trol_client::table::{self, BUILTIN};
 
 /// The header's constant of a command: TROLApproII -> TROL_APPRO_II.
 fn constant(name: &str) -> String {
@@ -38,9 +38,9 @@ fn the_header_agrees_with_the_table() {
         ("FINISH_WAIT".into(), table::FINISH_WAIT.into()),
         ("POS_COMMANDED".into(), table::POS_COMMANDED.into()),
         ("POS_ACT".into(), table::POS_ACT.into()),
-        ("POS_PREC".into(), trol::Tag::Prec as i64),
-        ("POS_JOINT".into(), trol::Tag::Joint as i64),
-        ("POS_CART".into(), trol::Tag::Cart as i64),
+        ("POS_PREC".into(), trol_client::Tag::Prec as i64),
+        ("POS_JOINT".into(), trol_client::Tag::Joint as i64),
+        ("POS_CART".into(), trol_client::Tag::Cart as i64),
     ]);
     for c in TROL_CODES {
         expected.push((c.name.into(), c.value.into()));

@@ -26,12 +26,13 @@ use serde::Serialize;
 use trol::{PosMode, Robot, Tag};
 use trol_a465::arm::ArmSettings;
 use trol_comm::ServerEvent;
-use trol_controller::{Controller, Mode, Pcp, SimBackend, SimSettings};
+use trol_controller::{Controller, Mode, Pcp};
 use trol_port::faulty::{FaultConfig, FaultInjector};
 use trol_port::{Port, memory};
 use trol_proto::application::record::{self, Value};
 use trol_proto::application::{CommandDef, Location, Reply, table};
 use trol_proto::link::{BlockCheck, LinkConfig, Timeouts};
+use trol_sim::{SimBackend, SimSettings};
 
 /// What to do to the line.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, clap::ValueEnum)]

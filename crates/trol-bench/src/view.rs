@@ -76,8 +76,7 @@ impl Drop for Sim {
 }
 
 fn start_sim() -> Result<Sim, String> {
-    let me = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
-    let mut child = Command::new(me)
+    let mut child = Command::new(super::trol_binary()?)
         .args([
             "sim",
             "--port",

@@ -113,7 +113,7 @@ fn scripted_controller(line: TcpLine) {
 
 fn run_with(link: Link) -> String {
     let exe = compile(
-        &root().join("crates/trol/tests/c/callbacks.c"),
+        &root().join("crates/trol-c/tests/c/callbacks.c"),
         "callbacks",
         link,
     );
@@ -187,7 +187,7 @@ fn handlers_named_as_in_the_manual_are_called_with_the_shared_library() {
 #[test]
 fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
     let exe = compile(
-        &root().join("crates/trol/tests/c/halt_thread.c"),
+        &root().join("crates/trol-c/tests/c/halt_thread.c"),
         "halt_thread",
         Link::Static,
     );
@@ -224,7 +224,7 @@ fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
 #[test]
 fn the_getstatus_method_tells_from_c_which_call_a_status_belongs_to() {
     let exe = compile(
-        &root().join("crates/trol/tests/c/status_of.c"),
+        &root().join("crates/trol-c/tests/c/status_of.c"),
         "status_of",
         Link::Static,
     );
@@ -268,7 +268,7 @@ fn sim_on_pty() -> (
     trol_port::serial::SerialLine,
 ) {
     let (master, other, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
-    let backend = trol_controller::SimBackend::new(trol_controller::SimSettings {
+    let backend = trol_sim::SimBackend::new(trol_sim::SimSettings {
         time_scale: 20.0,
         ..Default::default()
     });
@@ -292,7 +292,7 @@ fn sim_on_pty() -> (
 fn two_arms_from_two_threads_and_a_handler_that_calls_trol() {
     use std::io::{BufRead, BufReader, Write};
     let exe = compile(
-        &root().join("crates/trol/tests/c/two_arms.c"),
+        &root().join("crates/trol-c/tests/c/two_arms.c"),
         "two_arms",
         Link::Static,
     );
@@ -353,7 +353,7 @@ fn two_arms_from_two_threads_and_a_handler_that_calls_trol() {
 #[test]
 fn a_call_before_inittrol_says_so_once() {
     let exe = compile(
-        &root().join("crates/trol/tests/c/before_init.c"),
+        &root().join("crates/trol-c/tests/c/before_init.c"),
         "before_init",
         Link::Static,
     );

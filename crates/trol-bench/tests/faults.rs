@@ -6,16 +6,13 @@
 
 mod common;
 
-use common::{scratch, text, trol};
+use common::{json, scratch};
 
 fn run(args: &[&str]) -> serde_json::Value {
     let dir = scratch("faults");
-    let mut all = vec!["bench", "faults", "--json"];
+    let mut all = vec!["faults", "--json"];
     all.extend_from_slice(args);
-    let o = trol(&dir, &all, "");
-    let (out, err) = text(&o);
-    assert!(o.status.success(), "{args:?}: {out}\n{err}");
-    serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"))
+    json(&dir, &all)
 }
 
 fn n(r: &serde_json::Value, key: &str) -> u64 {

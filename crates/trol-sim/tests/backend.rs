@@ -4,13 +4,12 @@
 //! TROL_ERR_ROBOT with GetStatus telling the truth.
 
 use trol_a465::arm::Stored;
-use trol_controller::{
-    Backend, BackendError, BiosResult, Handled, Pcp, PosMode, SimBackend, SimSettings, Target,
-};
+use trol_controller::{Backend, BackendError, BiosResult, Handled, Pcp, PosMode, Target};
 use trol_proto::application::code::{Code, TROL_ERR_LOCATION, TROL_ERR_ROBOT};
 use trol_proto::application::record::{self, Value};
 use trol_proto::application::table::{self, FINISH_WAIT};
 use trol_proto::application::{CodeTable, LocName, Location, Reply, Tag};
+use trol_sim::{SimBackend, SimSettings};
 
 /// The simulated arm, with every target it is handed recorded, and a switch that breaks its
 /// link.

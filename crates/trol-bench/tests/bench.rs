@@ -1,0 +1,72 @@
+//! The benchmarks print their figures as JSON; the figures are checked for sense (the
+//! numbers of docs/performance.md come from full runs, not from these).
+
+mod common;
+
+use common::{bench, scratch, text};
+
+#[test]
+fn benches_print_json() {
+    let dir = scratch("bench");
+    let o = bench(&dir, &["ik", "--poses", "2000", "--json"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["poses"], 2000);
+    assert!(v["ns_per_pose"].as_f64().unwrap() > 0.0);
+    assert!(v["max_position_error_mm"].as_f64().unwrap() < 1e-6);
+
+    let o = bench(&dir, &["transact", "--count", "50", "--json"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["transactions"], 50);
+    assert_eq!(v["port"], "sim");
+
+    let o = bench(
+        &dir,
+        &["link", "--bytes", "600", "--baud", "115200", "--json"],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["payload_bytes"], 600);
+
+    // The whole path to a C500: every figure there, and Finish never before the arm stands
+    // (the bench fails if it does).
+    let o = bench(
+        &dir,
+        &[
+            "gateway", "--count", "3", "--moves", "2", "--baud", "115200", "--json",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["get_position_cart_actual"]["median_ms"].as_f64().unwrap() > 0.0);
+    let finish = v["finish"].as_array().unwrap();
+    assert_eq!(finish.len(), 2, "{out}");
+    for f in finish {
+        assert!(
+            f["after_motion_end"]["max_ms"].as_f64().unwrap() >= 0.0,
+            "{f}"
+        );
+    }
+
+    let o = bench(&dir, &["--help"]);
+    assert!(text(&o).0.contains("all "), "{:?}", text(&o));
+
+    let o = bench(&dir, &["moves", "--json"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let moves = v.as_array().unwrap();
+    assert!(moves.len() >= 8, "{out}");
+    for m in moves {
+        // No move is faster than the published speeds allow.
+        assert!(
+            m["seconds"].as_f64().unwrap() >= m["speed_bound_seconds"].as_f64().unwrap(),
+            "{m}"
+        );
+    }
+}

@@ -112,7 +112,8 @@ typedef uint8_t  TUCCHAR;
 #define TROL_GET_STATUS 193
 #define TROL_GET_VERSION 194
 #define TROL_SET_WATCHDOG 195
-#define LAST_CAT4_CODE 195
+#define TROL_GET_CODES 196
+#define LAST_CAT4_CODE 196
 
 /* The manual requires structure alignment off or 16 bit. */
 #pragma pack(push, 2)
@@ -175,6 +176,10 @@ TUINT TROLLastTransaction(void);
 #define TROL_PROTOCOL_VERSION 3
 TINT TROLGetVersion(TUINT *protocol, char *kind, TUINT kindSize);
 TINT TROLSetWatchdog(TUINT tenths);
+/* Added (docs/protocol.md "Codes"). TROLGetCodes: the controller's BIOS codes: up to max of
+ * their values into values, how many there are into *count; InitTROL and trol_connect read
+ * them, and trol_strerror names each as that controller does. */
+TINT TROLGetCodes(TINT *values, TUINT max, TUINT *count);
 
 /* Other functions */
 TUINT InitTROL(TUINT serOnly);
@@ -239,7 +244,8 @@ void TROLSetFatalError(TROLFatalErrorFn handler);
  * socket://HOST:PORT, "sim", "rapl:DEVICE"), checked as InitTROL(1) checks; NULL on failure,
  * with the reason from trol_connect_error() (this thread's last). trol_disconnect closes and
  * frees it (the controller stays in server mode; trol_terminate_pcp ends that).
- * trol_strerror: a return code as "NAME: meaning", a static string. Every manual function
+ * trol_strerror: a return code as "NAME: meaning", a static string (BIOS codes as the default
+ * connection's controller names them, TROLGetCodes). Every manual function
  * TROLName(args) has trol_name(TROL *, args) (NULL: TROL_ERR_ARG_RANGE, nothing sent). The
  * manual's functions above drive one default connection, as before. An error handler that
  * calls TROL on its own connection gets TROL_ERR_COMM at once; other connections work. */
@@ -272,6 +278,7 @@ TINT trol_get_status(TROL *c, int *lastBIOSRetVal);
 TINT trol_get_status_of(TROL *c, int *lastBIOSRetVal, TUINT *transaction, TUINT *epoch);
 TUINT trol_last_transaction(TROL *c);
 TINT trol_get_version(TROL *c, TUINT *protocol, char *kind, TUINT kindSize);
+TINT trol_get_codes(TROL *c, TINT *values, TUINT max, TUINT *count);
 TINT trol_set_watchdog(TROL *c, TUINT tenths);
 void trol_set_reply_timeout(TROL *c, TUINT tenths);   /* SetL3_TO_Intervall */
 void trol_set_repeats(TROL *c, TUINT repeats);

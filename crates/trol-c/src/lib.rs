@@ -841,6 +841,37 @@ pub unsafe extern "C" fn TROLGetVersion(
     r
 }
 
+/// TROLGetCodes: the controller's BIOS codes (docs/protocol.md, "Codes"): up to `max` of
+/// their values into `values`, how many it has into *count (which may be more than `max`);
+/// trol_strerror names each as that controller does. A NULL pointer is TROL_ERR_ARG_RANGE,
+/// and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLGetCodes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT {
+    if values.is_null() || count.is_null() {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::GET_CODES,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Codes(codes) = reply {
+                got = Some(codes);
+            }
+        },
+    );
+    if let Some(codes) = got {
+        // SAFETY: the caller's TUINT and an array of `max` TINTs.
+        unsafe {
+            *count = TUINT::try_from(codes.len()).unwrap_or(TUINT::MAX);
+            for (i, c) in codes.iter().take(usize::from(max)).enumerate() {
+                *values.add(i) = c.value;
+            }
+        }
+    }
+    r
+}
+
 /// TROLSetWatchdog: the controller halts the arm when no call arrives for tenths/10 s
 /// (1..250); 0 turns it off.
 #[unsafe(no_mangle)]
@@ -896,6 +927,7 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         if !ok {
             return INITTROL_FAILURE;
         }
+        *TOLD_CODES.lock().unwrap_or_else(|p| p.into_inner()) = Some(robot.codes());
         state().robot = Some(robot);
         INITTROL_SUCCESS
     })
@@ -1229,15 +1261,13 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
         let Ok(baud) = u32::try_from(baud) else {
             return fail(format!("trol_connect: baud rate {baud} is negative"));
         };
-        let mut robot = match Robot::open(name, baud) {
+        // The one connect path every surface takes: open, GetStatus, GetVersion, GetCodes.
+        let mut robot = match Robot::connect(name, baud) {
             Ok(r) => r,
             Err(e) => return fail(format!("trol_connect({name}): {e}")),
         };
         let fresh = FRESH;
         robot.set_handlers(Box::new(CHandlers(fresh.callbacks)));
-        if let Err(e) = trol_client::check_server(&mut robot) {
-            return fail(format!("trol_connect({name}): {e}"));
-        }
         CONNECT_ERROR.with_borrow_mut(|e| *e = std::ffi::CString::default());
         Box::into_raw(Box::new(TROL {
             inner: Mutex::new(State {
@@ -1268,20 +1298,31 @@ pub unsafe extern "C" fn trol_disconnect(c: *mut TROL) {
     })
 }
 
-/// trol_strerror: a return code as text, "NAME: meaning" (TROL's codes and the simulated
-/// A465's BIOS codes; a controller's own BIOS codes by number). The string is static.
+/// The BIOS codes the default connection's controller told (TROLGetCodes, read by
+/// InitTROL), for trol_strerror: a lock of its own, never held during a call, so that an
+/// error handler may ask.
+static TOLD_CODES: Mutex<Option<&'static trol_client::CodeTable>> = Mutex::new(None);
+
+/// trol_strerror: a return code as text, "NAME: meaning": TROL's codes, and BIOS codes as the
+/// default connection's controller names them (after InitTROL; before it, the simulated
+/// A465's; a code nobody named, by number). The string is static.
 #[unsafe(no_mangle)]
 pub extern "C" fn trol_strerror(code: std::ffi::c_int) -> *const std::ffi::c_char {
-    static TEXTS: Mutex<Vec<(std::ffi::c_int, std::ffi::CString)>> = Mutex::new(Vec::new());
+    type Texts = Vec<(std::ffi::c_int, usize, std::ffi::CString)>;
+    static TEXTS: Mutex<Texts> = Mutex::new(Vec::new());
     guard(c"TROL_ERR_COMM".as_ptr(), || {
+        let table = TOLD_CODES
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .unwrap_or_else(trol_client::default_codes);
+        let key = table.as_ptr() as usize;
         let mut texts = TEXTS.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some((_, t)) = texts.iter().find(|(c, _)| *c == code) {
+        if let Some((_, _, t)) = texts.iter().find(|(c, k, _)| *c == code && *k == key) {
             return t.as_ptr();
         }
         let text = match i16::try_from(code) {
             Ok(v) => {
                 let c = trol_proto::application::code::Code(v);
-                let table = trol_client::default_codes();
                 match (c.name(table), c.meaning(table)) {
                     (Some(n), Some(m)) => format!("{n}: {m}"),
                     (Some(n), None) => n.to_string(),
@@ -1292,8 +1333,10 @@ pub extern "C" fn trol_strerror(code: std::ffi::c_int) -> *const std::ffi::c_cha
             Err(_) => format!("code {code}: out of range for a TROL code"),
         };
         let text = std::ffi::CString::new(text).unwrap_or_default();
-        texts.push((code, text));
-        texts.last().map_or(std::ptr::null(), |(_, t)| t.as_ptr())
+        texts.push((code, key, text));
+        texts
+            .last()
+            .map_or(std::ptr::null(), |(_, _, t)| t.as_ptr())
     })
 }
 
@@ -1338,6 +1381,7 @@ per_connection! {
     fn trol_last_transaction() -> TUINT = TROLLastTransaction else 0;
     fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
     fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
+    fn trol_get_codes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT = TROLGetCodes else ARG_RANGE;
     fn trol_set_reply_timeout(tenths: TUINT) -> () = SetL3_TO_Intervall else ();
     fn trol_set_repeats(repeats: TUINT) -> () = TROLSetRepeats else ();
     fn trol_set_delay(delay: TUINT) -> () = SetDelay else ();

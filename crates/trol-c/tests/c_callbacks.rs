@@ -45,6 +45,14 @@ fn scripted_controller(line: TcpLine) {
             .encode()
         })
         .unwrap();
+    // InitTROL(1): GetCodes, which this controller does not know (as a TROL controller older
+    // than the command): InitTROL goes on, with the codes named by number.
+    server
+        .serve(Duration::from_secs(20), &mut |req| {
+            assert_eq!(req.first(), Some(&table::TROL_GET_CODES), "{req:02x?}");
+            Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode()
+        })
+        .unwrap();
     let mut driver = Driver::new(server.into_port());
     let receive = |driver: &mut Driver<TcpLine>| {
         let mut link = L2::new(cfg);

@@ -84,10 +84,10 @@ impl Conn {
     pub fn robot(&self) -> Result<(Robot, Config), String> {
         let cfg = self.config()?;
         let mut robot = robot_from_config(&cfg)?;
-        // The embedded controller starts in server mode with the tool of trol.cfg.
-        if cfg.port != "sim" {
-            trol::check_server(&mut robot).map_err(|e| e.to_string())?;
-        }
+        // The check every surface makes (Robot::connect_config): the server answers, speaks
+        // this protocol version, and tells its BIOS codes. The embedded controller starts in
+        // server mode with the tool of trol.cfg, and answers the same.
+        trol::check_server(&mut robot).map_err(|e| e.to_string())?;
         tracing::info!(port = %cfg.port, baud = cfg.baud, "connected");
         Ok((robot, cfg))
     }

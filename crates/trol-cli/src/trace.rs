@@ -107,6 +107,9 @@ pub struct Decoder<W: Write> {
     pc: Stream,
     ctl: Stream,
     last_request: Option<(Vec<u8>, f64)>,
+    /// The controller's BIOS codes: the default until a GetCodes reply goes by, then the
+    /// controller's own (docs/protocol.md, "Codes").
+    codes: &'static trol::CodeTable,
 }
 
 impl<W: Write> Decoder<W> {
@@ -118,6 +121,7 @@ impl<W: Write> Decoder<W> {
             pc: Stream::default(),
             ctl: Stream::default(),
             last_request: None,
+            codes: trol::default_codes(),
         }
     }
 
@@ -310,9 +314,17 @@ impl<W: Write> Decoder<W> {
                 self.last_request = Some((bytes, t));
             }
             Dir::Ctl => {
+                if let Some((req, _)) = &self.last_request
+                    && req.first() == Some(&trol::table::GET_CODES.code)
+                    && let Ok(trol::Reply::Codes(codes)) =
+                        trol::Reply::decode(&trol::table::GET_CODES, &bytes)
+                {
+                    // The controller told its codes: name them its way from now on.
+                    self.codes = trol::codes::intern(&codes);
+                }
                 let (text, after) = match &self.last_request {
                     Some((req, t0)) => (
-                        self.catalog.reply_text(req, &bytes, trol_sim::SIM_CODES),
+                        self.catalog.reply_text(req, &bytes, self.codes),
                         format!(" ({:.1} ms after the request)", (t - t0) * 1e3),
                     ),
                     None => (format!("{bytes:02x?}"), String::new()),

@@ -463,6 +463,14 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
             protocol: PROTOCOL_VERSION,
             kind: ctx.backend.kind().into(),
         },
+        TROL_GET_CODES => Reply::Codes(
+            ctx.backend
+                .codes()
+                .iter()
+                .filter(|c| !Code(c.value).is_trol() && !Code(c.value).is_success())
+                .map(Into::into)
+                .collect(),
+        ),
         TROL_SET_WATCHDOG => match c.int(0) {
             Ok(0) => {
                 *ctx.watchdog = None;

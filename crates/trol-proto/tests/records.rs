@@ -59,6 +59,7 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         (&GET_STATUS, vec![]),
         (&GET_VERSION, vec![]),
         (&SET_WATCHDOG, vec![Int(50)]),
+        (&GET_CODES, vec![]),
     ]
 }
 
@@ -404,6 +405,72 @@ fn print_record_vectors() {
             "```trol-record\nrequest: {}\ndecoded: {}\n```\n",
             hexs(&record::encode(def, &values).unwrap()),
             record::format_call(def, &values)
+        );
+    }
+}
+
+/// GetCodes' reply (docs/protocol.md, "Codes"): what the rules allow round-trips; anything
+/// else is TROL_ERR_BAD_RSIZE, never a table with a wrong name in it.
+#[test]
+fn a_codes_reply_holds_only_what_the_rules_allow() {
+    use trol_proto::application::CodeEntry;
+    use trol_proto::application::reply::{MAX_CODE_MEANING, MAX_CODE_NAME, MAX_CODES};
+    let def = &table::GET_CODES;
+    let entry = |v: i16, name: &str, meaning: &str| CodeEntry {
+        value: v,
+        name: name.into(),
+        meaning: meaning.into(),
+    };
+    let most: Vec<CodeEntry> = (1..=MAX_CODES as i16)
+        .map(|i| {
+            entry(
+                -i,
+                &"N".repeat(MAX_CODE_NAME),
+                &"m".repeat(MAX_CODE_MEANING),
+            )
+        })
+        .collect();
+    for codes in [vec![], vec![entry(-1, "BIOS_A", "")], most.clone()] {
+        let bytes = Reply::Codes(codes.clone()).encode();
+        assert_eq!(Reply::decode(def, &bytes).unwrap(), Reply::Codes(codes));
+    }
+    let good = Reply::Codes(vec![entry(-1, "BIOS_A", "a"), entry(5, "BIOS_B", "b")]).encode();
+    let mut bad: Vec<Vec<u8>> = vec![
+        // Cut anywhere inside an entry.
+        good[..good.len() - 1].to_vec(),
+        good[..3].to_vec(),
+        // A return value other than 0.
+        [&[1u8, 0][..], &good[2..]].concat(),
+        // One code too many (the encoder never writes more than the most).
+        [
+            Reply::Codes(most.clone()).encode(),
+            Reply::Codes(vec![entry(-99, "X", "")]).encode()[2..].to_vec(),
+        ]
+        .concat(),
+    ];
+    // Success or a TROL code in the table; an empty name; a name too long; a byte that is
+    // not printable.
+    for v in [0i16, -32001] {
+        let mut b = good.clone();
+        b[2..4].copy_from_slice(&v.to_le_bytes());
+        bad.push(b);
+    }
+    let mut b = good.clone();
+    b[4] = 0;
+    bad.push(b);
+    let mut b = vec![0, 0, 0xFF, 0xFF, MAX_CODE_NAME as u8 + 1];
+    b.extend(std::iter::repeat_n(b'N', MAX_CODE_NAME + 1));
+    b.push(0);
+    bad.push(b);
+    let mut b = good.clone();
+    b[5] = 0x07;
+    bad.push(b);
+    for b in bad {
+        let e = Reply::decode(def, &b).unwrap_err();
+        assert_eq!(
+            e.code(),
+            trol_proto::application::code::TROL_ERR_BAD_RSIZE,
+            "{b:02x?}"
         );
     }
 }

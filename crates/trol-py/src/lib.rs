@@ -286,6 +286,13 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
             bios_called, last, ..
         } => (bios_called, last.0).into_pyobject(py)?.into_any(),
         Reply::Version { protocol, kind } => (protocol, kind).into_pyobject(py)?.into_any(),
+        Reply::Codes(codes) => {
+            let d = pyo3::types::PyDict::new(py);
+            for c in codes {
+                d.set_item(c.value, (c.name, c.meaning))?;
+            }
+            d.into_any()
+        }
         Reply::Bytes { value, bytes } => (value.0, PyBytes::new(py, &bytes))
             .into_pyobject(py)?
             .into_any(),
@@ -584,6 +591,22 @@ impl Robot {
         self.with(py, |r| r.check_version().map(|v| (v.protocol, v.kind)))
     }
 
+    /// A return value's name and meaning as this connection's controller names it (its
+    /// BIOS codes come with the version check, TROLGetCodes): ``-1 (BIOS_NOT_HOMED): ...``.
+    fn describe(&self, py: Python<'_>, code: i16) -> PyResult<String> {
+        let codes = self.with(py, |r| Ok(r.codes()))?;
+        Ok(describe_with(code, codes))
+    }
+
+    /// The controller's BIOS codes (TROLGetCodes): ``{value: (name, meaning)}``.
+    fn codes(&self, py: Python<'_>) -> PyResult<std::collections::BTreeMap<i16, (String, String)>> {
+        let codes = self.with(py, |r| r.get_codes())?;
+        Ok(codes
+            .into_iter()
+            .map(|c| (c.value, (c.name, c.meaning)))
+            .collect())
+    }
+
     /// TROLSetWatchdog: the controller halts the arm when no call arrives for ``seconds``
     /// (0.1 .. 25; 0 turns it off). Every call feeds it, and so do ``finish()``'s polls.
     fn set_watchdog(&self, py: Python<'_>, seconds: f64) -> PyResult<()> {
@@ -686,7 +709,10 @@ impl Robot {
 /// A return value's name and meaning: ``-1 (BIOS_NOT_HOMED): the arm must be homed first``.
 #[pyfunction]
 fn describe(code: i16) -> String {
-    let codes = trol::default_codes();
+    describe_with(code, trol::default_codes())
+}
+
+fn describe_with(code: i16, codes: &trol::CodeTable) -> String {
     let c = Code(code);
     match c.meaning(codes) {
         Some(m) => format!("{}: {m}", c.describe(codes)),

@@ -330,6 +330,15 @@ def test_describe_names_a_code() -> None:
     assert trol.describe(0) == "0 (success)"
 
 
+def test_a_connection_names_codes_as_its_controller_does() -> None:
+    with trol.Robot.open("sim") as robot:
+        codes = robot.codes()
+        assert codes[-1] == ("BIOS_NOT_HOMED", "the arm must be homed first (TROLHome)")
+        assert all(value != 0 and value > -32000 for value in codes)
+        assert robot.describe(-1) == trol.describe(-1)
+        assert robot.call("TROLGetCodes") == codes
+
+
 def test_added_commands_are_called_by_name() -> None:
     """The guide's commands (docs/extending.md) against the guide's controller program."""
     exe = ROOT / "target" / "debug" / "examples" / "extending_controller"

@@ -14,7 +14,7 @@ use trol_proto::application::code::{
 use trol_proto::application::record::{self, RequestError, Value};
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
 use trol_proto::application::{
-    Catalog, CatalogError, CommandDef, LocName, Location, Reply, ReplyError, Tag,
+    Catalog, CatalogError, CodeEntry, CommandDef, LocName, Location, Reply, ReplyError, Tag,
 };
 use trol_proto::link::{BlockCheck, LinkConfig, LinkError};
 #[cfg(feature = "sim")]
@@ -262,9 +262,28 @@ fn not_built(port: &str, feature: &str, what: &str) -> Error {
 impl Robot {
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
-    /// with default settings.
+    /// with default settings. Nothing is sent: [`Robot::connect`] also checks the controller,
+    /// and [`crate::activate`] starts a controller's server first (InitTROL(0), `trol init`).
     pub fn open(port: &str, baud: u32) -> Result<Robot> {
         Robot::open_with(port, baud, BlockCheck::default())
+    }
+
+    /// Connect and check the controller, as every surface does (the utilities, C's
+    /// InitTROL(1) and trol_connect, Python's `Robot.open`): [`Robot::open`], then
+    /// [`crate::check_server`]: GetStatus, the protocol version (GetVersion, refused with
+    /// [`SetupError::Incompatible`]) and the controller's BIOS codes (GetCodes, for
+    /// [`Robot::codes`]).
+    pub fn connect(port: &str, baud: u32) -> Result<Robot> {
+        let mut robot = Robot::open(port, baud)?;
+        crate::check_server(&mut robot)?;
+        Ok(robot)
+    }
+
+    /// [`Robot::connect`] as trol.cfg says ([`Robot::from_config`], then the same check).
+    pub fn connect_config(cfg: &Config) -> Result<Robot> {
+        let mut robot = Robot::from_config(cfg)?;
+        crate::check_server(&mut robot)?;
+        Ok(robot)
     }
 
     /// Like [`Robot::open`], with the link's block check (`check` in trol.cfg).
@@ -1014,9 +1033,22 @@ impl Robot {
         }
     }
 
+    /// TROLGetCodes: the controller's BIOS codes, each with its name and meaning.
+    pub fn get_codes(&mut self) -> Result<Vec<CodeEntry>> {
+        let def = &table::GET_CODES;
+        match self.call(def, &[])? {
+            Reply::Codes(codes) => Ok(codes),
+            other => Err(Error::BadReply {
+                command: def.name,
+                len: other.encode().len(),
+            }),
+        }
+    }
+
     /// Ask the controller its version and refuse one that speaks another protocol than this
-    /// library, with what to do; name BIOS codes from then on as that controller's kind
-    /// names them (the simulated A465's, or a C500's over RAPL-II).
+    /// library, with what to do; then ask its BIOS codes (TROLGetCodes) and name them from
+    /// then on as that controller does ([`Robot::codes`]). A controller that does not know
+    /// TROLGetCodes keeps the table the connection had.
     pub fn check_version(&mut self) -> Result<ControllerVersion> {
         let v = match self.version() {
             Ok(v) => v,
@@ -1038,13 +1070,15 @@ impl Robot {
             }
             .into());
         }
-        self.codes = match v.kind.as_str() {
-            #[cfg(feature = "rapl")]
-            "C500 over RAPL-II" => trol_rapl::RAPL_CODES,
-            #[cfg(feature = "mars")]
-            "MARS 8" => trol_mars::MARS_CODES,
-            _ => crate::default_codes(),
-        };
+        match self.get_codes() {
+            Ok(codes) => self.codes = crate::codes::intern(&codes),
+            // Link failures are the connection's; a controller that does not know the
+            // command, or answers it in a form this end does not take, keeps the default.
+            Err(e @ Error::Link { .. }) => return Err(e),
+            Err(e) => tracing::warn!(
+                "the controller's BIOS codes (TROLGetCodes): {e}; its codes are named by number"
+            ),
+        }
         Ok(v)
     }
 

@@ -748,6 +748,75 @@ fn controller_of_version(version: Option<u16>) -> Robot {
     Robot::over(Box::new(host), LinkConfig::default(), None)
 }
 
+/// A controller on a thread that answers GetVersion with this library's version, GetCodes
+/// with `codes` (the reply's bytes), Move with BIOS code -77, and the rest (GetStatus) with a
+/// status.
+fn controller_with_codes(codes: Vec<u8>) -> Robot {
+    let (host, ctl) = trol_port::memory::pair(None);
+    std::thread::spawn(move || {
+        let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
+        for _ in 0..6 {
+            let r = server.serve(Duration::from_secs(5), &mut |req| match req.first() {
+                Some(&trol::table::TROL_GET_VERSION) => Reply::Version {
+                    protocol: trol::table::PROTOCOL_VERSION,
+                    kind: "gantry".into(),
+                }
+                .encode(),
+                Some(&trol::table::TROL_GET_CODES) => codes.clone(),
+                Some(&trol::table::TROL_MOVE) => Reply::Code(Code(-77)).encode(),
+                _ => Reply::Status {
+                    bios_called: false,
+                    last: SUCCESS,
+                    transaction: 0,
+                    epoch: 7,
+                }
+                .encode(),
+            });
+            if r.is_err() {
+                break;
+            }
+        }
+    });
+    Robot::over(Box::new(host), LinkConfig::default(), None)
+}
+
+/// The code table travels with the version handshake (docs/protocol.md, "Codes"): a
+/// controller's own BIOS codes are named as it names them, whatever its kind; one that does
+/// not know GetCodes, or answers it wrongly, leaves its codes named by number.
+#[test]
+fn a_controller_names_its_own_codes_at_connect() {
+    let jammed = trol::CodeEntry {
+        value: -77,
+        name: "BIOS_GANTRY_JAMMED".into(),
+        meaning: "the gantry is jammed".into(),
+    };
+    let mut robot = controller_with_codes(Reply::Codes(vec![jammed.clone()]).encode());
+    trol::check_server(&mut robot).unwrap();
+    assert_eq!(Code(-77).name(robot.codes()), Some("BIOS_GANTRY_JAMMED"));
+    let e = robot.move_to("p1", false).unwrap_err();
+    assert_eq!(e.code(), Code(-77));
+    assert!(e.to_string().contains("BIOS_GANTRY_JAMMED"), "{e}");
+    assert!(e.to_string().contains("the gantry is jammed"), "{e}");
+
+    // Older controllers: TROL_ERR_UNKNOWN, and a reply that breaks the rules (a TROL code
+    // in the table): connected, codes by number.
+    let mut bad = Reply::Codes(vec![jammed]).encode();
+    bad[2..4].copy_from_slice(&(-32001i16).to_le_bytes());
+    for reply in [Reply::Code(TROL_ERR_UNKNOWN).encode(), bad] {
+        let mut robot = controller_with_codes(reply);
+        trol::check_server(&mut robot).unwrap();
+        assert_eq!(Code(-77).name(robot.codes()), None);
+        let e = robot.move_to("p1", false).unwrap_err();
+        assert!(e.to_string().contains("-77"), "{e}");
+    }
+
+    // The simulator tells its own, the simulated A465's.
+    let mut robot = Robot::embedded(settings());
+    let told = robot.get_codes().unwrap();
+    assert_eq!(told.len(), trol_sim::SIM_CODES.len());
+    assert!(told.iter().any(|c| c.name == "BIOS_NOT_HOMED"));
+}
+
 #[test]
 fn the_host_checks_the_controllers_version_and_kind() {
     // The simulator: this library's version; its codes are the simulated A465's.

@@ -124,6 +124,10 @@ fn reply_json(
             "epoch": epoch,
         }}),
         trol::Reply::Version { protocol, kind } => json!({"protocol": protocol, "kind": kind}),
+        trol::Reply::Codes(codes) => json!({"codes": codes
+            .iter()
+            .map(|c| json!({"value": c.value, "name": c.name, "meaning": c.meaning}))
+            .collect::<Vec<_>>()}),
         trol::Reply::Reals { values, .. } => json!({"values": values}),
         trol::Reply::Bytes { bytes, .. } => json!({"bytes": bytes}),
         trol::Reply::Code(_) => json!({}),
@@ -298,7 +302,7 @@ impl Session {
                 let j = failure_json(
                     def,
                     Some(trol::code::TROL_ERR_COMM),
-                    trol_sim::SIM_CODES,
+                    trol::default_codes(),
                     &e,
                 );
                 return Err((e, j));

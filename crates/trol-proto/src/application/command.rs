@@ -136,6 +136,9 @@ pub enum ReplyKind {
     Status,
     /// GetVersion's: 0, the protocol version, and the controller's kind in words.
     Version,
+    /// GetCodes': 0, then for each of the controller's BIOS codes its value, its name and
+    /// its meaning (docs/protocol.md, "Codes").
+    Codes,
     /// The return value and any bytes (read by the application itself).
     Bytes,
 }

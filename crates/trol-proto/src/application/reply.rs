@@ -5,13 +5,44 @@
 //! TROL code (<= -32000) is valid for every command: it is how the controller refuses a
 //! request it could not decode (TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, ...).
 
-use super::code::{Code, CodeTable, TROL_ERR_BAD_RSIZE};
+use super::code::{Code, CodeInfo, CodeTable, TROL_ERR_BAD_RSIZE};
 use super::command::{CommandDef, ReplyKind};
 use super::location::{ARM_DIMS, Location, Tag};
 use super::record::{format_location, format_number, get_location, put_location};
 
 /// The longest kind a GetVersion reply carries, bytes.
 pub const MAX_KIND: usize = 32;
+/// The longest code name a GetCodes reply carries, bytes.
+pub const MAX_CODE_NAME: usize = 32;
+/// The longest meaning a GetCodes reply carries for a code, bytes.
+pub const MAX_CODE_MEANING: usize = 160;
+/// The most codes a GetCodes reply carries.
+pub const MAX_CODES: usize = 64;
+
+/// One of a controller's BIOS codes as its GetCodes reply tells it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CodeEntry {
+    /// The value (a BIOS code: above TROL's codes, not 0).
+    pub value: i16,
+    /// Its name (`BIOS_NOT_HOMED`): printable ASCII, 1 to [`MAX_CODE_NAME`] bytes.
+    pub name: String,
+    /// What it means: printable ASCII, at most [`MAX_CODE_MEANING`] bytes.
+    pub meaning: String,
+}
+
+impl From<&CodeInfo> for CodeEntry {
+    fn from(c: &CodeInfo) -> CodeEntry {
+        CodeEntry {
+            value: c.value,
+            name: c.name.to_string(),
+            meaning: c.meaning.to_string(),
+        }
+    }
+}
+
+fn printable(b: &u8) -> bool {
+    (0x20..0x7f).contains(b)
+}
 
 /// A reply, decoded.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +81,8 @@ pub enum Reply {
         /// The controller's kind.
         kind: String,
     },
+    /// TROLGetCodes: the controller's BIOS codes, each with its name and meaning.
+    Codes(Vec<CodeEntry>),
     /// The return value and bytes the application reads itself.
     Bytes {
         /// The return value.
@@ -64,7 +97,7 @@ impl Reply {
     pub fn value(&self) -> Code {
         match self {
             Reply::Code(v) | Reply::Reals { value: v, .. } | Reply::Bytes { value: v, .. } => *v,
-            Reply::Position(_) | Reply::Version { .. } => Code(0),
+            Reply::Position(_) | Reply::Version { .. } | Reply::Codes(_) => Code(0),
             Reply::Status { bios_called, .. } => Code(i16::from(*bios_called)),
         }
     }
@@ -100,6 +133,16 @@ impl Reply {
                         .filter(|b| (0x20..0x7f).contains(b))
                         .take(MAX_KIND),
                 );
+            }
+            Reply::Codes(codes) => {
+                for c in codes.iter().take(MAX_CODES) {
+                    out.extend_from_slice(&c.value.to_le_bytes());
+                    for (text, most) in [(&c.name, MAX_CODE_NAME), (&c.meaning, MAX_CODE_MEANING)] {
+                        let bytes: Vec<u8> = text.bytes().filter(printable).take(most).collect();
+                        out.push(bytes.len() as u8);
+                        out.extend_from_slice(&bytes);
+                    }
+                }
             }
             Reply::Bytes { bytes, .. } => out.extend_from_slice(bytes),
         }
@@ -169,6 +212,47 @@ impl Reply {
                     kind: String::from_utf8_lossy(kind).into_owned(),
                 })
             }
+            ReplyKind::Codes => {
+                if value.0 != 0 {
+                    return Err(bad());
+                }
+                let mut codes = Vec::new();
+                let mut rest = rest;
+                while !rest.is_empty() {
+                    let [lo, hi, more @ ..] = rest else {
+                        return Err(bad());
+                    };
+                    let code = Code(i16::from_le_bytes([*lo, *hi]));
+                    let mut texts = [String::new(), String::new()];
+                    let mut more = more;
+                    for (i, most) in [MAX_CODE_NAME, MAX_CODE_MEANING].into_iter().enumerate() {
+                        let [n, after @ ..] = more else {
+                            return Err(bad());
+                        };
+                        let n = *n as usize;
+                        if n > most || after.len() < n || !after[..n].iter().all(printable) {
+                            return Err(bad());
+                        }
+                        texts[i] = String::from_utf8_lossy(&after[..n]).into_owned();
+                        more = &after[n..];
+                    }
+                    let [name, meaning] = texts;
+                    // BIOS codes only: TROL's own codes and success are the host's.
+                    if name.is_empty() || code.is_trol() || code.is_success() {
+                        return Err(bad());
+                    }
+                    codes.push(CodeEntry {
+                        value: code.0,
+                        name,
+                        meaning,
+                    });
+                    if codes.len() > MAX_CODES {
+                        return Err(bad());
+                    }
+                    rest = more;
+                }
+                Ok(Reply::Codes(codes))
+            }
             ReplyKind::Status => {
                 if rest.len() != 6 || !(value.0 == 0 || value.0 == 1) || rest[3] != 0 {
                     return Err(bad());
@@ -200,6 +284,17 @@ impl Reply {
                 last.describe(bios)
             ),
             Reply::Version { protocol, kind } => format!("protocol {protocol}, {kind}"),
+            Reply::Codes(codes) => {
+                let each: Vec<String> = codes
+                    .iter()
+                    .map(|c| format!("{} {}", c.value, c.name))
+                    .collect();
+                if each.is_empty() {
+                    "BIOS codes: none".to_string()
+                } else {
+                    format!("BIOS codes: {}", each.join(", "))
+                }
+            }
             Reply::Reals { value, values } => {
                 let v: Vec<String> = values.iter().map(|x| format_number(*x)).collect();
                 format!("{}, values ({})", value.describe(bios), v.join(", "))

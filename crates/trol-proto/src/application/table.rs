@@ -239,6 +239,15 @@ commands! {
         reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
         help: "halt the arm when no call arrives for tenths/10 s (0: off)",
     }
+    /// TROLGetCodes(): the controller's BIOS codes with their names and meanings (added: the
+    /// host reads them after the version check, so that every surface names a controller's
+    /// codes as that controller does; docs/protocol.md "Codes").
+    TROL_GET_CODES = 196 => GET_CODES {
+        name: "TROLGetCodes",
+        args: &[],
+        reply: ReplyKind::Codes, success: &[], wait: Wait::Reply,
+        help: "the controller's BIOS codes: the value, name and meaning of each",
+    }
 }
 
 /// The version of TROL's protocol this library speaks: 3 is this successor's (the manual's
@@ -304,7 +313,7 @@ mod tests {
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
         assert_eq!(LAST_CAT3_CODE, 128);
-        assert_eq!(LAST_CAT4_CODE, 195);
+        assert_eq!(LAST_CAT4_CODE, 196);
     }
 
     #[test]

@@ -32,7 +32,7 @@ use trol_comm::{
 use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
 use trol_proto::application::record::Value;
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT, POS_ACT, POS_COMMANDED};
-use trol_proto::application::{Catalog, CommandDef, LocName, Location, Reply, Tag};
+use trol_proto::application::{CommandDef, LocName, Location, Reply, Tag};
 use trol_proto::transaction::TransCode;
 
 use trol_client::config::Config;
@@ -268,7 +268,15 @@ fn on_line<R>(f: impl FnOnce(&mut dyn Channel) -> R) -> Option<R> {
 }
 
 /// The layer-3 handlers that call the application's C functions.
-struct CHandlers(Callbacks);
+/// The C error handlers of a connection, and the reply-wait policy of the commands it knows
+/// (built-in and added), for the default ErrAppTimeOut.
+struct CHandlers(Callbacks, trol_comm::TimeoutPolicy);
+
+impl CHandlers {
+    fn of(callbacks: Callbacks, robot: &Robot) -> CHandlers {
+        CHandlers(callbacks, timeout_policy(robot.catalog().clone()))
+    }
+}
 
 fn message_for_c(bytes: &[u8]) -> (Vec<u8>, SInData) {
     let mut copy = bytes.to_vec();
@@ -325,10 +333,7 @@ impl ErrorHandlers for CHandlers {
         line: &mut dyn Channel,
     ) -> TimeoutAction {
         match self.0.resolved().app_timeout {
-            None => {
-                let policy = timeout_policy(Catalog::builtin());
-                DefaultHandlers::app_timeout(Some(&policy), ctx)
-            }
+            None => DefaultHandlers::app_timeout(Some(&self.1), ctx),
             Some(f) => {
                 let (_keep, mut data) = message_for_c(ctx.request);
                 // SAFETY: as above.
@@ -910,7 +915,8 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
             let st = state();
             (st.callbacks, st.reply_tenths, st.delay, st.repeats)
         };
-        robot.set_handlers(Box::new(CHandlers(callbacks)));
+        let handlers = CHandlers::of(callbacks, &robot);
+        robot.set_handlers(Box::new(handlers));
         robot.transactor_mut().set_repeats(repeats);
         // Both were checked when they were set.
         let _ = robot.set_reply_timeout_tenths(tenths);
@@ -1186,7 +1192,8 @@ fn set_callbacks(f: impl FnOnce(&mut Callbacks)) {
         f(&mut st.callbacks);
         let cb = st.callbacks;
         if let Some(r) = st.robot.as_mut() {
-            r.set_handlers(Box::new(CHandlers(cb)));
+            let handlers = CHandlers::of(cb, r);
+            r.set_handlers(Box::new(handlers));
         }
     })
 }
@@ -1267,7 +1274,8 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
             Err(e) => return fail(format!("trol_connect({name}): {e}")),
         };
         let fresh = FRESH;
-        robot.set_handlers(Box::new(CHandlers(fresh.callbacks)));
+        let handlers = CHandlers::of(fresh.callbacks, &robot);
+        robot.set_handlers(Box::new(handlers));
         CONNECT_ERROR.with_borrow_mut(|e| *e = std::ffi::CString::default());
         Box::into_raw(Box::new(TROL {
             inner: Mutex::new(State {

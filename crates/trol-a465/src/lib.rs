@@ -12,7 +12,7 @@
 //!
 #![doc = include_str!("../../../docs/a465.md")]
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod arm;
 pub mod kinematics;

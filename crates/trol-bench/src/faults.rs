@@ -327,7 +327,7 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
         .set_reply_timeout_tenths(3)
         .map_err(|e| e.to_string())?;
     if plan.recovery == Recovery::Getstatus {
-        robot.transactor_mut().set_repeats(0);
+        robot.set_repeats(0);
     }
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let mut asked: Vec<Asked> = Vec::new();
@@ -484,7 +484,7 @@ fn getstatus_method(
     let mut sent = robot.last_transaction();
     for _ in 0..20 {
         std::thread::sleep(Duration::from_millis(150));
-        let _ = robot.transactor_mut().driver_mut().port_mut().flush_input();
+        let _ = robot.flush_input();
         report.transactions += 1;
         let Ok(status) = robot.status_record() else {
             report.failed_calls += 1;

@@ -263,7 +263,7 @@ fn on_line<R>(f: impl FnOnce(&mut dyn Channel) -> R) -> Option<R> {
     }
     let mut st = state();
     let robot = st.robot.as_mut()?;
-    let mut line = robot.transactor_mut().channel();
+    let mut line = robot.channel();
     Some(f(&mut line))
 }
 
@@ -917,7 +917,7 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         };
         let handlers = CHandlers::of(callbacks, &robot);
         robot.set_handlers(Box::new(handlers));
-        robot.transactor_mut().set_repeats(repeats);
+        robot.set_repeats(repeats);
         // Both were checked when they were set.
         let _ = robot.set_reply_timeout_tenths(tenths);
         let _ = robot.set_delay(delay);
@@ -991,7 +991,7 @@ pub extern "C" fn TROLSetRepeats(repeats: TUINT) {
         let mut st = state();
         st.repeats = n;
         if let Some(r) = st.robot.as_mut() {
-            r.transactor_mut().set_repeats(n);
+            r.set_repeats(n);
         }
     })
 }

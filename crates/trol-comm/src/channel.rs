@@ -82,3 +82,11 @@ impl<P: Port> Channel for LineChannel<'_, P> {
         let _ = self.driver.port_mut().flush_input();
     }
 }
+
+impl<P> std::fmt::Debug for LineChannel<'_, P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LineChannel")
+            .field("wait", &self.wait)
+            .finish_non_exhaustive()
+    }
+}

@@ -175,3 +175,11 @@ impl<P: Port> Driver<P> {
         }
     }
 }
+
+impl<P> std::fmt::Debug for Driver<P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Driver")
+            .field("delay", &self.delay)
+            .finish_non_exhaustive()
+    }
+}

@@ -178,3 +178,11 @@ impl ErrorHandlers for DefaultHandlers {
         DefaultHandlers::app_timeout(self.policy.as_ref(), ctx)
     }
 }
+
+impl std::fmt::Debug for DefaultHandlers {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DefaultHandlers")
+            .field("reply_waits", &self.policy.is_some())
+            .finish()
+    }
+}

@@ -10,7 +10,7 @@
 //! Both ends use the same driver; only the state machine differs.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 mod channel;
 mod driver;

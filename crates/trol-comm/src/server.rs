@@ -225,3 +225,12 @@ impl<P: Port> Server<P> {
         }
     }
 }
+
+impl<P> std::fmt::Debug for Server<P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Server")
+            .field("driver", &self.driver)
+            .field("responder", &self.responder)
+            .finish_non_exhaustive()
+    }
+}

@@ -359,3 +359,13 @@ fn recovery(r: Recovery) -> Decision {
         Recovery::Fail | Recovery::Abort => Decision::GiveUp,
     }
 }
+
+impl<P> std::fmt::Debug for Transactor<P> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Transactor")
+            .field("driver", &self.driver)
+            .field("initiator", &self.initiator)
+            .field("repeats", &self.repeats)
+            .finish_non_exhaustive()
+    }
+}

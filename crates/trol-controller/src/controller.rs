@@ -314,3 +314,21 @@ impl Drop for Embedded {
         }
     }
 }
+
+impl<P, B: Backend> std::fmt::Debug for Controller<P, B> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Controller")
+            .field("server", &self.server)
+            .field("pcp", &self.pcp)
+            .field("mode", &self.mode)
+            .finish_non_exhaustive()
+    }
+}
+
+impl std::fmt::Debug for Embedded {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Embedded")
+            .field("running", &self.thread.is_some())
+            .finish_non_exhaustive()
+    }
+}

@@ -13,7 +13,7 @@
 //! runs the server with [`embedded_with`] or [`Controller`] (docs/extending.md).
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod a465;
 pub mod backend;

@@ -507,3 +507,29 @@ pub fn tool_in_reach(tool: [f64; 6]) -> Result<[f64; 6], Code> {
         Err(TROL_ERR_ARG_RANGE)
     }
 }
+
+impl<B: Backend> std::fmt::Debug for Context<'_, B> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Context")
+            .field("backend", &self.backend.kind())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<B> std::fmt::Debug for Handler<B> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Handler::Cat1(_) => "Handler::Cat1",
+            Handler::Other(_) => "Handler::Other",
+        })
+    }
+}
+
+impl<B: Backend> std::fmt::Debug for Pcp<B> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Pcp")
+            .field("backend", &self.backend.kind())
+            .field("commands", &self.catalog.iter().count())
+            .finish_non_exhaustive()
+    }
+}

@@ -951,3 +951,11 @@ impl Backend for MarsBackend {
         })
     }
 }
+
+impl std::fmt::Debug for MarsBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MarsBackend")
+            .field("port", &self.port.name())
+            .finish_non_exhaustive()
+    }
+}

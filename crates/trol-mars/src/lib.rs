@@ -10,6 +10,9 @@
 //! - [`mars8`]: a simulated MARS 8 (`trol sim --mars`), with a switch for each point the
 //!   public sources leave open.
 
+#![forbid(unsafe_code)]
+#![warn(missing_docs, missing_debug_implementations)]
+
 pub mod backend;
 pub mod line;
 pub mod mars8;

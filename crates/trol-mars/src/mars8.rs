@@ -668,6 +668,14 @@ pub fn serve(mut port: Box<dyn Port>, unit: Shared, stop: Arc<AtomicBool>) -> st
     Ok(())
 }
 
+impl std::fmt::Debug for Mars8 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Mars8")
+            .field("time_scale", &self.scale)
+            .finish_non_exhaustive()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

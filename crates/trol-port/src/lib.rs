@@ -16,7 +16,7 @@
 //! delays and a cut, from a seed so that a failure can be replayed.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod faulty;
 pub mod memory;

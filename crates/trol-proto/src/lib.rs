@@ -14,7 +14,7 @@
 //! `trol-comm`. The byte-exact specification is docs/protocol.md.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod activation;
 pub mod application;
@@ -23,6 +23,12 @@ pub mod time;
 pub mod transaction;
 
 pub use time::Instant;
+
+// The machines and the types every user of the core meets, at the root; the layers' modules
+// hold the details (frame layout, control codes, the command table).
+pub use application::{Catalog, CodeTable, CommandDef, Reply, Value};
+pub use link::{BlockCheck, Link, LinkConfig, LinkError};
+pub use transaction::{Initiator, Responder, TransCode};
 
 /// What every sans-IO machine of this crate offers to whoever moves its bytes and keeps its
 /// time: the driver in `trol-comm`, or a test's simulated line. Implemented by

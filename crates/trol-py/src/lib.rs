@@ -71,6 +71,8 @@ fn to_py(py: Python<'_>, f: Failure) -> PyErr {
             exception(py, "IncompatibleError", (message, code, ours, theirs))
         }
         Error::Setup(_) => exception(py, "SetupError", (message, code)),
+        // A kind of failure added to the Rust API later: the base class, with its code.
+        _ => exception(py, "TrolError", (message, code)),
     }
 }
 
@@ -296,6 +298,13 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
         Reply::Bytes { value, bytes } => (value.0, PyBytes::new(py, &bytes))
             .into_pyobject(py)?
             .into_any(),
+        // A reply form added to the core later: its bytes, as for an added command.
+        other => {
+            let bytes = other.encode();
+            (other.value().0, PyBytes::new(py, &bytes[2..]))
+                .into_pyobject(py)?
+                .into_any()
+        }
     })
 }
 

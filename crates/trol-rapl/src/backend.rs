@@ -1984,3 +1984,11 @@ impl Backend for RaplBackend {
         }
     }
 }
+
+impl std::fmt::Debug for RaplBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RaplBackend")
+            .field("port", &self.port.name())
+            .finish_non_exhaustive()
+    }
+}

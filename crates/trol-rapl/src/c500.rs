@@ -996,6 +996,12 @@ pub fn serve_with(
     Ok(())
 }
 
+impl std::fmt::Debug for C500 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("C500").finish_non_exhaustive()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

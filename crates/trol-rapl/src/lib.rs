@@ -16,7 +16,7 @@
 //! - [`c500`]: the simulated C500 in RAPL-II mode, backed by the simulated A465.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod aci;
 pub mod backend;

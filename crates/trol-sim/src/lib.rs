@@ -6,7 +6,7 @@
 //! - [`embedded`]: the controller the host's port `sim` talks to, on a thread.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 use std::time::Instant;
 
@@ -247,6 +247,15 @@ impl Backend for SimBackend {
             Tag::Prec => Location::Prec(joints_to_counts(&q).to_vec()),
             Tag::Cart => Location::from_array6(Tag::Cart, self.arm.kinematics().fk_xyzypr(&q)),
         })
+    }
+}
+
+impl std::fmt::Debug for SimBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SimBackend")
+            .field("time_scale", &self.scale)
+            .field("now", &self.now())
+            .finish_non_exhaustive()
     }
 }
 

@@ -22,7 +22,7 @@
 //! only, and each event stream needs a write timeout of its own, which std gives directly.
 
 #![forbid(unsafe_code)]
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -123,7 +123,7 @@ pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
 }
 
 /// What a view shows: the simulated arm itself, or what a backend reports of a real one.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub enum Source {
     /// The simulated arm's shared copy.
     Sim(SharedArm),
@@ -141,6 +141,7 @@ impl Source {
 }
 
 /// A running view server; it stops when dropped.
+#[derive(Debug)]
 pub struct ViewServer {
     addr: SocketAddr,
     stop: Arc<AtomicBool>,

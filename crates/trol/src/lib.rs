@@ -34,7 +34,7 @@
 //! The manual's C API (`include/trol.h`, `libtrol.so`, `libtrol.a`) is the crate `trol-c`
 //! over this one.
 
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 
 pub mod codes;
 pub mod config;

@@ -28,6 +28,7 @@ pub use trol_controller::PosMode;
 /// Why an API call did not succeed. "The controller said no" ([`Error::Refused`]) is kept
 /// apart from "the link failed" ([`Error::Link`]); [`Error::code`] gives the manual's code.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// The controller answered with a value that is not success for the command: a BIOS
     /// code (> -32000), or a TROL code the controller detected (TROL_ERR_UNKNOWN,
@@ -70,6 +71,7 @@ pub enum Error {
 
 /// Why a connection could not be set up.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum SetupError {
     /// The port could not be opened.
     #[error("{0}")]
@@ -693,9 +695,38 @@ impl Robot {
         self.transactor.last_comm_error()
     }
 
-    /// The layer-3 machinery (port, driver, link settings).
-    pub fn transactor_mut(&mut self) -> &mut Transactor<Box<dyn Port>> {
+    /// The layer-3 machinery (port, driver, link settings): the crate's own; the public
+    /// surface is the methods below.
+    pub(crate) fn transactor_mut(&mut self) -> &mut Transactor<Box<dyn Port>> {
         &mut self.transactor
+    }
+
+    /// How often a request whose transaction failed is sent again (TROLSetRepeats; 0: the
+    /// first failure is the call's).
+    pub fn set_repeats(&mut self, repeats: u8) {
+        self.transactor.set_repeats(repeats);
+    }
+
+    /// How often a failed request is sent again ([`Robot::set_repeats`]).
+    pub fn repeats(&self) -> u8 {
+        self.transactor.repeats()
+    }
+
+    /// The link's settings in use: the block check, timeouts, the time a character takes
+    /// (with [`Robot::set_delay`]).
+    pub fn link_config(&self) -> LinkConfig {
+        *self.transactor.initiator().link().config()
+    }
+
+    /// Drop what waits in the port's input (FlushBuffer).
+    pub fn flush_input(&mut self) -> std::io::Result<()> {
+        self.transactor.driver_mut().port_mut().flush_input()
+    }
+
+    /// Layers 1-2 of this connection for the manual's error handlers (SendData,
+    /// ReceiveData, BufferEmpty, FlushBuffer), with the link's settings and reply timeout.
+    pub fn channel(&mut self) -> trol_comm::LineChannel<'_, Box<dyn Port>> {
+        self.transactor.channel()
     }
 
     /// Give the port back, ending the connection (`trol link` activates the controller, then
@@ -1125,4 +1156,14 @@ fn loc_name(def: &CommandDef, name: &str) -> Result<Value> {
             what: e.to_string(),
         })
     })
+}
+
+impl std::fmt::Debug for Robot {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Robot")
+            .field("transactor", &self.transactor)
+            .field("embedded", &self._embedded.is_some())
+            .field("broken", &self.broken)
+            .finish_non_exhaustive()
+    }
 }

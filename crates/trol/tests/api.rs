@@ -351,12 +351,7 @@ fn exactly_once_when_the_reply_is_lost_for_good() {
     rig.deaf.store(false, Ordering::SeqCst);
     // Give both link ends their reset time, then ask.
     std::thread::sleep(Duration::from_millis(800));
-    let _ = rig
-        .robot
-        .transactor_mut()
-        .driver_mut()
-        .port_mut()
-        .flush_input();
+    let _ = rig.robot.flush_input();
     assert_eq!(
         rig.robot.status().unwrap(),
         (true, SUCCESS),
@@ -416,17 +411,12 @@ fn exactly_once_when_the_request_is_lost() {
         rig.robot.move_to("nowhere", false).unwrap_err().code(),
         TROL_ERR_LOCATION
     );
-    rig.robot.transactor_mut().set_repeats(0);
+    rig.robot.set_repeats(0);
     rig.mute.store(true, Ordering::SeqCst);
     assert_eq!(rig.robot.joint(1, 0.25).unwrap_err().code(), TROL_ERR_COMM);
     rig.mute.store(false, Ordering::SeqCst);
     std::thread::sleep(Duration::from_millis(800));
-    let _ = rig
-        .robot
-        .transactor_mut()
-        .driver_mut()
-        .port_mut()
-        .flush_input();
+    let _ = rig.robot.flush_input();
     assert_eq!(
         rig.robot.status().unwrap(),
         (false, TROL_ERR_LOCATION),
@@ -579,9 +569,7 @@ fn robots_from_a_config_file() {
         )
         .unwrap();
         let cfg = trol::Config::from_file(&dir.join("viewed.cfg")).unwrap();
-        let e = Robot::from_config(&cfg)
-            .err()
-            .expect("no view in this build");
+        let e = Robot::from_config(&cfg).expect_err("no view in this build");
         assert!(e.to_string().contains("`view =`"), "{e}");
     }
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
@@ -700,7 +688,7 @@ fn impossible_link_settings_are_refused_and_the_delay_counts_in_the_timeouts() {
     let e = rig.robot.set_delay(Duration::from_secs(65)).unwrap_err();
     assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
     assert!(e.to_string().contains("50 ms"), "{e}");
-    let char_time = |r: &mut Robot| r.transactor_mut().initiator().link().config().char_time;
+    let char_time = |r: &mut Robot| r.link_config().char_time;
     let before = char_time(&mut rig.robot);
     rig.robot.set_delay(Duration::from_millis(5)).unwrap();
     assert_eq!(char_time(&mut rig.robot), before + Duration::from_millis(5));
@@ -949,11 +937,11 @@ fn a_reply_that_comes_after_the_timeout_is_dropped_and_the_next_calls_work() {
     rig.robot.add_command(SLOW).unwrap();
     // 0.2 s for a reply, no repeats: the call fails, and its reply arrives afterwards.
     rig.robot.set_reply_timeout_tenths(2).unwrap();
-    let repeats = rig.robot.transactor_mut().repeats();
-    rig.robot.transactor_mut().set_repeats(0);
+    let repeats = rig.robot.repeats();
+    rig.robot.set_repeats(0);
     let e = rig.robot.call(&SLOW, &[]).unwrap_err();
     assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
-    rig.robot.transactor_mut().set_repeats(repeats);
+    rig.robot.set_repeats(repeats);
     // A call made at once finds the controller silent for longer than an ENQ timeout (it
     // still runs the slow handler): it fails with TROL_ERR_COMM rather than repeating into
     // the silence, or works if the controller answered in time; never the late reply.

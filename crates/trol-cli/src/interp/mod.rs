@@ -130,7 +130,8 @@ fn reply_json(
             .collect::<Vec<_>>()}),
         trol::Reply::Reals { values, .. } => json!({"values": values}),
         trol::Reply::Bytes { bytes, .. } => json!({"bytes": bytes}),
-        trol::Reply::Code(_) => json!({}),
+        // The return value alone, or a form this interpreter does not know yet.
+        _ => json!({}),
     };
     if let (Some(o), Some(e)) = (o.as_object_mut(), extra.as_object()) {
         o.extend(e.clone());

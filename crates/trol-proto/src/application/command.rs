@@ -118,8 +118,10 @@ pub struct Arg {
     pub kind: ArgKind,
 }
 
-/// The form of a command's reply (after the first word, the return value).
+/// The form of a command's reply (after the first word, the return value). More forms may
+/// come with more commands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ReplyKind {
     /// The return value alone (CAT1).
     Code,

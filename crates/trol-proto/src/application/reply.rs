@@ -44,8 +44,9 @@ fn printable(b: &u8) -> bool {
     (0x20..0x7f).contains(b)
 }
 
-/// A reply, decoded.
+/// A reply, decoded. More forms may come with more commands.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum Reply {
     /// CAT1 (and every refusal): the return value alone.
     Code(Code),

@@ -14,8 +14,9 @@ use std::time::Instant;
 use clap::{Args, Subcommand};
 use trol_proto::link::BlockCheck;
 use trol_proto::link::codes::NakCode;
-use trol_proto::link::control::{self, ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, accepts};
-use trol_proto::link::frame::{self, FRAME_SIZE, HEADER_LEN, frame_count};
+use trol_proto::link::control;
+use trol_proto::link::frame;
+use trol_proto::link::monitor::{FrameEnd, Message, Monitor, Seen};
 
 use trol_proto::application::Catalog;
 
@@ -84,28 +85,13 @@ impl Dir {
     }
 }
 
-/// One direction's block parser.
-#[derive(Default)]
-struct Stream {
-    pending: Vec<u8>,
-    /// The message being received: its length, PCI, bytes so far (from the header's first
-    /// word), and frames accepted.
-    message: Option<(usize, u16, Vec<u8>, usize)>,
-    /// The block check the message's header passed.
-    check: Option<BlockCheck>,
-    /// Terminal text (bytes outside the protocol, shown as text).
-    text: Vec<u8>,
-    /// An ENQ went out from this side: a header may follow (so a byte within one bit of
-    /// SOH starts one; otherwise only SOH itself does, as `>` of a prompt is one bit away).
-    after_enq: bool,
-}
-
-/// Decodes both directions and writes lines to `out`.
+/// Decodes both directions and writes lines to `out`: layer 2 through the protocol core's
+/// passive reader ([`Monitor`]), layer 4 through the catalog.
 pub struct Decoder<W: Write> {
     out: W,
     catalog: Catalog,
-    pc: Stream,
-    ctl: Stream,
+    pc: Monitor,
+    ctl: Monitor,
     last_request: Option<(Vec<u8>, f64)>,
     /// The controller's BIOS codes: the default until a GetCodes reply goes by, then the
     /// controller's own (docs/protocol.md, "Codes").
@@ -118,17 +104,10 @@ impl<W: Write> Decoder<W> {
         Decoder {
             out,
             catalog,
-            pc: Stream::default(),
-            ctl: Stream::default(),
+            pc: Monitor::new(),
+            ctl: Monitor::new(),
             last_request: None,
             codes: trol::default_codes(),
-        }
-    }
-
-    fn stream(&mut self, dir: Dir) -> &mut Stream {
-        match dir {
-            Dir::Pc => &mut self.pc,
-            Dir::Ctl => &mut self.ctl,
         }
     }
 
@@ -138,174 +117,83 @@ impl<W: Write> Decoder<W> {
 
     /// Bytes from `dir` at `t` seconds.
     pub fn feed(&mut self, t: f64, dir: Dir, bytes: &[u8]) {
-        let s = self.stream(dir);
-        s.pending.extend_from_slice(bytes);
-        loop {
-            let s = self.stream(dir);
-            let Some(&b) = s.pending.first() else {
-                break;
-            };
-            // Inside a message, a block starts with SOH or STX; its length is known.
-            let need = if b == SOH || (s.after_enq && accepts(b, SOH)) {
-                HEADER_LEN
-            } else if accepts(b, STX) {
-                match &s.message {
-                    Some((len, _, _, frames)) if *frames < frame_count(*len) => {
-                        let start = 2 + frames * FRAME_SIZE;
-                        (len - start).min(FRAME_SIZE) + 6
-                    }
-                    _ => 1,
-                }
-            } else if accepts(b, NAK) && !(b.is_ascii_graphic() || b == b' ') {
-                // (`R` is one bit from NAK: printable bytes outside a block are text.)
-                2
-            } else {
-                1
-            };
-            if s.pending.len() < need {
-                break;
-            }
-            let block: Vec<u8> = s.pending.drain(..need).collect();
-            self.block(t, dir, &block);
+        let seen = match dir {
+            Dir::Pc => self.pc.feed(bytes),
+            Dir::Ctl => self.ctl.feed(bytes),
+        };
+        for s in seen {
+            self.show(t, dir, s);
         }
     }
 
-    fn flush_text(&mut self, t: f64, dir: Dir) {
-        let s = self.stream(dir);
-        if s.text.is_empty() {
-            return;
-        }
-        let text = String::from_utf8_lossy(&s.text).escape_debug().to_string();
-        s.text.clear();
-        self.line(t, dir, format!("terminal text \"{text}\""));
-    }
-
-    fn block(&mut self, t: f64, dir: Dir, block: &[u8]) {
-        let b = block[0];
-        if block.len() == 1 && (b.is_ascii_graphic() || b == b' ' || b == b'\r' || b == b'\n') {
-            let s = self.stream(dir);
-            s.text.push(b);
-            if b == b'\r' || b == b'\n' {
-                self.flush_text(t, dir);
-            }
-            return;
-        }
-        self.flush_text(t, dir);
-        if block.len() == HEADER_LEN && accepts(b, SOH) {
-            self.stream(dir).after_enq = false;
-            let len = u16::from_le_bytes([block[1], block[2]]) as usize;
-            let pci = u16::from_le_bytes([block[3], block[4]]);
-            let bcc = u16::from_le_bytes([block[7], block[8]]);
-            let check = check_of(bcc, |c| frame::bcc(c, &block[1..7]));
-            let ok = check.is_some() && accepts(block[9], ETX);
-            let first: Vec<u8> = block[5..7.min(5 + len)].to_vec();
-            // In CRC-16 mode the PCI's bits 9..15 are the check of the whole message.
-            let shown = match check {
-                Some(BlockCheck::Crc16) => format!(
-                    "PCI {:#06x} (transaction {}), message check {:#04x}",
-                    pci & frame::PCI_LAYER3_BITS,
-                    pci & 0xFF,
-                    pci >> 9
-                ),
-                _ => format!("PCI {pci:#06x} (transaction {})", pci & 0xFF),
-            };
-            self.line(
-                t,
-                dir,
-                format!(
-                    "HEADER #bytes {len}, {shown}, first word {:02x?}, BCC {bcc:#06x} {}",
-                    &block[5..7],
-                    verdict(check)
-                ),
-            );
-            let s = self.stream(dir);
-            s.message = if ok { Some((len, pci, first, 0)) } else { None };
-            s.check = check;
-            return;
-        }
-        if accepts(b, STX) && block.len() > 6 {
-            let n = block.len() - 6;
-            let data = &block[1..1 + n];
-            let fid = u16::from_le_bytes([block[1 + n], block[2 + n]]);
-            let bcc = u16::from_le_bytes([block[3 + n], block[4 + n]]);
-            let end = block[5 + n];
-            let check = check_of(bcc, |c| {
-                frame::frame_bcc(c, &block[1..1 + n], [block[1 + n], block[2 + n]])
-            });
-            let ok = check.is_some();
-            // In CRC-16 mode the field is the index XOR a second CRC of the data.
-            let fid = frame::frame_index_of(check.unwrap_or(BlockCheck::Lrc), fid, data);
-            let term = if accepts(end, ETX) {
-                "ETX"
-            } else if accepts(end, ETB) {
-                "ETB"
-            } else {
-                "bad terminator"
-            };
-            self.line(
-                t,
-                dir,
-                format!(
-                    "FRAME id {fid}, {n} data bytes, BCC {bcc:#06x} {}, {term}",
-                    verdict(check)
-                ),
-            );
-            let s = self.stream(dir);
-            if let Some((_, _, bytes, frames)) = s.message.as_mut() {
-                if ok && fid as usize == *frames {
-                    bytes.extend_from_slice(data);
-                    *frames += 1;
-                }
-            }
-            return;
-        }
-        if accepts(b, NAK) && block.len() == 2 {
-            let code = NakCode::from_byte(block[1])
-                .map(|c| c.name().to_string())
-                .unwrap_or_else(|| format!("{:#04x}", block[1]));
-            self.line(t, dir, format!("NAK {code}"));
-            return;
-        }
-        let name = if accepts(b, ENQ) {
-            "ENQ"
-        } else if accepts(b, ACK) {
-            "ACK"
-        } else if accepts(b, EOT) {
-            "EOT"
-        } else {
-            let what = control::name_of(b)
+    fn show(&mut self, t: f64, dir: Dir, seen: Seen) {
+        let what = match seen {
+            Seen::Text(text) => format!(
+                "terminal text \"{}\"",
+                String::from_utf8_lossy(&text).escape_debug()
+            ),
+            Seen::Control(c) => control::name_of(c).unwrap_or("control").to_string(),
+            Seen::Nak(code) => format!(
+                "NAK {}",
+                NakCode::from_byte(code)
+                    .map(|c| c.name().to_string())
+                    .unwrap_or_else(|| format!("{code:#04x}"))
+            ),
+            Seen::Stray(b) => control::name_of(b)
                 .map(|n| format!("{n} out of place"))
-                .unwrap_or_else(|| format!("byte {b:#04x} outside a block"));
-            self.line(t, dir, what);
-            return;
+                .unwrap_or_else(|| format!("byte {b:#04x} outside a block")),
+            Seen::Header {
+                len,
+                pci,
+                first_word,
+                bcc,
+                check,
+            } => {
+                // In CRC-16 mode the PCI's bits 9..15 are the check of the whole message.
+                let shown = match check {
+                    Some(BlockCheck::Crc16) => format!(
+                        "PCI {:#06x} (transaction {}), message check {:#04x}",
+                        pci & frame::PCI_LAYER3_BITS,
+                        pci & 0xFF,
+                        pci >> 9
+                    ),
+                    _ => format!("PCI {pci:#06x} (transaction {})", pci & 0xFF),
+                };
+                format!(
+                    "HEADER #bytes {len}, {shown}, first word {first_word:02x?}, BCC {bcc:#06x} {}",
+                    verdict(check)
+                )
+            }
+            Seen::Frame {
+                index,
+                data,
+                bcc,
+                check,
+                end,
+            } => format!(
+                "FRAME id {index}, {} data bytes, BCC {bcc:#06x} {}, {}",
+                data.len(),
+                verdict(check),
+                match end {
+                    FrameEnd::Etx => "ETX",
+                    FrameEnd::Etb => "ETB",
+                    FrameEnd::Bad => "bad terminator",
+                }
+            ),
+            Seen::Message(Message::Incomplete { got, len }) => {
+                format!("message incomplete: {got} of {len} bytes")
+            }
+            Seen::Message(Message::CheckWrong) => "message check WRONG: not delivered".into(),
+            Seen::Message(Message::Delivered { pci, bytes }) => {
+                return self.message(t, dir, pci, bytes);
+            }
+            // A kind of sight the core adds later: its form, unformatted.
+            other => format!("{other:?}"),
         };
-        self.line(t, dir, name.to_string());
-        self.stream(dir).after_enq = name == "ENQ";
-        if name == "EOT" {
-            self.message_done(t, dir);
-        }
+        self.line(t, dir, what);
     }
 
-    fn message_done(&mut self, t: f64, dir: Dir) {
-        let s = self.stream(dir);
-        let Some((len, pci, bytes, _)) = s.message.take() else {
-            return;
-        };
-        let check = s.check;
-        if bytes.len() != len {
-            self.line(
-                t,
-                dir,
-                format!("message incomplete: {} of {len} bytes", bytes.len()),
-            );
-            return;
-        }
-        if check == Some(BlockCheck::Crc16)
-            && frame::line_pci(BlockCheck::Crc16, pci, &bytes) != pci
-        {
-            self.line(t, dir, "message check WRONG: not delivered".to_string());
-            return;
-        }
+    fn message(&mut self, t: f64, dir: Dir, pci: u16, bytes: Vec<u8>) {
         let n = pci & 0xFF;
         match dir {
             Dir::Pc => {
@@ -333,14 +221,6 @@ impl<W: Write> Decoder<W> {
             }
         }
     }
-}
-
-/// Which block check a BCC matches, if any (the trace reads either: the activation line
-/// agrees on one, and a capture may start after it).
-fn check_of(bcc: u16, of: impl Fn(BlockCheck) -> u16) -> Option<BlockCheck> {
-    [BlockCheck::Crc16, BlockCheck::Lrc]
-        .into_iter()
-        .find(|c| of(*c) == bcc)
 }
 
 fn verdict(check: Option<BlockCheck>) -> &'static str {
@@ -430,6 +310,7 @@ pub fn run(t: Trace) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use trol_proto::link::control::{ACK, ENQ, EOT, NAK};
     use trol_proto::link::frame::{Header, encode_frame};
 
     #[test]

@@ -5,6 +5,7 @@
 //!
 //! - [`control`]: the control codes and the one-bit tolerance;
 //! - [`frame`]: header and frame layout, the LRC, FRAME_SIZE, MAX_RETRIES;
+//! - [`monitor`]: a passive reader of one direction of a line (the tracer's);
 //! - [`codes`]: NAK codes and the return values of SendData / ReceiveData;
 //! - [`config`]: timeouts and limits;
 //! - [`Sender`] and [`Receiver`]: the two state machines;
@@ -15,6 +16,7 @@ pub mod codes;
 pub mod config;
 pub mod control;
 pub mod frame;
+pub mod monitor;
 mod receiver;
 mod sender;
 

@@ -130,6 +130,23 @@ impl<P: Port> Driver<P> {
         }
     }
 
+    /// Run `m` until `poll(m)` gives something, and return it; `None` once `until` passed
+    /// without (the one loop every caller takes: send_data, receive_data, the transactor,
+    /// the server).
+    pub fn next<M: Machine, T>(
+        &mut self,
+        m: &mut M,
+        until: Option<Instant>,
+        mut poll: impl FnMut(&mut M) -> Option<T>,
+    ) -> io::Result<Option<T>> {
+        let mut got = None;
+        self.run(m, until, |m| {
+            got = poll(m);
+            got.is_some()
+        })?;
+        Ok(got)
+    }
+
     /// Run `m` until `done(m)` says so, or until `until` passes (checked only between
     /// events). Bytes the machine queues are sent before `done` is asked.
     pub fn run<M: Machine>(

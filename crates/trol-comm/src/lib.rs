@@ -72,12 +72,8 @@ pub fn send_data<P: Port>(
             e.to_string(),
         )));
     }
-    let mut outcome = None;
-    driver
-        .run(link, None, |l| {
-            outcome = l.poll_outcome();
-            outcome.is_some()
-        })
+    let outcome = driver
+        .next(link, None, Link::poll_outcome)
         .map_err(LinkCallError::Io)?;
     match outcome {
         Some(Outcome::Sent) => Ok(()),
@@ -100,20 +96,13 @@ pub fn receive_data<P: Port>(
         return Err(LinkCallError::Io(std::io::Error::other("link busy")));
     }
     let give_up = now + wait;
-    let mut outcome = None;
-    driver
-        .run(link, Some(give_up), |l| {
-            outcome = l.poll_outcome();
-            outcome.is_some()
-        })
+    let mut outcome = driver
+        .next(link, Some(give_up), Link::poll_outcome)
         .map_err(LinkCallError::Io)?;
     if outcome.is_none() && !link.cancel_receive() {
         // The transfer started just before the deadline: let it end.
-        driver
-            .run(link, None, |l| {
-                outcome = l.poll_outcome();
-                outcome.is_some()
-            })
+        outcome = driver
+            .next(link, None, Link::poll_outcome)
             .map_err(LinkCallError::Io)?;
     }
     match outcome {

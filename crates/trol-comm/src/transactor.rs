@@ -218,12 +218,9 @@ impl<P: Port> Transactor<P> {
         // The failure that started the repeats: what the caller hears if they fail too.
         let mut first_failure = None;
         loop {
-            let mut event = None;
-            self.driver
-                .run(&mut self.initiator, None, |m| {
-                    event = m.poll_event();
-                    event.is_some()
-                })
+            let event = self
+                .driver
+                .next(&mut self.initiator, None, Initiator::poll_event)
                 .map_err(TransError::Io)?;
             match event {
                 Some(InitiatorEvent::Reply) => {

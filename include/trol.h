@@ -252,6 +252,17 @@ void TROLSetFatalError(TROLFatalErrorFn handler);
 typedef struct TROL TROL;
 TROL *trol_connect(const char *port, TLONG baud);
 const char *trol_connect_error(void);
+/* What kind of failure the last trol_connect on this thread met (the Rust API's SetupError,
+ * typed for C); after TROL_SETUP_INCOMPATIBLE, trol_connect_versions gives this library's
+ * protocol version and the controller's (0: it does not know TROLGetVersion). */
+#define TROL_SETUP_NONE 0
+#define TROL_SETUP_PORT 1         /* the port could not be opened */
+#define TROL_SETUP_CONFIG 2       /* the port's name, an argument or a setting is wrong */
+#define TROL_SETUP_NO_SERVER 3    /* the controller's TROL server does not answer */
+#define TROL_SETUP_INCOMPATIBLE 4 /* it speaks another protocol version */
+#define TROL_SETUP_OTHER 5
+int trol_connect_error_kind(void);
+void trol_connect_versions(TUINT *ours, TUINT *theirs);
 void trol_disconnect(TROL *c);
 const char *trol_strerror(int code);
 TINT trol_appro(TROL *c, TLocName locName, SLocData *pDisp, TUINT straight);

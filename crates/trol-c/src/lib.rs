@@ -1227,9 +1227,42 @@ pub extern "C" fn TROLSetFatalError(handler: FatalErrorFn) {
 // Connections, libmodbus-style: `TROL *trol_connect(port, baud)`, `trol_disconnect`,
 // `trol_strerror`, and `trol_name(TROL *, args)` for every manual function.
 
+/// trol_connect_error_kind's kinds (trol.h): the Rust API's SetupError, for C.
+pub const TROL_SETUP_NONE: std::ffi::c_int = 0;
+/// The port could not be opened.
+pub const TROL_SETUP_PORT: std::ffi::c_int = 1;
+/// The port's name, an argument or a setting is wrong.
+pub const TROL_SETUP_CONFIG: std::ffi::c_int = 2;
+/// The controller's TROL server does not answer, or cannot be activated.
+pub const TROL_SETUP_NO_SERVER: std::ffi::c_int = 3;
+/// The controller speaks another protocol version (trol_connect_versions).
+pub const TROL_SETUP_INCOMPATIBLE: std::ffi::c_int = 4;
+/// Anything else (the text says what).
+pub const TROL_SETUP_OTHER: std::ffi::c_int = 5;
+
+/// Why the last trol_connect on this thread failed: the text, the kind, and (for
+/// TROL_SETUP_INCOMPATIBLE) this library's protocol version and the controller's.
+#[derive(Default)]
+struct ConnectError {
+    text: std::ffi::CString,
+    kind: std::ffi::c_int,
+    versions: (u16, u16),
+}
+
 thread_local! {
-    /// Why the last trol_connect on this thread failed.
-    static CONNECT_ERROR: RefCell<std::ffi::CString> = RefCell::new(std::ffi::CString::default());
+    static CONNECT_ERROR: RefCell<ConnectError> = RefCell::new(ConnectError::default());
+}
+
+fn connect_failed(why: String, kind: std::ffi::c_int, versions: (u16, u16)) -> *mut TROL {
+    let text = std::ffi::CString::new(why.replace('\0', " ")).unwrap_or_default();
+    CONNECT_ERROR.with_borrow_mut(|e| {
+        *e = ConnectError {
+            text,
+            kind,
+            versions,
+        }
+    });
+    std::ptr::null_mut()
 }
 
 /// Run `f` (a manual function) on connection `c`. NULL: `fallback`.
@@ -1252,11 +1285,7 @@ fn on_conn<R>(c: *mut TROL, fallback: R, f: impl FnOnce() -> R) -> R {
 /// NULL on failure, with the reason from trol_connect_error().
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG) -> *mut TROL {
-    let fail = |why: String| {
-        let text = std::ffi::CString::new(why.replace('\0', " ")).unwrap_or_default();
-        CONNECT_ERROR.with_borrow_mut(|e| *e = text);
-        std::ptr::null_mut()
-    };
+    let fail = |why: String| connect_failed(why, TROL_SETUP_CONFIG, (0, 0));
     guard(std::ptr::null_mut(), || {
         if port.is_null() {
             return fail("trol_connect: the port is NULL".into());
@@ -1271,12 +1300,24 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
         // The one connect path every surface takes: open, GetStatus, GetVersion, GetCodes.
         let mut robot = match Robot::connect(name, baud) {
             Ok(r) => r,
-            Err(e) => return fail(format!("trol_connect({name}): {e}")),
+            Err(e) => {
+                use trol_client::SetupError as S;
+                let (kind, versions) = match &e {
+                    Error::Setup(S::Port(_)) => (TROL_SETUP_PORT, (0, 0)),
+                    Error::Setup(S::Config(_)) => (TROL_SETUP_CONFIG, (0, 0)),
+                    Error::Setup(S::NoServer(_)) => (TROL_SETUP_NO_SERVER, (0, 0)),
+                    Error::Setup(S::Incompatible { ours, theirs, .. }) => {
+                        (TROL_SETUP_INCOMPATIBLE, (*ours, theirs.unwrap_or(0)))
+                    }
+                    _ => (TROL_SETUP_OTHER, (0, 0)),
+                };
+                return connect_failed(format!("trol_connect({name}): {e}"), kind, versions);
+            }
         };
         let fresh = FRESH;
         let handlers = CHandlers::of(fresh.callbacks, &robot);
         robot.set_handlers(Box::new(handlers));
-        CONNECT_ERROR.with_borrow_mut(|e| *e = std::ffi::CString::default());
+        CONNECT_ERROR.with_borrow_mut(|e| *e = ConnectError::default());
         Box::into_raw(Box::new(TROL {
             inner: Mutex::new(State {
                 robot: Some(robot),
@@ -1290,7 +1331,31 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
 /// success). Valid until the next trol_connect on this thread.
 #[unsafe(no_mangle)]
 pub extern "C" fn trol_connect_error() -> *const std::ffi::c_char {
-    CONNECT_ERROR.with_borrow(|e| e.as_ptr())
+    CONNECT_ERROR.with_borrow(|e| e.text.as_ptr())
+}
+
+/// trol_connect_error_kind: what kind of failure the last trol_connect on this thread met
+/// (TROL_SETUP_NONE after a success): the Rust API's SetupError, typed for C.
+#[unsafe(no_mangle)]
+pub extern "C" fn trol_connect_error_kind() -> std::ffi::c_int {
+    CONNECT_ERROR.with_borrow(|e| e.kind)
+}
+
+/// trol_connect_versions: after TROL_SETUP_INCOMPATIBLE, this library's protocol version and
+/// the controller's (0 when it does not know TROLGetVersion); 0 and 0 otherwise. NULL
+/// pointers are skipped.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_connect_versions(ours: *mut TUINT, theirs: *mut TUINT) {
+    let (o, t) = CONNECT_ERROR.with_borrow(|e| e.versions);
+    // SAFETY: the caller's TUINTs, or NULL.
+    unsafe {
+        if !ours.is_null() {
+            *ours = o;
+        }
+        if !theirs.is_null() {
+            *theirs = t;
+        }
+    }
 }
 
 /// trol_disconnect: close the connection and free it (the controller's server stays in

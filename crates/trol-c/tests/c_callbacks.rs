@@ -375,3 +375,59 @@ fn a_call_before_inittrol_says_so_once() {
         "{err}"
     );
 }
+
+/// trol_connect's failures come typed (trol_connect_error_kind), as the Rust API's
+/// SetupError: a port that cannot be opened, and a controller of another protocol version
+/// with both numbers (trol_connect_versions).
+#[test]
+fn trol_connect_says_what_kind_of_failure_it_met() {
+    let exe = compile(
+        &root().join("crates/trol-c/tests/c/connect_errors.c"),
+        "connect_errors",
+        Link::Static,
+    );
+    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
+    let addr = line.local_addr().unwrap();
+    // A controller of protocol version 2: it answers GetStatus, then GetVersion with 2.
+    let controller = std::thread::spawn(move || {
+        let mut server = Server::new(line, LinkConfig::default());
+        for _ in 0..2 {
+            let r = server.serve(Duration::from_secs(20), &mut |req| {
+                if req.first() == Some(&table::TROL_GET_VERSION) {
+                    Reply::Version {
+                        protocol: 2,
+                        kind: "an older TROL".into(),
+                    }
+                    .encode()
+                } else {
+                    Reply::Status {
+                        bios_called: false,
+                        last: SUCCESS,
+                        transaction: 0,
+                        epoch: 1,
+                    }
+                    .encode()
+                }
+            });
+            if r.is_err() {
+                break;
+            }
+        }
+    });
+    let o = program(&exe)
+        .arg(format!("socket://{addr}"))
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("no port: kind 1"), "{out}");
+    assert!(
+        out.contains("old controller: kind 4, ours 3, theirs 2"),
+        "{out}"
+    );
+    let _ = controller.join();
+}

@@ -221,8 +221,13 @@ impl std::fmt::Display for IkError {
 
 impl std::error::Error for IkError {}
 
-/// Below this the wrist centre counts as on the base axis, and J5 as 0 (singular cases).
+/// Below this the wrist centre counts as on the base axis (a singular case).
 const SINGULAR: f64 = 1e-9;
+
+/// Below this sin(J5) counts as 0, where only J4 + J6 is fixed and J4 keeps its value. A pose
+/// that crossed the line as f32 (TROL's wire format) carries about 1e-7 of rounding, which
+/// must not pick an arbitrary J4; 1e-6 rad of wrist is 0.0002 mm at a 200 mm tool.
+const WRIST_SINGULAR: f64 = 1e-6;
 
 /// The arm's kinematics with a tool transform.
 #[derive(Clone, Copy, Debug)]
@@ -343,7 +348,7 @@ impl Kinematics {
             let e22 = z3.dot(z6);
             let sw = (e02 * e02 + e12 * e12).sqrt();
             // (J4, J5, J6) forward and backward.
-            let (fwd, bwd) = if sw > SINGULAR {
+            let (fwd, bwd) = if sw > WRIST_SINGULAR {
                 let e20 = z3.dot(r06.x_axis);
                 let e21 = z3.dot(r06.y_axis);
                 let q4 = e12.atan2(e02);

@@ -98,3 +98,21 @@ fn out_of_reach_and_limits_are_reported() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A pose with J5 = 0 that crossed the line as f32 (about 1e-7 of rounding) still counts as
+/// the singular wrist: J4 keeps its value and J6 takes the rest, instead of J4 jumping to
+/// whatever the rounding says (issue: a cartesian move to such a pose reset J4 to 0).
+#[test]
+fn at_j5_zero_j4_keeps_its_value_after_f32_rounding() {
+    let k = Kinematics::default();
+    let q = [0.0, 0.5, 1.0, 0.7, 0.0, 0.2];
+    let v = k.fk_xyzypr(&q).map(|x| x as f32 as f64);
+    let current = [0.0, 0.5, 1.0, 0.4, 0.3, 0.2];
+    let got = k.ik_nearest(&Pose::from_xyzypr(v), &current).unwrap();
+    assert!((got[3] - 0.4).abs() < 1e-9, "J4 {got:?}");
+    assert!(got[4].abs() < 1e-9, "J5 {got:?}");
+    assert!((got[5] - 0.5).abs() < 1e-5, "J6 {got:?}");
+    // The pose is the one asked, to f32's precision.
+    let (dp, dr) = pose_error(&k.fk(&got), &Pose::from_xyzypr(v));
+    assert!(dp < 1e-3 && dr < 1e-5, "{dp} mm, {dr}");
+}

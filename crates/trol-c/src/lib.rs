@@ -915,8 +915,6 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
             let st = state();
             (st.callbacks, st.reply_tenths, st.delay, st.repeats)
         };
-        let handlers = CHandlers::of(callbacks, &robot);
-        robot.set_handlers(Box::new(handlers));
         robot.set_repeats(repeats);
         // Both were checked when they were set.
         let _ = robot.set_reply_timeout_tenths(tenths);
@@ -933,6 +931,11 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         if !ok {
             return INITTROL_FAILURE;
         }
+        // The application's handlers from now on: InitTROL's own probes (is a server there,
+        // which version, which codes; the activation) are not the application's calls, and a
+        // probe that fails is how InitTROL(0) finds a controller in terminal mode.
+        let handlers = CHandlers::of(callbacks, &robot);
+        robot.set_handlers(Box::new(handlers));
         *TOLD_CODES.lock().unwrap_or_else(|p| p.into_inner()) = Some(robot.codes());
         state().robot = Some(robot);
         INITTROL_SUCCESS

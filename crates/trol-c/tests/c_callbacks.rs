@@ -431,3 +431,46 @@ fn trol_connect_says_what_kind_of_failure_it_met() {
     );
     let _ = controller.join();
 }
+
+/// InitTROL(0) finds a controller in terminal mode by a probe that fails, then activates
+/// it: the application's ErrOnSend and ErrOnReceive are not called for InitTROL's own probes.
+#[test]
+fn inittrol_does_not_call_the_applications_handlers_for_its_probes() {
+    let exe = compile(
+        &root().join("crates/trol-c/tests/c/init_probe.c"),
+        "init_probe",
+        Link::Static,
+    );
+    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
+    let addr = line.local_addr().unwrap();
+    let backend = trol_sim::SimBackend::new(trol_sim::SimSettings::default());
+    let mut controller = trol_controller::Controller::new(
+        line,
+        LinkConfig::default(),
+        trol_controller::Pcp::new(backend),
+        trol_controller::Mode::Terminal,
+    );
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = stop.clone();
+    let thread = std::thread::spawn(move || {
+        let _ = controller.run(&flag);
+    });
+    let dir = std::env::temp_dir().join(format!("trol-init-probe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n"),
+    )
+    .unwrap();
+    let o = program(&exe).current_dir(&dir).output().unwrap();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let _ = thread.join();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("handler calls during InitTROL(0): 0"), "{out}");
+    assert!(out.contains("TROLSpeed -> 0"), "{out}");
+}

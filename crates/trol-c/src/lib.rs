@@ -539,10 +539,36 @@ pub extern "C" fn TROLFinish(mode: TUINT) -> TINT {
 /// (another thread's TROLHalt gets through; a dead controller is noticed within a link
 /// timeout). Returns 0, or the failed poll's code.
 fn wait_idle() -> TINT {
+    // Bounded as the manual's one long request was: after SetL3_TO_Intervall the
+    // connection's ErrAppTimeOut decides (the default grants FINISH_WAIT no limit).
+    let mut wait = {
+        let Some(st) = state_for_call() else {
+            return COMM;
+        };
+        match st.robot.as_ref() {
+            Some(r) => r.finish_wait(),
+            None => return run(&table::FINISH, || Ok(vec![Value::Int(FINISH_STATUS)]), drop),
+        }
+    };
     loop {
         let status = FINISH_STATUS;
         match run(&table::FINISH, || Ok(vec![Value::Int(status)]), drop) {
-            1 => std::thread::sleep(trol_client::POLL),
+            1 => {
+                let (checked, fatal) = {
+                    let Some(mut st) = state_for_call() else {
+                        return COMM;
+                    };
+                    let fatal = st.callbacks.resolved().fatal;
+                    let Some(robot) = st.robot.as_mut() else {
+                        return COMM;
+                    };
+                    (wait.check(robot), fatal)
+                };
+                if let Err(e) = checked {
+                    return fatal_or(fatal, table::FINISH.code, e.code().0);
+                }
+                std::thread::sleep(trol_client::POLL)
+            }
             code => return code,
         }
     }

@@ -474,3 +474,42 @@ fn inittrol_does_not_call_the_applications_handlers_for_its_probes() {
     assert!(out.contains("handler calls during InitTROL(0): 0"), "{out}");
     assert!(out.contains("TROLSpeed -> 0"), "{out}");
 }
+
+/// TROLFinish(FINISH_WAIT) is polled, and still bounded as the manual's one long request:
+/// after SetL3_TO_Intervall the application's ErrAppTimeOut decides, and RECOVERY_FAIL ends
+/// the wait with TROL_ERR_COMM; RECOVERY_SUCCESS lets it go on to the motion's end.
+#[test]
+fn errapptimeout_bounds_finish_wait() {
+    let exe = compile(
+        &root().join("crates/trol-c/tests/c/finish_bound.c"),
+        "finish_bound",
+        Link::Static,
+    );
+    let dir = std::env::temp_dir().join(format!("trol-finish-bound-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n",
+    )
+    .unwrap();
+    let o = program(&exe).current_dir(&dir).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("TROLJoint -> 0"), "{out}");
+    // The handler was asked about the Finish (command 4), once, and its FAIL was final.
+    assert!(out.contains("ErrAppTimeOut: command 4"), "{out}");
+    assert!(
+        out.contains("gave up: TROLFinish -> -32001 after 1 call(s)"),
+        "{out}"
+    );
+    let waited = out
+        .lines()
+        .find_map(|l| l.strip_prefix("waited: TROLFinish -> 0 after "))
+        .unwrap_or_else(|| panic!("{out}"));
+    let calls: u32 = waited.split(' ').next().unwrap().parse().unwrap();
+    assert!(calls >= 1, "{out}");
+}

@@ -333,6 +333,24 @@ impl<P: Port> Transactor<P> {
         Ok(Asked::Decision(decision))
     }
 
+    /// ErrAppTimeOut for a wait the host keeps by polling instead of by one long request
+    /// (Finish(FINISH_WAIT)): `request` is the request the manual would have sent and
+    /// `waited` how long the wait has lasted. The handlers decide as for a late reply: wait
+    /// more, or give up.
+    pub fn app_timeout(&mut self, request: &[u8], waited: Duration) -> TimeoutAction {
+        let cfg = *self.initiator.link().config();
+        let reply_timeout = self.initiator.reply_timeout();
+        let mut line = LineChannel::new(&mut self.driver, cfg, reply_timeout);
+        let input_pending = !crate::Channel::buffer_empty(&mut line);
+        let ctx = AppTimeoutContext {
+            request,
+            waited,
+            reply_timeout,
+            input_pending,
+        };
+        self.handlers.err_app_timeout_on(&ctx, &mut line)
+    }
+
     /// Layer 1 and layer 2 of this transactor's line, outside a transaction (the manual's
     /// SendData, ReceiveData, BufferEmpty and FlushBuffer called by the application).
     pub fn channel(&mut self) -> LineChannel<'_, P> {

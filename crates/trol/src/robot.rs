@@ -184,15 +184,50 @@ pub const POLL_REPLY_TIMEOUT: Duration = Duration::from_secs(2);
 /// Wait until the arm is done, for a robot shared between threads: the lock is taken for each
 /// poll only, so another thread's `halt()` gets through between two polls.
 pub fn wait_idle(robot: &std::sync::Mutex<Robot>) -> Result<()> {
+    let lock = || robot.lock().unwrap_or_else(|p| p.into_inner());
+    let mut wait = lock().finish_wait();
     loop {
-        let idle = robot
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .poll_idle()?;
-        if idle {
+        let mut r = lock();
+        if r.poll_idle()? {
             return Ok(());
         }
+        wait.check(&mut r)?;
+        drop(r);
         std::thread::sleep(POLL);
+    }
+}
+
+/// A polled Finish(FINISH_WAIT) under way, bounded as the manual's one long request was
+/// ([`Robot::finish_wait`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FinishWait {
+    started: std::time::Instant,
+    limit: Duration,
+}
+
+impl FinishWait {
+    /// Call after each poll that found the arm moving: once the wait passes its limit, the
+    /// connection's ErrAppTimeOut decides; giving up is TRANS_TIMEOUT (TROL_ERR_COMM), as a
+    /// late reply is.
+    pub fn check(&mut self, robot: &mut Robot) -> Result<()> {
+        let waited = self.started.elapsed();
+        if waited < self.limit {
+            return Ok(());
+        }
+        let request = [table::TROL_FINISH, FINISH_WAIT];
+        match robot.transactor.app_timeout(&request, waited) {
+            trol_comm::TimeoutAction::WaitMore(more) => {
+                self.limit = waited + more.max(POLL);
+                Ok(())
+            }
+            trol_comm::TimeoutAction::Fail => Err(Error::Link {
+                command: table::FINISH.name,
+                error: TransError::Failed {
+                    code: trol_proto::transaction::TransCode::Timeout,
+                    last_comm: None,
+                },
+            }),
+        }
     }
 }
 
@@ -872,16 +907,35 @@ impl Robot {
     /// FINISH_STATUS every 20 ms instead of holding the line, so a controller that dies is
     /// noticed within a link timeout (about a second), not minutes later.
     pub fn finish(&mut self) -> Result<()> {
+        let mut wait = self.finish_wait();
         while self.is_moving()? {
+            wait.check(self)?;
             std::thread::sleep(POLL);
         }
         Ok(())
+    }
+
+    /// The bound of a polled Finish(FINISH_WAIT), as the manual's one long request had:
+    /// after the reply timeout (SetL3_TO_Intervall) ErrAppTimeOut decides, and again each
+    /// time the wait it granted runs out. The default handler grants Finish(FINISH_WAIT) no
+    /// limit (the manual's default); an application's may end the wait.
+    pub fn finish_wait(&self) -> FinishWait {
+        FinishWait {
+            started: std::time::Instant::now(),
+            limit: self.transactor.reply_timeout(),
+        }
+    }
+
+    /// The reply timeout (SetL3_TO_Intervall).
+    pub fn reply_timeout(&self) -> Duration {
+        self.transactor.reply_timeout()
     }
 
     /// [`Robot::finish`] that gives up when `cancel` becomes true (set from a Ctrl-C handler or
     /// another thread): it then sends Halt, waits for the arm to brake to a stop, and returns
     /// [`Waited::Halted`]. `cancel` is left as it is; the caller resets it.
     pub fn finish_unless(&mut self, cancel: &AtomicBool) -> Result<Waited> {
+        let mut wait = self.finish_wait();
         loop {
             if cancel.load(Ordering::SeqCst) {
                 self.halt()?;
@@ -893,6 +947,7 @@ impl Robot {
             if !self.is_moving()? {
                 return Ok(Waited::Idle);
             }
+            wait.check(self)?;
             std::thread::sleep(POLL);
         }
     }

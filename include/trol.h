@@ -107,7 +107,8 @@ typedef uint8_t  TUCCHAR;
 #define LAST_CAT1_CODE 17
 #define LAST_CAT2_CODE 63
 #define TROL_GET_POSITION 128
-#define LAST_CAT3_CODE 128
+#define TROL_GET_GRIPPER 129
+#define LAST_CAT3_CODE 129
 #define TROL_TERMINATE_PCP 192
 #define TROL_GET_STATUS 193
 #define TROL_GET_VERSION 194
@@ -180,6 +181,15 @@ TINT TROLSetWatchdog(TUINT tenths);
  * their values into values, how many there are into *count; InitTROL and trol_connect read
  * them, and trol_strerror names each as that controller does. */
 TINT TROLGetCodes(TINT *values, TUINT max, TUINT *count);
+/* Added (docs/protocol.md "Gripper"). TROLGetGripper: the fingers' opening (mm) and what they
+ * hold, to check a grasp: GRIPPER_EMPTY (closed on air, or open), GRIPPER_HOLDS (the object's
+ * name in name, nameSize bytes, NUL-terminated; empty when the controller knows none), or
+ * GRIPPER_UNKNOWN (the controller reads the opening only). A controller that cannot read its
+ * gripper answers TROL_ERR_UNKNOWN. */
+#define GRIPPER_EMPTY 0
+#define GRIPPER_HOLDS 1
+#define GRIPPER_UNKNOWN 2
+TINT TROLGetGripper(float *openingMm, TINT *held, char *name, TUINT nameSize);
 
 /* Other functions */
 TUINT InitTROL(TUINT serOnly);
@@ -290,6 +300,7 @@ TINT trol_get_status_of(TROL *c, int *lastBIOSRetVal, TUINT *transaction, TUINT 
 TUINT trol_last_transaction(TROL *c);
 TINT trol_get_version(TROL *c, TUINT *protocol, char *kind, TUINT kindSize);
 TINT trol_get_codes(TROL *c, TINT *values, TUINT max, TUINT *count);
+TINT trol_get_gripper(TROL *c, float *openingMm, TINT *held, char *name, TUINT nameSize);
 TINT trol_set_watchdog(TROL *c, TUINT tenths);
 void trol_set_reply_timeout(TROL *c, TUINT tenths);   /* SetL3_TO_Intervall */
 void trol_set_repeats(TROL *c, TUINT repeats);

@@ -872,6 +872,52 @@ pub unsafe extern "C" fn TROLGetVersion(
     r
 }
 
+/// TROLGetGripper: the fingers' opening in *openingMm and what they hold in *held
+/// (GRIPPER_EMPTY, GRIPPER_HOLDS, GRIPPER_UNKNOWN when the controller cannot tell); with
+/// GRIPPER_HOLDS, the object's name in `name` (at most nameSize - 1 bytes and a NUL; empty
+/// when the controller knows no name). `name` may be NULL (with nameSize 0); a NULL
+/// openingMm or held is TROL_ERR_ARG_RANGE, and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLGetGripper(
+    openingMm: *mut f32,
+    held: *mut TINT,
+    name: *mut std::ffi::c_char,
+    nameSize: TUINT,
+) -> TINT {
+    if openingMm.is_null() || held.is_null() || (name.is_null() && nameSize > 0) {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::GET_GRIPPER,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Gripper(g) = reply {
+                got = Some(g);
+            }
+        },
+    );
+    if let Some(g) = got {
+        use trol_proto::application::Held;
+        let (kind, object) = match &g.held {
+            Held::Nothing => (0, ""),
+            Held::Object(n) => (1, n.as_str()),
+            _ => (2, ""),
+        };
+        // SAFETY: the caller's float and TINT, and a buffer of nameSize bytes (or NULL).
+        unsafe {
+            *openingMm = g.opening_mm as f32;
+            *held = kind;
+            if !name.is_null() && nameSize > 0 {
+                let n = object.len().min(usize::from(nameSize) - 1);
+                std::ptr::copy_nonoverlapping(object.as_ptr(), name.cast::<u8>(), n);
+                *name.add(n) = 0;
+            }
+        }
+    }
+    r
+}
+
 /// TROLGetCodes: the controller's BIOS codes (docs/protocol.md, "Codes"): up to `max` of
 /// their values into `values`, how many it has into *count (which may be more than `max`);
 /// trol_strerror names each as that controller does. A NULL pointer is TROL_ERR_ARG_RANGE,
@@ -1484,6 +1530,7 @@ per_connection! {
     fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
     fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
     fn trol_get_codes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT = TROLGetCodes else ARG_RANGE;
+    fn trol_get_gripper(openingMm: *mut f32, held: *mut TINT, name: *mut std::ffi::c_char, nameSize: TUINT) -> TINT = TROLGetGripper else ARG_RANGE;
     fn trol_set_reply_timeout(tenths: TUINT) -> () = SetL3_TO_Intervall else ();
     fn trol_set_repeats(repeats: TUINT) -> () = TROLSetRepeats else ();
     fn trol_set_delay(delay: TUINT) -> () = SetDelay else ();

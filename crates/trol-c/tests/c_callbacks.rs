@@ -513,3 +513,41 @@ fn errapptimeout_bounds_finish_wait() {
     let calls: u32 = waited.split(' ').next().unwrap().parse().unwrap();
     assert!(calls >= 1, "{out}");
 }
+
+/// A grasp checked from C: TROLGetGripper says nothing is held after closing on air, and
+/// the cube (by name, at its width) after closing at it; NULL pointers are refused.
+#[test]
+fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
+    let exe = compile(
+        &root().join("crates/trol-c/tests/c/gripper.c"),
+        "gripper",
+        Link::Shared,
+    );
+    let dir = std::env::temp_dir().join(format!("trol-c-gripper-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
+    std::fs::write(dir.join("objs.txt"), "cube 420 0 400 30\n").unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\nlocations = locs.txt\n\
+         objects = objs.txt\n",
+    )
+    .unwrap();
+    let o = program(&exe).current_dir(&dir).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("NULL -> -32003"), "{out}");
+    assert!(out.contains("name NULL with a size -> -32003"), "{out}");
+    assert!(
+        out.contains("on air: 0, opening 0.0 mm, held 0, name \"\""),
+        "{out}"
+    );
+    assert!(
+        out.contains("at the cube: 0, opening 30.0 mm, held 1, name \"cube\""),
+        "{out}"
+    );
+}

@@ -190,6 +190,7 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
         TROL_GET_VERSION => robot.check_version().map(drop),
         TROL_SET_WATCHDOG => robot.set_watchdog(std::time::Duration::ZERO),
         TROL_GET_CODES => robot.get_codes().map(drop),
+        TROL_GET_GRIPPER => robot.gripper().map(drop),
         other => panic!("command {other} of the table has no method on Robot"),
     }
 }

@@ -19,7 +19,7 @@
 use trol_proto::application::code::{
     Code, CodeTable, TROL_ERR_LOCATION, TROL_ERR_ROBOT, TROL_ERR_ROBOT_UNSURE,
 };
-use trol_proto::application::{LocName, Location, Tag};
+use trol_proto::application::{Gripper, LocName, Location, Tag};
 
 /// The target of an absolute motion.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,6 +76,10 @@ pub enum BackendError {
     /// not a code, such as GetPosition).
     #[error("refused with BIOS code {0}")]
     Refused(i16),
+    /// The controller cannot answer this command at all (TROL_ERR_UNKNOWN): a gripper it
+    /// cannot read, for example.
+    #[error("this controller cannot {0}")]
+    Unsupported(&'static str),
 }
 
 impl BackendError {
@@ -86,6 +90,7 @@ impl BackendError {
             BackendError::Link(_) => TROL_ERR_ROBOT,
             BackendError::Unsure(_) => TROL_ERR_ROBOT_UNSURE,
             BackendError::Refused(v) => Code(*v),
+            BackendError::Unsupported(_) => trol_proto::application::code::TROL_ERR_UNKNOWN,
         }
     }
 }
@@ -141,6 +146,11 @@ pub trait Backend: Send {
     fn speed(&mut self, percent: u8) -> BiosResult;
     /// Read the position in the form `tag`, commanded or actual (six values).
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError>;
+    /// The gripper: the fingers' opening (mm) and what they hold (GetGripper). By default
+    /// the controller cannot read it (TROL_ERR_UNKNOWN).
+    fn gripper(&mut self) -> Result<Gripper, BackendError> {
+        Err(BackendError::Unsupported("read its gripper"))
+    }
     /// Where the world's objects are, in words, for logs (a simulator knows; a real
     /// controller does not, and says nothing).
     fn world(&mut self) -> Option<String> {

@@ -463,6 +463,10 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
             protocol: PROTOCOL_VERSION,
             kind: ctx.backend.kind().into(),
         },
+        TROL_GET_GRIPPER => match ctx.backend.gripper() {
+            Ok(g) => Reply::Gripper(g),
+            Err(e) => Reply::Code(e.code()),
+        },
         TROL_GET_CODES => Reply::Codes(
             ctx.backend
                 .codes()

@@ -27,7 +27,7 @@ use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
 use trol_a465::model::joints_to_counts;
 use trol_controller::{A465_CODES, ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
-use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
+use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, Location, Tag};
 
 use crate::line::{self, Lines, Reply, st};
 use crate::profile::Profile;
@@ -680,6 +680,16 @@ impl MarsBackend {
     }
 
     /// The gripper's axis position (`AP<g>?`).
+    /// The fingers' opening from the gripper axis' position and the profile's open and
+    /// closed positions, mm.
+    fn gripper_mm(&mut self, g: &crate::profile::Gripper) -> Result<f64, BackendError> {
+        let p = self.read_gripper()?;
+        Ok(
+            ((p - g.closed) / (g.open - g.closed) * trol_a465::arm::FINGER_MAX)
+                .clamp(0.0, trol_a465::arm::FINGER_MAX),
+        )
+    }
+
     fn read_gripper(&mut self) -> Result<f64, BackendError> {
         let axis = self.gripper_axis();
         let v = self.query(&format!("AP{axis}")).map_err(|f| f.not_run())?;
@@ -915,6 +925,18 @@ impl Backend for MarsBackend {
             Tag::Cart => Location::from_array6(Tag::Cart, self.planner.kinematics().fk_xyzypr(&q)),
         })
     }
+    fn gripper(&mut self) -> Result<Gripper, BackendError> {
+        let Some(g) = self.profile.gripper.clone() else {
+            return Err(BackendError::Unsupported(
+                "read a gripper: the arm profile names none ([gripper])",
+            ));
+        };
+        // The unit reads the gripper axis' position, not what is between the fingers.
+        Ok(Gripper {
+            opening_mm: self.gripper_mm(&g)?,
+            held: Held::Unknown,
+        })
+    }
     fn idle(&mut self) {
         if !self.pending.is_empty() {
             let _ = self.pump();
@@ -930,13 +952,7 @@ impl Backend for MarsBackend {
         let s = self.status().ok()?;
         let c = self.counters().ok()?;
         let gripper_mm = match self.profile.gripper.clone() {
-            Some(g) => {
-                let p = self.read_gripper().ok()?;
-                Some(
-                    ((p - g.closed) / (g.open - g.closed) * trol_a465::arm::FINGER_MAX)
-                        .clamp(0.0, trol_a465::arm::FINGER_MAX),
-                )
-            }
+            Some(g) => Some(self.gripper_mm(&g).ok()?),
             None => None,
         };
         Some(ArmReport {

@@ -207,6 +207,13 @@ fn the_variant(name: &str) {
             .collect::<Vec<u8>>(),
         "{name}"
     );
+    // GetGripper: the unit reads the opening, not what is between the fingers.
+    let g = r.gripper().unwrap();
+    assert_eq!(g.held, trol::Held::Unknown, "{name}");
+    assert!(
+        g.opening_mm > 0.0 && g.opening_mm < trol_a465::arm::FINGER_MAX,
+        "{name}: {g:?}"
+    );
     twin.with(|u| u.set_object(None));
 
     // Halt mid-motion: the arm stops short; nothing reports the motion as done. (At 2 %

@@ -60,6 +60,7 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         (&GET_VERSION, vec![]),
         (&SET_WATCHDOG, vec![Int(50)]),
         (&GET_CODES, vec![]),
+        (&GET_GRIPPER, vec![]),
     ]
 }
 
@@ -472,5 +473,40 @@ fn a_codes_reply_holds_only_what_the_rules_allow() {
             trol_proto::application::code::TROL_ERR_BAD_RSIZE,
             "{b:02x?}"
         );
+    }
+}
+
+/// GetGripper's reply (docs/protocol.md, "Gripper"): its three forms round-trip; a held byte
+/// out of range, a name where none belongs, or an opening that is not a length is
+/// TROL_ERR_BAD_RSIZE.
+#[test]
+fn a_gripper_reply_holds_only_what_the_rules_allow() {
+    let def = &table::GET_GRIPPER;
+    for held in [
+        Held::Nothing,
+        Held::Unknown,
+        Held::Object("cube".into()),
+        Held::Object(String::new()),
+    ] {
+        let r = Reply::Gripper(Gripper {
+            opening_mm: 12.5,
+            held,
+        });
+        assert_eq!(Reply::decode(def, &r.encode()).unwrap(), r);
+    }
+    let opening = 12.5f32.to_le_bytes();
+    let with = |held: &[u8]| [&[0u8, 0][..], &opening, held].concat();
+    for bad in [
+        with(&[3]),
+        with(&[0, b'x']),
+        with(&[2, b'x']),
+        with(&[1, 0x07]),
+        [&[0u8, 0][..], &f32::NAN.to_le_bytes(), &[0]].concat(),
+        [&[0u8, 0][..], &(-1.0f32).to_le_bytes(), &[0]].concat(),
+        [&[1u8, 0][..], &opening, &[0]].concat(),
+        with(&[]),
+    ] {
+        let e = Reply::decode(def, &bad).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_BAD_RSIZE, "{bad:02x?}");
     }
 }

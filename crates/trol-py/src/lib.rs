@@ -230,6 +230,17 @@ fn location_object<'py>(py: Python<'py>, loc: Location) -> PyResult<Bound<'py, P
     }
 }
 
+/// A ``trol.Gripper`` of GetGripper's answer.
+fn gripper_object<'py>(py: Python<'py>, g: trol::Gripper) -> PyResult<Bound<'py, PyAny>> {
+    let (holding, known): (Option<String>, bool) = match g.held {
+        trol::Held::Nothing => (None, true),
+        trol::Held::Object(name) => (Some(name), true),
+        _ => (None, false),
+    };
+    let cls = py.import("trol._types")?.getattr("Gripper")?;
+    cls.call1((g.opening_mm, holding, known))
+}
+
 /// A Python argument for an argument of `kind`.
 fn arg_value(py: Python<'_>, name: &str, kind: ArgKind, obj: &Bound<'_, PyAny>) -> PyResult<Value> {
     let bad = |what: &str| argument_error(py, format!("`{name}`: expected {what}"));
@@ -288,6 +299,7 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
             bios_called, last, ..
         } => (bios_called, last.0).into_pyobject(py)?.into_any(),
         Reply::Version { protocol, kind } => (protocol, kind).into_pyobject(py)?.into_any(),
+        Reply::Gripper(g) => gripper_object(py, g)?,
         Reply::Codes(codes) => {
             let d = pyo3::types::PyDict::new(py);
             for c in codes {
@@ -570,6 +582,13 @@ impl Robot {
     #[pyo3(signature = (actual = false))]
     fn precision<'py>(&self, py: Python<'py>, actual: bool) -> PyResult<Bound<'py, PyAny>> {
         location_object(py, self.position(py, Tag::Prec, actual)?)
+    }
+
+    /// TROLGetGripper: a ``trol.Gripper``: the fingers' opening (mm) and what they hold, to
+    /// check a grasp.
+    fn gripper<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let g = self.with(py, |r| r.gripper())?;
+        gripper_object(py, g)
     }
 
     /// TROLGetStatus: (whether the last CAT1/CAT2 command called the BIOS, its value or the

@@ -339,6 +339,26 @@ def test_a_connection_names_codes_as_its_controller_does() -> None:
         assert robot.call("TROLGetCodes") == codes
 
 
+def test_a_missed_grasp_can_be_told_from_a_held_object(tmp_path: Path) -> None:
+    (tmp_path / "locs.txt").write_text("p2 420 0 400 0 1.5707963 0\n")
+    (tmp_path / "objs.txt").write_text("cube 420 0 400 30\n")
+    cfg = tmp_path / "trol.cfg"
+    cfg.write_text("9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\n"
+                   "locations = locs.txt\nobjects = objs.txt\n")
+    with trol.Robot.from_config(cfg) as robot:
+        robot.close_gripper()
+        robot.finish()
+        assert robot.gripper() == trol.Gripper(0.0, None, True)
+        robot.open_gripper()
+        robot.move("p2")
+        robot.finish()
+        robot.close_gripper()
+        robot.finish()
+        g = robot.gripper()
+        assert g.holding == "cube" and g.known
+        assert g.opening_mm == pytest.approx(30.0, abs=0.5)
+
+
 def test_added_commands_are_called_by_name() -> None:
     """The guide's commands (docs/extending.md) against the guide's controller program."""
     exe = ROOT / "target" / "debug" / "examples" / "extending_controller"

@@ -17,7 +17,7 @@ use trol_controller::{
     embedded_with,
 };
 use trol_port::memory::MemoryLine;
-use trol_proto::application::{CodeTable, Location, Tag};
+use trol_proto::application::{CodeTable, Gripper, Held, Location, Tag};
 use trol_proto::link::LinkConfig;
 
 /// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's.
@@ -234,6 +234,16 @@ impl Backend for SimBackend {
             })
             .collect();
         Some(words.join("; "))
+    }
+    fn gripper(&mut self) -> Result<Gripper, BackendError> {
+        let now = self.now();
+        Ok(Gripper {
+            opening_mm: self.arm.fingers(now),
+            held: match self.arm.held() {
+                Some(name) => Held::Object(name.to_string()),
+                None => Held::Nothing,
+            },
+        })
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let now = self.now();

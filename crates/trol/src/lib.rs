@@ -50,8 +50,8 @@ pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;
 pub use trol_proto::application::table;
 pub use trol_proto::application::{
-    Arg, ArgKind, Catalog, Choice, CodeEntry, CommandDef, LocName, Location, Reply, ReplyKind, Tag,
-    Wait,
+    Arg, ArgKind, Catalog, Choice, CodeEntry, CommandDef, Gripper, Held, LocName, Location, Reply,
+    ReplyKind, Tag, Wait,
 };
 #[cfg(feature = "sim")]
 pub use trol_sim::SimSettings;

@@ -14,7 +14,8 @@ use trol_proto::application::code::{
 use trol_proto::application::record::{self, RequestError, Value};
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
 use trol_proto::application::{
-    Catalog, CatalogError, CodeEntry, CommandDef, LocName, Location, Reply, ReplyError, Tag,
+    Catalog, CatalogError, CodeEntry, CommandDef, Gripper, LocName, Location, Reply, ReplyError,
+    Tag,
 };
 use trol_proto::link::{BlockCheck, LinkConfig, LinkError};
 #[cfg(feature = "sim")]
@@ -1112,6 +1113,20 @@ impl Robot {
         let def = &table::GET_VERSION;
         match self.call(def, &[])? {
             Reply::Version { protocol, kind } => Ok(ControllerVersion { protocol, kind }),
+            other => Err(Error::BadReply {
+                command: def.name,
+                len: other.encode().len(),
+            }),
+        }
+    }
+
+    /// TROLGetGripper: the fingers' opening (mm) and what they hold, to check a grasp (a
+    /// close that found no object leaves [`Held::Nothing`](trol_proto::application::Held)).
+    /// A controller that cannot read its gripper refuses with TROL_ERR_UNKNOWN.
+    pub fn gripper(&mut self) -> Result<Gripper> {
+        let def = &table::GET_GRIPPER;
+        match self.call(def, &[])? {
+            Reply::Gripper(g) => Ok(g),
             other => Err(Error::BadReply {
                 command: def.name,
                 len: other.encode().len(),

@@ -240,12 +240,17 @@ fn every_api_function_over_the_whole_stack() {
     std::thread::sleep(Duration::from_millis(20));
     assert_eq!(joints(r), stopped);
     assert!(stopped[0] < start_j1 + 0.5, "{stopped:?}");
-    // Gripper.
+    // Gripper. Closing on nothing is a missed grasp GetGripper tells: closed, nothing held.
     r.close_gripper(60).unwrap();
     r.finish().unwrap();
+    let g = r.gripper().unwrap();
+    assert_eq!(g.held, trol::Held::Nothing);
+    assert!(g.opening_mm < 1.0, "{g:?}");
     r.open_gripper(100).unwrap();
     r.grip(25).unwrap();
     r.finish().unwrap();
+    let g = r.gripper().unwrap();
+    assert!((g.opening_mm - 25.0).abs() < 0.5, "{g:?}");
     // Tool transform: the TCP moves 100 mm along the tool x axis.
     let before = r
         .position(Tag::Cart, PosMode::Commanded)
@@ -589,6 +594,10 @@ fn robots_from_a_config_file() {
         world.starts_with("cube at x 420.0") && world.ends_with("in the gripper"),
         "{world}"
     );
+    // A grasp can be checked (GetGripper): the fingers stopped at the cube's 30 mm.
+    let g = r.gripper().unwrap();
+    assert_eq!(g.held, trol::Held::Object("cube".into()));
+    assert!((g.opening_mm - 30.0).abs() < 0.5, "{g:?}");
     // `view = ADDR`: the embedded controller serves the live view; /state tells the same.
     #[cfg(feature = "view")]
     {

@@ -130,6 +130,14 @@ fn reply_json(
             .collect::<Vec<_>>()}),
         trol::Reply::Reals { values, .. } => json!({"values": values}),
         trol::Reply::Bytes { bytes, .. } => json!({"bytes": bytes}),
+        trol::Reply::Gripper(g) => json!({"gripper": {
+            "opening_mm": g.opening_mm,
+            "held": match &g.held {
+                trol::Held::Object(name) => Some(name.as_str()),
+                _ => None,
+            },
+            "known": !matches!(g.held, trol::Held::Unknown),
+        }}),
         // The return value alone, or a form this interpreter does not know yet.
         _ => json!({}),
     };

@@ -141,6 +141,9 @@ pub enum ReplyKind {
     /// GetCodes': 0, then for each of the controller's BIOS codes its value, its name and
     /// its meaning (docs/protocol.md, "Codes").
     Codes,
+    /// GetGripper's: 0, the opening (f32, mm), what is held (0 nothing, 1 an object, 2
+    /// unknown) and the object's name (0 to 32 printable bytes, with 1 only).
+    Gripper,
     /// The return value and any bytes (read by the application itself).
     Bytes,
 }

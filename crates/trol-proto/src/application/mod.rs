@@ -30,4 +30,4 @@ pub use code::{Code, CodeInfo, CodeTable};
 pub use command::{Arg, ArgKind, Choice, Class, CommandDef, ReplyKind, Wait};
 pub use location::{LocName, Location, Tag};
 pub use record::{RequestError, Value};
-pub use reply::{CodeEntry, Reply, ReplyError};
+pub use reply::{CodeEntry, Gripper, Held, Reply, ReplyError};

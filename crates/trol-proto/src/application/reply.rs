@@ -40,6 +40,27 @@ impl From<&CodeInfo> for CodeEntry {
     }
 }
 
+/// What the gripper's fingers hold, as GetGripper tells it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Held {
+    /// Nothing: the fingers closed on air, or are open.
+    Nothing,
+    /// An object, by its name where the controller knows one (a simulator does; empty
+    /// otherwise): printable ASCII, at most [`MAX_KIND`] bytes.
+    Object(String),
+    /// The controller cannot tell (it reads the fingers' opening, not what is between them).
+    Unknown,
+}
+
+/// GetGripper's answer: the fingers' opening and what they hold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gripper {
+    /// The opening between the fingers, mm.
+    pub opening_mm: f64,
+    /// What they hold.
+    pub held: Held,
+}
+
 fn printable(b: &u8) -> bool {
     (0x20..0x7f).contains(b)
 }
@@ -84,6 +105,8 @@ pub enum Reply {
     },
     /// TROLGetCodes: the controller's BIOS codes, each with its name and meaning.
     Codes(Vec<CodeEntry>),
+    /// TROLGetGripper: the fingers' opening and what they hold.
+    Gripper(Gripper),
     /// The return value and bytes the application reads itself.
     Bytes {
         /// The return value.
@@ -98,7 +121,9 @@ impl Reply {
     pub fn value(&self) -> Code {
         match self {
             Reply::Code(v) | Reply::Reals { value: v, .. } | Reply::Bytes { value: v, .. } => *v,
-            Reply::Position(_) | Reply::Version { .. } | Reply::Codes(_) => Code(0),
+            Reply::Position(_) | Reply::Version { .. } | Reply::Codes(_) | Reply::Gripper(_) => {
+                Code(0)
+            }
             Reply::Status { bios_called, .. } => Code(i16::from(*bios_called)),
         }
     }
@@ -142,6 +167,17 @@ impl Reply {
                         let bytes: Vec<u8> = text.bytes().filter(printable).take(most).collect();
                         out.push(bytes.len() as u8);
                         out.extend_from_slice(&bytes);
+                    }
+                }
+            }
+            Reply::Gripper(g) => {
+                out.extend_from_slice(&(g.opening_mm as f32).to_le_bytes());
+                match &g.held {
+                    Held::Nothing => out.push(0),
+                    Held::Unknown => out.push(2),
+                    Held::Object(name) => {
+                        out.push(1);
+                        out.extend(name.bytes().filter(printable).take(MAX_KIND));
                     }
                 }
             }
@@ -212,6 +248,23 @@ impl Reply {
                     protocol: u16::from_le_bytes([*lo, *hi]),
                     kind: String::from_utf8_lossy(kind).into_owned(),
                 })
+            }
+            ReplyKind::Gripper => {
+                let [a, b, c, d, held, name @ ..] = rest else {
+                    return Err(bad());
+                };
+                let opening_mm = f64::from(f32::from_le_bytes([*a, *b, *c, *d]));
+                let name_ok = name.len() <= MAX_KIND && name.iter().all(printable);
+                let held = match held {
+                    0 if name.is_empty() => Held::Nothing,
+                    1 if name_ok => Held::Object(String::from_utf8_lossy(name).into_owned()),
+                    2 if name.is_empty() => Held::Unknown,
+                    _ => return Err(bad()),
+                };
+                if value.0 != 0 || !opening_mm.is_finite() || opening_mm < 0.0 {
+                    return Err(bad());
+                }
+                Ok(Reply::Gripper(Gripper { opening_mm, held }))
             }
             ReplyKind::Codes => {
                 if value.0 != 0 {
@@ -285,6 +338,16 @@ impl Reply {
                 last.describe(bios)
             ),
             Reply::Version { protocol, kind } => format!("protocol {protocol}, {kind}"),
+            Reply::Gripper(g) => format!(
+                "opening {} mm, {}",
+                format_number(g.opening_mm),
+                match &g.held {
+                    Held::Nothing => "holding nothing".to_string(),
+                    Held::Object(name) if name.is_empty() => "holding an object".to_string(),
+                    Held::Object(name) => format!("holding {name}"),
+                    Held::Unknown => "what it holds unknown to the controller".to_string(),
+                }
+            ),
             Reply::Codes(codes) => {
                 let each: Vec<String> = codes
                     .iter()

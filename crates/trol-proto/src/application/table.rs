@@ -209,6 +209,14 @@ commands! {
         reply: ReplyKind::Position, success: &[], wait: Wait::Reply,
         help: "read the position: cartesian, joint or precision point; commanded or actual",
     }
+    /// TROLGetGripper(): the fingers' opening and what they hold (added: a grasp can be
+    /// checked; docs/protocol.md "Gripper").
+    TROL_GET_GRIPPER = 129 => GET_GRIPPER {
+        name: "TROLGetGripper",
+        args: &[],
+        reply: ReplyKind::Gripper, success: &[], wait: Wait::Reply,
+        help: "read the gripper: the fingers' opening (mm) and what they hold",
+    }
     /// TROLTerminatePCP().
     TROL_TERMINATE_PCP = 192 => TERMINATE_PCP {
         name: "TROLTerminatePCP",
@@ -312,7 +320,7 @@ mod tests {
         }
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
-        assert_eq!(LAST_CAT3_CODE, 128);
+        assert_eq!(LAST_CAT3_CODE, 129);
         assert_eq!(LAST_CAT4_CODE, 196);
     }
 

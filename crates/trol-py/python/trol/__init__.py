@@ -24,11 +24,12 @@ from trol._errors import (
     TrolError,
 )
 from trol._trol import Robot, describe
-from trol._types import Joints, Pose, Precision
+from trol._types import Gripper, Joints, Pose, Precision
 
 __all__ = [
     "ArgumentError",
     "BadReplyError",
+    "Gripper",
     "IncompatibleError",
     "Joints",
     "LinkError",

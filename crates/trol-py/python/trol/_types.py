@@ -37,3 +37,13 @@ class Precision(NamedTuple):
     c4: int
     c5: int
     c6: int
+
+
+class Gripper(NamedTuple):
+    """The gripper (TROLGetGripper): the fingers' opening in mm, and what they hold: the
+    object's name (``""`` when the controller knows no name), ``None`` for nothing. With
+    ``known`` false the controller reads the opening only and cannot tell what is held."""
+
+    opening_mm: float
+    holding: str | None
+    known: bool

@@ -532,7 +532,7 @@ fn line_up(asked: &[Asked], executed: &[Execution], report: &mut Report) {
         {
             report.corrupted_replies_accepted += 1;
             // Each one is worth a look: what was asked, what was taken, what ran.
-            eprintln!(
+            tell!(
                 "a reply the controller never sent was accepted: request {:02x?}, accepted \
                  {got:02x?}, the controller's replies to those bytes {ran:02x?}",
                 a.request

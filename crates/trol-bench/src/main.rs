@@ -2,20 +2,9 @@
 //! docs/performance.md. A binary of its own, so that the shipped `trol` carries no benchmark
 //! code; `trol bench ARGS` runs this program from beside it.
 
-/// `println!` that does not panic when nobody reads stdout any more.
-macro_rules! say {
-    ($($arg:tt)*) => {
-        trol_cli::common::say(format_args!($($arg)*))
-    };
-}
-
-/// `eprintln!` that never panics (a standard error nobody reads); it shadows std's macro in
-/// every module of the binary.
-macro_rules! eprintln {
-    ($($arg:tt)*) => {
-        trol_cli::common::tell(format_args!($($arg)*))
-    };
-}
+// `say!` and `tell!`: output that never panics when nobody reads it (trol-cli's library).
+#[macro_use]
+extern crate trol_cli;
 
 mod faults;
 mod view;
@@ -48,7 +37,7 @@ fn main() -> ExitCode {
     match run(cli.bench) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("trol bench: {e}");
+            tell!("trol bench: {e}");
             ExitCode::FAILURE
         }
     }

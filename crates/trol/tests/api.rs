@@ -713,29 +713,23 @@ fn impossible_link_settings_are_refused_and_the_delay_counts_in_the_timeouts() {
     assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
 }
 
-/// A controller on a thread that answers GetStatus and, to GetVersion, `version` (None:
-/// TROL_ERR_UNKNOWN, as a controller that does not know the command).
-fn controller_of_version(version: Option<u16>) -> Robot {
+/// A scripted controller on a thread: `answer` gives the reply to each request it knows
+/// (`None`: a GetStatus record), for up to `requests` requests.
+fn scripted(requests: usize, answer: impl Fn(u8) -> Option<Vec<u8>> + Send + 'static) -> Robot {
     let (host, ctl) = trol_port::memory::pair(None);
     std::thread::spawn(move || {
         let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
-        for _ in 0..4 {
-            let r = server.serve(Duration::from_secs(5), &mut |req| match req.first() {
-                Some(&trol::table::TROL_GET_VERSION) => match version {
-                    Some(protocol) => Reply::Version {
-                        protocol,
-                        kind: "elsewhere".into(),
+        for _ in 0..requests {
+            let r = server.serve(Duration::from_secs(5), &mut |req| {
+                answer(req.first().copied().unwrap_or(0)).unwrap_or_else(|| {
+                    Reply::Status {
+                        bios_called: false,
+                        last: SUCCESS,
+                        transaction: 0,
+                        epoch: 7,
                     }
-                    .encode(),
-                    None => Reply::Code(TROL_ERR_UNKNOWN).encode(),
-                },
-                _ => Reply::Status {
-                    bios_called: false,
-                    last: SUCCESS,
-                    transaction: 0,
-                    epoch: 7,
-                }
-                .encode(),
+                    .encode()
+                })
             });
             if r.is_err() {
                 break;
@@ -745,36 +739,36 @@ fn controller_of_version(version: Option<u16>) -> Robot {
     Robot::over(Box::new(host), LinkConfig::default(), None)
 }
 
-/// A controller on a thread that answers GetVersion with this library's version, GetCodes
-/// with `codes` (the reply's bytes), Move with BIOS code -77, and the rest (GetStatus) with a
-/// status.
-fn controller_with_codes(codes: Vec<u8>) -> Robot {
-    let (host, ctl) = trol_port::memory::pair(None);
-    std::thread::spawn(move || {
-        let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
-        for _ in 0..6 {
-            let r = server.serve(Duration::from_secs(5), &mut |req| match req.first() {
-                Some(&trol::table::TROL_GET_VERSION) => Reply::Version {
-                    protocol: trol::table::PROTOCOL_VERSION,
-                    kind: "gantry".into(),
-                }
-                .encode(),
-                Some(&trol::table::TROL_GET_CODES) => codes.clone(),
-                Some(&trol::table::TROL_MOVE) => Reply::Code(Code(-77)).encode(),
-                _ => Reply::Status {
-                    bios_called: false,
-                    last: SUCCESS,
-                    transaction: 0,
-                    epoch: 7,
-                }
-                .encode(),
-            });
-            if r.is_err() {
-                break;
+/// A controller that answers GetStatus and, to GetVersion, `version` (None:
+/// TROL_ERR_UNKNOWN, as a controller that does not know the command).
+fn controller_of_version(version: Option<u16>) -> Robot {
+    scripted(4, move |code| {
+        (code == trol::table::TROL_GET_VERSION).then(|| match version {
+            Some(protocol) => Reply::Version {
+                protocol,
+                kind: "elsewhere".into(),
             }
-        }
-    });
-    Robot::over(Box::new(host), LinkConfig::default(), None)
+            .encode(),
+            None => Reply::Code(TROL_ERR_UNKNOWN).encode(),
+        })
+    })
+}
+
+/// A controller that answers GetVersion with this library's version, GetCodes with `codes`
+/// (the reply's bytes), Move with BIOS code -77, and GetStatus.
+fn controller_with_codes(codes: Vec<u8>) -> Robot {
+    scripted(6, move |code| match code {
+        trol::table::TROL_GET_VERSION => Some(
+            Reply::Version {
+                protocol: trol::table::PROTOCOL_VERSION,
+                kind: "gantry".into(),
+            }
+            .encode(),
+        ),
+        trol::table::TROL_GET_CODES => Some(codes.clone()),
+        trol::table::TROL_MOVE => Some(Reply::Code(Code(-77)).encode()),
+        _ => None,
+    })
 }
 
 /// The code table travels with the version handshake (docs/protocol.md, "Codes"): a

@@ -194,21 +194,12 @@ fn handlers_named_as_in_the_manual_are_called_with_the_shared_library() {
 /// TROLHalt from a second thread while the first waits in TROLFinish(FINISH_WAIT).
 #[test]
 fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/halt_thread.c"),
+    let text = run_c(
         "halt_thread",
         Link::Static,
+        &[("trol.cfg", "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n")],
+        &[],
     );
-    let dir = std::env::temp_dir().join(format!("trol-halt-thread-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n",
-    )
-    .unwrap();
-    let out = program(&exe).current_dir(&dir).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "{text}");
     assert!(
         text.contains("TROLJoint -> 0") && text.contains("TROLHalt -> 0"),
         "{text}"
@@ -231,21 +222,12 @@ fn halt_from_another_thread_gets_through_while_one_waits_in_finish() {
 /// The manual's GetStatus method from C, exact: TROLLastTransaction, then TROLGetStatusOf.
 #[test]
 fn the_getstatus_method_tells_from_c_which_call_a_status_belongs_to() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/status_of.c"),
+    let text = run_c(
         "status_of",
         Link::Static,
+        &[("trol.cfg", "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\n")],
+        &[],
     );
-    let dir = std::env::temp_dir().join(format!("trol-status-of-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\n",
-    )
-    .unwrap();
-    let out = program(&exe).current_dir(&dir).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "{text}");
     let lines: Vec<&str> = text.lines().collect();
     // The refused Joint: its own request's status, BIOS called, BIOS_NOT_HOMED.
     let n: Vec<&str> = lines[0].split(&[' ', ';', ':'][..]).collect();
@@ -381,11 +363,6 @@ fn a_call_before_inittrol_says_so_once() {
 /// with both numbers (trol_connect_versions).
 #[test]
 fn trol_connect_says_what_kind_of_failure_it_met() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/connect_errors.c"),
-        "connect_errors",
-        Link::Static,
-    );
     let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
     let addr = line.local_addr().unwrap();
     // A controller of protocol version 2: it answers GetStatus, then GetVersion with 2.
@@ -414,16 +391,8 @@ fn trol_connect_says_what_kind_of_failure_it_met() {
             }
         }
     });
-    let o = program(&exe)
-        .arg(format!("socket://{addr}"))
-        .output()
-        .unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        o.status.success(),
-        "{out}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let port = format!("socket://{addr}");
+    let out = run_c("connect_errors", Link::Static, &[], &[&port]);
     assert!(out.contains("no port: kind 1"), "{out}");
     assert!(
         out.contains("old controller: kind 4, ours 3, theirs 2"),
@@ -436,11 +405,6 @@ fn trol_connect_says_what_kind_of_failure_it_met() {
 /// it: the application's ErrOnSend and ErrOnReceive are not called for InitTROL's own probes.
 #[test]
 fn inittrol_does_not_call_the_applications_handlers_for_its_probes() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/init_probe.c"),
-        "init_probe",
-        Link::Static,
-    );
     let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
     let addr = line.local_addr().unwrap();
     let backend = trol_sim::SimBackend::new(trol_sim::SimSettings::default());
@@ -455,22 +419,10 @@ fn inittrol_does_not_call_the_applications_handlers_for_its_probes() {
     let thread = std::thread::spawn(move || {
         let _ = controller.run(&flag);
     });
-    let dir = std::env::temp_dir().join(format!("trol-init-probe-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n"),
-    )
-    .unwrap();
-    let o = program(&exe).current_dir(&dir).output().unwrap();
+    let cfg = format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n");
+    let out = run_c("init_probe", Link::Static, &[("trol.cfg", &cfg)], &[]);
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     let _ = thread.join();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        o.status.success(),
-        "{out}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
     assert!(out.contains("handler calls during InitTROL(0): 0"), "{out}");
     assert!(out.contains("TROLSpeed -> 0"), "{out}");
 }
@@ -480,24 +432,11 @@ fn inittrol_does_not_call_the_applications_handlers_for_its_probes() {
 /// the wait with TROL_ERR_COMM; RECOVERY_SUCCESS lets it go on to the motion's end.
 #[test]
 fn errapptimeout_bounds_finish_wait() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/finish_bound.c"),
+    let out = run_c(
         "finish_bound",
         Link::Static,
-    );
-    let dir = std::env::temp_dir().join(format!("trol-finish-bound-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n",
-    )
-    .unwrap();
-    let o = program(&exe).current_dir(&dir).output().unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        o.status.success(),
-        "{out}\n{}",
-        String::from_utf8_lossy(&o.stderr)
+        &[("trol.cfg", "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n")],
+        &[],
     );
     assert!(out.contains("TROLJoint -> 0"), "{out}");
     // The handler was asked about the Finish (command 4), once, and its FAIL was final.
@@ -518,27 +457,19 @@ fn errapptimeout_bounds_finish_wait() {
 /// the cube (by name, at its width) after closing at it; NULL pointers are refused.
 #[test]
 fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
-    let exe = compile(
-        &root().join("crates/trol-c/tests/c/gripper.c"),
+    let out = run_c(
         "gripper",
         Link::Shared,
-    );
-    let dir = std::env::temp_dir().join(format!("trol-c-gripper-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
-    std::fs::write(dir.join("objs.txt"), "cube 420 0 400 30\n").unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\nlocations = locs.txt\n\
-         objects = objs.txt\n",
-    )
-    .unwrap();
-    let o = program(&exe).current_dir(&dir).output().unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        o.status.success(),
-        "{out}\n{}",
-        String::from_utf8_lossy(&o.stderr)
+        &[
+            ("locs.txt", "p2 420 0 400 0 1.5707963 0\n"),
+            ("objs.txt", "cube 420 0 400 30\n"),
+            (
+                "trol.cfg",
+                "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\n\
+                 locations = locs.txt\nobjects = objs.txt\n",
+            ),
+        ],
+        &[],
     );
     assert!(out.contains("NULL -> -32003"), "{out}");
     assert!(out.contains("name NULL with a size -> -32003"), "{out}");
@@ -550,4 +481,28 @@ fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
         out.contains("at the cube: 0, opening 30.0 mm, held 1, name \"cube\""),
         "{out}"
     );
+}
+
+/// Compile the C program `name` (crates/trol-c/tests/c/NAME.c), run it in a folder of its
+/// own with `files` (trol.cfg and what it names) and `args`, and return its standard output
+/// after checking that it succeeded.
+fn run_c(name: &str, link: Link, files: &[(&str, &str)], args: &[&str]) -> String {
+    let exe = compile(
+        &root().join(format!("crates/trol-c/tests/c/{name}.c")),
+        name,
+        link,
+    );
+    let dir = std::env::temp_dir().join(format!("trol-c-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, text) in files {
+        std::fs::write(dir.join(file), text).unwrap();
+    }
+    let o = program(&exe).current_dir(&dir).args(args).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{name}: {out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
 }

@@ -16,6 +16,7 @@
 
 use std::time::Duration;
 
+use trol_proto::application::Catalog;
 use trol_proto::link::LinkError;
 
 use crate::channel::Channel;
@@ -94,10 +95,11 @@ pub trait ErrorHandlers: Send {
         Recovery::Fail
     }
 
-    /// ErrAppTimeOut: no reply within the reply timeout.
+    /// ErrAppTimeOut: no reply within the reply timeout. The manual's default: 90 s more for
+    /// Home, no limit for Finish(FINISH_WAIT), no more for the other built-in commands and
+    /// for added ones (whose descriptions [`DefaultHandlers::with_policy`] can take).
     fn err_app_timeout(&mut self, ctx: &AppTimeoutContext<'_>) -> TimeoutAction {
-        let _ = ctx;
-        TimeoutAction::Fail
+        DefaultHandlers::app_timeout(Some(&timeout_policy(Catalog::builtin())), ctx)
     }
 
     /// ErrOnSend with the line at hand (SendData, ReceiveData, BufferEmpty, FlushBuffer);
@@ -124,6 +126,20 @@ pub trait ErrorHandlers: Send {
         let _ = line;
         self.err_app_timeout(ctx)
     }
+}
+
+/// The ErrAppTimeOut policy of `catalog`'s commands, from their descriptions: 90 s more for
+/// Home, no limit for Finish(FINISH_WAIT), as the manual's default handler; no more for a
+/// command whose description asks for none, or one the catalog does not know.
+pub fn timeout_policy(catalog: Catalog) -> TimeoutPolicy {
+    std::sync::Arc::new(move |request: &[u8]| {
+        let def = catalog.get(*request.first()?)?;
+        match def.extra_wait(request) {
+            Some(d) if d.is_zero() => None,
+            Some(d) => Some(ExtraWait::Up(d)),
+            None => Some(ExtraWait::Unlimited),
+        }
+    })
 }
 
 /// Which requests ErrAppTimeOut waits longer for, by their bytes (the host API builds it

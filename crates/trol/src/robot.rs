@@ -1,11 +1,10 @@
 //! The Rust API: a connection to the controller and one method per TROL API function, each
 //! a thin skin over [`Robot::call`], which works from the command's description.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use trol_comm::{DefaultHandlers, ErrorHandlers, ExtraWait, TransError, Transactor};
+use trol_comm::{DefaultHandlers, ErrorHandlers, TransError, Transactor};
 use trol_controller::Embedded;
 use trol_port::{Port, PortSettings};
 use trol_proto::application::code::{
@@ -23,6 +22,8 @@ use trol_sim::SimSettings;
 
 use crate::config::Config;
 
+/// The ErrAppTimeOut policy of a catalog's commands (the manual's default handler's).
+pub use trol_comm::timeout_policy;
 /// GetPosition's mode.
 pub use trol_controller::PosMode;
 
@@ -243,19 +244,6 @@ pub struct StatusRecord {
     pub transaction: u8,
     /// The controller's epoch.
     pub epoch: u16,
-}
-
-/// The host's ErrAppTimeOut policy from the commands' descriptions: 90 s more for Home, no
-/// limit for Finish(FINISH_WAIT), as the manual's default handler.
-pub fn timeout_policy(catalog: Catalog) -> trol_comm::TimeoutPolicy {
-    Arc::new(move |request: &[u8]| {
-        let def = catalog.get(*request.first()?)?;
-        match def.extra_wait(request) {
-            Some(d) if d.is_zero() => None,
-            Some(d) => Some(ExtraWait::Up(d)),
-            None => Some(ExtraWait::Unlimited),
-        }
-    })
 }
 
 /// A connection to a TROL controller.

@@ -988,6 +988,57 @@ fn adding_a_command_keeps_the_handlers_the_application_installed() {
     assert!(told.load(Ordering::SeqCst) >= 1, "the handler was replaced");
 }
 
+/// A polled Finish is bounded as the one long request was: after the reply timeout the
+/// handlers' ErrAppTimeOut decides. Handlers that keep the manual's default for it (the trait's
+/// default) wait the motion out; handlers that give up end the wait with TRANS_TIMEOUT.
+#[test]
+fn an_applications_errapptimeout_bounds_finish() {
+    struct GivesUp;
+    impl trol_comm::ErrorHandlers for GivesUp {
+        fn err_app_timeout(
+            &mut self,
+            _ctx: &trol_comm::AppTimeoutContext<'_>,
+        ) -> trol_comm::TimeoutAction {
+            trol_comm::TimeoutAction::Fail
+        }
+    }
+    let told = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    for give_up in [false, true] {
+        let mut r = Robot::embedded(SimSettings {
+            time_scale: 1.0,
+            arm: trol_a465::arm::ArmSettings {
+                homed: true,
+                ..Default::default()
+            },
+            ..settings()
+        });
+        if give_up {
+            r.set_handlers(Box::new(GivesUp));
+        } else {
+            r.set_handlers(Box::new(Counting(told.clone())));
+        }
+        r.set_reply_timeout_tenths(3).unwrap();
+        r.speed(15).unwrap();
+        // A motion of about two seconds against a reply timeout of 0.3 s: a poll finds it
+        // moving after the timeout however busy the machine.
+        r.joint(1, 1.0).unwrap();
+        let waited = r.finish();
+        if give_up {
+            let e = waited.unwrap_err();
+            assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+            assert!(e.to_string().contains("TROLFinish"), "{e}");
+            assert!(
+                r.is_moving().unwrap(),
+                "the arm still moves: only the wait ended"
+            );
+            r.halt().unwrap();
+        } else {
+            waited.unwrap();
+            assert!((joints(&mut r)[0] - 1.0).abs() < 1e-3);
+        }
+    }
+}
+
 /// A controller that answers `polls` FINISH_STATUS polls with "moving", then takes the next
 /// request (`answer_last`: false, and goes silent with it; true: goes silent before it) and
 /// never says another byte, its end of the line still open (as a cable whose far end died).

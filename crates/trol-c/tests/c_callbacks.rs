@@ -483,6 +483,51 @@ fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
     );
 }
 
+/// trol_strerror names a controller's own BIOS codes once InitTROL has read them
+/// (TROLGetCodes), whatever kind of controller it is.
+#[test]
+fn trol_strerror_names_the_controllers_own_codes() {
+    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
+    let addr = line.local_addr().unwrap();
+    let controller = std::thread::spawn(move || {
+        let mut server = Server::new(line, LinkConfig::default());
+        for _ in 0..4 {
+            let r = server.serve(Duration::from_secs(20), &mut |req| match req.first() {
+                Some(&table::TROL_GET_VERSION) => Reply::Version {
+                    protocol: table::PROTOCOL_VERSION,
+                    kind: "gantry".into(),
+                }
+                .encode(),
+                Some(&table::TROL_GET_CODES) => Reply::Codes(vec![trol_client::CodeEntry {
+                    value: -77,
+                    name: "BIOS_GANTRY_JAMMED".into(),
+                    meaning: "the gantry is jammed".into(),
+                }])
+                .encode(),
+                _ => Reply::Status {
+                    bios_called: false,
+                    last: SUCCESS,
+                    transaction: 0,
+                    epoch: 1,
+                }
+                .encode(),
+            });
+            if r.is_err() {
+                break;
+            }
+        }
+    });
+    let cfg = format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n");
+    let out = run_c("strerror", Link::Static, &[("trol.cfg", &cfg)], &[]);
+    assert!(out.contains("before: code -77: not one of TROL's"), "{out}");
+    assert!(
+        out.contains("after: BIOS_GANTRY_JAMMED: the gantry is jammed"),
+        "{out}"
+    );
+    assert!(out.contains("TROL's own: TROL_ERR_LOCATION"), "{out}");
+    let _ = controller.join();
+}
+
 /// Compile the C program `name` (crates/trol-c/tests/c/NAME.c), run it in a folder of its
 /// own with `files` (trol.cfg and what it names) and `args`, and return its standard output
 /// after checking that it succeeded.

@@ -114,3 +114,24 @@ fn the_installed_library_builds_a_program_through_pkg_config() {
     );
     let _ = std::fs::remove_dir_all(&prefix);
 }
+
+/// libtrol is the client with its backends and the C API, and no live view: none of the
+/// view's page or three.js is in it (the utilities serve the view; issue 24).
+#[test]
+fn libtrol_carries_no_view() {
+    common::cbuild::build_libtrol();
+    for lib in ["libtrol.so", "libtrol.a"] {
+        let bytes = std::fs::read(common::cbuild::lib_dir().join(lib)).unwrap();
+        for needle in [
+            &b"OrbitControls"[..],
+            b"three.module.js",
+            b"<!doctype html>",
+        ] {
+            assert!(
+                !bytes.windows(needle.len()).any(|w| w == needle),
+                "{lib} carries {}",
+                String::from_utf8_lossy(needle)
+            );
+        }
+    }
+}

@@ -159,6 +159,9 @@ TINT TROLReady(void);
 TINT TROLSetToolTransform(SLocData *md);
 TINT TROLSpeed(TUINT perMaxSpeed);
 /* CAT3 */
+/* TROLGetPosition: set pos->tag first: it chooses the form read (POS_CART: x y z mm, yaw
+ * pitch roll rad; POS_JOINT: rad; POS_PREC: encoder counts); mode is POS_COMMANDED or
+ * POS_ACT. The six values and numDims come back in *pos. */
 TINT TROLGetPosition(SLocData *pos, TINT mode);
 /* CAT4 */
 TINT TROLTerminatePCP(void);

@@ -211,6 +211,34 @@ impl Config {
                 *file = dir.join(&*file);
             }
         }
+        // A file it names that is not there is this file's error, with its line, not the
+        // first command's.
+        for (key, file) in [
+            ("locations", &cfg.locations),
+            ("objects", &cfg.objects),
+            ("rapl-profile", &cfg.rapl_profile),
+            ("mars-profile", &cfg.mars_profile),
+        ] {
+            let Some(file) = file else { continue };
+            if file.is_file() {
+                continue;
+            }
+            let line = text
+                .lines()
+                .position(|l| {
+                    let l = l.trim_start();
+                    l.starts_with(key) || l.starts_with(&key.replace('-', "_"))
+                })
+                .map(|i| i + 1);
+            return Err(ConfigError {
+                file: path.to_path_buf(),
+                line,
+                message: format!(
+                    "{key}: {} is not there (a relative path counts from trol.cfg's folder)",
+                    file.display()
+                ),
+            });
+        }
         Ok(cfg)
     }
 

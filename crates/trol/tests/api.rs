@@ -619,6 +619,15 @@ fn robots_from_a_config_file() {
             "{state}"
         );
     }
+    // A file trol.cfg names that is not there: the configuration's error, with its line.
+    std::fs::write(
+        dir.join("missing.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 2\nobjects = gone.txt\n",
+    )
+    .unwrap();
+    let e = trol::Config::from_file(&dir.join("missing.cfg")).unwrap_err();
+    assert_eq!(e.line, Some(5), "{e}");
+    assert!(e.to_string().contains("gone.txt is not there"), "{e}");
     std::fs::write(dir.join("bad.cfg"), "9600\nsim\n1 2 3\n").unwrap();
     let e = trol::Config::from_file(&dir.join("bad.cfg")).unwrap_err();
     assert_eq!(e.line, Some(3));

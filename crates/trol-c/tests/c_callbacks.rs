@@ -363,33 +363,15 @@ fn a_call_before_inittrol_says_so_once() {
 /// with both numbers (trol_connect_versions).
 #[test]
 fn trol_connect_says_what_kind_of_failure_it_met() {
-    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
-    let addr = line.local_addr().unwrap();
     // A controller of protocol version 2: it answers GetStatus, then GetVersion with 2.
-    let controller = std::thread::spawn(move || {
-        let mut server = Server::new(line, LinkConfig::default());
-        for _ in 0..2 {
-            let r = server.serve(Duration::from_secs(20), &mut |req| {
-                if req.first() == Some(&table::TROL_GET_VERSION) {
-                    Reply::Version {
-                        protocol: 2,
-                        kind: "an older TROL".into(),
-                    }
-                    .encode()
-                } else {
-                    Reply::Status {
-                        bios_called: false,
-                        last: SUCCESS,
-                        transaction: 0,
-                        epoch: 1,
-                    }
-                    .encode()
-                }
-            });
-            if r.is_err() {
-                break;
+    let (addr, controller) = scripted_tcp(2, |code| {
+        (code == table::TROL_GET_VERSION).then(|| {
+            Reply::Version {
+                protocol: 2,
+                kind: "an older TROL".into(),
             }
-        }
+            .encode()
+        })
     });
     let port = format!("socket://{addr}");
     let out = run_c("connect_errors", Link::Static, &[], &[&port]);
@@ -487,35 +469,23 @@ fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
 /// (TROLGetCodes), whatever kind of controller it is.
 #[test]
 fn trol_strerror_names_the_controllers_own_codes() {
-    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
-    let addr = line.local_addr().unwrap();
-    let controller = std::thread::spawn(move || {
-        let mut server = Server::new(line, LinkConfig::default());
-        for _ in 0..4 {
-            let r = server.serve(Duration::from_secs(20), &mut |req| match req.first() {
-                Some(&table::TROL_GET_VERSION) => Reply::Version {
-                    protocol: table::PROTOCOL_VERSION,
-                    kind: "gantry".into(),
-                }
-                .encode(),
-                Some(&table::TROL_GET_CODES) => Reply::Codes(vec![trol_client::CodeEntry {
-                    value: -77,
-                    name: "BIOS_GANTRY_JAMMED".into(),
-                    meaning: "the gantry is jammed".into(),
-                }])
-                .encode(),
-                _ => Reply::Status {
-                    bios_called: false,
-                    last: SUCCESS,
-                    transaction: 0,
-                    epoch: 1,
-                }
-                .encode(),
-            });
-            if r.is_err() {
-                break;
+    let (addr, controller) = scripted_tcp(4, |code| match code {
+        table::TROL_GET_VERSION => Some(
+            Reply::Version {
+                protocol: table::PROTOCOL_VERSION,
+                kind: "gantry".into(),
             }
-        }
+            .encode(),
+        ),
+        table::TROL_GET_CODES => Some(
+            Reply::Codes(vec![trol_client::CodeEntry {
+                value: -77,
+                name: "BIOS_GANTRY_JAMMED".into(),
+                meaning: "the gantry is jammed".into(),
+            }])
+            .encode(),
+        ),
+        _ => None,
     });
     let cfg = format!("9600\nsocket://{addr}\n0 0 0 0 0 0\n");
     let out = run_c("strerror", Link::Static, &[("trol.cfg", &cfg)], &[]);
@@ -550,4 +520,34 @@ fn run_c(name: &str, link: Link, files: &[(&str, &str)], args: &[&str]) -> Strin
         String::from_utf8_lossy(&o.stderr)
     );
     out
+}
+
+/// A scripted controller on a TCP port of its own, on a thread: `answer` gives the reply to
+/// each request it knows (`None`: a GetStatus record), for up to `requests` requests.
+fn scripted_tcp(
+    requests: usize,
+    answer: impl Fn(u8) -> Option<Vec<u8>> + Send + 'static,
+) -> (std::net::SocketAddr, std::thread::JoinHandle<()>) {
+    let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(20)).unwrap();
+    let addr = line.local_addr().unwrap();
+    let thread = std::thread::spawn(move || {
+        let mut server = Server::new(line, LinkConfig::default());
+        for _ in 0..requests {
+            let r = server.serve(Duration::from_secs(20), &mut |req| {
+                answer(req.first().copied().unwrap_or(0)).unwrap_or_else(|| {
+                    Reply::Status {
+                        bios_called: false,
+                        last: SUCCESS,
+                        transaction: 0,
+                        epoch: 1,
+                    }
+                    .encode()
+                })
+            });
+            if r.is_err() {
+                break;
+            }
+        }
+    });
+    (addr, thread)
 }

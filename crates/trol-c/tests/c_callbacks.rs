@@ -551,3 +551,23 @@ fn scripted_tcp(
     });
     (addr, thread)
 }
+
+/// Code written the manual's way calls FatalError; a program that defines none still links,
+/// with either library, and the default returns the error code (docs/protocol.md, the
+/// handlers' table).
+#[test]
+fn fatal_error_has_a_default_the_manuals_extension_code_links_against() {
+    for link in [Link::Static, Link::Shared] {
+        let out = run_c(
+            "fatal_default",
+            link,
+            &[("trol.cfg", "9600\nsim\n0 0 0 0 0 0\nhomed = yes\n")],
+            &[],
+        );
+        assert!(
+            out.contains("FatalError(TROL_MOVE, -5) -> -5"),
+            "{link:?}: {out}"
+        );
+        assert!(out.contains("MyMoveNowhere -> -32102"), "{link:?}: {out}");
+    }
+}

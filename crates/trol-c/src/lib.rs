@@ -358,6 +358,8 @@ fn run(
     read: impl FnOnce(Reply),
 ) -> TINT {
     guard(COMM, || {
+        // GetLastCommErr speaks of this call from now on, even if it never reaches the line.
+        note_comm(None);
         let args = match build() {
             Ok(a) => a,
             Err(code) => return code,
@@ -1127,6 +1129,7 @@ unsafe fn hand_out(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT {
     guard(TransCode::ErrSend as TUINT, || {
+        note_comm(None);
         let Some(request) = (unsafe { bytes_of(req) }) else {
             return TransCode::ErrSend as TUINT;
         };
@@ -1161,6 +1164,7 @@ pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
     guard(COMM, || {
+        note_comm(None);
         let Some(request) = (unsafe { bytes_of(req) }) else {
             return ARG_RANGE;
         };

@@ -175,6 +175,16 @@ fn check(out: &str) {
     // 5: ErrOnReceive said RECOVERY_FAIL: the call ended with TROL_ERR_COMM, no repeat.
     assert!(out.contains("TROLOpen -> -32001"), "{out}");
     assert!(
+        !out.contains("after TROLOpen: GetLastCommErr 0x0000"),
+        "{out}"
+    );
+    // 6: a call refused before the line leaves no code of an earlier call (docs/protocol.md,
+    // "Decision (GetLastCommErr)").
+    assert!(
+        out.contains("TROLSpeed(0) -> -32003, GetLastCommErr 0x0000"),
+        "{out}"
+    );
+    assert!(
         out.contains("calls: send 1 receive 2 timeout ") && out.contains(" fatal 3;"),
         "{out}"
     );

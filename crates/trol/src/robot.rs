@@ -714,9 +714,18 @@ impl Robot {
         Ok(())
     }
 
-    /// GetLastCommErr: the last layer-2 failure.
+    /// GetLastCommErr: the layer-2 failure of the last call, `None` if it had none (a call
+    /// refused before it reached the line included: no code is left from an earlier call).
     pub fn last_comm_error(&self) -> Option<LinkError> {
         self.transactor.last_comm_error()
+    }
+
+    /// A call begins: GetLastCommErr speaks of it from now on.
+    fn forget_comm_error(&mut self) {
+        self.transactor
+            .initiator_mut()
+            .link_mut()
+            .clear_last_error();
     }
 
     /// The layer-3 machinery (port, driver, link settings): the crate's own; the public
@@ -769,6 +778,7 @@ impl Robot {
 
     /// TransSR (layer 3): send any request's bytes and return the reply's bytes, unchecked.
     pub fn transact_raw(&mut self, request: &[u8]) -> Result<Vec<u8>> {
+        self.forget_comm_error();
         let command = self.name_of(request);
         self.trans(command, request)
     }
@@ -800,9 +810,14 @@ impl Robot {
     /// is out of range), send, and decode the reply in the form `def` gives. A return value
     /// that `def` does not count as success is [`Error::Refused`].
     pub fn call(&mut self, def: &CommandDef, args: &[Value]) -> Result<Reply> {
+        self.forget_comm_error();
         let request = record::encode(def, args)?;
         tracing::debug!(
-            transaction = self.transactor.transaction_number().wrapping_add(1),
+            transaction = self
+                .transactor
+                .transaction_number()
+                .checked_add(1)
+                .unwrap_or(1),
             "request {}",
             self.catalog.request_text(&request)
         );

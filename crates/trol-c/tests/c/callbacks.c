@@ -66,6 +66,12 @@ int main(void)
     /* 5: the reply starts with garbage and never comes: ErrOnReceive's RECOVERY_FAIL ends
      * the call; the request is not sent again (the controller checks). */
     printf("TROLOpen -> %d\n", TROLOpen(50));
+    printf("after TROLOpen: GetLastCommErr 0x%04x\n", GetLastCommErr());
+    /* 6: a call refused before it reaches the line: GetLastCommErr speaks of it, 0. */
+    {
+        TINT r = TROLSpeed(0);
+        printf("TROLSpeed(0) -> %d, GetLastCommErr 0x%04x\n", r, GetLastCommErr());
+    }
     printf("calls: send %d receive %d timeout %d fatal %d; buffer empty at first timeout %d\n",
            sends, receives, timeouts, fatals, buffer_was_empty);
     return 0;

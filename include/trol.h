@@ -169,7 +169,9 @@ TINT TROLGetStatus(int *lastBIOSRetVal);
 /* Additions for the manual's GetStatus method: which transaction the status belongs to and
  * the controller's epoch (it changes when the controller restarts); and the number of the
  * last request sent. After a failed call: n = TROLLastTransaction(); then
- * TROLGetStatusOf(&last, &t, &e); if t == n, the status is the failed call's. */
+ * TROLGetStatusOf(&last, &t, &e); if t == n, the status is the failed call's. A controller
+ * that speaks only the manual's protocol answers GetStatus in the manual's 4 bytes: t and e
+ * are then 0 (no request is numbered 0, no controller draws epoch 0). */
 TINT TROLGetStatusOf(int *lastBIOSRetVal, TUINT *transaction, TUINT *epoch);
 TUINT TROLLastTransaction(void);
 /* Added (docs/protocol.md "Version and kind", "Watchdog"). TROLGetVersion: the protocol
@@ -200,8 +202,10 @@ TUINT CleanupTROL(void);
 void SetL3_TO_Intervall(TUINT TO_Intervall);
 void SetDelay(TUINT delay);           /* milliseconds between two bytes sent */
 /* How often a request whose reply was lost is sent again, marked REPEAT, so that it runs
- * exactly once; 0..10, default 2 (an addition: 0 is the manual's behaviour). An error
- * handler that returns RECOVERY_FAIL ends the call without a repeat. */
+ * exactly once; 0..10 (an addition: 0 is the manual's behaviour). Without this call: 2 once
+ * InitTROL found a controller of this protocol (it remembers its last request), 0 for one
+ * that speaks only the manual's (a 1998 TROL server). An error handler that returns
+ * RECOVERY_FAIL ends the call without a repeat. */
 void TROLSetRepeats(TUINT repeats);
 TUINT GetLastCommErr(void);           /* the last call's layer-2 failure, 0 if none */
 /* Added: which service that failure belongs to (ERR_LIMIT_EXCEEDED is 0x07 on both sides),
@@ -235,7 +239,8 @@ void FlushBuffer(void);
  * and TROL calls it (with libtrol.so and libtrol.a alike); leave it out and TROL's default
  * runs. ErrOnReceive that returns RECOVERY_SUCCESS must point *out at the message it
  * received (with ReceiveData) and set *PCI; ErrAppTimeOut may look with BufferEmpty() but
- * must not take a byte. */
+ * must not take a byte. FatalError is also defined in libtrol (returning errorCode), so that
+ * an added API function may call it, as the manual's own do, in a program without one. */
 TUINT ErrOnSend(SInData *in, TUINT *PCI);
 TUINT ErrOnReceive(SOutData *out, TUINT *PCI);
 TUINT ErrAppTimeOut(SInData *in);

@@ -326,9 +326,12 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     robot
         .set_reply_timeout_tenths(3)
         .map_err(|e| e.to_string())?;
-    if plan.recovery == Recovery::Getstatus {
-        robot.set_repeats(0);
-    }
+    // The controller is this process's own, with its memory of the last request: the
+    // repeats a version handshake would grant, without one over the noisy line.
+    robot.set_repeats(match plan.recovery {
+        Recovery::Api => trol_comm::DEFAULT_REPEATS,
+        Recovery::Getstatus => 0,
+    });
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let mut asked: Vec<Asked> = Vec::new();
     let mut report = Report {

@@ -100,7 +100,8 @@ struct State {
     callbacks: Callbacks,
     reply_tenths: u16,
     delay: Duration,
-    repeats: u8,
+    /// TROLSetRepeats's choice; `None`: as the controller's version handshake allows.
+    repeats: Option<u8>,
 }
 
 const FRESH: State = State {
@@ -113,7 +114,7 @@ const FRESH: State = State {
     },
     reply_tenths: trol_proto::transaction::DEFAULT_REPLY_TIMEOUT_TENTHS,
     delay: Duration::ZERO,
-    repeats: trol_comm::DEFAULT_REPEATS,
+    repeats: None,
 };
 
 /// The default connection: the manual's functions drive it.
@@ -989,7 +990,9 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
             let st = state();
             (st.callbacks, st.reply_tenths, st.delay, st.repeats)
         };
-        robot.set_repeats(repeats);
+        if let Some(n) = repeats {
+            robot.set_repeats(n);
+        }
         // Both were checked when they were set.
         let _ = robot.set_reply_timeout_tenths(tenths);
         let _ = robot.set_delay(delay);
@@ -1004,6 +1007,9 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         };
         if !ok {
             return INITTROL_FAILURE;
+        }
+        if let Some(notice) = robot.take_notice() {
+            eprintln!("InitTROL: note: {notice}");
         }
         // The application's handlers from now on: InitTROL's own probes (is a server there,
         // which version, which codes; the activation) are not the application's calls, and a
@@ -1053,8 +1059,10 @@ pub extern "C" fn SetL3_TO_Intervall(TO_Intervall: TUINT) {
 }
 
 /// TROLSetRepeats: how often a request whose reply was lost is sent again, marked REPEAT, so
-/// that it runs exactly once (docs/protocol.md, "Exactly once"); 0..10, default 2. 0 is the
-/// manual's behaviour: the call fails, and the application decides with TROLGetStatus. An
+/// that it runs exactly once (docs/protocol.md, "Exactly once"); 0..10. Without this call, 2
+/// for a controller whose version handshake announced its memory of the last request, and 0
+/// for one that speaks only the manual's protocol. 0 is the manual's behaviour: the call
+/// fails, and the application decides with TROLGetStatus. An
 /// error handler of the application's that returns RECOVERY_FAIL ends the call without a
 /// repeat whatever this says. A value out of range changes nothing and is reported on stderr.
 #[unsafe(no_mangle)]
@@ -1066,7 +1074,7 @@ pub extern "C" fn TROLSetRepeats(repeats: TUINT) {
         }
         let n = repeats as u8;
         let mut st = state();
-        st.repeats = n;
+        st.repeats = Some(n);
         if let Some(r) = st.robot.as_mut() {
             r.set_repeats(n);
         }
@@ -1393,6 +1401,9 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
                 return connect_failed(format!("trol_connect({name}): {e}"), kind, versions);
             }
         };
+        if let Some(notice) = robot.take_notice() {
+            eprintln!("trol_connect({name}): note: {notice}");
+        }
         let fresh = FRESH;
         let handlers = CHandlers::of(fresh.callbacks, &robot);
         robot.set_handlers(Box::new(handlers));

@@ -88,6 +88,9 @@ impl Conn {
         // this protocol version, and tells its BIOS codes. The embedded controller starts in
         // server mode with the tool of trol.cfg, and answers the same.
         trol::check_server(&mut robot).map_err(|e| e.to_string())?;
+        if let Some(notice) = robot.take_notice() {
+            crate::tell!("trol: note: {notice}");
+        }
         tracing::info!(port = %cfg.port, baud = cfg.baud, "connected");
         Ok((robot, cfg))
     }
@@ -101,7 +104,7 @@ pub fn robot_from_config(cfg: &Config) -> Result<Robot, String> {
         Some(addr) if cfg.port == "sim" => {
             let settings = trol::sim_settings(cfg).map_err(|e| e.to_string())?;
             let link = trol_proto::link::LinkConfig {
-                check: cfg.check,
+                check: cfg.block_check(),
                 ..Default::default()
             };
             let viewed = embedded_viewed(settings, link, addr)?;
@@ -393,7 +396,7 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         ("tool", tool.join(" "), from(false, has_file)),
         (
             "check",
-            cfg.check.word().to_ascii_lowercase(),
+            cfg.block_check().word().to_ascii_lowercase(),
             from(false, in_file(&["check"])),
         ),
         (

@@ -84,7 +84,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         match &view {
             Some(addr) => {
                 let link = trol_proto::link::LinkConfig {
-                    check: cfg.check,
+                    check: cfg.block_check(),
                     ..Default::default()
                 };
                 let viewed = crate::common::embedded_viewed(settings, link, addr)?;

@@ -20,8 +20,11 @@ pub fn init(conn: &Conn) -> Result<(), String> {
         return Ok(());
     }
     let mut robot =
-        Robot::open_with(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
+        Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
     trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
+    if let Some(notice) = robot.take_notice() {
+        say!("note: {notice}");
+    }
     say!(
         "the TROL server on {} is active (baud {}, tool transform {:?})",
         cfg.port,
@@ -38,7 +41,7 @@ pub fn cleanup(conn: &Conn) -> Result<(), String> {
         return Ok(());
     }
     let mut robot =
-        Robot::open_with(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
+        Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
     robot.terminate_pcp().map_err(|e| {
         format!(
             "the controller did not take TerminatePCP: {e}. Is its TROL server active (`trol \

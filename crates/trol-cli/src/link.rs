@@ -143,7 +143,7 @@ pub fn run(a: LinkArgs) -> Result<(), String> {
             None => cfg.tool,
         };
         let link = LinkConfig {
-            check: cfg.check,
+            check: cfg.block_check(),
             ..LinkConfig::for_line(baud, Duration::ZERO)
         };
         let mut robot = Robot::over(ctl.port, link, None);

@@ -9,6 +9,7 @@ use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
 use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp};
 use trol_proto::link::{BlockCheck, LinkConfig};
+use trol_proto::transaction::ManualLayer3;
 use trol_sim::{SimBackend, SimSettings};
 
 use crate::common::positive;
@@ -58,6 +59,13 @@ pub struct SimArgs {
     /// lrc (the manual's).
     #[arg(long, default_value = "crc16", value_parser = parse_check)]
     check: BlockCheck,
+    /// Be a controller with the 1998 PCP server, which speaks only the manual's protocol: only
+    /// the bare `PCP TROL` activates it, the manual's LRC, GetStatus in 4 bytes, the commands
+    /// TROL added unknown, no memory of the last request (a repeat runs again). PCI says what
+    /// its replies carry in the PCI, which the manual leaves open: `zero` (default) or `echo`
+    /// (the request's). --check does not apply. For trying a host against an old controller.
+    #[arg(long, value_name = "PCI", num_args = 0..=1, default_missing_value = "zero", value_parser = parse_manual_pci, conflicts_with_all = ["rapl", "mars"])]
+    manual: Option<ManualLayer3>,
     /// Commands an application added, described in FILE (docs/extending.md): the log shows
     /// them by name. `trol sim` has no handlers for them and answers TROL_ERR_UNKNOWN; a
     /// controller program of the application's own serves them.
@@ -210,7 +218,12 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         }
     }
     let cfg = LinkConfig {
-        check: a.check,
+        // A 1998 controller knows only the manual's LRC.
+        check: if a.manual.is_some() {
+            BlockCheck::Lrc
+        } else {
+            a.check
+        },
         ..LinkConfig::for_line(a.baud, Duration::ZERO)
     };
     let pcp = Pcp::new(backend);
@@ -220,7 +233,18 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     } else {
         Mode::Terminal
     };
-    let controller = Controller::new(opened.port, cfg, pcp, mode);
+    let mut controller = Controller::new(opened.port, cfg, pcp, mode);
+    if let Some(pci) = a.manual {
+        say!(
+            "  speaking only the manual's protocol (a 1998 PCP server): LRC, no memory of the \
+             last request, replies with PCI {}",
+            match pci {
+                ManualLayer3::ZeroPci => "0",
+                ManualLayer3::EchoPci => "as the request's",
+            }
+        );
+        controller.speak_manual_only(pci);
+    }
     serve(controller, described, trol_sim::SIM_CODES)
 }
 
@@ -293,8 +317,13 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             last_mode = controller.mode();
             match last_mode {
                 Mode::Server => say!(
-                    "activated: serving TROL ({} block check)",
-                    controller.check().word()
+                    "activated: serving TROL ({} block check{})",
+                    controller.check().word(),
+                    if controller.pcp_mut().speaks_manual() {
+                        ", the manual's record sizes"
+                    } else {
+                        ""
+                    }
                 ),
                 Mode::Terminal => say!("TerminatePCP: back in terminal mode"),
             }
@@ -504,6 +533,14 @@ fn parse_pose(line: &str) -> Result<[f64; 6], String> {
         .collect::<Option<Vec<f64>>>()
         .ok_or_else(|| format!("`{}` is not six numbers (degrees)", line.trim()))?;
     <[f64; 6]>::try_from(v).map_err(|_| format!("`{}` is not six numbers (degrees)", line.trim()))
+}
+
+fn parse_manual_pci(s: &str) -> Result<ManualLayer3, String> {
+    match s {
+        "zero" => Ok(ManualLayer3::ZeroPci),
+        "echo" => Ok(ManualLayer3::EchoPci),
+        _ => Err(format!("`{s}`: the replies' PCI is `zero` or `echo`")),
+    }
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {

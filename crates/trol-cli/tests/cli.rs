@@ -1451,30 +1451,122 @@ fn trol_sim_keeps_serving_when_nobody_reads_its_log() {
 #[test]
 fn a_block_check_mismatch_is_named_not_blamed_on_the_cable() {
     // A controller that checks blocks with the manual's LRC (as a 1998 one does) and a host
-    // with TROL's default CRC-16: every block is refused as damaged; the message says which
+    // that asks for CRC-16 by name: every block is refused as damaged; the message says which
     // setting to change.
     let dir = scratch("check-mismatch");
     let sim = Background::start(&dir, &["sim", "--server", "--check", "lrc"], "serving on ");
     std::fs::write(
         dir.join("trol.cfg"),
-        format!("9600\n{}\n0 0 0 0 0 0\n", sim.name),
+        format!("9600\n{}\n0 0 0 0 0 0\ncheck = crc16\n", sim.name),
     )
     .unwrap();
     let o = trol(&dir, &["interp"], "ready\n");
     let (out, err) = text(&o);
     assert!(!o.status.success(), "{out}");
     assert!(err.contains("add `check = lrc` to trol.cfg"), "{err}");
-    // With the setting it names, the same kind of controller works (a fresh one: the first
-    // is still riding out the refused blocks).
+    // The manual's 3-line trol.cfg names no check: the host falls back to the LRC the
+    // controller takes, says so once, and works (a fresh controller: the first is still
+    // riding out the refused blocks).
     let sim = Background::start(&dir, &["sim", "--server", "--check", "lrc"], "serving on ");
     std::fs::write(
         dir.join("trol.cfg"),
-        format!("9600\n{}\n0 0 0 0 0 0\ncheck = lrc\n", sim.name),
+        format!("9600\n{}\n0 0 0 0 0 0\n", sim.name),
     )
     .unwrap();
     let o = trol(&dir, &["interp"], "home 0\nready\n");
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
+    assert!(err.contains("takes the manual's LRC"), "{err}");
+    assert_eq!(err.matches("note:").count(), 1, "{err}");
+}
+
+/// A controller that speaks only the manual's protocol (`trol sim --manual`: only the bare
+/// `PCP TROL`, the LRC, GetStatus in 4 bytes, no memory of the last request, the added
+/// commands unknown), with either PCI in its replies: `trol init`, the interpreter and the
+/// 1998 C examples with the manual's 3-line trol.cfg work, with nothing configured, and
+/// each says once what it found.
+#[test]
+fn a_1998_controller_runs_1998_programs_with_the_manuals_trol_cfg() {
+    let root = cbuild::root();
+    let locations = root.join("examples/locations.txt");
+    for pci in ["zero", "echo"] {
+        let dir = scratch(&format!("manual-{pci}"));
+        let sim = Background::start(
+            &dir,
+            &[
+                "sim",
+                "--manual",
+                pci,
+                "--time-scale",
+                "50",
+                "--locations",
+                locations.to_str().unwrap(),
+            ],
+            "serving on ",
+        );
+        std::fs::write(
+            dir.join("trol.cfg"),
+            format!("9600\n{}\n0 0 0 0 0 0\n", sim.name),
+        )
+        .unwrap();
+        let o = trol(&dir, &["init"], "");
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{out}\n{err}");
+        assert!(out.contains("speaks only the manual's protocol"), "{out}");
+        assert!(out.contains("is active"), "{out}");
+
+        let o = trol(
+            &dir,
+            &["interp"],
+            "home 0\njoint 1 0.25\nfinish\ngetposition joint\ngetstatus\n",
+        );
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{out}\n{err}");
+        assert!(out.contains("j(0.25, "), "{out}");
+        assert!(
+            out.contains("(the manual's reply: no transaction, no epoch)"),
+            "{out}"
+        );
+        assert_eq!(err.matches("speaks only the manual's").count(), 1, "{err}");
+
+        for (name, done) in [("pick", "pick: done"), ("position", "position: done")] {
+            // The manual's steps: inittrol, the application, whose CleanupTROL ends the
+            // server.
+            let o = trol(&dir, &["init"], "");
+            assert!(o.status.success(), "{:?}", text(&o));
+            let exe = cbuild::compile(
+                &root.join("examples").join(format!("{name}.c")),
+                &format!("{name}-1998-{pci}"),
+                cbuild::Link::Static,
+            );
+            let run = cbuild::program(&exe)
+                .current_dir(&dir)
+                .env_remove("TROL_CONFIG")
+                .output()
+                .unwrap();
+            let (out, err) = text(&run);
+            assert!(run.status.success(), "{name}: {out}\n{err}");
+            assert!(out.contains(done), "{out}");
+            assert!(
+                err.contains("InitTROL: note: the controller speaks only the manual's"),
+                "{err}"
+            );
+        }
+        let log = sim.output_until("TROLDepart", 1, 30).join("\n");
+        assert!(
+            log.contains("activated: serving TROL (LRC block check, the manual's record sizes)"),
+            "{log}"
+        );
+        // Nothing the manual's server does not know was asked of it.
+        for added in [
+            "TROLGetVersion",
+            "TROLGetCodes",
+            "TROLSetWatchdog",
+            "TROLGetGripper",
+        ] {
+            assert!(!log.contains(added), "{added}: {log}");
+        }
+    }
 }
 
 #[test]

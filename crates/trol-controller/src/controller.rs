@@ -143,6 +143,16 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.log = Some(log);
     }
 
+    /// Speak only the manual's protocol, as a controller with the 1998 PCP server does (the
+    /// simulated 1998 controller, `trol sim --manual`): only the bare `PCP TROL` activates,
+    /// the added commands are unknown, GetStatus has the manual's 4 bytes, and layer 3 has no
+    /// memory (a repeated request runs again) and numbers its replies as `pci` says.
+    pub fn speak_manual_only(&mut self, pci: trol_proto::transaction::ManualLayer3) {
+        self.terminal = Terminal::manual_only();
+        self.pcp.set_manual_only(true);
+        self.server.responder_mut().set_manual(Some(pci));
+    }
+
     /// The mode.
     pub fn mode(&self) -> Mode {
         self.mode
@@ -170,15 +180,18 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 if !out.is_empty() {
                     port.send(&out)?;
                 }
-                if let Some(check) = activated {
+                if let Some(activation) = activated {
                     port.flush_input()?;
                     // The block check the activation line agreed on.
                     let link = self.server.responder_mut().link_mut();
                     let cfg = LinkConfig {
-                        check,
+                        check: activation.check(),
                         ..*link.config()
                     };
                     link.set_config(cfg);
+                    // A 1998 host (the bare line) gets the manual's record sizes.
+                    self.pcp
+                        .set_manual_host(activation == crate::terminal::Activation::Manual);
                     self.mode = Mode::Server;
                     self.last_seen = Instant::now();
                 } else if n == 0 {

@@ -78,7 +78,8 @@ pub struct Context<'a, B> {
     pub status: &'a mut Status,
     /// Set to end server mode once the reply is sent (TerminatePCP).
     pub terminate: &'a mut bool,
-    /// The server's epoch.
+    /// The server's epoch; 0 when GetStatus answers in the manual's 4 bytes (a host or a
+    /// server that speaks only the manual's protocol).
     pub epoch: u16,
     /// The watchdog's limit: the arm is halted when no transaction arrives for this long
     /// (SetWatchdog; `None`: off).
@@ -146,6 +147,12 @@ pub struct Pcp<B> {
     pending: Option<Pending>,
     epoch: u16,
     watchdog: Option<std::time::Duration>,
+    /// The host speaks only the manual's protocol (it activated with the bare line): GetStatus
+    /// in the manual's 4 bytes.
+    manual_host: bool,
+    /// This server speaks only the manual's protocol (a 1998 controller, simulated): the
+    /// added commands are unknown, GetStatus has the manual's 4 bytes.
+    manual_only: bool,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -169,6 +176,8 @@ impl<B: Backend> Pcp<B> {
             pending: None,
             epoch: new_epoch(),
             watchdog: None,
+            manual_host: false,
+            manual_only: false,
         };
         for def in table::BUILTIN {
             let handler = match def.class() {
@@ -254,6 +263,24 @@ impl<B: Backend> Pcp<B> {
         self.status.current = number;
     }
 
+    /// Whether the host speaks only the manual's protocol (it activated with the bare `PCP
+    /// TROL`): GetStatus answers in the manual's 4 bytes, without transaction and epoch.
+    pub fn set_manual_host(&mut self, manual: bool) {
+        self.manual_host = manual;
+    }
+
+    /// Speak only the manual's protocol, as the 1998 PCP server did: the commands this
+    /// successor added ([`table::ADDED`]) are unknown, GetStatus has the manual's 4 bytes.
+    pub fn set_manual_only(&mut self, manual: bool) {
+        self.manual_only = manual;
+    }
+
+    /// Whether GetStatus answers in the manual's 4 bytes (a 1998 host, or a server that
+    /// speaks only the manual's protocol).
+    pub fn speaks_manual(&self) -> bool {
+        self.manual_host || self.manual_only
+    }
+
     /// Whether TerminatePCP asked to end server mode (reading clears it).
     pub fn take_terminate(&mut self) -> bool {
         std::mem::take(&mut self.terminate)
@@ -278,6 +305,11 @@ impl<B: Backend> Pcp<B> {
                 return Handled::Reply(Reply::Code(e.code()).encode());
             }
         };
+        if self.manual_only && table::ADDED.contains(&def.code) {
+            return Handled::Reply(
+                Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode(),
+            );
+        }
         let index = (def.code - def.class().base()) as usize;
         let handler = self.tables[def.class().index()][index];
         let call = Call {
@@ -310,7 +342,12 @@ impl<B: Backend> Pcp<B> {
                     backend: &mut self.backend,
                     status: &mut self.status,
                     terminate: &mut self.terminate,
-                    epoch: self.epoch,
+                    // The manual's GetStatus has no epoch (nor transaction).
+                    epoch: if self.manual_host || self.manual_only {
+                        0
+                    } else {
+                        self.epoch
+                    },
                     watchdog: &mut self.watchdog,
                 };
                 Handled::Reply(h(&mut ctx, &call).encode())
@@ -456,7 +493,11 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
         TROL_GET_STATUS => Reply::Status {
             bios_called: ctx.status.bios_called,
             last: ctx.status.last_error_code,
-            transaction: ctx.status.transaction,
+            transaction: if ctx.epoch == 0 {
+                0
+            } else {
+                ctx.status.transaction
+            },
             epoch: ctx.epoch,
         },
         TROL_GET_VERSION => Reply::Version {

@@ -271,8 +271,22 @@ fn replies_round_trip_and_bad_sizes_are_bad_rsize() {
     // has six values, no more and no fewer.
     assert!(Reply::decode(&MOVE, &[0, 0, 0, 0]).is_err());
     assert!(Reply::decode(&GET_STATUS, &[2, 0, 0, 0, 0, 0, 0, 0]).is_err());
-    // The manual's 4-byte status (no transaction, no epoch) is not this protocol's.
-    assert!(Reply::decode(&GET_STATUS, &[1, 0, 0, 0]).is_err());
+    // The manual's 4-byte status (a 1998 controller's: no transaction, no epoch) is read as
+    // epoch 0, which no controller of this protocol draws, and written back the same; an
+    // 8-byte status with epoch 0 is neither.
+    let manual = Reply::decode(&GET_STATUS, &[1, 0, 0xF6, 0xFF]).unwrap();
+    assert_eq!(
+        manual,
+        Reply::Status {
+            bios_called: true,
+            last: Code(-10),
+            transaction: 0,
+            epoch: 0,
+        }
+    );
+    assert_eq!(manual.encode(), [1, 0, 0xF6, 0xFF]);
+    assert!(Reply::decode(&GET_STATUS, &[1, 0, 0, 0, 7, 0, 0, 0]).is_err());
+    assert!(Reply::decode(&GET_STATUS, &[1, 0, 0, 0, 0, 0]).is_err());
     for n in 0..=8u8 {
         let mut bytes = vec![0, 0, Tag::Cart as u8, n];
         bytes.resize(4 + 4 * n as usize, 0);

@@ -202,7 +202,12 @@ fn a_stale_reply_is_never_taken_for_the_answer_to_a_newer_request() {
     assert_eq!(got, Some(Outcome::Received));
     let (req_pci, req) = c.take_received().unwrap();
     assert_eq!(req, b"second");
-    let stale = trol_proto::transaction::pci(pci_number(req_pci).wrapping_sub(1));
+    // The number before this one: requests count 1, ..., 255, 1, ... (never 0).
+    let before = match pci_number(req_pci) {
+        1 => 255,
+        n => n - 1,
+    };
+    let stale = trol_proto::transaction::pci(before);
     c.send(b"late answer to the first", stale, w.now).unwrap();
     let mut sent = 0;
     let mut ev = None;
@@ -333,4 +338,35 @@ fn a_repeated_request_is_answered_from_memory_and_not_executed_again() {
         |_| Decision::GiveUp,
     );
     assert_eq!((e, n), (InitiatorEvent::Reply, 1));
+}
+
+#[test]
+fn requests_are_never_numbered_zero_and_a_reply_numbered_zero_is_taken() {
+    use trol_proto::link::{Link, Outcome};
+    // A controller that speaks only the manual's protocol sends PCI 0 (the manual: "not
+    // needed"); no request carries 0, so such a reply can be no stale one of this host's.
+    let mut i = Initiator::new(LinkConfig::default());
+    let mut c = Link::new(LinkConfig::default());
+    let mut w = Wire::new();
+    for round in 0..300u32 {
+        c.receive(w.now).unwrap();
+        i.start(b"req", w.now).unwrap();
+        let mut got = None;
+        w.run(&mut i, &mut c, Duration::from_secs(10), |_, c| {
+            got = got.or(c.poll_outcome());
+            got.is_some()
+        });
+        assert_eq!(got, Some(Outcome::Received));
+        let (req_pci, _) = c.take_received().unwrap();
+        assert_ne!(pci_number(req_pci), 0, "round {round}");
+        c.send(b"ok", 0, w.now).unwrap();
+        let mut ev = None;
+        w.run_t(&mut i, &mut c, Duration::from_secs(10), |i, _, _| {
+            ev = i.poll_event();
+            ev.is_some()
+        });
+        assert_eq!(ev, Some(InitiatorEvent::Reply), "round {round}");
+        assert_eq!(i.take_reply().as_deref(), Some(&b"ok"[..]));
+    }
+    assert_eq!(i.stale_replies(), 0);
 }

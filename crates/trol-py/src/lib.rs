@@ -335,6 +335,11 @@ fn connected(py: Python<'_>, robot: trol::Result<trol::Robot>, check: bool) -> P
     let mut robot = robot.map_err(fail)?;
     if check {
         py.detach(|| trol::check_server(&mut robot)).map_err(fail)?;
+        if let Some(notice) = robot.take_notice() {
+            // Said once, as a warning the program can filter or turn into an error.
+            let warnings = py.import("warnings")?;
+            warnings.call_method1("warn", (format!("trol: {notice}"),))?;
+        }
     }
     Ok(Robot::new(robot))
 }

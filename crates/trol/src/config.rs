@@ -10,7 +10,7 @@
 //!
 //! | key | value | default |
 //! |---|---|---|
-//! | `check` | the link's block check: `crc16` or the manual's `lrc` (docs/protocol.md) | crc16 |
+//! | `check` | the link's block check: `crc16` or the manual's `lrc` (docs/protocol.md) | crc16, and lrc for a controller that speaks only the manual's protocol |
 //! | `time_scale` | how much faster than real time the simulation runs | 1 |
 //! | `locations` | a location file to load (relative to trol.cfg's folder) | none |
 //! | `table_z` | the table plane, mm | 0 |
@@ -48,8 +48,10 @@ pub struct Config {
     pub locations: Option<PathBuf>,
     /// The objects file of the simulated world.
     pub objects: Option<PathBuf>,
-    /// The link's block check.
-    pub check: trol_proto::link::BlockCheck,
+    /// The link's block check, if trol.cfg names one. Without it (the manual's 3-line
+    /// trol.cfg) a connection uses CRC-16 and falls back to the manual's LRC for a
+    /// controller that checks blocks only so (docs/protocol.md, "A peer of 1998").
+    pub check: Option<trol_proto::link::BlockCheck>,
     /// Table plane, mm (port `sim`).
     pub table_z: f64,
     /// The simulated arm starts homed.
@@ -64,6 +66,13 @@ pub struct Config {
     pub view: Option<String>,
 }
 
+impl Config {
+    /// The block check a connection starts with: the one named, else CRC-16.
+    pub fn block_check(&self) -> trol_proto::link::BlockCheck {
+        self.check.unwrap_or_default()
+    }
+}
+
 impl Default for Config {
     fn default() -> Self {
         Config {
@@ -73,7 +82,7 @@ impl Default for Config {
             time_scale: 1.0,
             locations: None,
             objects: None,
-            check: trol_proto::link::BlockCheck::default(),
+            check: None,
             table_z: 0.0,
             homed: false,
             object: None,
@@ -363,10 +372,9 @@ impl Config {
                             cfg.mars_profile = Some(PathBuf::from(value))
                         }
                         "check" => {
-                            cfg.check = trol_proto::link::BlockCheck::from_word(value).ok_or((
-                                n,
-                                format!("check: expected crc16 or lrc, found {value:?}"),
-                            ))?
+                            cfg.check = Some(trol_proto::link::BlockCheck::from_word(value).ok_or(
+                                (n, format!("check: expected crc16 or lrc, found {value:?}")),
+                            )?)
                         }
                         "table_z" => cfg.table_z = number("a height in mm")?,
                         "object" => cfg.object = Some(number("a width in mm")?),

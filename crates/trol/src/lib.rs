@@ -53,6 +53,7 @@ pub use trol_proto::application::{
     Arg, ArgKind, Catalog, Choice, CodeEntry, CommandDef, Gripper, Held, LocName, Location, Reply,
     ReplyKind, Tag, Wait,
 };
+use trol_proto::link::BlockCheck;
 #[cfg(feature = "sim")]
 pub use trol_sim::SimSettings;
 
@@ -114,15 +115,39 @@ pub fn default_codes() -> &'static CodeTable {
     &[]
 }
 
+/// Whether a transaction failed because the controller refused every block this end sent as
+/// damaged: the two ends check blocks differently (or the line is very noisy). Nothing
+/// arrived, so nothing ran.
+pub(crate) fn refused_every_block(error: &trol_comm::TransError) -> bool {
+    matches!(
+        error,
+        trol_comm::TransError::Failed {
+            last_comm: Some(trol_proto::link::LinkError::Send(
+                trol_proto::link::codes::SendError::LimitExceeded
+            )),
+            ..
+        }
+    )
+}
+
 /// Check that the server answers (InitTROL(1)): one GetStatus transaction, then its protocol
-/// version ([`Robot::check_version`]).
+/// version ([`Robot::check_version`]). A controller whose GetStatus has the manual's 4 bytes
+/// speaks only the manual's protocol (a 1998 TROL server): it has no version to check, and
+/// the connection says so once ([`Robot::take_notice`]).
 pub fn check_server(robot: &mut Robot) -> Result<()> {
     // A probe: one attempt, so that a controller in terminal mode is found out quickly.
     let repeats = robot.transactor_mut().repeats();
     robot.transactor_mut().set_repeats(0);
-    let status = robot.status();
+    let status = robot.status_record();
     robot.transactor_mut().set_repeats(repeats);
-    let e = match status.and_then(|_| robot.check_version()) {
+    let checked = status.and_then(|s| {
+        if robot.note_status_form(&s) {
+            Ok(())
+        } else {
+            robot.check_version().map(drop)
+        }
+    });
+    let e = match checked {
         Ok(_) => return Ok(()),
         Err(e @ Error::Setup(SetupError::Incompatible { .. })) => return Err(e),
         Err(e) => e,
@@ -140,18 +165,13 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
     // Every block refused as damaged: the two ends check blocks differently, as a 1998
     // controller (LRC) and TROL's default (CRC-16) do; a noisy line or another baud rate can
     // do the same.
-    let damaged = matches!(
-        &e,
-        Error::Link {
-            error: trol_comm::TransError::Failed {
-                last_comm: Some(trol_proto::link::LinkError::Send(
-                    trol_proto::link::codes::SendError::LimitExceeded
-                )),
-                ..
-            },
-            ..
-        }
-    );
+    let damaged = matches!(&e, Error::Link { error, .. } if refused_every_block(error));
+    if damaged && robot.check_is_auto() {
+        return Err(Error::Setup(SetupError::NoServer(format!(
+            "the controller refused every block this end sent as damaged ({e}), checked with \
+             CRC-16 and with the manual's LRC: the line is noisy, or the baud rate differs"
+        ))));
+    }
     if damaged {
         let check = robot.transactor_mut().initiator().link().config().check;
         let other = match check {
@@ -192,45 +212,103 @@ fn shared_port(robot: &mut Robot) -> Option<String> {
 
 /// Bring the controller into server mode and apply the tool transform (InitTROL(0), `trol
 /// init`): the activation sequence of docs/protocol.md, then GetStatus, then
-/// SetToolTransform.
+/// SetToolTransform. A controller that answers the line with the block check's word as an
+/// unknown line speaks only the manual's protocol: unless trol.cfg names `check = crc16`, it
+/// gets the manual's bare `PCP TROL` and the link the manual's LRC.
 pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
     if check_server(robot).is_err() {
         // The block check this end uses: the activation line makes the controller use it too.
-        let check = robot.transactor_mut().initiator().link().config().check;
+        let check = robot.link_config().check;
         let line = trol_proto::activation::activation_line(check);
         let answer = trol_proto::activation::activated_line(check);
-        let port = robot.transactor_mut().driver_mut().port_mut();
         let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
-        port.send(b"\x03\r").map_err(io)?;
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        port.flush_input().map_err(io)?;
-        port.send(line.as_bytes()).map_err(io)?;
-        port.send(b"\r").map_err(io)?;
-        let mut seen = Vec::new();
-        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(3);
-        let mut buf = [0u8; 256];
-        while !String::from_utf8_lossy(&seen).contains(&answer) {
-            let n = port.recv(&mut buf, deadline).map_err(io)?;
-            if n == 0 {
-                let said = String::from_utf8_lossy(&seen).into_owned();
-                let what = format!(
-                    "the controller did not answer the activation line `{line}` with \
-                     `{answer}` (it answered {said:?})"
-                );
-                return Err(Error::Setup(SetupError::NoServer(
-                    match shared_port(robot) {
-                        Some(shared) => format!("{what}; {shared}"),
-                        None => format!(
-                            "{what}; check the cable, the port and the baud rate in trol.cfg"
-                        ),
-                    },
-                )));
+        {
+            let port = robot.transactor_mut().driver_mut().port_mut();
+            port.send(b"\x03\r").map_err(io)?;
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            port.flush_input().map_err(io)?;
+        }
+        match type_line(robot, &line, &answer)? {
+            Typed::Active => {}
+            Typed::Unknown if check == BlockCheck::Crc16 && !robot.check_is_auto() => {
+                return Err(Error::Setup(SetupError::NoServer(format!(
+                    "the controller does not know `{line}`: it speaks only the manual's \
+                     protocol (a 1998 TROL server), which checks blocks with the manual's LRC; \
+                     trol.cfg asks for `check = crc16`: remove that line (or write `check = \
+                     lrc`)"
+                ))));
             }
-            seen.extend_from_slice(&buf[..n]);
+            Typed::Unknown => {
+                // A 1998 controller: the manual's bare line, the manual's LRC.
+                let bare = trol_proto::activation::ACTIVATE;
+                match type_line(robot, bare, trol_proto::activation::ACTIVATED)? {
+                    Typed::Active => robot.set_check(BlockCheck::Lrc),
+                    Typed::Unknown => {
+                        return Err(Error::Setup(SetupError::NoServer(format!(
+                            "the controller knows neither `{line}` nor the manual's `{bare}`: \
+                             it answers both as unknown commands, so its TROL server (PCP) is \
+                             not installed; load it as its manual says"
+                        ))));
+                    }
+                }
+            }
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
-        port.flush_input().map_err(io)?;
+        robot
+            .transactor_mut()
+            .driver_mut()
+            .port_mut()
+            .flush_input()
+            .map_err(io)?;
         check_server(robot)?;
     }
     robot.set_tool_transform(tool)
+}
+
+/// How a controller in terminal mode took an activation line.
+enum Typed {
+    /// It answered the activation.
+    Active,
+    /// It answered `COMMAND ERROR` and its prompt: it does not know the line.
+    Unknown,
+}
+
+/// Type `line` and CR at the controller's terminal and read until it answers `answer`, or
+/// says it does not know the line; at most 3 s.
+fn type_line(robot: &mut Robot, line: &str, answer: &str) -> Result<Typed> {
+    let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
+    let port = robot.transactor_mut().driver_mut().port_mut();
+    port.send(line.as_bytes()).map_err(io)?;
+    port.send(b"\r").map_err(io)?;
+    let mut seen = Vec::new();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(3);
+    let mut buf = [0u8; 256];
+    loop {
+        let text = String::from_utf8_lossy(&seen);
+        if text.contains(answer) {
+            return Ok(Typed::Active);
+        }
+        let error = trol_proto::activation::COMMAND_ERROR;
+        if text.find(error).is_some_and(|at| text[at..].contains(">>")) {
+            return Ok(Typed::Unknown);
+        }
+        let port = robot.transactor_mut().driver_mut().port_mut();
+        let n = port.recv(&mut buf, deadline).map_err(io)?;
+        if n == 0 {
+            let said = text.into_owned();
+            let what = format!(
+                "the controller did not answer the activation line `{line}` with `{answer}` (it \
+                 answered {said:?})"
+            );
+            return Err(Error::Setup(SetupError::NoServer(
+                match shared_port(robot) {
+                    Some(shared) => format!("{what}; {shared}"),
+                    None => {
+                        format!("{what}; check the cable, the port and the baud rate in trol.cfg")
+                    }
+                },
+            )));
+        }
+        seen.extend_from_slice(&buf[..n]);
+    }
 }

@@ -268,7 +268,24 @@ pub struct Robot {
     view: Option<trol_view::ViewServer>,
     /// What lives as long as the connection ([`Robot::keep`]).
     kept: Vec<Box<dyn std::any::Any + Send>>,
+    /// No block check was named: CRC-16 may fall back to the manual's LRC at first contact.
+    check_auto: bool,
+    /// A transaction went through with the block check in use.
+    check_settled: bool,
+    /// The application chose the repeats ([`Robot::set_repeats`]): the handshake keeps them.
+    repeats_set: bool,
+    /// The controller speaks only the manual's protocol (its GetStatus is the manual's).
+    manual_peer: bool,
+    /// What the user should hear once about this connection ([`Robot::take_notice`]).
+    notice: Option<String>,
 }
+
+/// What a connection says once when the controller speaks only the manual's protocol.
+pub const MANUAL_PEER_NOTICE: &str = "the controller speaks only the manual's protocol (a \
+    1998 TROL server): the manual's LRC block check, which misses damage CRC-16 finds \
+    (docs/reliability.md); no exactly-once repeats, so after a failed call TROLGetStatus tells \
+    whether it ran; no version check; and TROL's added commands (GetVersion, GetCodes, \
+    GetGripper, SetWatchdog) are unknown to it";
 
 /// The port prefix that embeds the controller with the RAPL-II backend (`rapl:/dev/ttyUSB0`).
 pub const RAPL_PREFIX: &str = "rapl:";
@@ -291,7 +308,7 @@ impl Robot {
     /// with default settings. Nothing is sent: [`Robot::connect`] also checks the controller,
     /// and [`crate::activate`] starts a controller's server first (InitTROL(0), `trol init`).
     pub fn open(port: &str, baud: u32) -> Result<Robot> {
-        Robot::open_with(port, baud, BlockCheck::default())
+        Robot::open_checked(port, baud, None)
     }
 
     /// Connect and check the controller, as every surface does (the utilities, C's
@@ -312,10 +329,18 @@ impl Robot {
         Ok(robot)
     }
 
-    /// Like [`Robot::open`], with the link's block check (`check` in trol.cfg).
+    /// Like [`Robot::open`], with the link's block check (`check` in trol.cfg): no fallback
+    /// to the manual's LRC.
     pub fn open_with(port: &str, baud: u32, check: BlockCheck) -> Result<Robot> {
+        Robot::open_checked(port, baud, Some(check))
+    }
+
+    /// [`Robot::open`] with the block check trol.cfg names, if any: without one, CRC-16,
+    /// and the manual's LRC if the controller refuses every CRC-16 block at first contact
+    /// and takes LRC ones (a controller that speaks only the manual's protocol).
+    pub fn open_checked(port: &str, baud: u32, check: Option<BlockCheck>) -> Result<Robot> {
         let cfg = LinkConfig {
-            check,
+            check: check.unwrap_or_default(),
             ..LinkConfig::for_line(baud, Duration::ZERO)
         };
         if port == "sim" {
@@ -345,6 +370,7 @@ impl Robot {
         let p = trol_port::open(port, &settings).map_err(SetupError::Port)?;
         let mut robot = Robot::over(p, cfg, None);
         robot.origin = Some((port.to_string(), settings));
+        robot.check_auto = check.is_none();
         Ok(robot)
     }
 
@@ -372,7 +398,7 @@ impl Robot {
                 }
             };
             let link = LinkConfig {
-                check: cfg.check,
+                check: cfg.block_check(),
                 ..LinkConfig::default()
             };
             let locations = crate::config_locations(cfg)?;
@@ -386,7 +412,7 @@ impl Robot {
                 None => trol_rapl::Profile::default(),
             };
             let link = LinkConfig {
-                check: cfg.check,
+                check: cfg.block_check(),
                 ..LinkConfig::default()
             };
             return Robot::rapl(device, profile, link);
@@ -394,7 +420,7 @@ impl Robot {
         #[cfg(feature = "sim")]
         if cfg.port == "sim" {
             let link = LinkConfig {
-                check: cfg.check,
+                check: cfg.block_check(),
                 ..LinkConfig::default()
             };
             let settings = crate::sim_settings(cfg)?;
@@ -422,7 +448,7 @@ impl Robot {
                 None => Ok(Robot::embedded_on(settings, link)),
             };
         }
-        Robot::open_with(&cfg.port, cfg.baud, cfg.check)
+        Robot::open_checked(&cfg.port, cfg.baud, cfg.check)
     }
 
     /// Connect as ./trol.cfg (or $TROL_CONFIG) says.
@@ -541,12 +567,22 @@ impl Robot {
     /// Connect over a port that is already open (for tests, relays, and controllers of the
     /// application's own). `embedded` keeps an in-process controller alive as long as the
     /// connection.
+    ///
+    /// A request whose transaction failed is sent again (exactly once, docs/protocol.md) only
+    /// to a controller that announced its memory of the last request: an in-process one, or
+    /// one whose version check ([`Robot::check_version`], part of [`Robot::connect`]) found
+    /// this protocol. Until then, and for a controller that speaks only the manual's
+    /// protocol, the first failure is the call's, as in the manual ([`Robot::set_repeats`]
+    /// chooses otherwise).
     pub fn over(port: Box<dyn Port>, cfg: LinkConfig, embedded: Option<Embedded>) -> Robot {
         let catalog = Catalog::builtin();
         let mut transactor = Transactor::new(port, cfg);
         transactor.set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
             catalog.clone(),
         ))));
+        if embedded.is_none() {
+            transactor.set_repeats(0);
+        }
         Robot {
             transactor,
             catalog,
@@ -560,7 +596,51 @@ impl Robot {
             #[cfg(feature = "view")]
             view: None,
             kept: Vec::new(),
+            check_auto: false,
+            check_settled: false,
+            repeats_set: false,
+            manual_peer: false,
+            notice: None,
         }
+    }
+
+    /// Whether the controller speaks only the manual's protocol (a 1998 TROL server: found by
+    /// its 4-byte GetStatus when the connection was checked). It then has no memory of the
+    /// last request, so nothing is sent again on its own ([`Robot::set_repeats`]).
+    pub fn speaks_manual_only(&self) -> bool {
+        self.manual_peer
+    }
+
+    /// What the user should hear once about this connection, taken: that the controller
+    /// speaks only the manual's protocol, or that the block check fell back to the manual's
+    /// LRC. The utilities, C's InitTROL and Python print it.
+    pub fn take_notice(&mut self) -> Option<String> {
+        self.notice.take()
+    }
+
+    fn add_notice(&mut self, text: &str) {
+        self.notice = Some(match self.notice.take() {
+            Some(n) => format!("{n}; {text}"),
+            None => text.to_string(),
+        });
+    }
+
+    /// After the first GetStatus of a check: a reply in the manual's 4 bytes is a controller
+    /// that speaks only the manual's protocol. Returns whether it is one.
+    pub(crate) fn note_status_form(&mut self, status: &StatusRecord) -> bool {
+        if status.epoch != 0 {
+            return false;
+        }
+        if !self.manual_peer {
+            self.manual_peer = true;
+            self.epoch = None;
+            if !self.repeats_set {
+                self.transactor.set_repeats(0);
+            }
+            // It says all there is: the LRC fallback's notice is part of it.
+            self.notice = Some(MANUAL_PEER_NOTICE.to_string());
+        }
+        true
     }
 
     /// Keep `thing` alive as long as the connection: a live view served next to an embedded
@@ -602,6 +682,7 @@ impl Robot {
         let probe = self.status_record();
         self.transactor.set_repeats(repeats);
         match probe {
+            Ok(status) if self.note_status_form(&status) => Ok(()),
             Ok(_) => self.check_version().map(drop),
             Err(e) => match self.reactivate {
                 Some(tool) => crate::activate(self, &tool),
@@ -622,12 +703,71 @@ impl Robot {
     /// TransSR with the reconnection bookkeeping: a port failure marks the connection broken.
     fn trans(&mut self, command: &'static str, request: &[u8]) -> Result<Vec<u8>> {
         self.mend()?;
-        self.transactor.trans_sr(request).map_err(|error| {
-            if matches!(error, TransError::Io(_)) && self.origin.is_some() {
-                self.broken = true;
+        let mut result = self.transactor.trans_sr(request);
+        if let Err(error) = &result {
+            if self.may_fall_back(error) {
+                result = self.fall_back_to_lrc(request);
             }
-            Error::Link { command, error }
-        })
+        }
+        match result {
+            Ok(reply) => {
+                self.check_settled = true;
+                Ok(reply)
+            }
+            Err(error) => {
+                if matches!(error, TransError::Io(_)) && self.origin.is_some() {
+                    self.broken = true;
+                }
+                Err(Error::Link { command, error })
+            }
+        }
+    }
+
+    /// Whether `error` is the controller refusing every CRC-16 block as damaged at first
+    /// contact, with no block check named: it may check blocks as the manual does.
+    fn may_fall_back(&self, error: &TransError) -> bool {
+        self.check_auto
+            && !self.check_settled
+            && self.link_config().check == BlockCheck::Crc16
+            && crate::refused_every_block(error)
+    }
+
+    /// Send `request` again with the manual's LRC (it never arrived: every block was refused),
+    /// and keep LRC if the controller takes it; else go back to CRC-16 and fail as the LRC
+    /// attempt did.
+    fn fall_back_to_lrc(&mut self, request: &[u8]) -> std::result::Result<Vec<u8>, TransError> {
+        let crc = self.link_config();
+        // The controller refused the last block and waits for it again; it gives up after its
+        // block timeout and is then deaf for a reset period (docs/protocol.md, "The reset
+        // after a failure"). An ENQ before that would go unanswered.
+        let t = crc.timeouts;
+        std::thread::sleep(t.start + t.reset + t.reset / 2);
+        self.set_check(BlockCheck::Lrc);
+        let _ = self.transactor.driver_mut().port_mut().flush_input();
+        let result = self.transactor.trans_sr(request);
+        match &result {
+            Ok(_) => self.add_notice(
+                "the controller refused CRC-16 blocks and takes the manual's LRC: this \
+                 connection checks blocks with the LRC (`check = lrc` in trol.cfg says so and \
+                 skips the trial)",
+            ),
+            Err(_) => self.set_check(crc.check),
+        }
+        result
+    }
+
+    /// Whether no block check was named, so CRC-16 may fall back to the manual's LRC.
+    pub(crate) fn check_is_auto(&self) -> bool {
+        self.check_auto
+    }
+
+    pub(crate) fn set_check(&mut self, check: BlockCheck) {
+        let link = self.transactor.initiator_mut().link_mut();
+        let cfg = LinkConfig {
+            check,
+            ..*link.config()
+        };
+        link.set_config(cfg);
     }
 
     /// Know a command an application added (docs/extending.md): [`Robot::call`] takes it,
@@ -736,7 +876,11 @@ impl Robot {
 
     /// How often a request whose transaction failed is sent again (TROLSetRepeats; 0: the
     /// first failure is the call's).
+    ///
+    /// Without this call, a connection repeats only to a controller that announced its memory
+    /// of the last request ([`Robot::over`]).
     pub fn set_repeats(&mut self, repeats: u8) {
+        self.repeats_set = true;
         self.transactor.set_repeats(repeats);
     }
 
@@ -1173,6 +1317,11 @@ impl Robot {
                 kind: Some(v.kind),
             }
             .into());
+        }
+        // This protocol's controller remembers its last request: a request whose
+        // transaction failed goes again, unless the application chose otherwise.
+        if !self.repeats_set {
+            self.transactor.set_repeats(trol_comm::DEFAULT_REPEATS);
         }
         match self.get_codes() {
             Ok(codes) => self.codes = crate::codes::intern(&codes),

@@ -1114,3 +1114,138 @@ fn a_halt_reaches_the_arm_while_it_homes() {
     let e = robot.lock().unwrap().joint(1, 0.1).unwrap_err();
     assert_eq!(e.code(), Code(-1), "{e}");
 }
+
+/// Repeats follow the version handshake (docs/protocol.md, "A peer of 1998"): none before
+/// it; the default once a controller of this protocol answered it; none for a controller that
+/// speaks only the manual's protocol, which has no memory of its last request, so that a
+/// repeated relative move would run twice there (shown with repeats forced on).
+#[test]
+fn repeats_go_only_to_a_controller_that_announced_its_memory() {
+    use trol_controller::{Controller, Embedded, Mode};
+    use trol_proto::link::BlockCheck;
+    use trol_proto::transaction::ManualLayer3;
+    for manual in [
+        None,
+        Some(ManualLayer3::ZeroPci),
+        Some(ManualLayer3::EchoPci),
+    ] {
+        for forced in [None, Some(1)] {
+            let cfg = LinkConfig {
+                check: BlockCheck::Lrc,
+                ..quick()
+            };
+            let (host, ctl) = trol_port::memory::pair(None);
+            let mut controller = Controller::new(
+                ctl,
+                cfg,
+                Pcp::new(SimBackend::new(settings())),
+                Mode::Server,
+            );
+            if let Some(pci) = manual {
+                controller.speak_manual_only(pci);
+            }
+            let handle = Embedded::spawn(controller);
+            let deaf = Arc::new(AtomicBool::new(false));
+            let deaf_after_eot = Arc::new(AtomicBool::new(false));
+            let port = Switchable {
+                inner: host,
+                deaf: deaf.clone(),
+                mute: Arc::new(AtomicBool::new(false)),
+                deaf_after_eot: deaf_after_eot.clone(),
+                drop_next_eot: Arc::new(AtomicBool::new(false)),
+            };
+            let mut robot = Robot::over(Box::new(port), cfg, None);
+            robot.keep(handle);
+            robot.set_reply_timeout_tenths(10).unwrap();
+            assert_eq!(robot.repeats(), 0, "no repeats before the handshake");
+            if let Some(n) = forced {
+                robot.set_repeats(n);
+            }
+            trol::check_server(&mut robot).unwrap();
+            let case = format!("{manual:?}, repeats {forced:?}");
+            assert_eq!(robot.speaks_manual_only(), manual.is_some(), "{case}");
+            let repeats = forced.unwrap_or(if manual.is_some() { 0 } else { 2 });
+            assert_eq!(robot.repeats(), repeats, "{case}");
+            assert_eq!(robot.take_notice().is_some(), manual.is_some(), "{case}");
+            assert_eq!(robot.take_notice(), None, "said once");
+            robot.home(0).unwrap();
+            robot.finish().unwrap();
+            // The Joint's reply is lost; the line is back before a repeat would go out.
+            deaf_after_eot.store(true, Ordering::SeqCst);
+            let heal = {
+                let deaf = deaf.clone();
+                std::thread::spawn(move || {
+                    std::thread::sleep(Duration::from_millis(500));
+                    deaf.store(false, Ordering::SeqCst);
+                })
+            };
+            let result = robot.joint(1, 0.25);
+            heal.join().unwrap();
+            if repeats == 0 {
+                // The manual's behaviour: the call fails, GetStatus says it ran.
+                assert_eq!(result.unwrap_err().code(), TROL_ERR_COMM, "{case}");
+                std::thread::sleep(Duration::from_millis(800));
+                let _ = robot.flush_input();
+                assert_eq!(robot.status().unwrap(), (true, SUCCESS), "{case}");
+            } else {
+                result.unwrap();
+            }
+            robot.finish().unwrap();
+            let j1 = joints(&mut robot)[0];
+            // Only a repeat forced onto a controller without memory runs the move twice.
+            let want = if manual.is_some() && repeats > 0 {
+                0.5
+            } else {
+                0.25
+            };
+            assert!((j1 - want).abs() < 1e-6, "{case}: J1 {j1}");
+        }
+    }
+}
+
+/// A 1998 host (the manual's bare `PCP TROL`) gets the manual's answer and sizes from this
+/// controller: `PCP TROL ACTIVE` without a word, the LRC, GetStatus in 4 bytes. A host of
+/// this protocol that asks for the LRC by name gets the longer GetStatus.
+#[test]
+fn a_1998_host_gets_the_manuals_answer_and_sizes() {
+    use trol_controller::{Controller, Embedded, Mode};
+    use trol_proto::link::BlockCheck;
+    for (line, answer, manual) in [
+        ("PCP TROL", "PCP TROL\r\nPCP TROL ACTIVE\r\n", true),
+        (
+            "PCP TROL LRC",
+            "PCP TROL LRC\r\nPCP TROL ACTIVE LRC\r\n",
+            false,
+        ),
+    ] {
+        let (mut host, ctl) = trol_port::memory::pair(None);
+        let controller = Controller::new(
+            ctl,
+            quick(),
+            Pcp::new(SimBackend::new(settings())),
+            Mode::Terminal,
+        );
+        let handle = Embedded::spawn(controller);
+        host.send(format!("{line}\r").as_bytes()).unwrap();
+        let mut seen = Vec::new();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut buf = [0u8; 64];
+        while !String::from_utf8_lossy(&seen).contains("ACTIVE") || !seen.ends_with(b"\r\n") {
+            let n = host.recv(&mut buf, deadline).unwrap();
+            assert!(n > 0, "no answer to {line}: {seen:?}");
+            seen.extend_from_slice(&buf[..n]);
+        }
+        assert_eq!(String::from_utf8_lossy(&seen), answer);
+        // The controller drops its input once it has answered (as `trol::activate` waits).
+        std::thread::sleep(Duration::from_millis(200));
+        let lrc = LinkConfig {
+            check: BlockCheck::Lrc,
+            ..quick()
+        };
+        let mut robot = Robot::over(Box::new(host), lrc, None);
+        robot.keep(handle);
+        let reply = robot.transact_raw(&[trol::table::TROL_GET_STATUS]).unwrap();
+        assert_eq!(reply.len(), if manual { 4 } else { 8 }, "{line}: {reply:?}");
+        assert_eq!(robot.status_record().unwrap().epoch == 0, manual, "{line}");
+    }
+}

@@ -92,7 +92,10 @@ pub enum Reply {
         /// The transaction number (the PCI's low byte) of the CAT1/CAT2 request the status
         /// belongs to; 0 before the first.
         transaction: u8,
-        /// The controller's epoch: a number it draws when it starts.
+        /// The controller's epoch: a number it draws when it starts, never 0. Epoch 0 is the
+        /// manual's 4-byte reply, which has neither a transaction nor an epoch (a 1998
+        /// controller's, or the answer to a 1998 host): `transaction` is then 0 too, and the
+        /// reply encodes as the manual's `BIOSCalled, lastErrorCode`.
         epoch: u16,
     },
     /// TROLGetVersion: the protocol version the controller speaks and what it is (`simulated
@@ -149,8 +152,10 @@ impl Reply {
                 ..
             } => {
                 out.extend_from_slice(&last.0.to_le_bytes());
-                out.extend_from_slice(&u16::from(*transaction).to_le_bytes());
-                out.extend_from_slice(&epoch.to_le_bytes());
+                if *epoch != 0 {
+                    out.extend_from_slice(&u16::from(*transaction).to_le_bytes());
+                    out.extend_from_slice(&epoch.to_le_bytes());
+                }
             }
             Reply::Version { protocol, kind } => {
                 out.extend_from_slice(&protocol.to_le_bytes());
@@ -308,7 +313,20 @@ impl Reply {
                 Ok(Reply::Codes(codes))
             }
             ReplyKind::Status => {
-                if rest.len() != 6 || !(value.0 == 0 || value.0 == 1) || rest[3] != 0 {
+                if !(value.0 == 0 || value.0 == 1) {
+                    return Err(bad());
+                }
+                if rest.len() == 2 {
+                    // The manual's reply: BIOSCalled and lastErrorCode only.
+                    return Ok(Reply::Status {
+                        bios_called: value.0 == 1,
+                        last: Code(i16::from_le_bytes([rest[0], rest[1]])),
+                        transaction: 0,
+                        epoch: 0,
+                    });
+                }
+                // A controller never draws epoch 0, which stands for the manual's reply.
+                if rest.len() != 6 || rest[3] != 0 || rest[4..6] == [0, 0] {
                     return Err(bad());
                 }
                 Ok(Reply::Status {
@@ -327,6 +345,16 @@ impl Reply {
         match self {
             Reply::Code(v) => v.describe(bios),
             Reply::Position(loc) => format_location(loc),
+            Reply::Status {
+                bios_called,
+                last,
+                transaction,
+                epoch,
+            } if *epoch == 0 => format!(
+                "BIOSCalled {}, lastErrorCode {} (the manual's reply: no transaction, no epoch)",
+                u8::from(*bios_called),
+                last.describe(bios)
+            ),
             Reply::Status {
                 bios_called,
                 last,

@@ -258,6 +258,16 @@ commands! {
     }
 }
 
+/// The commands this successor added to the manual's table (GetGripper, GetVersion,
+/// SetWatchdog, GetCodes): a controller that speaks only the manual's protocol answers them
+/// TROL_ERR_UNKNOWN.
+pub const ADDED: &[u8] = &[
+    TROL_GET_GRIPPER,
+    TROL_GET_VERSION,
+    TROL_SET_WATCHDOG,
+    TROL_GET_CODES,
+];
+
 /// The version of TROL's protocol this library speaks: 3 is this successor's (the manual's
 /// layers with the CRC-16 agreement, transaction numbers with repeats, GetStatus with its
 /// transaction and epoch, GetVersion and SetWatchdog). Host and controller must speak the

@@ -144,7 +144,9 @@ impl Initiator {
                 request.len(),
             )));
         }
-        self.number = self.number.wrapping_add(1);
+        // 1, 2, ..., 255, 1, ...: 0 is never a request's number, so that a reply numbered 0
+        // can only come from a controller that does not number its replies.
+        self.number = self.number.checked_add(1).unwrap_or(1);
         self.link.clear_last_error();
         self.repeat = false;
         self.request.clear();
@@ -293,7 +295,10 @@ impl Initiator {
                 let Some((reply_pci, data)) = self.link.take_received() else {
                     return;
                 };
-                if pci_number(reply_pci) == self.number {
+                // The reply carries its request's number; a controller that speaks only the
+                // manual's protocol (its PCI is "not needed") sends 0, and that is taken too.
+                let number = pci_number(reply_pci);
+                if number == self.number || number == 0 {
                     self.reply = Some(data);
                     self.state = State::Finished;
                     self.event = Some(InitiatorEvent::Reply);

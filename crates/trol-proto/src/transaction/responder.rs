@@ -41,6 +41,18 @@ pub struct Responder {
     memory: Option<(u8, Vec<u8>)>,
     /// Requests answered from memory.
     repeats_answered: u64,
+    /// The manual's layer 3 (a 1998 controller, simulated), if set.
+    manual: Option<ManualLayer3>,
+}
+
+/// How a responder that speaks only the manual's layer 3 (a 1998 PCP server) numbers its
+/// replies: the manual says the PCI "is not needed" and does not say what goes in it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ManualLayer3 {
+    /// Every reply's PCI is 0.
+    ZeroPci,
+    /// Every reply's PCI is its request's.
+    EchoPci,
 }
 
 impl Responder {
@@ -55,7 +67,16 @@ impl Responder {
             event: None,
             memory: None,
             repeats_answered: 0,
+            manual: None,
         }
+    }
+
+    /// Speak only the manual's layer 3, as a 1998 controller does: no memory of the last
+    /// request (every request executes, the REPEAT bit unknown, so a repeated relative move
+    /// runs twice) and the reply's PCI as `how` says. For the simulated 1998 controller.
+    pub fn set_manual(&mut self, how: Option<ManualLayer3>) {
+        self.manual = how;
+        self.memory = None;
     }
 
     /// How many repeated requests were answered from memory, not executed again.
@@ -68,7 +89,7 @@ impl Responder {
     /// of the controller executed it cannot be told. It must not run (a relative move would
     /// run twice); the server answers TROL_ERR_ROBOT_UNSURE.
     pub fn request_is_unknown_repeat(&self) -> bool {
-        pci_is_repeat(self.request_pci) && self.memory.is_none()
+        self.manual.is_none() && pci_is_repeat(self.request_pci) && self.memory.is_none()
     }
 
     /// Forget the last executed request (the manual's behaviour: every request executes).
@@ -147,13 +168,19 @@ impl Responder {
         }
         self.reply.clear();
         self.reply.extend_from_slice(reply);
-        self.memory = Some((pci_number(self.request_pci), reply.to_vec()));
+        if self.manual.is_none() {
+            self.memory = Some((pci_number(self.request_pci), reply.to_vec()));
+        }
         self.send_reply(now);
     }
 
     fn send_reply(&mut self, now: Instant) {
         // The reply carries the request's transaction number (the PCI's low byte).
-        let reply_pci = self.request_pci & 0x00FF;
+        let reply_pci = match self.manual {
+            Some(ManualLayer3::ZeroPci) => 0,
+            Some(ManualLayer3::EchoPci) => self.request_pci,
+            None => self.request_pci & 0x00FF,
+        };
         if self.link.send(&self.reply, reply_pci, now).is_ok() {
             self.state = State::Replying;
         } else {

@@ -49,7 +49,13 @@ impl SyntaxError {
 
     /// The line with a caret line under the offending columns.
     pub fn render(&self, line: &str) -> String {
-        let pad = " ".repeat(self.col.saturating_sub(1));
+        // The line's own tabs in the padding, so that the caret stands under the column
+        // however wide the terminal draws a tab.
+        let pad: String = line
+            .chars()
+            .take(self.col.saturating_sub(1))
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
         format!("  {line}\n  {pad}{}", "^".repeat(self.width))
     }
 }
@@ -180,5 +186,10 @@ mod tests {
         let e = scan("home @").unwrap_err();
         assert_eq!(e.col, 6);
         assert_eq!(e.render("home @"), "  home @\n       ^");
+        // A tab before the column stays a tab under it.
+        let line = "speed\t\tabc";
+        let tokens = scan(line).unwrap();
+        let e = SyntaxError::at(&tokens[1], "x");
+        assert_eq!(e.render(line), "  speed\t\tabc\n       \t\t^^^");
     }
 }

@@ -48,6 +48,10 @@ pub type TraceFn = Box<dyn FnMut(Direction, &[u8], Instant) + Send>;
 /// their own deadlines and stop flags.
 const IDLE_POLL: Duration = Duration::from_millis(50);
 
+/// How late past a timer a read must return for its process to count as stopped meanwhile
+/// (docs/reliability.md, "A controller that freezes").
+pub const THAWED: Duration = Duration::from_millis(500);
+
 /// Runs state machines over one port.
 pub struct Driver<P> {
     port: P,
@@ -181,6 +185,14 @@ impl<P: Port> Driver<P> {
             }
             let n = self.port.recv(&mut self.rx, self.clock.to_std(wake))?;
             let now = self.clock.now();
+            // A process stopped inside this read (SIGSTOP, a debugger, a suspended machine)
+            // comes back with bytes that arrived while its timers ran out: the timers fire
+            // first, so a transfer the peer gave up on is dropped, not completed (a thawed
+            // controller must not run a move its host reported failed). A read that is late
+            // by less than THAWED is a busy machine's, and its bytes count.
+            if n > 0 && timer.is_some_and(|t| now > t + THAWED) {
+                m.tick(now);
+            }
             if n > 0 {
                 tracing::trace!("received {:02x?}", &self.rx[..n]);
                 if let Some(trace) = self.trace.as_mut() {

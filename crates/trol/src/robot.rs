@@ -984,6 +984,17 @@ impl Robot {
         let reply = Reply::decode(def, &bytes)?;
         tracing::debug!("reply {}", reply.text(self.codes));
         match reply {
+            // A position in another form than the one asked for is no answer to this request,
+            // for every caller (the interpreter and the trace too).
+            Reply::Position(loc)
+                if def.code == table::GET_POSITION.code
+                    && !matches!(args.first(), Some(Value::Int(t)) if *t == loc.tag() as u8) =>
+            {
+                Err(Error::BadReply {
+                    command: def.name,
+                    len: bytes.len(),
+                })
+            }
             // These carry data, not a return value: a refusal comes as a bare code.
             Reply::Status { .. } | Reply::Position(_) => Ok(reply),
             _ if def.is_success(reply.value().0) => Ok(reply),

@@ -1249,3 +1249,106 @@ fn a_1998_host_gets_the_manuals_answer_and_sizes() {
         assert_eq!(robot.status_record().unwrap().epoch == 0, manual, "{line}");
     }
 }
+
+/// A position in another form than the one asked for answers no GetPosition of this host:
+/// TROL_ERR_BAD_RSIZE through `call` too (the interpreter's and the trace's path), not a
+/// location printed as if it were the one asked for.
+#[test]
+fn a_position_in_another_form_is_bad_rsize_on_every_path() {
+    let mut robot = scripted(2, |code| {
+        (code == trol::table::TROL_GET_POSITION).then(|| {
+            Reply::Position(Location::Cart(vec![400.0, 0.0, 150.0, 0.0, 0.0, 0.0])).encode()
+        })
+    });
+    let joint = [
+        trol::Value::Int(Tag::Joint as u8),
+        trol::Value::Int(trol::table::POS_COMMANDED),
+    ];
+    let e = robot.call(&trol::table::GET_POSITION, &joint).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_BAD_RSIZE, "{e}");
+    let cart = [
+        trol::Value::Int(Tag::Cart as u8),
+        trol::Value::Int(trol::table::POS_COMMANDED),
+    ];
+    assert!(matches!(
+        robot.call(&trol::table::GET_POSITION, &cart).unwrap(),
+        Reply::Position(loc) if loc.tag() == Tag::Cart
+    ));
+}
+
+/// A controller's port that stops its process inside a read (as SIGSTOP, a debugger or a
+/// suspended machine would) once the request's EOT is among the bytes read: the read returns
+/// them `frozen` later.
+struct Freezing<P> {
+    inner: P,
+    armed: Arc<AtomicBool>,
+    frozen: Duration,
+}
+
+impl<P: Port> Port for Freezing<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        if buf[..n].contains(&0x87) && self.armed.swap(false, Ordering::SeqCst) {
+            std::thread::sleep(self.frozen);
+        }
+        Ok(n)
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "freezing".into()
+    }
+}
+
+/// A controller frozen while the request's last byte waits for it, thawed after its host
+/// gave up on the call: its timers fire before the bytes are read, so the request its host
+/// reported failed is dropped, not executed (issue: a thawed controller ran such a move
+/// about 20 s later).
+#[test]
+fn a_thawed_controller_drops_the_request_its_host_gave_up_on() {
+    use trol_controller::{Controller, Embedded, Mode};
+    let (host, ctl) = trol_port::memory::pair(None);
+    let armed = Arc::new(AtomicBool::new(false));
+    let port = Freezing {
+        inner: ctl,
+        armed: armed.clone(),
+        frozen: Duration::from_millis(2500),
+    };
+    let mut sim = settings();
+    sim.arm.homed = true;
+    let controller = Controller::new(port, quick(), Pcp::new(SimBackend::new(sim)), Mode::Server);
+    let handle = Embedded::spawn(controller);
+    let mut robot = Robot::over(Box::new(host), quick(), None);
+    robot.keep(handle);
+    robot.set_reply_timeout_tenths(10).unwrap();
+    robot.set_repeats(0);
+    robot.joint(2, 0.1).unwrap();
+    robot.finish().unwrap();
+    armed.store(true, Ordering::SeqCst);
+    let e = robot.joint(1, 0.25).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    let failed = robot.last_transaction();
+    // The controller thaws and rides out its reset; then the host asks.
+    std::thread::sleep(Duration::from_millis(2500));
+    let _ = robot.flush_input();
+    let status = robot.status_record().unwrap();
+    assert_ne!(
+        status.transaction, failed,
+        "GetStatus speaks of the Joint(1): it ran"
+    );
+    robot.finish().unwrap();
+    let j = joints(&mut robot);
+    assert!(
+        j[0].abs() < 1e-9,
+        "the Joint(1) the host gave up on ran: J1 {}",
+        j[0]
+    );
+    assert!((j[1] - 0.1).abs() < 1e-6);
+}

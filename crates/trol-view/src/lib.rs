@@ -42,9 +42,17 @@ pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
 /// How often a moving arm's state is sent.
 pub const EVENT_INTERVAL: Duration = Duration::from_millis(20);
 
-/// At most this many connections are served at once (each page holds one event stream and
+/// At most this many requests are answered at once (each page holds one event stream and
 /// opens a few more while it loads); more get 503.
 pub const MAX_CLIENTS: usize = 32;
+
+/// At most this many connections may be still sending their request's head; more are
+/// closed with 503 at once. Apart from [`MAX_CLIENTS`], so that connections that send nothing
+/// (or a byte now and then) never take the places of viewers.
+pub const MAX_WAITING: usize = 64;
+
+/// A request's head must arrive whole within this time of the connection.
+pub const HEAD_DEADLINE: Duration = Duration::from_secs(2);
 
 /// The most a request's head may take.
 const MAX_HEAD: u64 = 16 * 1024;
@@ -209,6 +217,7 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     let clients = Arc::new(AtomicUsize::new(0));
+    let waiting = Arc::new(AtomicUsize::new(0));
     std::thread::Builder::new()
         .name("trol-view".into())
         .spawn(move || {
@@ -221,32 +230,75 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
                     std::thread::sleep(Duration::from_millis(10));
                     continue;
                 };
-                if clients.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
-                    clients.fetch_sub(1, Ordering::SeqCst);
-                    let _ = conn.set_write_timeout(Some(Duration::from_secs(1)));
-                    let _ = respond(
-                        &mut conn,
-                        "503 Service Unavailable",
-                        "text/plain",
-                        b"too many viewers at once: close a page and reload\n",
-                    );
+                if waiting.fetch_add(1, Ordering::SeqCst) >= MAX_WAITING {
+                    waiting.fetch_sub(1, Ordering::SeqCst);
+                    too_many(&mut conn);
                     continue;
                 }
                 let shared = shared.clone();
                 let flag = flag.clone();
-                let count = clients.clone();
+                let (count, heads) = (clients.clone(), waiting.clone());
                 let spawned = std::thread::Builder::new()
                     .name("trol-view-client".into())
                     .spawn(move || {
-                        let _ = answer(conn, &shared, &flag);
+                        let head = read_head_of(&conn);
+                        heads.fetch_sub(1, Ordering::SeqCst);
+                        let Ok(head) = head else {
+                            return;
+                        };
+                        if count.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
+                            count.fetch_sub(1, Ordering::SeqCst);
+                            too_many(&mut conn);
+                            return;
+                        }
+                        let _ = answer(conn, head, &shared, &flag);
                         count.fetch_sub(1, Ordering::SeqCst);
                     });
                 if spawned.is_err() {
-                    clients.fetch_sub(1, Ordering::SeqCst);
+                    waiting.fetch_sub(1, Ordering::SeqCst);
                 }
             }
         })?;
     Ok(ViewServer { addr: local, stop })
+}
+
+/// Turn a connection away: the server is full.
+fn too_many(conn: &mut TcpStream) {
+    let _ = conn.set_write_timeout(Some(Duration::from_secs(1)));
+    let _ = respond(
+        conn,
+        "503 Service Unavailable",
+        "text/plain",
+        b"too many viewers at once: close a page and reload\n",
+    );
+}
+
+/// A reader of `conn` that gives up once [`HEAD_DEADLINE`] has passed since it was made,
+/// however the bytes trickle in.
+struct Deadlined<'a> {
+    conn: &'a TcpStream,
+    until: std::time::Instant,
+}
+
+impl Read for Deadlined<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let left = self
+            .until
+            .checked_duration_since(std::time::Instant::now())
+            .filter(|d| !d.is_zero())
+            .ok_or_else(|| std::io::Error::from(std::io::ErrorKind::TimedOut))?;
+        self.conn.set_read_timeout(Some(left))?;
+        (&mut &*self.conn).read(buf)
+    }
+}
+
+/// The head of the request on `conn`, read within [`HEAD_DEADLINE`]; `Ok(None)`: too large.
+fn read_head_of(conn: &TcpStream) -> std::io::Result<Option<(String, String)>> {
+    let reader = Deadlined {
+        conn,
+        until: std::time::Instant::now() + HEAD_DEADLINE,
+    };
+    read_head(BufReader::new(reader))
 }
 
 fn respond(conn: &mut TcpStream, status: &str, kind: &str, body: &[u8]) -> std::io::Result<()> {
@@ -288,12 +340,16 @@ fn read_head(reader: impl BufRead) -> std::io::Result<Option<(String, String)>> 
     }
 }
 
-/// Read one request and answer it.
-fn answer(mut conn: TcpStream, shared: &Source, stop: &AtomicBool) -> std::io::Result<()> {
+/// Answer one request, whose head was read.
+fn answer(
+    mut conn: TcpStream,
+    head: Option<(String, String)>,
+    shared: &Source,
+    stop: &AtomicBool,
+) -> std::io::Result<()> {
     conn.set_read_timeout(Some(Duration::from_secs(5)))?;
     // A client that stops reading is dropped: every write must go through within a second.
     conn.set_write_timeout(Some(Duration::from_secs(1)))?;
-    let head = read_head(BufReader::new(conn.try_clone()?))?;
     let Some((method, path)) = head else {
         return respond(
             &mut conn,

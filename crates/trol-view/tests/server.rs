@@ -160,3 +160,54 @@ fn too_many_clients_are_turned_away_until_one_leaves() {
         std::thread::sleep(Duration::from_millis(200));
     }
 }
+
+#[test]
+fn connections_that_send_nothing_or_trickle_never_keep_viewers_out() {
+    let (_backend, server) = viewed();
+    // More connections that send nothing than viewers may be answered at once: they wait for
+    // their heads apart from the viewers, so a viewer still gets in.
+    let idle: Vec<TcpStream> = (0..trol_view::MAX_CLIENTS + 8)
+        .map(|_| TcpStream::connect(server.addr()).unwrap())
+        .collect();
+    std::thread::sleep(Duration::from_millis(200));
+    let r = request(&server, "GET /state HTTP/1.1\r\n\r\n");
+    assert!(r.starts_with("HTTP/1.1 200"), "{r}");
+    // A head that trickles in, a byte every 100 ms, is cut off once HEAD_DEADLINE has passed
+    // (it used to hold its place for as long as each byte came within 5 s). 10 s is the
+    // bound with headroom for a busy machine.
+    let mut slow = TcpStream::connect(server.addr()).unwrap();
+    let mut writer = slow.try_clone().unwrap();
+    let trickle = std::thread::spawn(move || {
+        let head = b"GET /state HTTP/1.1\r\nX-Slow: ";
+        for b in head
+            .iter()
+            .copied()
+            .chain(std::iter::repeat(b'a'))
+            .take(200)
+        {
+            if writer.write_all(&[b]).is_err() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    });
+    slow.set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let started = Instant::now();
+    let mut got = Vec::new();
+    // Closed: the end of the stream, or a reset (the server closed with bytes unread).
+    let closed = match slow.read_to_end(&mut got) {
+        Ok(_) => true,
+        Err(e) => matches!(
+            e.kind(),
+            std::io::ErrorKind::ConnectionReset | std::io::ErrorKind::ConnectionAborted
+        ),
+    };
+    assert!(
+        closed && started.elapsed() < Duration::from_secs(10),
+        "still open after {:?}",
+        started.elapsed()
+    );
+    trickle.join().unwrap();
+    drop(idle);
+}

@@ -26,8 +26,8 @@
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde_json::json;
@@ -148,6 +148,52 @@ impl Source {
     }
 }
 
+/// One encoding of the arm's state, shared by every viewer.
+#[derive(Debug)]
+struct Frame {
+    state: serde_json::Value,
+    text: String,
+}
+
+/// The arm's state as the viewers get it: taken from the source and encoded at most once per
+/// half [`EVENT_INTERVAL`], whatever the number of viewers (each stream used to take and
+/// encode its own).
+struct Frames {
+    source: Source,
+    last: Mutex<Option<(std::time::Instant, Arc<Frame>)>>,
+    /// How long a frame serves.
+    max_age: Duration,
+}
+
+impl Frames {
+    fn new(source: Source) -> Frames {
+        Frames::with_age(source, EVENT_INTERVAL / 2)
+    }
+
+    fn with_age(source: Source, max_age: Duration) -> Frames {
+        Frames {
+            source,
+            last: Mutex::new(None),
+            max_age,
+        }
+    }
+
+    /// The newest frame; `None` before the controller shared its arm.
+    fn frame(&self) -> Option<Arc<Frame>> {
+        let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some((at, frame)) = last.as_ref() {
+            if at.elapsed() < self.max_age {
+                return Some(frame.clone());
+            }
+        }
+        let state = self.source.state()?;
+        let text = state.to_string();
+        let frame = Arc::new(Frame { state, text });
+        *last = Some((std::time::Instant::now(), frame.clone()));
+        Some(frame)
+    }
+}
+
 /// A running view server; it stops when dropped.
 #[derive(Debug)]
 pub struct ViewServer {
@@ -217,6 +263,7 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     let clients = Arc::new(AtomicUsize::new(0));
+    let frames = Arc::new(Frames::new(shared));
     let waiting = Arc::new(AtomicUsize::new(0));
     std::thread::Builder::new()
         .name("trol-view".into())
@@ -235,7 +282,7 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
                     too_many(&mut conn);
                     continue;
                 }
-                let shared = shared.clone();
+                let shared = frames.clone();
                 let flag = flag.clone();
                 let (count, heads) = (clients.clone(), waiting.clone());
                 let spawned = std::thread::Builder::new()
@@ -344,7 +391,7 @@ fn read_head(reader: impl BufRead) -> std::io::Result<Option<(String, String)>> 
 fn answer(
     mut conn: TcpStream,
     head: Option<(String, String)>,
-    shared: &Source,
+    shared: &Frames,
     stop: &AtomicBool,
 ) -> std::io::Result<()> {
     conn.set_read_timeout(Some(Duration::from_secs(5)))?;
@@ -391,13 +438,8 @@ fn answer(
             "application/xml",
             trol_a465::urdf::urdf().as_bytes(),
         ),
-        "/state" => match shared.state() {
-            Some(s) => respond(
-                &mut conn,
-                "200 OK",
-                "application/json",
-                s.to_string().as_bytes(),
-            ),
+        "/state" => match shared.frame() {
+            Some(f) => respond(&mut conn, "200 OK", "application/json", f.text.as_bytes()),
             None => respond(
                 &mut conn,
                 "503 Service Unavailable",
@@ -411,35 +453,41 @@ fn answer(
 }
 
 /// Server-sent events: the state while the arm moves, once when it stops, then quiet.
-fn events(mut conn: TcpStream, shared: &Source, stop: &AtomicBool) -> std::io::Result<()> {
+fn events(mut conn: TcpStream, shared: &Frames, stop: &AtomicBool) -> std::io::Result<()> {
     write!(
         conn,
         "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
          Connection: keep-alive\r\n\r\n"
     )?;
-    let mut last_sent: Option<serde_json::Value> = None;
+    let mut last_sent: Option<Arc<Frame>> = None;
     let mut quiet = std::time::Instant::now();
     while !stop.load(Ordering::Relaxed) {
         // One round each EVENT_INTERVAL, whatever the round itself takes.
         let next = std::time::Instant::now() + EVENT_INTERVAL;
-        if let Some(s) = shared.state() {
+        if let Some(frame) = shared.frame() {
+            let s = &frame.state;
             let moving = s["moving"].as_bool().unwrap_or(false);
             // Still: only a change is sent (a new tool, an object put down), not the time or
             // the servo's dither of a count or two.
             let changed = match &last_sent {
                 None => true,
+                // The frame already sent (several rounds may fall within one frame).
+                Some(prev) if Arc::ptr_eq(prev, &frame) => false,
                 Some(prev) => {
+                    let prev = &prev.state;
                     moving
                         || prev["moving"] != s["moving"]
                         || prev["gripper_mm"] != s["gripper_mm"]
                         || prev["objects"] != s["objects"]
-                        || tcp_moved(prev, &s)
+                        || tcp_moved(prev, s)
                 }
             };
             if changed {
-                write!(conn, "data: {s}\n\n")?;
+                conn.write_all(b"data: ")?;
+                conn.write_all(frame.text.as_bytes())?;
+                conn.write_all(b"\n\n")?;
                 conn.flush()?;
-                last_sent = Some(s);
+                last_sent = Some(frame.clone());
                 quiet = std::time::Instant::now();
             } else if quiet.elapsed() > Duration::from_secs(10) {
                 conn.write_all(b": still\n\n")?;
@@ -488,6 +536,24 @@ fn tcp_moved(a: &serde_json::Value, b: &serde_json::Value) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_viewer_gets_the_same_encoding_of_one_moment() {
+        let mut settings = trol_sim::SimSettings::default();
+        settings.arm.homed = true;
+        let mut backend = trol_sim::SimBackend::new(settings);
+        let shared = backend.share();
+        // Within a frame's age every viewer gets the same frame, encoded once.
+        let frames = Frames::with_age(Source::Sim(shared.clone()), Duration::from_secs(3600));
+        let a = frames.frame().unwrap();
+        let b = frames.frame().unwrap();
+        assert!(Arc::ptr_eq(&a, &b));
+        assert_eq!(a.text, a.state.to_string());
+        // Past it, a new one.
+        let frames = Frames::with_age(Source::Sim(shared), Duration::ZERO);
+        let a = frames.frame().unwrap();
+        assert!(!Arc::ptr_eq(&a, &frames.frame().unwrap()));
+    }
 
     #[test]
     fn a_head_is_read_to_its_blank_line_and_no_further_than_the_limit() {

@@ -15,7 +15,7 @@
 //! [`faulty::Faulty`] wraps any port and injects bit errors, drops, insertions, duplicates,
 //! delays and a cut, from a seed so that a failure can be replayed.
 
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 #![warn(missing_docs, missing_debug_implementations)]
 
 pub mod faulty;

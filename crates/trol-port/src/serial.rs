@@ -1,5 +1,12 @@
 //! Serial devices and pseudo-terminals, through the `serialport` crate: 8 data bits, no
 //! parity, 1 stop bit, no flow control, raw mode.
+//!
+//! Writes go straight to the device's descriptor (Unix): one write(2) where the kernel takes
+//! the bytes, without the crate's poll before each write and its tcdrain after it. The link
+//! times its answers from when the bytes were handed over plus their line time
+//! (`LinkConfig::line_time`), and the EOT confirms delivery as the manual says; a drain per
+//! write only cost two system calls and the line's idle time (docs/performance.md, "System
+//! calls"). Reads keep the crate's one poll per read.
 
 use std::io::{self, Read, Write};
 use std::time::{Duration, Instant};
@@ -11,8 +18,15 @@ use crate::{Port, remaining};
 /// A serial device (USB adapters and pseudo-terminals included).
 pub struct SerialLine {
     port: Box<dyn SerialPort>,
+    /// The device's descriptor, written directly (Unix; `None` for a port opened elsewhere).
+    fd: Option<RawFd>,
     name: String,
 }
+
+#[cfg(unix)]
+type RawFd = std::os::fd::RawFd;
+#[cfg(not(unix))]
+type RawFd = i32;
 
 impl std::fmt::Debug for SerialLine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -30,7 +44,7 @@ impl SerialLine {
 
     /// Like [`SerialLine::open`], with RTS/CTS hardware flow control if `rts_cts`.
     pub fn open_with(path: &str, baud: u32, rts_cts: bool) -> io::Result<SerialLine> {
-        let port = serialport::new(path, baud)
+        let builder = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
             .parity(Parity::None)
             .stop_bits(StopBits::One)
@@ -39,11 +53,22 @@ impl SerialLine {
             } else {
                 FlowControl::None
             })
-            .timeout(Duration::from_millis(100))
-            .open()
-            .map_err(io::Error::from)?;
+            .timeout(Duration::from_millis(100));
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsRawFd;
+            let port = builder.open_native().map_err(io::Error::from)?;
+            let fd = Some(port.as_raw_fd());
+            Ok(SerialLine {
+                port: Box::new(port),
+                fd,
+                name: path.to_string(),
+            })
+        }
+        #[cfg(not(unix))]
         Ok(SerialLine {
-            port,
+            port: builder.open().map_err(io::Error::from)?,
+            fd: None,
             name: path.to_string(),
         })
     }
@@ -51,24 +76,32 @@ impl SerialLine {
     /// Wrap a port opened elsewhere.
     pub fn from_port(port: Box<dyn SerialPort>) -> SerialLine {
         let name = port.name().unwrap_or_else(|| "serial".into());
-        SerialLine { port, name }
+        SerialLine {
+            port,
+            fd: None,
+            name,
+        }
     }
 
     /// A new pseudo-terminal pair: `(controlling end, other end)`. The other end has a path
     /// (`/dev/pts/N`) that a second process can open by name.
     #[cfg(unix)]
     pub fn pty_pair() -> io::Result<(SerialLine, SerialLine, String)> {
+        use std::os::fd::AsRawFd;
         let (master, slave) = serialport::TTYPort::pair().map_err(io::Error::from)?;
         let path = slave
             .name()
             .ok_or_else(|| io::Error::other("the pty has no path"))?;
+        let (master_fd, slave_fd) = (master.as_raw_fd(), slave.as_raw_fd());
         Ok((
             SerialLine {
                 port: Box::new(master),
+                fd: Some(master_fd),
                 name: "pty-master".into(),
             },
             SerialLine {
                 port: Box::new(slave),
+                fd: Some(slave_fd),
                 name: path.clone(),
             },
             path,
@@ -78,6 +111,34 @@ impl SerialLine {
 
 impl Port for SerialLine {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        #[cfg(unix)]
+        if let Some(fd) = self.fd {
+            use std::os::fd::FromRawFd;
+            // SAFETY: `fd` is the open descriptor `self.port` owns and keeps open for as long
+            // as `self` lives; ManuallyDrop never closes it. (The crate's one unsafe block:
+            // std has no safe way to write to a descriptor another value owns.)
+            #[allow(unsafe_code)]
+            let mut device =
+                std::mem::ManuallyDrop::new(unsafe { std::fs::File::from_raw_fd(fd) });
+            let mut rest = bytes;
+            while !rest.is_empty() {
+                match device.write(rest) {
+                    Ok(0) => return Err(io::ErrorKind::WriteZero.into()),
+                    Ok(n) => rest = &rest[n..],
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    // A descriptor without blocking (a pty pair's end) whose buffer is full:
+                    // the crate's write waits until it takes the rest, at most a second.
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                        self.port
+                            .set_timeout(Duration::from_secs(1))
+                            .map_err(io::Error::from)?;
+                        return self.port.write_all(rest);
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            return Ok(());
+        }
         self.port.write_all(bytes)?;
         self.port.flush()
     }

@@ -22,6 +22,12 @@ use crate::model::{A2, D1, D4, D6, limits, within_limits};
 /// Six joint angles in radians, joint 1 first.
 pub type Joints = [f64; 6];
 
+/// How near pitch ±90° (rad) a pose reads with roll 0 and the whole turn about z as yaw. Nearer
+/// the singular pitch yaw and roll turn about almost the same axis, and their split is
+/// dominated by noise (an actual pose 0.006° off read yaw 0.3066, roll 0.3066); reading roll 0
+/// there changes the orientation by at most twice this angle (1 mrad, 0.06°).
+pub const GIMBAL_ZONE: f64 = 5e-4;
+
 /// A rigid transform: rotation then translation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
@@ -49,13 +55,15 @@ impl Pose {
         }
     }
 
-    /// x y z yaw pitch roll. At pitch ±90° (gimbal lock) the roll is 0 and the yaw takes
-    /// the whole turn about z.
+    /// x y z yaw pitch roll. At and near pitch ±90° (gimbal lock: within
+    /// [`GIMBAL_ZONE`] rad) the roll is 0 and the yaw takes the whole turn about z, for
+    /// commanded and actual poses alike (docs/a465.md, "Orientation near pitch ±90°").
     pub fn to_xyzypr(&self) -> [f64; 6] {
         let r = |i: usize, j: usize| self.rot.col(j)[i];
         let cp = (r(0, 0) * r(0, 0) + r(1, 0) * r(1, 0)).sqrt();
         let pitch = (-r(2, 0)).atan2(cp);
-        let (yaw, roll) = if cp > 1e-9 {
+        // cos(pitch) = sin(the distance from ±90°).
+        let (yaw, roll) = if cp >= GIMBAL_ZONE.sin() {
             (r(1, 0).atan2(r(0, 0)), r(2, 1).atan2(r(2, 2)))
         } else {
             // R = Rz(yaw)·Ry(±90°): the roll cannot be told from the yaw.
@@ -477,6 +485,54 @@ mod tests {
         let tilt = k.fk_xyzypr(&deg([0.0, 0.0, 0.0, 0.0, 30.0, 0.0]));
         assert!((tilt[4] + 60f64.to_radians()).abs() < 1e-9, "{tilt:?}");
         assert!(tilt[3].abs() < 1e-9 && tilt[5].abs() < 1e-9, "{tilt:?}");
+    }
+
+    /// The rule near pitch ±90° (docs/a465.md): roll 0 within GIMBAL_ZONE, the orientation
+    /// kept to within twice that angle; outside it, the angles as given.
+    #[test]
+    fn near_the_singular_pitch_the_roll_reads_0_and_the_orientation_is_kept() {
+        // The angle between two rotations, from the Frobenius norm of their difference
+        // (2√2·sin(θ/2)): exact for small angles, where acos of the trace is not.
+        let angle_between = |a: &Pose, b: &Pose| {
+            let d = a.rot - b.rot;
+            let f = (d.x_axis.length_squared()
+                + d.y_axis.length_squared()
+                + d.z_axis.length_squared())
+            .sqrt();
+            2.0 * (f / (2.0 * std::f64::consts::SQRT_2)).min(1.0).asin()
+        };
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for i in 0..2000 {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            let off = GIMBAL_ZONE * 3.0 * next();
+            let v = [
+                1.0,
+                2.0,
+                3.0,
+                (next() * 2.0 - 1.0) * 3.1,
+                sign * (std::f64::consts::FRAC_PI_2 - off),
+                (next() * 2.0 - 1.0) * 3.1,
+            ];
+            let pose = Pose::from_xyzypr(v);
+            let read = pose.to_xyzypr();
+            let back = Pose::from_xyzypr(read);
+            if off < GIMBAL_ZONE * 0.999 {
+                assert_eq!(read[5], 0.0, "{v:?} -> {read:?}");
+                assert!(
+                    angle_between(&pose, &back) <= 2.0 * GIMBAL_ZONE,
+                    "{v:?} -> {read:?}: {}",
+                    angle_between(&pose, &back)
+                );
+            } else if off > GIMBAL_ZONE * 1.001 {
+                assert!(angle_between(&pose, &back) < 1e-9, "{v:?} -> {read:?}");
+            }
+        }
     }
 
     #[test]

@@ -118,8 +118,7 @@ impl Port for SerialLine {
             // as `self` lives; ManuallyDrop never closes it. (The crate's one unsafe block:
             // std has no safe way to write to a descriptor another value owns.)
             #[allow(unsafe_code)]
-            let mut device =
-                std::mem::ManuallyDrop::new(unsafe { std::fs::File::from_raw_fd(fd) });
+            let mut device = std::mem::ManuallyDrop::new(unsafe { std::fs::File::from_raw_fd(fd) });
             let mut rest = bytes;
             while !rest.is_empty() {
                 match device.write(rest) {

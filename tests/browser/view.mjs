@@ -8,7 +8,10 @@
 //   shown {"webgl": "ok", "joints": [6 rad as the page shows them], "frames": N}
 // Then, for each line `watch` on standard input, it prints `watching`, waits until the page
 // has shown the arm moving and then still again (the test moves it meanwhile), and prints
-//   followed {"moving_frames": N, "joints": [...]}
+//   followed {"moving_frames": N, "joints": [...], "trail": N}
+// For a line `held` it waits until the page shows an object in the gripper and prints
+//   held {"off_mm": centre to the fingers' point, "finger_low_mm": above the table}
+// `warnings` prints what the page logged as warnings or errors: `warnings [...]`.
 // Every wait is bounded; a failure prints `error ...` and exits with 1.
 import { chromium } from 'playwright-core';
 import { createInterface } from 'node:readline';
@@ -35,6 +38,8 @@ async function joints(page) {
 try {
   const page = await browser.newPage({ viewport: { width: 1000, height: 650 } });
   page.on('pageerror', e => console.error(`page error: ${e}`));
+  const logged = [];
+  page.on('console', m => { if (m.type() === 'warning' || m.type() === 'error') logged.push(m.text()); });
   await page.goto(url, { timeout: 30_000 });
   // The first state has arrived and the arm stands.
   await page.waitForFunction(
@@ -47,6 +52,19 @@ try {
   console.log(`shown ${JSON.stringify({ webgl: body.webgl, joints: await joints(page), frames: Number(body.frames) })}`);
 
   for await (const line of createInterface({ input: process.stdin })) {
+    if (line.trim() === 'warnings') {
+      console.log(`warnings ${JSON.stringify(logged)}`);
+      continue;
+    }
+    if (line.trim() === 'held') {
+      await page.waitForFunction(
+        () => document.body.dataset.held === 'true' && document.body.dataset.moving === 'false',
+        null, { timeout: 60_000 });
+      await page.evaluate(() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r))));
+      const b = await page.evaluate(() => ({ ...document.body.dataset }));
+      console.log(`held ${JSON.stringify({ off_mm: Number(b.heldOffMm), finger_low_mm: Number(b.fingerLowMm) })}`);
+      continue;
+    }
     if (line.trim() !== 'watch') continue;
     // Count the updates that say "moving"; done once one said so and the page is still again.
     await page.evaluate(() => {
@@ -60,7 +78,8 @@ try {
     await page.waitForFunction(
       () => window.__watch.saw && document.body.dataset.moving === 'false', null, { timeout: 60_000 });
     const frames = await page.evaluate(() => window.__watch.frames);
-    console.log(`followed ${JSON.stringify({ moving_frames: frames, joints: await joints(page) })}`);
+    const trail = await page.evaluate(() => Number(document.body.dataset.trail || 0));
+    console.log(`followed ${JSON.stringify({ moving_frames: frames, joints: await joints(page), trail })}`);
   }
 } catch (e) {
   console.log(`error ${String(e).split('\n')[0]}`);

@@ -66,11 +66,16 @@ pub struct WorldObject {
     pub width: f64,
 }
 
-/// An object in the gripper: which one, and where it sits in the tool frame.
+/// An object in the gripper: which one, and where its centre sits in the tool frame.
 #[derive(Clone, Copy, Debug)]
 struct Held {
     index: usize,
     in_tool: glam::DVec3,
+}
+
+/// The centre of an object whose base's middle is at `pos` (where the fingers take it).
+fn centre_of(o: &WorldObject) -> glam::DVec3 {
+    glam::DVec3::from_array(o.pos) + glam::DVec3::Z * (o.width / 2.0)
 }
 
 /// A location in the controller's table.
@@ -300,9 +305,10 @@ impl Arm {
         }
         if let Some(w) = arm.settings.object_width {
             // An object already between the fingers: closed on it at start.
+            let centre = arm.kin.fk(&READY).pos;
             arm.objects.push(WorldObject {
                 name: "object".into(),
-                pos: arm.kin.fk(&READY).pos.to_array(),
+                pos: (centre - glam::DVec3::Z * (w / 2.0)).to_array(),
                 width: w,
             });
             arm.held = Some(Held {
@@ -570,15 +576,15 @@ impl Arm {
                 self.held = None;
             }
         }
-        // Closing on an object at the tool centre point takes it: the fingers stop at its
-        // width and it moves with the tool from now on.
+        // Closing with an object's centre at the tool centre point takes it: the fingers stop
+        // at its width and it moves with the tool from now on.
         if self.held.is_none() {
             let grasped = self.objects.iter().position(|o| {
-                let d = (glam::DVec3::from_array(o.pos) - tcp.pos).length();
+                let d = (centre_of(o) - tcp.pos).length();
                 d <= GRASP_DISTANCE && target < o.width && from >= o.width
             });
             if let Some(index) = grasped {
-                let rel = glam::DVec3::from_array(self.objects[index].pos) - tcp.pos;
+                let rel = centre_of(&self.objects[index]) - tcp.pos;
                 self.held = Some(Held {
                     index,
                     in_tool: tcp.rot.transpose() * rel,
@@ -603,10 +609,23 @@ impl Arm {
         if let Some(h) = self.held {
             let q = self.commanded(now);
             let tcp = self.kin.fk(&q);
-            let at = tcp.pos + tcp.rot * h.in_tool;
-            out[h.index].pos = at.to_array();
+            let centre = tcp.pos + tcp.rot * h.in_tool;
+            let half = out[h.index].width / 2.0;
+            out[h.index].pos = (centre - glam::DVec3::Z * half).to_array();
         }
         out
+    }
+
+    /// The lowest point of what the arm carries with the tool centre point at `tcp`: the tool
+    /// centre point, or a held object's underside below it (its centre less half its width).
+    fn lowest_z(&self, tcp: &Pose) -> f64 {
+        match self.held {
+            Some(h) => {
+                let centre = tcp.pos + tcp.rot * h.in_tool;
+                tcp.pos.z.min(centre.z - self.objects[h.index].width / 2.0)
+            }
+            None => tcp.pos.z,
+        }
     }
 
     /// The name of the object in the gripper, if any.
@@ -678,7 +697,7 @@ impl Arm {
         for k in 0..=PATH_SAMPLES {
             let s = k as f64 / PATH_SAMPLES as f64;
             let q: Joints = std::array::from_fn(|i| from[i] + (to[i] - from[i]) * s);
-            if self.kin.fk(&q).pos.z < self.settings.table_z - 1e-9 {
+            if self.lowest_z(&self.kin.fk(&q)) < self.settings.table_z - 1e-9 {
                 return code::BELOW_TABLE;
             }
         }
@@ -719,7 +738,7 @@ impl Arm {
         }
         let from = self.kin.fk(&q0);
         // The line is straight, so its ends bound its height.
-        if from.pos.z.min(to.pos.z) < self.settings.table_z - 1e-9 {
+        if self.lowest_z(&from).min(self.lowest_z(&to)) < self.settings.table_z - 1e-9 {
             return code::BELOW_TABLE;
         }
         let line = Line::new(from, to);
@@ -814,8 +833,9 @@ impl Arm {
         if !to.pos.is_finite() || !to.rot.is_finite() {
             return code::BAD_ARGUMENT;
         }
-        // A target below the table says so first, whatever else is wrong with it.
-        if to.pos.z < self.settings.table_z - 1e-9 {
+        // A target below the table (the tool's, or a held object's underside) says so
+        // first, whatever else is wrong with it.
+        if self.lowest_z(&to) < self.settings.table_z - 1e-9 {
             return code::BELOW_TABLE;
         }
         if straight {

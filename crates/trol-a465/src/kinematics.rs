@@ -495,10 +495,9 @@ mod tests {
         // (2√2·sin(θ/2)): exact for small angles, where acos of the trace is not.
         let angle_between = |a: &Pose, b: &Pose| {
             let d = a.rot - b.rot;
-            let f = (d.x_axis.length_squared()
-                + d.y_axis.length_squared()
-                + d.z_axis.length_squared())
-            .sqrt();
+            let f =
+                (d.x_axis.length_squared() + d.y_axis.length_squared() + d.z_axis.length_squared())
+                    .sqrt();
             2.0 * (f / (2.0 * std::f64::consts::SQRT_2)).min(1.0).asin()
         };
         let mut seed = 0x2545_f491_4f6c_dd1du64;

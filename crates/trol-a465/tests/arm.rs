@@ -408,11 +408,14 @@ fn the_actual_position_lags_while_moving_and_dithers_at_rest() {
 #[test]
 fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
     use trol_a465::arm::{WorldObject, parse_objects};
-    let objects = parse_objects("; name x y z width\ncube 400 0 150 30\nfar 0 400 0 20\n").unwrap();
+    // The cube's base at z 135 (on a table there): its centre, where the fingers take it,
+    // is test_001's 150.
+    let objects = parse_objects("; name x y z width\ncube 400 0 135 30\nfar 0 400 0 20\n").unwrap();
     assert_eq!(objects[0].name, "cube");
     let mut arm = Arm::new(ArmSettings {
         homed: true,
         objects,
+        table_z: 135.0,
         ..ArmSettings::default()
     });
     let test_001 = [400.0, 0.0, 150.0, 0.0, DOWN, 0.0];
@@ -435,15 +438,26 @@ fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
         code::OK
     );
     t = arm.done_at(t);
+    // Its centre is at the tool centre point, so its base half a width below.
     let at = &arm.objects(t)[0];
-    for (got, want) in at.pos.iter().zip([400.0, 0.0, 240.0]) {
+    for (got, want) in at.pos.iter().zip([400.0, 0.0, 225.0]) {
         assert!((got - want).abs() < 1e-6, "{at:?}");
     }
+    // A held object's underside may not go below the table either: the tool centre point
+    // 10 mm above the table would put the cube 5 mm into it.
+    assert_eq!(
+        arm.move_to(Target::Cart([400.0, 0.0, 145.0, 0.0, DOWN, 0.0]), false, t),
+        code::BELOW_TABLE
+    );
+    assert_eq!(
+        arm.move_to(Target::Cart([400.0, 0.0, 145.0, 0.0, DOWN, 0.0]), true, t),
+        code::BELOW_TABLE
+    );
     // Open: it drops onto the table below the tool; the other object never moved.
     assert_eq!(arm.open(50.0, t), code::OK);
     assert_eq!(arm.held(), None);
     let objects: Vec<WorldObject> = arm.objects(t + 1.0);
-    for (got, want) in objects[0].pos.iter().zip([400.0, 0.0, 0.0]) {
+    for (got, want) in objects[0].pos.iter().zip([400.0, 0.0, 135.0]) {
         assert!((got - want).abs() < 1e-9, "{:?}", objects[0]);
     }
     assert_eq!(objects[1].pos, [0.0, 400.0, 0.0]);

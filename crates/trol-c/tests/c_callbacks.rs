@@ -454,7 +454,7 @@ fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
         Link::Shared,
         &[
             ("locs.txt", "p2 420 0 400 0 1.5707963 0\n"),
-            ("objs.txt", "cube 420 0 400 30\n"),
+            ("objs.txt", "cube 420 0 385 30\n"),
             (
                 "trol.cfg",
                 "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\n\

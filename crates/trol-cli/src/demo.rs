@@ -66,11 +66,18 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                 .push(("test_001".into(), Stored::Cart(TEST_001)));
         }
         if settings.arm.objects.is_empty() && settings.arm.object_width.is_none() {
-            // Something to pick: a 30 mm cube at test_001.
+            // Something to pick: a 30 mm cube whose centre is test_001 (where the fingers
+            // close), resting on the table: unless trol.cfg placed the table, it is raised
+            // to the cube's base.
+            let width = 30.0;
+            let base = TEST_001[2] - width / 2.0;
+            if settings.arm.table_z == 0.0 {
+                settings.arm.table_z = base;
+            }
             settings.arm.objects.push(WorldObject {
                 name: "cube".into(),
-                pos: [TEST_001[0], TEST_001[1], TEST_001[2]],
-                width: 30.0,
+                pos: [TEST_001[0], TEST_001[1], base],
+                width,
             });
         }
         say!(

@@ -31,14 +31,15 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
         "{out}"
     );
     // It says that motion commands return before the motion ends, shows the arm moving,
-    // and where the cube it picked up ended: in the gripper, 90 mm above test_001.
+    // and where the cube it picked up ended: in the gripper, its centre 90 mm above test_001
+    // (the world gives an object's base: 15 mm lower).
     assert!(out.contains("motion commands return as soon as"), "{out}");
     assert!(
         out.contains("(0.1 s later, the program not waiting)"),
         "{out}"
     );
     assert!(
-        out.contains("trol demo: cube at x 400.0 y") && out.contains("z 240.0 mm, in the gripper"),
+        out.contains("trol demo: cube at x 400.0 y") && out.contains("z 225.0 mm, in the gripper"),
         "{out}"
     );
 }
@@ -499,7 +500,7 @@ fn sim_objects_are_picked_up_and_the_log_says_where_they_are() {
     let dir = scratch("simobjects");
     std::fs::write(
         dir.join("objects.txt"),
-        "; name x y z width\ncube 400 0 150 30\n",
+        "; name x y z width\ncube 400 0 135 30\n",
     )
     .unwrap();
     let sim = Background::start(
@@ -526,10 +527,11 @@ fn sim_objects_are_picked_up_and_the_log_says_where_they_are() {
     assert!(o.status.success(), "{:?}", text(&o));
     let log = sim.output_until("z 0.0 mm, resting", 1, 30).join("\n");
     assert!(
-        log.contains("world: cube at x 400.0 y 0.0 z 150.0 mm, resting"),
+        log.contains("world: cube at x 400.0 y 0.0 z 135.0 mm, resting"),
         "{log}"
     );
-    assert!(log.contains("z 240.0 mm, in the gripper"), "{log}");
+    // Taken by its centre (15 mm above its base) at the tool centre point.
+    assert!(log.contains("z 225.0 mm, in the gripper"), "{log}");
     assert!(
         log.contains("world: cube at x 400.0 y") && log.contains("z 0.0 mm, resting"),
         "{log}"

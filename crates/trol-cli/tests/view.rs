@@ -67,6 +67,8 @@ fn the_page_draws_the_arm_and_follows_it() {
         "Playwright is missing: run `npm ci` in tests/browser (scripts/test.sh does)"
     );
     let dir = scratch("view");
+    // A 30 mm cube resting on the table, to be picked up.
+    std::fs::write(dir.join("objects.txt"), "cube 400 0 0 30\n").unwrap();
     let sim = Background::start(
         &dir,
         &[
@@ -75,6 +77,8 @@ fn the_page_draws_the_arm_and_follows_it() {
             "listen://127.0.0.1:0",
             "--server",
             "--homed",
+            "--objects",
+            "objects.txt",
             "--view",
             "127.0.0.1:0",
         ],
@@ -176,6 +180,49 @@ fn the_page_draws_the_arm_and_follows_it() {
         six(&followed),
         by_api,
     );
+    // The tool's trail was drawn along the motion.
+    assert!(
+        followed["trail"].as_u64().unwrap() >= 10,
+        "trail: {followed}"
+    );
+
+    // A grasp drawn truthfully: the cube's centre between the fingers, the fingers above the
+    // table (they reach 10 mm beyond the tool centre point, and the cube's centre is 15 mm
+    // above the table).
+    robot
+        .move_ii(
+            &trol::Location::Cart(vec![
+                400.0,
+                0.0,
+                15.0,
+                0.0,
+                std::f64::consts::FRAC_PI_2,
+                0.0,
+            ]),
+            false,
+        )
+        .unwrap();
+    robot.finish().unwrap();
+    robot.close_gripper(60).unwrap();
+    robot.finish().unwrap();
+    assert_eq!(
+        robot.gripper().unwrap().held,
+        trol::Held::Object("cube".into())
+    );
+    page.type_line("held");
+    let held = page.wait_for("held ", 90).pop().unwrap();
+    let held: serde_json::Value =
+        serde_json::from_str(held.split("held ").nth(1).unwrap()).unwrap();
+    assert!(held["off_mm"].as_f64().unwrap() < 1.0, "{held}");
+    let low = held["finger_low_mm"].as_f64().unwrap();
+    assert!(
+        (4.0..6.0).contains(&low),
+        "the fingers' lowest point: {held}"
+    );
+    // Nothing the page did made the browser warn (three.js warned at every trail update).
+    page.type_line("warnings");
+    let warnings = page.wait_for("warnings ", 30).pop().unwrap();
+    assert!(warnings.ends_with("warnings []"), "{warnings}");
     drop(stalled);
 }
 

@@ -341,7 +341,7 @@ def test_a_connection_names_codes_as_its_controller_does() -> None:
 
 def test_a_missed_grasp_can_be_told_from_a_held_object(tmp_path: Path) -> None:
     (tmp_path / "locs.txt").write_text("p2 420 0 400 0 1.5707963 0\n")
-    (tmp_path / "objs.txt").write_text("cube 420 0 400 30\n")
+    (tmp_path / "objs.txt").write_text("cube 420 0 385 30\n")
     cfg = tmp_path / "trol.cfg"
     cfg.write_text("9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\n"
                    "locations = locs.txt\nobjects = objs.txt\n")

@@ -6,18 +6,21 @@ import { OrbitControls } from '/OrbitControls.js';
 const COLOURS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b'];
 const NEAR_LIMIT = 10 * Math.PI / 180;
 const HISTORY_S = 10;
+const TRAIL_MAX = 3000;       // points of the tool's trail kept
 
 const host = document.getElementById('scene');
 const status = document.getElementById('status');
 const joints = [];          // the revolute joints' rotors, joint_1 .. joint_6
 let tool0 = null;
+let gripper = null;         // the tool centre point's frame: the fingers close there
 let fingers = [];
 const history = [];         // [time, q1..q6]
 let frames = 0;
 
 // --- the scene (WebGL may be missing: the panel works without it) ---
 let renderer = null, scene = null, camera = null, controls = null;
-let trail = null, trailPoints = [], target = null, table = null;
+let trail = null, trailCount = 0, target = null, table = null;
+const trailPositions = new Float32Array(TRAIL_MAX * 3);
 const objects = new Map();
 try {
   renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -42,7 +45,14 @@ try {
   grid.rotation.x = Math.PI / 2;
   grid.position.z = 0.0005;
   table.add(grid);
-  trail = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0x2a5db0 }));
+  // One buffer for the whole trail, filled as the tool moves (a geometry rebuilt from a
+  // growing list of points made three.js warn "Buffer size too small" at every update).
+  const trailGeometry = new THREE.BufferGeometry();
+  trailGeometry.setAttribute('position',
+    new THREE.BufferAttribute(trailPositions, 3).setUsage(THREE.DynamicDrawUsage));
+  trailGeometry.setDrawRange(0, 0);
+  trail = new THREE.Line(trailGeometry, new THREE.LineBasicMaterial({ color: 0x2a5db0 }));
+  trail.frustumCulled = false;
   scene.add(trail);
   target = new THREE.Mesh(new THREE.SphereGeometry(0.012, 16, 12),
     new THREE.MeshLambertMaterial({ color: 0xd62728, transparent: true, opacity: 0.6 }));
@@ -127,15 +137,26 @@ async function loadArm() {
     }
   }
   tool0 = links.tool0;
-  // Two fingers along the tool's y axis, beyond the gripper body (tool x is out of the flange).
+  // The gripper as the simulator models it: the fingers close at the tool centre point (the
+  // flange moved by the tool transform), so they are drawn there, along the tool's y axis,
+  // 40 mm long and reaching 10 mm beyond it (tool x points out of the flange); a palm behind
+  // them. The URDF's box beyond the flange is left out: with the tool transform it would
+  // not be where the fingers close.
+  for (const m of [...tool0.children]) if (m.isMesh) tool0.remove(m);
+  gripper = new THREE.Group();
+  tool0.add(gripper);
   const fingerMaterial = new THREE.MeshLambertMaterial({ color: 0x333333 });
   fingers = [-1, 1].map(side => {
-    const f = new THREE.Mesh(new THREE.BoxGeometry(0.05, 0.008, 0.02), fingerMaterial);
+    const f = new THREE.Mesh(new THREE.BoxGeometry(0.04, 0.008, 0.02), fingerMaterial);
     f.userData.side = side;
-    f.position.set(0.105, side * 0.025, 0);
-    tool0.add(f);
+    f.position.set(-0.01, side * 0.025, 0);
+    gripper.add(f);
     return f;
   });
+  const palm = new THREE.Mesh(new THREE.BoxGeometry(0.01, 0.07, 0.03),
+    new THREE.MeshLambertMaterial({ color: 0x5a5a5a }));
+  palm.position.set(-0.035, 0, 0);
+  gripper.add(palm);
   if (scene) scene.add(links.base_link);
 }
 
@@ -166,6 +187,7 @@ function showObjects(list) {
       objects.set(o.name, m);
     }
     if (m) {
+      m.material.color.set(o.held ? 0xd0802a : 0xe0a030);
       const w = o.width / 1000;
       m.scale.set(w, w, w);
       m.position.set(o.x / 1000, o.y / 1000, o.z / 1000 + w / 2);
@@ -199,15 +221,19 @@ function update(s) {
   document.getElementById('gripper').textContent =
     g == null ? 'fingers: not reported' : `fingers ${g.toFixed(1)} mm apart`;
   if (g != null) for (const f of fingers) f.position.y = f.userData.side * (g / 2000 + 0.004);
+  if (gripper && s.tool) {
+    const [tx, ty, tz, tyaw, tpitch, troll] = s.tool;
+    gripper.position.set(tx / 1000, ty / 1000, tz / 1000);
+    gripper.rotation.set(troll, tpitch, tyaw, 'ZYX');   // R = Rz(yaw) Ry(pitch) Rx(roll)
+  }
   showObjects(s.objects);
   status.textContent = `${s.moving ? 'moving' : 'still'}, t = ${s.time.toFixed(2)} s` +
     (s.reported ? ' (as the controller reports it)' : '') + (renderer ? '' : ' (no WebGL here)');
   document.body.dataset.moving = String(s.moving);
   if (scene) {
     table.position.z = s.table_z / 1000;
-    trailPoints.push(new THREE.Vector3(x / 1000, y / 1000, z / 1000));
-    if (trailPoints.length > 3000) trailPoints.shift();
-    trail.geometry.setFromPoints(trailPoints);
+    addToTrail(x / 1000, y / 1000, z / 1000);
+    measure(s);
     target.visible = !!s.target_tcp;
     if (s.target_tcp) target.position.set(s.target_tcp[0] / 1000, s.target_tcp[1] / 1000, s.target_tcp[2] / 1000);
   }
@@ -216,20 +242,71 @@ function update(s) {
   plot();
 }
 
+// What the page drew, in numbers a test can read: how far a held object's centre is from
+// the point where the fingers close, and how high the fingers' lowest point is above the
+// table (mm).
+function measure(s) {
+  scene.updateMatrixWorld(true);
+  const held = s.objects.find(o => o.held);
+  document.body.dataset.held = String(!!held);
+  if (!gripper) return;
+  const tcp = gripper.getWorldPosition(new THREE.Vector3());
+  if (held && objects.get(held.name)) {
+    const c = objects.get(held.name).getWorldPosition(new THREE.Vector3());
+    document.body.dataset.heldOffMm = (c.distanceTo(tcp) * 1000).toFixed(2);
+  }
+  const low = Math.min(...fingers.map(f => new THREE.Box3().setFromObject(f).min.z));
+  document.body.dataset.fingerLowMm = ((low - s.table_z / 1000) * 1000).toFixed(2);
+}
+
+// The tool's trail: a point each update the tool moved more than half a millimetre.
+function addToTrail(x, y, z) {
+  if (trailCount > 0) {
+    const i = (trailCount - 1) * 3;
+    const d = Math.hypot(x - trailPositions[i], y - trailPositions[i + 1], z - trailPositions[i + 2]);
+    if (d < 0.0005) return;
+  }
+  if (trailCount === TRAIL_MAX) { trailPositions.copyWithin(0, 3); trailCount -= 1; }
+  trailPositions.set([x, y, z], trailCount * 3);
+  trailCount += 1;
+  trail.geometry.attributes.position.needsUpdate = true;
+  trail.geometry.setDrawRange(0, trailCount);
+  document.body.dataset.trail = String(trailCount);
+}
+
 function plot() {
   const c = document.getElementById('plot');
   const g = c.getContext('2d');
+  // The axes: joint angle in degrees (±180) on the left, seconds before now below.
+  const left = 34, right = 16, top = 7, bottom = 14;
+  const w = c.width - left - right, h = c.height - top - bottom;
+  const yOf = rad => top + h / 2 - rad / Math.PI * (h / 2);
   g.clearRect(0, 0, c.width, c.height);
-  g.strokeStyle = '#ccc';
-  g.beginPath(); g.moveTo(0, c.height / 2); g.lineTo(c.width, c.height / 2); g.stroke();
+  g.font = '10px sans-serif';
+  g.fillStyle = '#666';
+  g.strokeStyle = '#ddd';
+  g.textAlign = 'right';
+  g.textBaseline = 'middle';
+  for (const deg of [180, 90, 0, -90, -180]) {
+    const y = yOf(deg * Math.PI / 180);
+    g.beginPath(); g.moveTo(left, y); g.lineTo(left + w, y); g.stroke();
+    g.fillText(`${deg}°`, left - 3, y);
+  }
+  g.textAlign = 'center';
+  g.textBaseline = 'top';
+  for (let t = -HISTORY_S; t <= 0; t += 2) {
+    const x = left + (t + HISTORY_S) / HISTORY_S * w;
+    g.beginPath(); g.moveTo(x, top); g.lineTo(x, top + h); g.stroke();
+    g.fillText(t === 0 ? 'now' : `${t} s`, x, top + h + 2);
+  }
   if (history.length < 2) return;
   const t1 = history[history.length - 1][0], t0 = t1 - HISTORY_S;
   for (let i = 0; i < 6; i++) {
     g.strokeStyle = COLOURS[i];
     g.beginPath();
-    history.forEach((h, n) => {
-      const px = (h[0] - t0) / HISTORY_S * c.width;
-      const py = c.height / 2 - h[i + 1] / Math.PI * (c.height / 2);
+    history.forEach((p, n) => {
+      const px = left + (p[0] - t0) / HISTORY_S * w;
+      const py = yOf(p[i + 1]);
       n ? g.lineTo(px, py) : g.moveTo(px, py);
     });
     g.stroke();

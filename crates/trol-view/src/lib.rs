@@ -100,6 +100,7 @@ pub fn state(shared: &SharedArm) -> Option<serde_json::Value> {
         "target_tcp": target_tcp,
         "limits": LIMITS_RAD,
         "table_z": arm.settings().table_z,
+        "tool": arm.kinematics().tool(),
     }))
 }
 
@@ -126,6 +127,7 @@ pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
         "target_tcp": target_tcp,
         "limits": LIMITS_RAD,
         "table_z": 0.0,
+        "tool": r.tool,
         "reported": true,
     }))
 }
@@ -448,6 +450,8 @@ fn answer(
             ),
         },
         "/events" => events(conn, shared, stop),
+        // Browsers ask for it unasked; no icon, and no 404 in the page's console.
+        "/favicon.ico" => respond(&mut conn, "204 No Content", "image/x-icon", b""),
         _ => respond(&mut conn, "404 Not Found", "text/plain", b"not here\n"),
     }
 }

@@ -555,7 +555,7 @@ fn robots_from_a_config_file() {
     let dir = std::env::temp_dir().join(format!("trol-cfg-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
-    std::fs::write(dir.join("objs.txt"), "cube 420 0 400 30\n").unwrap();
+    std::fs::write(dir.join("objs.txt"), "cube 420 0 385 30\n").unwrap();
     // With the feature `view`, trol.cfg's `view = ADDR` serves the live view; without it,
     // saying so is a clear error.
     let view = "view = 127.0.0.1:0\n";

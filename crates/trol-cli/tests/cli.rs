@@ -1591,3 +1591,22 @@ fn an_output_nobody_reads_any_more_ends_the_demo_without_a_panic() {
     // 1: it stopped (and halted the arm) because nobody reads; 101 would be a panic.
     assert_eq!(status.code(), Some(1), "{first}");
 }
+
+/// A byte that is not UTF-8 in a script is that line's error, with its line and column; the
+/// script stops there, or goes on with -k (it used to end the script with no line number).
+#[test]
+fn a_line_that_is_not_text_is_its_lines_error() {
+    let dir = scratch("interp-bytes");
+    std::fs::write(dir.join("bad.trol"), b"speed 50\nre\xffady\nspeed 60\n").unwrap();
+    let o = trol(&dir, &["interp", "bad.trol", "--port", "sim"], "");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("bad.trol:2:3: error: byte 0xff is not UTF-8"), "{err}");
+    assert!(err.contains("stopped at line 2"), "{err}");
+    assert!(!out.contains("speed 60"), "{out}");
+    let o = trol(&dir, &["interp", "-k", "bad.trol", "--port", "sim"], "");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(out.contains("speed 60  ->  0 (success)"), "{out}");
+    assert!(err.contains("1 command(s) failed"), "{err}");
+}

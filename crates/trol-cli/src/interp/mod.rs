@@ -511,10 +511,26 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
         None => ("<stdin>".into(), Box::new(std::io::stdin().lock())),
     };
     let mut failed = 0usize;
-    for (n, line) in reader.lines().enumerate() {
-        let line = line.map_err(|e| format!("{name}: {e}"))?;
+    for (n, bytes) in reader.split(b'\n').enumerate() {
+        let mut bytes = bytes.map_err(|e| format!("{name}: {e}"))?;
+        if bytes.last() == Some(&b'\r') {
+            bytes.pop();
+        }
         let origin = format!("{name}:{}:", n + 1);
-        let outcome = session.line(&line, &origin, true);
+        // A line that is not text is that line's error, with where it is; -k goes on.
+        let outcome = match String::from_utf8(bytes) {
+            Ok(line) => session.line(&line, &origin, true),
+            Err(e) => {
+                let at = e.utf8_error().valid_up_to();
+                let byte = e.as_bytes()[at];
+                let col = String::from_utf8_lossy(&e.as_bytes()[..at]).chars().count() + 1;
+                eprintln!(
+                    "{origin}{col}: error: byte 0x{byte:02x} is not UTF-8 text; a script is \
+                     plain text (ASCII or UTF-8)"
+                );
+                Outcome::Failed
+            }
+        };
         if interrupted().load(std::sync::atomic::Ordering::SeqCst) {
             // Ctrl-C ends a script; the arm is halted whatever the line was doing.
             if let Some(robot) = session.robot.as_mut() {

@@ -89,7 +89,12 @@ enum Command {
     )]
     Config(common::Conn),
     /// List the serial ports of this machine.
-    Ports,
+    Ports {
+        /// The configuration file whose port to point out (default: $TROL_CONFIG, else
+        /// ./trol.cfg).
+        #[arg(long, value_name = "FILE")]
+        config: Option<std::path::PathBuf>,
+    },
     /// Measure: link throughput, transactions, inverse kinematics, faults, the view (runs
     /// the `trol-bench` program beside this one; `trol bench --help` lists the benchmarks).
     #[command(disable_help_flag = true)]
@@ -153,7 +158,20 @@ fn man(out: &std::path::Path) -> Result<(), String> {
     Ok(())
 }
 
-fn ports() -> Result<(), String> {
+fn ports(config: Option<std::path::PathBuf>) -> Result<(), String> {
+    // The port trol.cfg names, pointed out in the list (or named after it).
+    let conn = common::Conn {
+        config,
+        port: None,
+        baud: None,
+        time_scale: None,
+        locations: None,
+    };
+    let (cfg, source) = conn.config_with_source()?;
+    let configured = match source {
+        trol::config::ConfigSource::Defaults => None,
+        found => Some((cfg.port, cfg.baud, found)),
+    };
     let list = trol_port::serial::list().map_err(|e| format!("cannot list the ports: {e}"))?;
     if list.is_empty() {
         say!(
@@ -161,8 +179,19 @@ fn ports() -> Result<(), String> {
              plugged in; `trol sim` makes a pty to try things with)"
         );
     }
+    let mut named = false;
     for (name, what) in list {
-        say!("{name:<24} {what}");
+        let mark = match &configured {
+            Some((port, baud, source)) if *port == name => {
+                named = true;
+                format!("  <- {source} names it (baud {baud})")
+            }
+            _ => String::new(),
+        };
+        say!("{name:<24} {what}{mark}");
+    }
+    if let Some((port, baud, source)) = configured.filter(|_| !named) {
+        say!("{source} names port {port} (baud {baud})");
     }
     Ok(())
 }
@@ -180,7 +209,7 @@ fn main() -> ExitCode {
         Command::Rapl(r) => rapl::run(r).map(|()| ExitCode::SUCCESS),
         Command::Mars(m) => mars::run(m).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
-        Command::Ports => ports().map(|()| ExitCode::SUCCESS),
+        Command::Ports { config } => ports(config).map(|()| ExitCode::SUCCESS),
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
         Command::Bench { args } => bench::run(&args),
         Command::Demo(a) => demo::run(a),

@@ -29,18 +29,25 @@ pub struct SimArgs {
     /// listen://HOST:PORT (port 0 picks a free one).
     #[arg(long, default_value = "pty")]
     port: String,
-    /// Baud rate of a serial device.
-    #[arg(long, default_value_t = 9600)]
-    baud: u32,
+    /// The configuration file whose simulator settings apply unless given here (baud,
+    /// check, time_scale, locations, objects, table_z, homed, object; default:
+    /// $TROL_CONFIG, else ./trol.cfg, else none). Its port is the application's, not this.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Baud rate of a serial device [default: trol.cfg's, else 9600].
+    #[arg(long)]
+    baud: Option<u32>,
     /// The location table to load (docs/a465.md, "Locations").
     #[arg(long, value_name = "FILE")]
     locations: Option<PathBuf>,
-    /// Run the simulation this many times faster than real time.
-    #[arg(long, default_value_t = 1.0, value_parser = positive)]
-    time_scale: f64,
-    /// The table plane (world z, mm): the tool tip may not go below it.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    table_z: f64,
+    /// Run the simulation this many times faster than real time [default: trol.cfg's, else
+    /// 1].
+    #[arg(long, value_parser = positive)]
+    time_scale: Option<f64>,
+    /// The table plane (world z, mm): the tool tip may not go below it [default: trol.cfg's,
+    /// else 0].
+    #[arg(long, allow_negative_numbers = true)]
+    table_z: Option<f64>,
     /// Start homed (a real arm must be homed after power-up).
     #[arg(long)]
     homed: bool,
@@ -56,9 +63,9 @@ pub struct SimArgs {
     #[arg(long)]
     server: bool,
     /// The block check in server mode until an activation line names one: crc16 (TROL's) or
-    /// lrc (the manual's).
-    #[arg(long, default_value = "crc16", value_parser = parse_check)]
-    check: BlockCheck,
+    /// lrc (the manual's) [default: trol.cfg's, else crc16].
+    #[arg(long, value_parser = parse_check)]
+    check: Option<BlockCheck>,
     /// Be a controller with the 1998 PCP server, which speaks only the manual's protocol: only
     /// the bare `PCP TROL` activates it, the manual's LRC, GetStatus in 4 bytes, the commands
     /// TROL added unknown, no memory of the last request (a repeat runs again). PCI says what
@@ -116,6 +123,49 @@ pub struct SimArgs {
     /// does; the log says `pendant: at ...` once it stands (for `trol rapl probe --poses`).
     #[arg(long, requires = "rapl")]
     pendant: bool,
+    /// The settings in force: the flags, else trol.cfg's, else the defaults ([`resolve`]).
+    #[arg(skip)]
+    r: Resolved,
+}
+
+/// What `trol sim` runs with, each from its flag, else from trol.cfg, else its default.
+#[derive(Debug, Default)]
+struct Resolved {
+    baud: u32,
+    time_scale: f64,
+    table_z: f64,
+    check: BlockCheck,
+    homed: bool,
+    /// The configuration file read, if there was one.
+    from: Option<String>,
+}
+
+/// Fill in what the flags left open from the configuration (`--config`, $TROL_CONFIG or
+/// ./trol.cfg; none: the defaults), as every subcommand reads it. Relative files in trol.cfg
+/// are its folder's.
+fn resolve(mut a: SimArgs) -> Result<SimArgs, String> {
+    let conn = crate::common::Conn {
+        config: a.config.clone(),
+        port: None,
+        baud: None,
+        time_scale: None,
+        locations: None,
+    };
+    let (cfg, source) = conn.config_with_source()?;
+    let from =
+        (!matches!(source, trol::config::ConfigSource::Defaults)).then(|| source.to_string());
+    a.r = Resolved {
+        from,
+        baud: a.baud.unwrap_or(cfg.baud),
+        time_scale: a.time_scale.unwrap_or(cfg.time_scale),
+        table_z: a.table_z.unwrap_or(cfg.table_z),
+        check: a.check.unwrap_or(cfg.block_check()),
+        homed: a.homed || cfg.homed,
+    };
+    a.locations = a.locations.take().or(cfg.locations);
+    a.objects = a.objects.take().or(cfg.objects);
+    a.object = a.object.or(cfg.object);
+    Ok(a)
 }
 
 fn check_variant(a: &SimArgs) -> Result<(), String> {
@@ -144,6 +194,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     // Serving must never wait for a reader of the log (docs/reliability.md).
     crate::common::log_in_background();
     check_variant(&a)?;
+    let a = resolve(a)?;
     if (a.profile.is_some() || a.print_profile) && !(a.rapl || a.mars) {
         return Err("--profile and --print-profile need --rapl or --mars".into());
     }
@@ -175,12 +226,12 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     };
     let settings = SimSettings {
         arm: ArmSettings {
-            table_z: a.table_z,
+            table_z: a.r.table_z,
             object_width: a.object,
             objects,
-            homed: a.homed,
+            homed: a.r.homed,
         },
-        time_scale: a.time_scale,
+        time_scale: a.r.time_scale,
         locations,
         tool: [0.0; 6],
     };
@@ -197,17 +248,20 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         None => None,
     };
     // A new pty or a listening socket, like the application's side of a relay.
-    let opened = open_side(&a.port, a.baud, Side::Application)?;
+    let opened = open_side(&a.port, a.r.baud, Side::Application)?;
     let name = opened.name.clone();
     say!("trol sim: serving on {name}");
     say!(
         "  {} mode, time scale {}, table at z = {} mm, {} location(s), {}",
         if a.server { "server" } else { "terminal" },
-        a.time_scale,
-        a.table_z,
+        a.r.time_scale,
+        a.r.table_z,
         n_locations,
-        if a.homed { "homed" } else { "not homed" }
+        if a.r.homed { "homed" } else { "not homed" }
     );
+    if let Some(file) = &a.r.from {
+        say!("  settings not given as flags: from {file}");
+    }
     if !a.server {
         say!("  activate it with: trol init --port {name}");
     }
@@ -222,9 +276,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         check: if a.manual.is_some() {
             BlockCheck::Lrc
         } else {
-            a.check
+            a.r.check
         },
-        ..LinkConfig::for_line(a.baud, Duration::ZERO)
+        ..LinkConfig::for_line(a.r.baud, Duration::ZERO)
     };
     let pcp = Pcp::new(backend);
     let described = trol::described::catalog(a.commands.as_deref())?;
@@ -343,7 +397,7 @@ fn run_mars(a: &SimArgs) -> Result<(), String> {
     }
     let variant = a.variant.as_deref().unwrap_or("default");
     let sw = trol_mars::mars8::variant(variant).ok_or_else(|| format!("no variant {variant}"))?;
-    let mut unit = trol_mars::Mars8::new(profile.clone(), sw, a.homed, a.time_scale);
+    let mut unit = trol_mars::Mars8::new(profile.clone(), sw, a.r.homed, a.r.time_scale);
     if let Some(mm) = a.object {
         unit.set_object(profile.gripper_position(mm));
     }
@@ -359,8 +413,8 @@ fn run_mars(a: &SimArgs) -> Result<(), String> {
             profile.source.as_str()
         },
         profile.baud,
-        a.time_scale,
-        if a.homed { "homed" } else { "not homed" }
+        a.r.time_scale,
+        if a.r.homed { "homed" } else { "not homed" }
     );
     let what = trol_mars::mars8::VARIANTS
         .iter()
@@ -439,14 +493,14 @@ fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
     let (profile, homed) = match (&a.profile, &a.variant) {
         (Some(p), _) => (
             trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
-            a.homed,
+            a.r.homed,
         ),
         (None, Some(v)) => {
             let (p, homed) =
                 trol_rapl::c500::variant(v).ok_or_else(|| format!("no variant {v}"))?;
-            (p, a.homed && homed)
+            (p, a.r.homed && homed)
         }
-        (None, None) => (trol_rapl::Profile::simulator(), a.homed),
+        (None, None) => (trol_rapl::Profile::simulator(), a.r.homed),
     };
     let mut settings = settings;
     settings.arm.homed = homed;
@@ -468,7 +522,7 @@ fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
             "ACI mode"
         },
         c500.describe().baud,
-        a.time_scale,
+        a.r.time_scale,
         if homed { "homed" } else { "not homed" }
     );
     if let Some(v) = &a.variant {
@@ -498,7 +552,7 @@ fn run_rapl(a: &SimArgs, settings: SimSettings) -> Result<(), String> {
     trol_rapl::c500::serve_with(
         opened.port.as_mut(),
         &mut c500,
-        a.time_scale,
+        a.r.time_scale,
         &stop,
         &mut |line| say!("{line}"),
         &mut |c, now| {

@@ -1601,7 +1601,10 @@ fn a_line_that_is_not_text_is_its_lines_error() {
     let o = trol(&dir, &["interp", "bad.trol", "--port", "sim"], "");
     let (out, err) = text(&o);
     assert!(!o.status.success(), "{out}");
-    assert!(err.contains("bad.trol:2:3: error: byte 0xff is not UTF-8"), "{err}");
+    assert!(
+        err.contains("bad.trol:2:3: error: byte 0xff is not UTF-8"),
+        "{err}"
+    );
     assert!(err.contains("stopped at line 2"), "{err}");
     assert!(!out.contains("speed 60"), "{out}");
     let o = trol(&dir, &["interp", "-k", "bad.trol", "--port", "sim"], "");
@@ -1609,4 +1612,40 @@ fn a_line_that_is_not_text_is_its_lines_error() {
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("speed 60  ->  0 (success)"), "{out}");
     assert!(err.contains("1 command(s) failed"), "{err}");
+}
+
+/// `trol sim` and `trol ports` read trol.cfg as every subcommand does: the simulator's
+/// settings come from it unless a flag says otherwise, and `--config` names another file.
+#[test]
+fn sim_and_ports_read_trol_cfg_like_every_subcommand() {
+    let dir = scratch("sim-config");
+    std::fs::write(dir.join("locs.txt"), "p1 400 0 300 0 1.5707963 0\n").unwrap();
+    std::fs::write(
+        dir.join("lab.cfg"),
+        "9600\n/dev/ttyUSB7\n0 0 0 0 0 0\ntime_scale = 20\ntable_z = -5\nlocations = locs.txt\n",
+    )
+    .unwrap();
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--config",
+            "lab.cfg",
+            "--port",
+            "listen://127.0.0.1:0",
+            "--table-z",
+            "-7",
+        ],
+        "serving on ",
+    );
+    let lines = sim.wait_for("activate it with", 10).join("\n");
+    assert!(
+        lines.contains("time scale 20, table at z = -7 mm, 1 location(s)"),
+        "{lines}"
+    );
+    assert!(lines.contains("from lab.cfg"), "{lines}");
+    let o = trol(&dir, &["ports", "--config", "lab.cfg"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(out.contains("/dev/ttyUSB7 (baud 9600)"), "{out}");
 }

@@ -146,7 +146,7 @@ fn serve_backend<B: trol_controller::Backend>(
         if a.server { "server" } else { "terminal" }
     );
     if !a.server {
-        say!("  activate it with: trol init --port {name}");
+        say!("  {}", crate::link::activation_hint(&a.port, &name));
     }
     let cfg = LinkConfig {
         check: a.check,

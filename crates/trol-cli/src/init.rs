@@ -9,6 +9,17 @@ const CHECK: &str = "check that the controller is on and connected to this port,
                      port is the right one (`trol ports` lists them), and that the baud rate \
                      matches the controller's";
 
+/// Why the port did not open, with what to check; a port another program holds needs no
+/// cable hint: the message names the holder.
+fn open_failed(e: trol::Error) -> String {
+    match e {
+        trol::Error::Setup(trol::SetupError::Port(trol_port::OpenError::Busy { .. })) => {
+            e.to_string()
+        }
+        e => format!("{e}; {CHECK}"),
+    }
+}
+
 pub fn init(conn: &Conn) -> Result<(), String> {
     let cfg = conn.config()?;
     if cfg.port == "sim" {
@@ -19,8 +30,7 @@ pub fn init(conn: &Conn) -> Result<(), String> {
         );
         return Ok(());
     }
-    let mut robot =
-        Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
+    let mut robot = Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(open_failed)?;
     trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
     if let Some(notice) = robot.take_notice() {
         say!("note: {notice}");
@@ -40,8 +50,7 @@ pub fn cleanup(conn: &Conn) -> Result<(), String> {
         say!("port sim: the embedded simulator ends with each program; nothing to end.");
         return Ok(());
     }
-    let mut robot =
-        Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(|e| format!("{e}; {CHECK}"))?;
+    let mut robot = Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(open_failed)?;
     robot.terminate_pcp().map_err(|e| {
         format!(
             "the controller did not take TerminatePCP: {e}. Is its TROL server active (`trol \

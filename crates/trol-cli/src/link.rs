@@ -58,6 +58,21 @@ pub struct Opened {
 }
 
 /// Open one end: `pty` makes a new pseudo-terminal; `listen://HOST:PORT` waits for clients.
+/// How to activate a controller served on `asked` (the --port given) that clients reach at
+/// `name`: a new pty or a listening socket is reached where it says; a device is one end of
+/// a line, and `trol init` belongs at the other end.
+pub fn activation_hint(asked: &str, name: &str) -> String {
+    if asked == "pty" || asked.starts_with("listen://") {
+        format!("activate it with: trol init --port {name}")
+    } else {
+        format!(
+            "{name} is this end of the line: applications and `trol init` use its other end \
+             (the device at the far side of the cable, or the other pty of a socat pair): \
+             trol init --port OTHER_END"
+        )
+    }
+}
+
 pub fn open_side(name: &str, baud: u32, side: Side) -> Result<Opened, String> {
     if name == "pty" {
         if side == Side::Controller {

@@ -263,7 +263,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         say!("  settings not given as flags: from {file}");
     }
     if !a.server {
-        say!("  activate it with: trol init --port {name}");
+        say!("  {}", crate::link::activation_hint(&a.port, &name));
     }
     if let Some(v) = &view {
         say!("  the view: {}", v.url());

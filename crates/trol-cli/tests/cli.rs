@@ -1649,3 +1649,32 @@ fn sim_and_ports_read_trol_cfg_like_every_subcommand() {
     assert!(o.status.success(), "{err}");
     assert!(out.contains("/dev/ttyUSB7 (baud 9600)"), "{out}");
 }
+
+/// A serial port another program holds is named with its holder, on `trol init` and the
+/// interpreter alike, without the cable hint (serialport's flock said only "Unable to acquire
+/// exclusive lock"); and `trol sim` on a device says that `trol init` belongs at the line's
+/// other end.
+#[test]
+fn a_busy_serial_port_names_its_holder_and_a_device_its_other_end() {
+    let dir = scratch("busy-serial");
+    let sim = Background::start(&dir, &["sim", "--server"], "serving on ");
+    assert!(sim.name.starts_with("/dev/"), "{}", sim.name);
+    let held = trol_port::open(&sim.name, &trol_port::PortSettings::default()).unwrap();
+    let holder = format!("in use by process {}", std::process::id());
+    for args in [
+        &["init", "--port", &sim.name][..],
+        &["interp", "--port", &sim.name],
+    ] {
+        let o = trol(&dir, args, "getstatus\n");
+        let (out, err) = text(&o);
+        assert!(!o.status.success(), "{args:?}: {out}");
+        assert!(err.contains(&holder), "{args:?}: {err}");
+        assert!(!err.contains("exclusive lock"), "{args:?}: {err}");
+        assert!(!err.contains("cable"), "{args:?}: {err}");
+    }
+    drop(held);
+    // A second simulator on the first one's pty: a device, one end of a line.
+    let other = Background::start(&dir, &["sim", "--port", &sim.name], "serving on ");
+    let lines = other.wait_for("this end of the line", 10).join("\n");
+    assert!(lines.contains("trol init --port OTHER_END"), "{lines}");
+}

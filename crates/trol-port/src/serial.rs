@@ -57,7 +57,7 @@ impl SerialLine {
         #[cfg(unix)]
         {
             use std::os::fd::AsRawFd;
-            let port = builder.open_native().map_err(io::Error::from)?;
+            let port = builder.open_native().map_err(open_error)?;
             let fd = Some(port.as_raw_fd());
             Ok(SerialLine {
                 port: Box::new(port),
@@ -67,7 +67,7 @@ impl SerialLine {
         }
         #[cfg(not(unix))]
         Ok(SerialLine {
-            port: builder.open().map_err(io::Error::from)?,
+            port: builder.open().map_err(open_error)?,
             fd: None,
             name: path.to_string(),
         })
@@ -106,6 +106,16 @@ impl SerialLine {
             },
             path,
         ))
+    }
+}
+
+/// The crate's error on opening, as an I/O error: its failed flock (another program has the
+/// device open through the crate, as TROL does) is the device being busy, as EBUSY is.
+fn open_error(e: serialport::Error) -> io::Error {
+    if e.kind == serialport::ErrorKind::NoDevice && e.description.contains("lock") {
+        io::Error::new(io::ErrorKind::ResourceBusy, e.description)
+    } else {
+        io::Error::from(e)
     }
 }
 

@@ -49,6 +49,7 @@ typedef uint8_t  TUCCHAR;
 #define TROL_ERR_COMM      (-32001)
 #define TROL_ERR_BAD_RSIZE (-32002)
 #define TROL_ERR_ARG_RANGE (-32003)
+#define TROL_ERR_NOT_INIT  (-32004) /* called before InitTROL succeeded, or after CleanupTROL: nothing was sent (not in the manual) */
 #define TROL_ERR_UNKNOWN   (-32051)
 #define TROL_ERR_BAD_CSIZE (-32052)
 #define TROL_ERR_ROBOT     (-32053) /* the controller lost its link to the robot; the command did not run (not in the manual) */

@@ -29,7 +29,7 @@ use trol_comm::{
     AppTimeoutContext, Channel, DefaultHandlers, ErrorHandlers, FailureContext, Recovery,
     TimeoutAction,
 };
-use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM};
+use trol_proto::application::code::{TROL_ERR_ARG_RANGE, TROL_ERR_COMM, TROL_ERR_NOT_INIT};
 use trol_proto::application::record::Value;
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT, POS_ACT, POS_COMMANDED};
 use trol_proto::application::{CommandDef, LocName, Location, Reply, Tag};
@@ -40,6 +40,7 @@ use trol_client::{Error, Robot, timeout_policy};
 
 const ARG_RANGE: TINT = TROL_ERR_ARG_RANGE.0;
 const COMM: TINT = TROL_ERR_COMM.0;
+const NOT_INIT: TINT = TROL_ERR_NOT_INIT.0;
 
 /// signed 32 bit.
 pub type TLONG = i32;
@@ -372,7 +373,7 @@ fn run(
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
                 not_connected(def.name);
-                return fatal_or(fatal, def.code, COMM);
+                return fatal_or(fatal, def.code, NOT_INIT);
             };
             let r = robot.call(def, &args);
             note_comm(robot.last_comm_error());
@@ -391,8 +392,7 @@ fn run(
 }
 
 /// A call with no connection (before InitTROL, after CleanupTROL, or on a handle not
-/// connected): TROL_ERR_COMM, and once per process a line on stderr that tells it apart from
-/// a failed line.
+/// connected): TROL_ERR_NOT_INIT, and once per process a line on stderr that says why.
 fn not_connected(command: &str) {
     static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
     if !SAID.swap(true, Ordering::Relaxed) {
@@ -400,7 +400,7 @@ fn not_connected(command: &str) {
         let _ = writeln!(
             std::io::stderr(),
             "TROL: {command} called with no connection (before InitTROL, or after \
-             CleanupTROL): nothing was sent; it returns TROL_ERR_COMM"
+             CleanupTROL): nothing was sent; it returns TROL_ERR_NOT_INIT"
         );
     }
 }
@@ -563,7 +563,7 @@ fn wait_idle() -> TINT {
                     };
                     let fatal = st.callbacks.resolved().fatal;
                     let Some(robot) = st.robot.as_mut() else {
-                        return COMM;
+                        return NOT_INIT;
                     };
                     (wait.check(robot), fatal)
                 };
@@ -1186,7 +1186,7 @@ pub unsafe extern "C" fn Cat1Transaction(req: *mut SInData) -> TINT {
             let fatal = st.callbacks.resolved().fatal;
             let Some(robot) = st.robot.as_mut() else {
                 not_connected("Cat1Transaction");
-                return fatal_or(fatal, code, COMM);
+                return fatal_or(fatal, code, NOT_INIT);
             };
             let r = robot.cat1_transaction(request);
             note_comm(robot.last_comm_error());

@@ -39,6 +39,9 @@ pub const TROL_ERR_BAD_RSIZE: Code = Code(-32002);
 /// An argument of an API call is out of its range (host; the controller also uses it for a
 /// request whose fields are out of range).
 pub const TROL_ERR_ARG_RANGE: Code = Code(-32003);
+/// No connection: the C API was called before InitTROL succeeded, or after CleanupTROL;
+/// nothing was sent (host; not in the manual, where such a call failed as TROL_ERR_COMM).
+pub const TROL_ERR_NOT_INIT: Code = Code(-32004);
 /// The controller does not know the command code (controller).
 pub const TROL_ERR_UNKNOWN: Code = Code(-32051);
 /// The request has not the size its command expects (controller).
@@ -73,6 +76,12 @@ pub const TROL_CODES: &CodeTable = &[
         value: TROL_ERR_ARG_RANGE.0,
         name: "TROL_ERR_ARG_RANGE",
         meaning: "an argument of the API call is out of range",
+    },
+    CodeInfo {
+        value: TROL_ERR_NOT_INIT.0,
+        name: "TROL_ERR_NOT_INIT",
+        meaning: "no connection: InitTROL has not succeeded (or CleanupTROL ended it); \
+                  nothing was sent",
     },
     CodeInfo {
         value: TROL_ERR_UNKNOWN.0,

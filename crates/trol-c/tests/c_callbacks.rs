@@ -360,7 +360,10 @@ fn a_call_before_inittrol_says_so_once() {
     let out = program(&exe).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(text.starts_with("-32004\n-32004\n-32004: TROL_ERR_NOT_INIT"), "{text}\n{err}");
+    assert!(
+        text.starts_with("-32004\n-32004\n-32004: TROL_ERR_NOT_INIT"),
+        "{text}\n{err}"
+    );
     assert_eq!(err.matches("called with no connection").count(), 1, "{err}");
     assert!(
         err.contains("TROLHome called with no connection (before InitTROL"),

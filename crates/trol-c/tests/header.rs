@@ -68,3 +68,149 @@ fn the_header_agrees_with_the_table() {
     assert_eq!(constant("TROLTerminatePCP"), "TROL_TERMINATE_PCP");
     assert_eq!(constant("TROLMA"), "TROL_MA");
 }
+
+/// The prototype of `name` in trol.h (the line that declares it).
+fn prototype(header: &str, name: &str) -> String {
+    header
+        .lines()
+        .find(|l| l.contains(&format!(" {name}(")) && l.trim_end().ends_with(';'))
+        .unwrap_or_else(|| panic!("trol.h declares no {name}"))
+        .split(';')
+        .next()
+        .unwrap()
+        .trim()
+        .to_string()
+}
+
+fn tags(tags: &[trol_client::Tag]) -> String {
+    let names: Vec<&str> = tags
+        .iter()
+        .map(|t| match t {
+            trol_client::Tag::Cart => "POS_CART",
+            trol_client::Tag::Joint => "POS_JOINT",
+            trol_client::Tag::Prec => "POS_PREC",
+        })
+        .collect();
+    names.join(" or ")
+}
+
+/// One argument in words, with its range, from the command table.
+fn argument(a: &trol_client::Arg) -> String {
+    use trol_client::ArgKind;
+    let what = match a.kind {
+        ArgKind::Int { min, max } => format!("a whole number {min}..{max}"),
+        ArgKind::Choice(choices) => {
+            let c: Vec<String> = choices
+                .iter()
+                .map(|c| format!("{} ({})", c.constant, c.value))
+                .collect();
+            format!("one of {}", c.join(", "))
+        }
+        ArgKind::Straight => "0: joint-interpolated, 1: a straight line".into(),
+        ArgKind::Name => "a location name of the controller's table (TLocName)".into(),
+        ArgKind::Real => "a real number".into(),
+        ArgKind::Loc { tags: t, min, max } => {
+            let n = if min == max {
+                format!("{min}")
+            } else {
+                format!("{min}..{max}")
+            };
+            format!("an SLocData of tag {}, numDims {n}", tags(t))
+        }
+    };
+    format!("`{}`: {what}", a.name)
+}
+
+fn returns(def: &trol_client::CommandDef) -> &'static str {
+    use trol_client::ReplyKind;
+    match def.reply {
+        ReplyKind::Code => {
+            "the firmware's return value (0: success; a BIOS code of the controller's \
+             table), or a TROL code"
+        }
+        ReplyKind::Reals { .. } => "0 and the values, or a TROL code",
+        ReplyKind::Position => {
+            "0 with the position in `*pos` (in the form `pos->tag` asked for), or a \
+             TROL code (TROL_ERR_BAD_RSIZE: a reply in another form, `*pos` untouched)"
+        }
+        ReplyKind::Status => {
+            "BIOSCalled (1: the last CAT1/CAT2 command called the firmware, 0: it did not), \
+             with lastErrorCode in `*lastBIOSRetVal` (the firmware's value, or the TROL code \
+             that kept it from being called), or a TROL code"
+        }
+        ReplyKind::Version | ReplyKind::Codes | ReplyKind::Gripper => {
+            "0 with the reply in the out parameters, or a TROL code (TROL_ERR_UNKNOWN: a \
+             controller that does not know the command)"
+        }
+        ReplyKind::Bytes => "the reply's first word; its bytes are the application's",
+        _ => "a return value, or a TROL code",
+    }
+}
+
+/// The generated part of docs/c-api.md: one entry per command of the table, and the TROL
+/// codes.
+fn c_api_reference(header: &str) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    for def in BUILTIN {
+        let added = table::ADDED.contains(&def.code);
+        let _ = writeln!(s, "### {}\n", def.name);
+        let _ = writeln!(s, "```c\n{};", prototype(header, def.name));
+        let per = constant(def.name).to_ascii_lowercase();
+        let _ = writeln!(s, "{};\n```\n", prototype(header, &per));
+        let _ = writeln!(
+            s,
+            "{} ({}, code {}{}).\n",
+            upper_first(def.help),
+            def.class(),
+            def.code,
+            if added { ", added to the manual's" } else { "" }
+        );
+        if !def.args.is_empty() {
+            for a in def.args {
+                let _ = writeln!(s, "- {}", argument(a));
+            }
+            s.push('\n');
+        }
+        let _ = writeln!(s, "Returns {}.\n", returns(def));
+    }
+    let _ = writeln!(s, "### TROL's codes\n");
+    let _ = writeln!(s, "| code | value | meaning |\n|---|---|---|");
+    for c in TROL_CODES {
+        let _ = writeln!(s, "| {} | {} | {} |", c.name, c.value, c.meaning);
+    }
+    s
+}
+
+fn upper_first(text: &str) -> String {
+    let mut c = text.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),
+        None => String::new(),
+    }
+}
+
+/// docs/c-api.md's reference of the commands is generated from the command table and
+/// trol.h's prototypes, so it cannot drift: this test compares it (TROL_BLESS=1 writes it).
+#[test]
+fn the_c_reference_is_the_tables() {
+    let root = common::cbuild::root();
+    let header = std::fs::read_to_string(root.join("include/trol.h")).unwrap();
+    let path = root.join("docs/c-api.md");
+    let doc = std::fs::read_to_string(&path).unwrap();
+    let (begin, end) = ("<!-- generated: commands -->\n", "<!-- /generated -->");
+    let at = doc.find(begin).expect("docs/c-api.md's generated part") + begin.len();
+    let stop = doc[at..].find(end).expect("its end") + at;
+    let want = c_api_reference(&header);
+    if std::env::var_os("TROL_BLESS").is_some() {
+        let new = format!("{}\n{want}\n{}", &doc[..at], &doc[stop..]);
+        std::fs::write(&path, new.replace(&format!("{begin}\n"), begin)).unwrap();
+        return;
+    }
+    assert_eq!(
+        doc[at..stop].trim(),
+        want.trim(),
+        "docs/c-api.md's reference is not the table's: run TROL_BLESS=1 cargo test -p \
+         trol-c --test header"
+    );
+}

@@ -644,7 +644,16 @@ fn link(a: LinkArgs) -> Result<(), String> {
     let message: Vec<u8> = (0..len).map(|i| (i * 131 + 7) as u8).collect();
     let cfg = LinkConfig::for_line(a.baud, Duration::ZERO);
     let mut best: Option<LinkReport> = None;
-    for _ in 0..a.repeat {
+    // What it does and how long it will take, before the silence of a paced line.
+    let line_s = frame::wire_bytes_for(len) as f64 * 10.0 / f64::from(a.baud);
+    eprintln!(
+        "trol bench link: {len} bytes at {} baud, {} time(s): about {:.1} s of line time each",
+        a.baud, a.repeat, line_s
+    );
+    for round in 0..a.repeat {
+        if a.repeat > 1 {
+            eprintln!("  round {} of {}", round + 1, a.repeat);
+        }
         let (tx, rx) = memory::pair(Some(a.baud));
         let receiver = std::thread::spawn(move || {
             let mut driver = Driver::new(rx);

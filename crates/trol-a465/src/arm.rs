@@ -360,8 +360,20 @@ impl Arm {
     }
 
     fn retire(&mut self, now: f64) {
-        while let Some(m) = self.motions.front() {
+        // A homing's axes are homed once its commanded motion has ended.
+        for m in &self.motions {
             if m.profile.end() > now {
+                break;
+            }
+            for &a in m.homes.iter().flatten() {
+                self.homed[a] = true;
+            }
+        }
+        while let Some(m) = self.motions.front() {
+            // A motion stays until the actual position (a servo lag behind) has ended it
+            // too: retired at its end, the actual position snapped to the end up to a lag
+            // early.
+            if m.profile.end() > now - SERVO_LAG {
                 break;
             }
             let m = self.motions.pop_front().expect("a front motion");
@@ -463,10 +475,16 @@ impl Arm {
         self.done_at(now) > now
     }
 
-    /// When everything accepted so far will have ended.
+    /// When everything accepted so far will have ended: the actual position at the last
+    /// motion's end (a servo lag after the command's, as a controller's in-position flag
+    /// waits for the following error), and the fingers.
     pub fn done_at(&mut self, now: f64) -> f64 {
         self.retire(now);
-        let arm = self.motions.back().map(|m| m.profile.end()).unwrap_or(now);
+        let arm = self
+            .motions
+            .back()
+            .map(|m| m.profile.end() + SERVO_LAG)
+            .unwrap_or(now);
         arm.max(self.fingers.done_at()).max(now)
     }
 
@@ -508,9 +526,23 @@ impl Arm {
         code::OK
     }
 
-    /// The tool transform for every cartesian computation that follows.
+    /// The tool transform for every cartesian computation that follows. A tool that would put
+    /// the tool centre point below the table where the arm will stand is refused
+    /// (BIOS_BELOW_TABLE) and changes nothing: taken, it left every move but Home refused. A
+    /// held object stays where it is in the world.
     pub fn set_tool(&mut self, tool: [f64; 6]) -> i16 {
-        self.kin = Kinematics::new(tool);
+        let kin = Kinematics::new(tool);
+        let q = self.planned_end();
+        let end = kin.fk(&q);
+        if end.pos.z < self.settings.table_z - 1e-9 {
+            return code::BELOW_TABLE;
+        }
+        let old = self.kin.fk(&q);
+        if let Some(h) = self.held.as_mut() {
+            let centre = old.pos + old.rot * h.in_tool;
+            h.in_tool = end.rot.transpose() * (centre - end.pos);
+        }
+        self.kin = kin;
         code::OK
     }
 

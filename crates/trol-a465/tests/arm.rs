@@ -137,11 +137,19 @@ fn the_table_refusal_changes_nothing() {
     arm.ma(down, 0.0);
     let t = arm.done_at(0.0);
     let before = arm.commanded(t);
-    // A 600 mm long tool reaches below the table there.
-    arm.set_tool([600.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
-    assert_eq!(arm.joint(1, 0.1, t), code::BELOW_TABLE);
+    // A 600 mm long tool would reach below the table there: refused, nothing changes.
     assert_eq!(
-        arm.depart([-10.0, 0.0, 0.0, 0.0, 0.0, 0.0], true, t),
+        arm.set_tool([600.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        code::BELOW_TABLE
+    );
+    // A 550 mm one ends 8.8 mm above it; 20 mm further down along the tool is below.
+    assert_eq!(arm.set_tool([550.0, 0.0, 0.0, 0.0, 0.0, 0.0]), code::OK);
+    assert_eq!(
+        arm.depart([20.0, 0.0, 0.0, 0.0, 0.0, 0.0], true, t),
+        code::BELOW_TABLE
+    );
+    assert_eq!(
+        arm.depart([20.0, 0.0, 0.0, 0.0, 0.0, 0.0], false, t),
         code::BELOW_TABLE
     );
     assert_eq!(arm.commanded(t + 10.0), before);
@@ -405,6 +413,45 @@ fn the_actual_position_lags_while_moving_and_dithers_at_rest() {
     assert_eq!(arm.position(end + 1.0, Which::Commanded), target);
 }
 
+/// Right after the commanded motion ended, the actual position is still a servo lag behind
+/// whatever was asked before: it used to snap to the end as soon as the commanded position
+/// had been read past it.
+#[test]
+fn the_actual_position_reaches_the_end_a_servo_lag_after_the_command() {
+    use trol_a465::arm::{DITHER_COUNTS, SERVO_LAG};
+    use trol_a465::model::counts_per_radian;
+    let mut arm = homed_arm();
+    let target = [1.0, 0.4, -0.3, 0.2, 0.3, 0.4];
+    arm.ma(target, 0.0);
+    // The command ends a lag before the motion counts as done (the actual position there).
+    let end = arm.done_at(0.0) - SERVO_LAG;
+    let per_rad = counts_per_radian();
+    let t = end + SERVO_LAG / 2.0;
+    assert!(
+        arm.is_moving(t),
+        "not done before the actual position arrived"
+    );
+    // The command has ended, and was read so.
+    assert_eq!(arm.position(t, Which::Commanded), target);
+    let actual = arm.position(t, Which::Actual);
+    let lagging = arm.planned_at(t - SERVO_LAG);
+    for i in 0..6 {
+        let slack = (DITHER_COUNTS as f64 + 0.5) / per_rad[i] + 1e-12;
+        assert!(
+            (actual[i] - lagging[i]).abs() <= slack,
+            "{actual:?} vs {lagging:?}"
+        );
+    }
+    // Half a lag before its end, joint 1 (decelerating at 720 °/s²) is still more than the
+    // dither away from it: a snap would show.
+    let slack0 = (DITHER_COUNTS as f64 + 0.5) / per_rad[0];
+    assert!(
+        (lagging[0] - target[0]).abs() > 2.0 * slack0,
+        "{} rad from the end, dither {slack0}",
+        (lagging[0] - target[0]).abs()
+    );
+}
+
 #[test]
 fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
     use trol_a465::arm::{WorldObject, parse_objects};
@@ -546,4 +593,29 @@ fn a_location_file_in_degrees_is_refused_with_the_line_and_the_radians() {
     assert!(e.contains("1.5707963"), "{e}");
     // A precision point's counts are not angles.
     assert!(parse_locations("#park 1000 -2000 3000 0 0 9000\n").is_ok());
+}
+
+/// A tool that would put the tool centre point below the table where the arm stands is
+/// refused and changes nothing (it used to be taken, and then every move but Home was
+/// refused); a shorter one is taken.
+#[test]
+fn a_tool_that_reaches_below_the_table_is_refused_and_changes_nothing() {
+    let mut arm = Arm::new(ArmSettings {
+        homed: true,
+        ..ArmSettings::default()
+    });
+    // The tool pointing down, 150 mm above the table.
+    let t = settle_at(&mut arm, [400.0, 0.0, 150.0, 0.0, DOWN, 0.0], 0.0);
+    let before = arm.position(t, Which::Commanded);
+    assert_eq!(
+        arm.set_tool([200.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        code::BELOW_TABLE
+    );
+    // Nothing changed: the same moves work.
+    assert_eq!(
+        arm.move_to(Target::Cart([400.0, 0.0, 100.0, 0.0, DOWN, 0.0]), false, t),
+        code::OK
+    );
+    assert_eq!(arm.position(t, Which::Commanded), before);
+    assert_eq!(arm.set_tool([50.0, 0.0, 0.0, 0.0, 0.0, 0.0]), code::OK);
 }

@@ -67,7 +67,8 @@ fn joint_moves_stay_within_every_joints_limits_and_end_together() {
         let mut arm = homed_arm();
         let from = random_joints(&mut rng, 0.05);
         arm.ma(from, 0.0);
-        let t0 = arm.done_at(0.0);
+        // Some time after the first motion, so that the samples before t0 are at rest.
+        let t0 = arm.done_at(0.0) + 0.1;
         arm.set_speed(percent);
         let to = random_joints(&mut rng, 0.05);
         assert_eq!(arm.ma(to, t0), code::OK);
@@ -130,7 +131,8 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
         if arm.ma(q0, 0.0) != code::OK {
             continue;
         }
-        let t0 = arm.done_at(0.0);
+        // Some time after the first motion, so that the samples before t0 are at rest.
+        let t0 = arm.done_at(0.0) + 0.1;
         arm.set_speed(percent);
         let from = arm.kinematics().fk_xyzypr(&q0);
         let mut to = from;

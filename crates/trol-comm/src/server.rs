@@ -41,6 +41,10 @@ pub enum ServerEvent {
     /// (re)started after the PC first sent it, and whether its earlier run executed it cannot
     /// be told. It was not run; the reply is TROL_ERR_ROBOT_UNSURE (docs/reliability.md).
     UnknownRepeat,
+    /// With the manual's LRC, a CAT1/CAT2 request without the REPEAT bit arrived under the
+    /// number of the request last executed: that request again, its REPEAT bit lost to noise.
+    /// It was not run; the reply is TROL_ERR_ROBOT_UNSURE (docs/reliability.md).
+    SuspectDuplicate,
     /// Nothing arrived in the time given.
     Idle,
     /// A request arrived and `execute` deferred its reply: send it with [`Server::respond`],
@@ -133,6 +137,7 @@ impl<P: Port> Server<P> {
         let mut attempts = 0u32;
         let answered_before = self.responder.repeats_answered();
         let mut unknown_repeat = false;
+        let mut duplicate = false;
         loop {
             let mut event = None;
             let until = if self.responder.in_transaction() {
@@ -153,8 +158,16 @@ impl<P: Port> Server<P> {
                     let reply = Reply::Code(TROL_ERR_ROBOT_UNSURE).encode();
                     self.responder.respond(&reply, now);
                 }
+                Some(ResponderEvent::Request) if self.responder.request_is_suspect_duplicate() => {
+                    duplicate = true;
+                    let reply = Reply::Code(TROL_ERR_ROBOT_UNSURE).encode();
+                    self.responder.respond(&reply, now);
+                }
                 Some(ResponderEvent::Done) if unknown_repeat => {
                     return Ok(ServerEvent::UnknownRepeat);
+                }
+                Some(ResponderEvent::Done) if duplicate => {
+                    return Ok(ServerEvent::SuspectDuplicate);
                 }
                 Some(ResponderEvent::Request) => {
                     let pci = self.responder.request_pci();

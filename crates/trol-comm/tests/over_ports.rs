@@ -639,3 +639,63 @@ fn a_controller_that_restarted_never_runs_a_repeat_it_cannot_place() {
     // The move ran once (before the restart), "next" once.
     assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 2);
 }
+
+/// With the manual's LRC the REPEAT bit can be lost to noise the check lets through; a
+/// CAT1/CAT2 request without it under the number of the request last executed is then that
+/// request again, and must not run twice: the controller answers TROL_ERR_ROBOT_UNSURE and
+/// runs nothing (docs/reliability.md, "LRC"). Here a host that starts anew sends its first
+/// request under the number the controller executed last, which is what such a request looks
+/// like. With CRC-16, which protects the bit, the same request runs (a host that restarted is
+/// never refused).
+#[test]
+fn with_the_lrc_a_lost_repeat_bit_never_runs_a_request_twice() {
+    use trol_proto::link::BlockCheck;
+    for check in [BlockCheck::Lrc, BlockCheck::Crc16] {
+        let cfg = LinkConfig {
+            check,
+            ..quick_link()
+        };
+        let (a, b) = memory::pair(None);
+        let runs = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
+        let counted = runs.clone();
+        let controller = std::thread::spawn(move || {
+            let mut server = Server::new(b, cfg);
+            let mut events = Vec::new();
+            let started = Instant::now();
+            while events.len() < 2 && started.elapsed() < Duration::from_secs(20) {
+                let ev = server
+                    .serve(Duration::from_millis(100), &mut |req| {
+                        counted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                        execute(req)
+                    })
+                    .unwrap();
+                if ev != ServerEvent::Idle {
+                    events.push(ev);
+                }
+            }
+            events
+        });
+        let mut first = Transactor::new(a, cfg);
+        assert_eq!(first.trans_sr(b"mi 0.5").unwrap(), b"5.0 im");
+        // The same number (1) again, without the REPEAT bit.
+        let mut again = Transactor::new(first.into_port(), cfg);
+        let reply = again.trans_sr(b"mi 0.5").unwrap();
+        let events = controller.join().unwrap();
+        if check == BlockCheck::Lrc {
+            let unsure = trol_proto::application::Reply::Code(
+                trol_proto::application::code::TROL_ERR_ROBOT_UNSURE,
+            )
+            .encode();
+            assert_eq!(reply, unsure);
+            assert_eq!(
+                events,
+                [ServerEvent::Executed, ServerEvent::SuspectDuplicate]
+            );
+            assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 1);
+        } else {
+            assert_eq!(reply, b"5.0 im");
+            assert_eq!(events, [ServerEvent::Executed, ServerEvent::Executed]);
+            assert_eq!(runs.load(std::sync::atomic::Ordering::SeqCst), 2);
+        }
+    }
+}

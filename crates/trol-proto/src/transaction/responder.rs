@@ -92,6 +92,23 @@ impl Responder {
         self.manual.is_none() && pci_is_repeat(self.request_pci) && self.memory.is_none()
     }
 
+    /// Whether the request in hand, with the manual's LRC, is a motion or another CAT1/CAT2
+    /// command that is not marked REPEAT yet carries the number of the request last executed:
+    /// the host numbers each new request anew, so it is that request again with its REPEAT
+    /// bit lost to noise the LRC let through (a relative move would run twice). It must not
+    /// run; the server answers TROL_ERR_ROBOT_UNSURE. CRC-16 protects the bit; a controller
+    /// without memory (the manual's layer 3) cannot tell.
+    pub fn request_is_suspect_duplicate(&self) -> bool {
+        self.manual.is_none()
+            && self.link.config().check == crate::link::BlockCheck::Lrc
+            && !pci_is_repeat(self.request_pci)
+            && self.request.first().is_some_and(|code| *code < 128)
+            && self
+                .memory
+                .as_ref()
+                .is_some_and(|(n, _)| *n == pci_number(self.request_pci))
+    }
+
     /// Forget the last executed request (the manual's behaviour: every request executes).
     pub fn forget(&mut self) {
         self.memory = None;

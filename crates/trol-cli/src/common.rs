@@ -41,6 +41,26 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The configuration file `config` names (else $TROL_CONFIG, else ./trol.cfg), and where it
+/// came from; without one the defaults, with no note (for the utilities that do not connect:
+/// `trol sim`, `trol ports`).
+pub fn config_file(
+    config: Option<PathBuf>,
+) -> Result<(Config, trol::config::ConfigSource), String> {
+    use trol::config::ConfigSource;
+    let source = match config {
+        Some(p) => ConfigSource::Named(p),
+        None => Config::locate(),
+    };
+    let cfg = match &source {
+        ConfigSource::Named(p) | ConfigSource::Found(p) => {
+            Config::from_file(p).map_err(|e| e.to_string())?
+        }
+        ConfigSource::Defaults => Config::default(),
+    };
+    Ok((cfg, source))
+}
+
 impl Conn {
     /// trol.cfg with the flags applied. A missing default trol.cfg means the defaults (port
     /// `sim`); a missing file named by --config or $TROL_CONFIG is an error.

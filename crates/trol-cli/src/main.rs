@@ -160,14 +160,7 @@ fn man(out: &std::path::Path) -> Result<(), String> {
 
 fn ports(config: Option<std::path::PathBuf>) -> Result<(), String> {
     // The port trol.cfg names, pointed out in the list (or named after it).
-    let conn = common::Conn {
-        config,
-        port: None,
-        baud: None,
-        time_scale: None,
-        locations: None,
-    };
-    let (cfg, source) = conn.config_with_source()?;
+    let (cfg, source) = common::config_file(config)?;
     let configured = match source {
         trol::config::ConfigSource::Defaults => None,
         found => Some((cfg.port, cfg.baud, found)),

@@ -144,14 +144,7 @@ struct Resolved {
 /// ./trol.cfg; none: the defaults), as every subcommand reads it. Relative files in trol.cfg
 /// are its folder's.
 fn resolve(mut a: SimArgs) -> Result<SimArgs, String> {
-    let conn = crate::common::Conn {
-        config: a.config.clone(),
-        port: None,
-        baud: None,
-        time_scale: None,
-        locations: None,
-    };
-    let (cfg, source) = conn.config_with_source()?;
+    let (cfg, source) = crate::common::config_file(a.config.clone())?;
     let from =
         (!matches!(source, trol::config::ConfigSource::Defaults)).then(|| source.to_string());
     a.r = Resolved {
@@ -338,6 +331,10 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             ServerEvent::ReceiveFailed(err) => {
                 say!("a request could not be received: {err}")
             }
+            ServerEvent::SuspectDuplicate => say!(
+                "{req} -> {reply} (the last request's number again without the REPEAT bit: \
+                 with the LRC, that request repeated with its bit damaged; not run again)"
+            ),
             ServerEvent::UnknownRepeat => say!(
                 "{req} -> {reply} (a repeat of a request sent before this controller started: \
                  whether it ran before cannot be told, so it was not run)"

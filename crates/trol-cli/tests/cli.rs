@@ -1648,6 +1648,23 @@ fn sim_and_ports_read_trol_cfg_like_every_subcommand() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{err}");
     assert!(out.contains("/dev/ttyUSB7 (baud 9600)"), "{out}");
+    // Without a trol.cfg: no note on either stream (--mars --print-profile prints and
+    // exits), and nothing about trol.cfg while serving.
+    let bare = scratch("sim-no-config");
+    let o = trol(&bare, &["sim", "--mars", "--print-profile"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        !err.contains("trol.cfg") && !out.contains("trol.cfg"),
+        "{out}\n{err}"
+    );
+    let sim = Background::start(
+        &bare,
+        &["sim", "--port", "listen://127.0.0.1:0"],
+        "serving on ",
+    );
+    let lines = sim.wait_for("activate it with", 10);
+    assert!(!lines.join("\n").contains("trol.cfg"), "{lines:?}");
 }
 
 /// A serial port another program holds is named with its holder, on `trol init` and the

@@ -18,6 +18,8 @@ import pytest
 
 import trol
 
+from conftest import trol_binary
+
 ROOT = Path(__file__).resolve().parents[3]
 HALF_PI = math.pi / 2
 
@@ -415,3 +417,35 @@ def test_the_getstatus_method_knows_which_call_a_status_belongs_to(sim_robot: tr
     n = sim_robot.last_transaction()
     sim_robot.status()  # a transaction of its own: the status still belongs to the joint
     assert sim_robot.status_record()[:3] == (True, 0, n)
+
+
+def test_a_1998_controller_is_driven_and_the_program_is_told_once() -> None:
+    """A controller that speaks only the manual's protocol (`trol sim --manual`): after `trol
+    init` falls back to the manual's activation, Python drives it with nothing configured,
+    and says once (a UserWarning) what that costs: no repeats, the manual's GetStatus."""
+    proc = subprocess.Popen(
+        [str(trol_binary()), "sim", "--manual", "--time-scale", "50"],
+        stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        port = line.split("serving on ", 1)[1].split()[0]
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
+        init = subprocess.run([str(trol_binary()), "init", "--port", port],
+                              capture_output=True, text=True, cwd="/")
+        assert init.returncode == 0, init.stderr
+        assert "speaks only the manual's protocol" in init.stdout
+        with pytest.warns(UserWarning, match="speaks only the manual's protocol"):
+            robot = trol.Robot.open(port, baud=9600)
+        with robot:
+            robot.home(0)
+            robot.finish()
+            robot.joint(1, 0.25)
+            robot.finish()
+            assert abs(robot.joints()[0] - 0.25) < 1e-6
+            bios_called, last, transaction, epoch = robot.status_record()
+            assert (bios_called, last, transaction, epoch) == (True, 0, 0, 0)
+    finally:
+        proc.kill()
+        proc.wait()

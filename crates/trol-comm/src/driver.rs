@@ -49,7 +49,7 @@ pub type TraceFn = Box<dyn FnMut(Direction, &[u8], Instant) + Send>;
 const IDLE_POLL: Duration = Duration::from_millis(50);
 
 /// How late past a timer a read must return for its process to count as stopped meanwhile
-/// (docs/reliability.md, "A controller that freezes").
+/// (docs/reliability.md, "What each fault ends in": the controller freezes).
 pub const THAWED: Duration = Duration::from_millis(500);
 
 /// Runs state machines over one port.

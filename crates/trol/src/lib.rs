@@ -166,7 +166,7 @@ pub fn check_server(robot: &mut Robot) -> Result<()> {
     // controller (LRC) and TROL's default (CRC-16) do; a noisy line or another baud rate can
     // do the same.
     let damaged = matches!(&e, Error::Link { error, .. } if refused_every_block(error));
-    if damaged && robot.check_is_auto() {
+    if damaged && robot.tried_lrc() {
         return Err(Error::Setup(SetupError::NoServer(format!(
             "the controller refused every block this end sent as damaged ({e}), checked with \
              CRC-16 and with the manual's LRC: the line is noisy, or the baud rate differs"

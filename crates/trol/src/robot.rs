@@ -272,6 +272,8 @@ pub struct Robot {
     check_auto: bool,
     /// A transaction went through with the block check in use.
     check_settled: bool,
+    /// A request was tried with the manual's LRC after CRC-16's blocks were refused.
+    lrc_tried: bool,
     /// The application chose the repeats ([`Robot::set_repeats`]): the handshake keeps them.
     repeats_set: bool,
     /// The controller speaks only the manual's protocol (its GetStatus is the manual's).
@@ -598,6 +600,7 @@ impl Robot {
             kept: Vec::new(),
             check_auto: false,
             check_settled: false,
+            lrc_tried: false,
             repeats_set: false,
             manual_peer: false,
             notice: None,
@@ -742,6 +745,7 @@ impl Robot {
         // after a failure"). An ENQ before that would go unanswered.
         let t = crc.timeouts;
         std::thread::sleep(t.start + t.reset + t.reset / 2);
+        self.lrc_tried = true;
         self.set_check(BlockCheck::Lrc);
         let _ = self.transactor.driver_mut().port_mut().flush_input();
         let result = self.transactor.trans_sr(request);
@@ -759,6 +763,11 @@ impl Robot {
     /// Whether no block check was named, so CRC-16 may fall back to the manual's LRC.
     pub(crate) fn check_is_auto(&self) -> bool {
         self.check_auto
+    }
+
+    /// Whether a request was tried with the manual's LRC after CRC-16's were refused.
+    pub(crate) fn tried_lrc(&self) -> bool {
+        self.lrc_tried
     }
 
     pub(crate) fn set_check(&mut self, check: BlockCheck) {

@@ -25,7 +25,6 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use trol::{PosMode, Robot, Tag};
 use trol_a465::arm::ArmSettings;
-use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp};
 use trol_port::faulty::{FaultConfig, FaultInjector};
 use trol_port::{Port, memory};
@@ -114,6 +113,9 @@ pub struct Report {
     /// Relative moves that failed with TROL_ERR_COMM but ran (the API's failure is then
     /// ambiguous, and GetStatus tells).
     pub failed_but_ran: u64,
+    /// Requests the controller ran that its log does not show (every execution must be
+    /// logged, whatever became of its reply).
+    pub unlogged_executions: u64,
     /// Soak: the process's resident memory at the start and the end, kB.
     pub rss_start_kb: Option<u64>,
     pub rss_end_kb: Option<u64>,
@@ -280,13 +282,9 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     if !soak {
         let log = executed.clone();
         controller.set_log(Box::new(move |e| {
-            let ran = matches!(
-                e.event,
-                ServerEvent::Executed
-                    | ServerEvent::ReplyFailed(_)
-                    | ServerEvent::ReplyTooLong { .. }
-            );
-            if ran && let Ok(mut l) = log.lock() {
+            if e.executed
+                && let Ok(mut l) = log.lock()
+            {
                 l.push(Execution {
                     request: e.request.to_vec(),
                     reply: e.reply.to_vec(),
@@ -298,6 +296,7 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     let flag = stop.clone();
     let server = std::thread::spawn(move || {
         let _ = controller.run(&flag);
+        controller
     });
 
     let noise = |seed| FaultConfig {
@@ -458,7 +457,11 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     std::thread::sleep(Duration::from_millis(200));
     stop.store(true, Ordering::SeqCst);
     drop(robot);
-    let _ = server.join();
+    let handled = server
+        .join()
+        .map_err(|_| "the controller's thread panicked")?
+        .pcp_mut()
+        .handled();
     report.flipped_bits = flipped.load(Ordering::Relaxed);
     if plan.mode == FaultMode::Cut {
         report.cut_ms = plan.cut_length.as_millis() as u64;
@@ -468,6 +471,7 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     report.seconds = started.elapsed().as_secs_f64();
     if !soak {
         let executed = std::mem::take(&mut *executed.lock().map_err(|_| "poisoned")?);
+        report.unlogged_executions = handled.saturating_sub(executed.len() as u64);
         line_up(&asked, &executed, &mut report);
     }
     Ok(report)
@@ -537,8 +541,10 @@ fn line_up(asked: &[Asked], executed: &[Execution], report: &mut Report) {
             // Each one is worth a look: what was asked, what was taken, what ran.
             tell!(
                 "a reply the controller never sent was accepted: request {:02x?}, accepted \
-                 {got:02x?}, the controller's replies to those bytes {ran:02x?}",
-                a.request
+                 {got:02x?}, the controller's {} replies to those bytes (the first 3) {:02x?}",
+                a.request,
+                ran.len(),
+                &ran[..ran.len().min(3)]
             );
         }
         if a.relative {

@@ -387,13 +387,15 @@ fn faults(a: FaultsArgs) -> Result<(), String> {
         }
         t += &format!(
             "  corrupted requests executed: {}\n  corrupted replies accepted: {}\n  \
-             relative moves: {}, lost {}, repeated {}, failed but ran {}",
+             relative moves: {}, lost {}, repeated {}, failed but ran {}\n  \
+             executions the controller's log misses: {}",
             r.corrupted_requests_executed,
             r.corrupted_replies_accepted,
             r.relative_moves,
             r.lost_moves,
             r.repeated_moves,
-            r.failed_but_ran
+            r.failed_but_ran,
+            r.unlogged_executions
         );
         t
     })

@@ -1,8 +1,8 @@
 //! Short, seeded runs of `trol bench faults` (the full runs and their figures are in
 //! docs/reliability.md): over a noisy line (BER 1e-3) and a line cut at a random byte of
 //! every relative move, no corrupted request is executed, no corrupted reply is accepted,
-//! and no relative move is lost or runs twice, with the API's repeats and with the manual's
-//! GetStatus method.
+//! no relative move is lost or runs twice, and the controller's log holds every request it
+//! ran, with the API's repeats and with the manual's GetStatus method.
 
 mod common;
 
@@ -25,6 +25,7 @@ fn assert_nothing_wrong(r: &serde_json::Value) {
         "corrupted_replies_accepted",
         "lost_moves",
         "repeated_moves",
+        "unlogged_executions",
     ] {
         assert_eq!(n(r, key), 0, "{key}: {r:#}");
     }

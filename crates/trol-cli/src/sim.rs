@@ -328,6 +328,9 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             ServerEvent::ReplyTooLong { len } => {
                 say!("{req} -> a reply of {len} bytes, too long to send")
             }
+            ServerEvent::ReceiveFailed(err) if e.executed => {
+                say!("{req} -> {reply} (ran; then a request could not be received: {err})")
+            }
             ServerEvent::ReceiveFailed(err) => {
                 say!("a request could not be received: {err}")
             }

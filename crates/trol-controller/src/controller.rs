@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use trol_comm::{Server, ServerEvent};
 use trol_port::Port;
 use trol_proto::application::Catalog;
-use trol_proto::link::LinkConfig;
+use trol_proto::link::{LinkConfig, LinkError, SendError};
 
 use crate::backend::{Backend, SharedReport};
 use crate::pcp::{Handled, Pcp};
@@ -33,6 +33,10 @@ pub struct LogEntry<'a> {
     pub reply: &'a [u8],
     /// How the transaction ended.
     pub event: ServerEvent,
+    /// Whether the PCP server ran the request (answered it from its dispatch tables):
+    /// true for every request it executed, whatever happened to the reply afterwards, so a
+    /// log that counts these counts every execution.
+    pub executed: bool,
     /// The backend's word on its world (a simulator's objects), if it has one.
     pub world: Option<String>,
 }
@@ -62,6 +66,8 @@ pub struct Controller<P, B> {
     log: Option<LogFn>,
     /// The last request and its reply, for the log.
     last: (Vec<u8>, Vec<u8>),
+    /// Whether the PCP server ran a request not yet logged.
+    ran: bool,
     /// When the last transaction arrived (or a long one was still under way).
     last_seen: Instant,
     /// Whether the watchdog has halted the arm since the last transaction.
@@ -82,6 +88,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
             terminal: Terminal::default(),
             log: None,
             last: (Vec::new(), Vec::new()),
+            ran: false,
             last_seen: Instant::now(),
             tripped: false,
             trip: None,
@@ -200,41 +207,22 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 }
             }
             Mode::Server => {
-                let ev = if self.pcp.is_pending() {
-                    // A long call: ask the backend between short waits on the line, so the
-                    // thread never sleeps inside the backend.
-                    match self.pcp.poll() {
-                        Some(reply) => {
-                            self.server.respond(&reply);
-                            self.last.1 = reply;
-                            self.server.serve(slice, &mut |_| Vec::new())?
+                let ev = match self.serve_one(slice) {
+                    Ok(Some(ev)) => ev,
+                    Ok(None) => return Ok(()),
+                    Err(e) => {
+                        // The port failed under a request that ran: its log entry still
+                        // comes, so that the log holds every execution.
+                        if self.ran {
+                            self.log_transaction(ServerEvent::ReplyFailed(LinkError::Send(
+                                SendError::Port,
+                            )));
                         }
-                        None => {
-                            // A long call under way counts as a transaction for the watchdog.
-                            self.last_seen = Instant::now();
-                            self.refresh_report();
-                            self.server.wait(POLL.min(slice))?;
-                            return Ok(());
-                        }
+                        return Err(e);
                     }
-                } else {
-                    let pcp = &mut self.pcp;
-                    let last = &mut self.last;
-                    self.server.serve_deferrable(slice, &mut |req, pci| {
-                        last.0 = req.to_vec();
-                        last.1.clear();
-                        pcp.set_transaction(trol_proto::transaction::pci_number(pci));
-                        match pcp.handle(req) {
-                            Handled::Reply(reply) => {
-                                last.1 = reply.clone();
-                                Some(reply)
-                            }
-                            Handled::Pending => None,
-                        }
-                    })?
                 };
                 // A request that arrived whole feeds the watchdog; noise on the line does not.
-                if !matches!(ev, ServerEvent::Idle | ServerEvent::ReceiveFailed(_)) {
+                if !matches!(ev, ServerEvent::Idle | ServerEvent::ReceiveFailed(_)) || self.ran {
                     self.last_seen = Instant::now();
                     self.tripped = false;
                 }
@@ -245,16 +233,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     self.pcp.backend_mut().after_request();
-                    if let Some(log) = self.log.as_mut() {
-                        let world = self.pcp.backend_mut().world();
-                        log(&LogEntry {
-                            catalog: self.pcp.catalog(),
-                            request: &self.last.0,
-                            reply: &self.last.1,
-                            event: ev,
-                            world,
-                        });
-                    }
+                    self.log_transaction(ev);
                 }
                 if self.pcp.take_terminate() {
                     self.mode = Mode::Terminal;
@@ -266,6 +245,60 @@ impl<P: Port, B: Backend> Controller<P, B> {
             }
         }
         Ok(())
+    }
+
+    /// Serve one transaction's worth in server mode: its event, or `None` while a long
+    /// call is still under way.
+    fn serve_one(&mut self, slice: Duration) -> std::io::Result<Option<ServerEvent>> {
+        if self.pcp.is_pending() {
+            // A long call: ask the backend between short waits on the line, so the thread
+            // never sleeps inside the backend.
+            let Some(reply) = self.pcp.poll() else {
+                // A long call under way counts as a transaction for the watchdog.
+                self.last_seen = Instant::now();
+                self.refresh_report();
+                self.server.wait(POLL.min(slice))?;
+                return Ok(None);
+            };
+            // The deferred reply goes out; serving below ends its transaction (a request
+            // that arrived meanwhile is run as any other, never answered blindly).
+            self.server.respond(&reply);
+            self.last.1 = reply;
+        }
+        let pcp = &mut self.pcp;
+        let last = &mut self.last;
+        let ran = &mut self.ran;
+        self.server
+            .serve_deferrable(slice, &mut |req, pci| {
+                last.0 = req.to_vec();
+                last.1.clear();
+                *ran = true;
+                pcp.set_transaction(trol_proto::transaction::pci_number(pci));
+                match pcp.handle(req) {
+                    Handled::Reply(reply) => {
+                        last.1 = reply.clone();
+                        Some(reply)
+                    }
+                    Handled::Pending => None,
+                }
+            })
+            .map(Some)
+    }
+
+    /// Tell the log hook how the transaction ended (whether its request ran included).
+    fn log_transaction(&mut self, event: ServerEvent) {
+        let executed = std::mem::take(&mut self.ran);
+        if let Some(log) = self.log.as_mut() {
+            let world = self.pcp.backend_mut().world();
+            log(&LogEntry {
+                catalog: self.pcp.catalog(),
+                request: &self.last.0,
+                reply: &self.last.1,
+                event,
+                executed,
+                world,
+            });
+        }
     }
 
     /// Run until `stop` is set.

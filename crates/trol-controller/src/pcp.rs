@@ -153,6 +153,8 @@ pub struct Pcp<B> {
     /// This server speaks only the manual's protocol (a 1998 controller, simulated): the
     /// added commands are unknown, GetStatus has the manual's 4 bytes.
     manual_only: bool,
+    /// Requests run so far ([`Pcp::handle`] calls).
+    handled: u64,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -178,6 +180,7 @@ impl<B: Backend> Pcp<B> {
             watchdog: None,
             manual_host: false,
             manual_only: false,
+            handled: 0,
         };
         for def in table::BUILTIN {
             let handler = match def.class() {
@@ -286,6 +289,12 @@ impl<B: Backend> Pcp<B> {
         std::mem::take(&mut self.terminate)
     }
 
+    /// How many requests this server has run ([`Pcp::handle`] calls, refused ones included):
+    /// what a log that counts every execution must add up to.
+    pub fn handled(&self) -> u64 {
+        self.handled
+    }
+
     /// Whether a reply waits for the arm to be idle.
     pub fn is_pending(&self) -> bool {
         self.pending.is_some()
@@ -293,6 +302,7 @@ impl<B: Backend> Pcp<B> {
 
     /// MsgReceived: execute a request; its reply, or [`Handled::Pending`].
     pub fn handle(&mut self, request: &[u8]) -> Handled {
+        self.handled += 1;
         let code = request.first().copied();
         let class = code.map(Class::of);
         let (def, values) = match self.catalog.decode(request) {

@@ -1352,3 +1352,111 @@ fn a_thawed_controller_drops_the_request_its_host_gave_up_on() {
     );
     assert!((j[1] - 0.1).abs() < 1e-6);
 }
+
+/// A controller port that fails (an I/O error, as a pty whose other end is gone) on the next
+/// reply it starts (its ENQ) once `broken` is set: the request has been received and run.
+struct BreaksOnReply<P> {
+    inner: P,
+    broken: Arc<AtomicBool>,
+}
+
+impl<P: Port> Port for BreaksOnReply<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        if bytes.first() == Some(&trol_proto::link::control::ENQ)
+            && self.broken.load(Ordering::SeqCst)
+        {
+            return Err(io::Error::new(
+                io::ErrorKind::BrokenPipe,
+                "the line is gone",
+            ));
+        }
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        self.inner.recv(buf, deadline)
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "breaks on reply".into()
+    }
+}
+
+/// The controller's log holds every request it ran (issue 26, item 5), also one whose reply
+/// could not go out because the line failed under it: the entry says it ran, and the count
+/// of entries that ran equals the count of requests the PCP server ran.
+#[test]
+fn the_log_holds_every_execution_even_when_the_line_fails_under_the_reply() {
+    use trol_comm::ServerEvent;
+    use trol_controller::{Controller, Mode};
+    use trol_proto::link::{LinkError, SendError};
+    let (host, ctl) = trol_port::memory::pair(None);
+    let broken = Arc::new(AtomicBool::new(false));
+    let port = BreaksOnReply {
+        inner: ctl,
+        broken: broken.clone(),
+    };
+    let mut controller = Controller::new(
+        port,
+        quick(),
+        Pcp::new(SimBackend::new(settings())),
+        Mode::Server,
+    );
+    type Logged = (Vec<u8>, ServerEvent, bool);
+    let log: Arc<std::sync::Mutex<Vec<Logged>>> = Arc::default();
+    let sink = log.clone();
+    controller.set_log(Box::new(move |e| {
+        sink.lock()
+            .unwrap()
+            .push((e.request.to_vec(), e.event, e.executed));
+    }));
+    let server = std::thread::spawn(move || {
+        let failed = loop {
+            if let Err(e) = controller.step(Duration::from_millis(20)) {
+                break e;
+            }
+        };
+        (controller, failed)
+    });
+    let mut robot = Robot::over(Box::new(host), quick(), None);
+    robot.set_reply_timeout_tenths(5).unwrap();
+    robot.home(0).unwrap();
+    let Location::Joint(before) = robot.position(Tag::Joint, PosMode::Commanded).unwrap() else {
+        panic!("a joint position")
+    };
+    broken.store(true, Ordering::SeqCst);
+    let e = robot.joint(1, 0.1).unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_COMM, "{e}");
+    let (mut controller, failed) = server.join().unwrap();
+    assert_eq!(failed.kind(), io::ErrorKind::BrokenPipe);
+    let log = log.lock().unwrap();
+    let ran: Vec<_> = log.iter().filter(|(_, _, ran)| *ran).collect();
+    assert_eq!(
+        ran.len() as u64,
+        controller.pcp_mut().handled(),
+        "every request run is logged: {log:?}"
+    );
+    let (request, event, _) = ran.last().unwrap();
+    assert_eq!(
+        request.first(),
+        Some(&trol_proto::application::table::JOINT.code)
+    );
+    assert_eq!(
+        *event,
+        ServerEvent::ReplyFailed(LinkError::Send(SendError::Port))
+    );
+    // And it did run: the arm took the joint's new target.
+    let target = controller
+        .pcp_mut()
+        .backend_mut()
+        .arm()
+        .planned_at(f64::MAX);
+    assert!(
+        (target[0] - before[0] - 0.1).abs() < 1e-6,
+        "{before:?} -> {target:?}"
+    );
+}

@@ -18,7 +18,7 @@ use crate::model::{
     self, READY, counts_to_joints, first_outside_limits, joints_to_counts, max_accels, max_speeds,
     snap_to_limits,
 };
-use crate::motion::{Path, Profile};
+use crate::motion::{Path, Profile, Stretch};
 
 /// The simulated BIOS's return values (ours; the real ones are in CRS's technical manual,
 /// which is not public).
@@ -168,6 +168,14 @@ const LINE_TOLERANCE_MM: f64 = 0.01;
 const LINE_TOLERANCE_RAD: f64 = 1e-4;
 /// Most samples a straight line may need.
 const LINE_MAX_SAMPLES: usize = 200_000;
+/// Stretches of the time grid per segment of a straight line's spline ([`Profile::along`]).
+const LINE_PIECES: usize = 4;
+/// The longest a straight line may take, as a multiple of the least time it needs (its
+/// joints' joint-interpolated move between the same ends, or its length at the linear
+/// limits, whichever is longer): a line that needs more passes too near a singular pose,
+/// where the wrist would have to turn far faster than the tool moves, and is refused with
+/// SINGULAR_PATH before anything moves (docs/a465.md, "Straight lines").
+pub const LINE_MAX_FACTOR: f64 = 20.0;
 
 /// A motion: a path and its profile in time.
 #[derive(Clone, Debug)]
@@ -245,7 +253,8 @@ impl Fingers {
     fn at(&self, t: f64) -> f64 {
         let d = self.to - self.from;
         let dt = (t - self.start).max(0.0);
-        if d.abs() <= FINGER_SPEED * dt {
+        // At done_at exactly the end, whatever the rounding of start + d / speed.
+        if t >= self.done_at() || d.abs() <= FINGER_SPEED * dt {
             self.to
         } else {
             self.from + d.signum() * FINGER_SPEED * dt
@@ -733,27 +742,60 @@ impl Arm {
                 return code::BELOW_TABLE;
             }
         }
-        self.push(Path::Joint { from, to }, None, now);
+        self.push(Path::Joint { from, to }, now);
         code::OK
     }
 
-    /// Queue a motion along `path`, timed by the joint limits at the speed setting (and, for
-    /// a straight line of `line_mm`, the tool's linear limits).
-    fn push(&mut self, path: Path, line_mm: Option<f64>, now: f64) {
+    /// Queue a motion along `path`, timed by the joint limits at the speed setting.
+    fn push(&mut self, path: Path, now: f64) {
         let (speeds, accels) = joint_limits(self.speed);
-        let (mut v, mut a) = path.bounds().limits(&speeds, &accels);
-        if let Some(l) = line_mm.filter(|l| *l > 0.0) {
-            let f = self.speed.clamp(1.0, 100.0) / 100.0;
-            v = v.min(MAX_LINEAR_SPEED * f / l);
-            a = a.min(MAX_LINEAR_ACCEL * f / l);
-        }
+        let (v, a) = path.bounds().limits(&speeds, &accels);
         let start = self.planned_start_time(now);
         let profile = Profile::trapezoid(start, v, a, 0.0);
+        self.push_timed(path, profile);
+    }
+
+    fn push_timed(&mut self, path: Path, profile: Profile) {
         self.motions.push_back(Motion {
             profile,
             path,
             homes: None,
         });
+    }
+
+    /// The tool's linear limits at the speed setting: (mm/s, mm/s²).
+    fn linear_limits(&self) -> (f64, f64) {
+        let f = self.speed.clamp(1.0, 100.0) / 100.0;
+        (MAX_LINEAR_SPEED * f, MAX_LINEAR_ACCEL * f)
+    }
+
+    /// A straight line's path of `length` mm timed along it ([`Profile::along`]) from
+    /// `start`, within the joint limits at the speed setting and the tool's linear limits.
+    fn line_profile(&self, path: &Path, length: f64, start: f64) -> Profile {
+        let (speeds, accels) = joint_limits(self.speed);
+        let linear = Some((length, self.linear_limits()));
+        let stretches = path
+            .pieces(LINE_PIECES)
+            .iter()
+            .map(|(s0, s1, b)| Stretch::new(*s0, *s1, b, &speeds, &accels, linear))
+            .collect();
+        Profile::along(start, stretches)
+    }
+
+    /// The least time a straight line from `from` to `to` (joints) of `length` mm needs: the
+    /// joint-interpolated move between its ends at the speed setting, or its length at the
+    /// tool's linear limits, whichever takes longer.
+    pub fn line_least_time(&self, from: Joints, to: Joints, length: f64) -> f64 {
+        let (speeds, accels) = joint_limits(self.speed);
+        let (v, a) = Path::Joint { from, to }.bounds().limits(&speeds, &accels);
+        let joints = Profile::trapezoid(0.0, v, a, 0.0).end();
+        let (lv, la) = self.linear_limits();
+        let linear = if length > 0.0 {
+            Profile::trapezoid(0.0, lv / length, la / length, 0.0).end()
+        } else {
+            0.0
+        };
+        joints.max(linear)
     }
 
     /// Accept a straight-line motion of the tool centre point to `to`, orientation
@@ -783,7 +825,13 @@ impl Arm {
             return code::JOINT_LIMIT;
         }
         let length = (to.pos - from.pos).length();
-        self.push(path, Some(length), now);
+        let start = self.planned_start_time(now);
+        let profile = self.line_profile(&path, length, start);
+        let least = self.line_least_time(q0, path.at(1.0), length);
+        if profile.end() - start > LINE_MAX_FACTOR * least {
+            return code::SINGULAR_PATH;
+        }
+        self.push_timed(path, profile);
         code::OK
     }
 

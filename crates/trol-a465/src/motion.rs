@@ -14,7 +14,11 @@
 //! ```
 //!
 //! so choosing V and A from these bounds keeps every joint within its limits at every
-//! instant, not only at the samples.
+//! instant, not only at the samples. A joint path is timed by one trapezoid within V and A
+//! ([`Profile::trapezoid`]); a straight line's spline by the same bounds taken stretch by
+//! stretch, each stretch as fast as its own bounds allow ([`Profile::along`]).
+
+use std::sync::Arc;
 
 use crate::kinematics::Joints;
 
@@ -34,11 +38,112 @@ struct Phase {
 /// s(t): phases of constant acceleration, from s = 0 at rest to the end at rest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Profile {
-    phases: Vec<Phase>,
+    /// Shared, so that copies of an arm (a view's, a test's) cost little.
+    phases: Arc<Vec<Phase>>,
     end: f64,
     s_end: f64,
-    /// The deceleration a stop may use (|s''| the limits allow).
-    brake: f64,
+    /// How a stop may decelerate.
+    brake: Brake,
+}
+
+/// How a stop decelerates along the path.
+#[derive(Clone, Debug, PartialEq)]
+enum Brake {
+    /// At one rate |s''| the limits allow anywhere on the path below the cruise speed.
+    Rate(f64),
+    /// As hard as each stretch of the path allows at the speed it goes (a profile timed
+    /// along the path, [`Profile::along`]).
+    Stretches(Arc<Vec<Stretch>>),
+}
+
+/// One constraint on a stretch of path: |s''| d1 + s'^2 d2 <= a (a joint's acceleration, with
+/// d1 and d2 the largest |q'(s)| and |q''(s)| on the stretch; or the tool's linear
+/// acceleration, with d1 the line's length and d2 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Limit {
+    a: f64,
+    d1: f64,
+    d2: f64,
+}
+
+/// The largest s'^2 of any stretch.
+const X_CEILING: f64 = 1e12;
+
+/// A stretch [s0, s1] of a path with what limits s' and s'' on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stretch {
+    s0: f64,
+    s1: f64,
+    /// The largest s'^2 on it (joint speeds, the linear speed, and s'' = 0 being possible).
+    x_max: f64,
+    limits: [Limit; 7],
+}
+
+impl Stretch {
+    /// A stretch with its derivative bounds `b`, under joint `speeds` and `accels`, and a
+    /// linear limit (`length` mm of line at `linear` = (mm/s, mm/s^2)) if it is a line.
+    pub fn new(
+        s0: f64,
+        s1: f64,
+        b: &Bounds,
+        speeds: &[f64; 6],
+        accels: &[f64; 6],
+        linear: Option<(f64, (f64, f64))>,
+    ) -> Stretch {
+        let mut limits = [Limit::default(); 7];
+        let mut x_max = f64::INFINITY;
+        for i in 0..6 {
+            limits[i] = Limit {
+                a: accels[i],
+                d1: b.d1[i],
+                d2: b.d2[i],
+            };
+            if b.d1[i] > 0.0 {
+                x_max = x_max.min((speeds[i] / b.d1[i]).powi(2));
+            }
+            if b.d2[i] > 0.0 {
+                x_max = x_max.min(accels[i] / b.d2[i]);
+            }
+        }
+        if let Some((length, (v, a))) = linear.filter(|(l, _)| *l > 0.0) {
+            limits[6] = Limit {
+                a,
+                d1: length,
+                d2: 0.0,
+            };
+            x_max = x_max.min((v / length).powi(2));
+        }
+        Stretch {
+            s0,
+            s1,
+            // Where nothing moves nothing limits s': a bound all the same, so that every
+            // figure stays finite (s' of 10^6 per second crosses any stretch at once).
+            x_max: x_max.min(X_CEILING),
+            limits,
+        }
+    }
+
+    /// The largest |s''| allowed at s'^2 = `x` (at most `x_max`).
+    fn accel(&self, x: f64) -> f64 {
+        self.limits
+            .iter()
+            .filter(|l| l.d1 > 0.0)
+            .map(|l| (l.a - l.d2 * x) / l.d1)
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0)
+    }
+
+    /// The largest s'^2 at one end of `len` of this stretch from which s'^2 = `x` at the
+    /// other end can be reached (accelerating from `x`, or braking down to it), the
+    /// acceleration taken at the faster end: the largest y with y - 2 len accel(y) <= x, at
+    /// most `x_max`.
+    fn reach(&self, x: f64, len: f64) -> f64 {
+        self.limits
+            .iter()
+            .filter(|l| l.d1 > 0.0)
+            .map(|l| (x + 2.0 * len * l.a / l.d1) / (1.0 + 2.0 * len * l.d2 / l.d1))
+            .fold(self.x_max, f64::min)
+    }
 }
 
 impl Profile {
@@ -92,25 +197,84 @@ impl Profile {
             },
         ];
         Profile {
-            phases,
+            phases: Arc::new(phases),
             end: start + 2.0 * ta + cruise,
             s_end: 1.0,
-            brake: a,
+            brake: Brake::Rate(a),
+        }
+    }
+
+    /// The fastest s(t) from s = 0 at rest to 1 at rest within the limits of each of
+    /// `stretches` (consecutive, covering 0..1), starting at `start`: time-optimal path
+    /// parameterization by reachability analysis (H. Pham, Q.-C. Pham, "A New Approach to
+    /// Time-Optimal Path Parameterization Based on Reachability Analysis", IEEE Transactions
+    /// on Robotics 34(3), 2018), on the stretches as its grid, with s'' constant on each. A
+    /// backward pass finds the fastest s'^2 at each grid point from which the end can still be
+    /// reached at rest; a forward pass accelerates as hard as allowed under it. Each
+    /// stretch's constraint uses the largest |q'| and |q''| on it and the larger s'^2 of its
+    /// ends, so the limits hold at every instant, not only at the grid points.
+    pub fn along(start: f64, stretches: Vec<Stretch>) -> Profile {
+        let n = stretches.len();
+        if n == 0 {
+            return Profile::still(start);
+        }
+        // Backward: the fastest s'^2 at each grid point that can still stop at s = 1.
+        let mut back = vec![0.0; n + 1];
+        for k in (0..n).rev() {
+            let st = &stretches[k];
+            let mut x = st.reach(back[k + 1], st.s1 - st.s0);
+            if k > 0 {
+                x = x.min(stretches[k - 1].x_max);
+            }
+            back[k] = x.max(0.0);
+        }
+        back[0] = 0.0;
+        // Forward: as fast as allowed under the backward pass.
+        let mut phases = Vec::with_capacity(n);
+        let (mut t, mut x) = (start, 0.0f64);
+        for (k, st) in stretches.iter().enumerate() {
+            let len = st.s1 - st.s0;
+            let next = st.reach(x, len).min(back[k + 1]).max(0.0);
+            let (v0, v1) = (x.sqrt(), next.sqrt());
+            let dt = if v0 + v1 > 0.0 {
+                2.0 * len / (v0 + v1)
+            } else {
+                0.0
+            };
+            if dt > 0.0 {
+                phases.push(Phase {
+                    t,
+                    s: st.s0,
+                    v: v0,
+                    a: (next - x) / (2.0 * len),
+                });
+            }
+            t += dt;
+            x = next;
+        }
+        if phases.is_empty() {
+            return Profile::still(start);
+        }
+        Profile {
+            phases: Arc::new(phases),
+            end: t,
+            s_end: 1.0,
+            brake: Brake::Stretches(Arc::new(stretches)),
         }
     }
 
     /// A profile that stays at s = 0 (an empty motion).
     pub fn still(start: f64) -> Profile {
         Profile {
-            phases: vec![Phase {
+            phases: Arc::new(vec![Phase {
                 t: start,
                 s: 0.0,
                 v: 0.0,
                 a: 0.0,
-            }],
+            }]),
             end: start,
             s_end: 0.0,
-            brake: 1.0,
+            brake: Brake::Rate(1.0),
         }
     }
 
@@ -148,8 +312,8 @@ impl Profile {
         (s, (p.v + p.a * dt).max(0.0))
     }
 
-    /// Stop as soon as the limits allow, from `t` on: decelerate at the braking rate until
-    /// at rest, along the same path. Returns the s where it comes to rest.
+    /// Stop as soon as the limits allow, from `t` on: decelerate as hard as the limits allow
+    /// until at rest, along the same path. Returns the s where it comes to rest.
     pub fn stop_at(&mut self, t: f64) -> f64 {
         if t >= self.end {
             return self.s_end;
@@ -157,21 +321,49 @@ impl Profile {
         let t = t.max(self.start());
         let (s, v) = self.at(t);
         let keep = self.phases.partition_point(|p| p.t <= t).max(1);
-        self.phases.truncate(keep);
-        if t > self.start() {
-            self.phases.push(Phase {
-                t,
-                s,
-                v,
-                a: -self.brake,
-            });
-        } else {
+        let phases = Arc::make_mut(&mut self.phases);
+        phases.truncate(keep);
+        if t <= phases[0].t {
             // Not started yet: it never will.
-            self.phases[0].a = 0.0;
+            phases[0].a = 0.0;
+            self.end = t;
+            self.s_end = 0.0;
+            return 0.0;
         }
-        let stop = v / self.brake;
-        self.end = t + stop;
-        self.s_end = (s + 0.5 * v * stop).min(self.s_end);
+        match &self.brake {
+            Brake::Rate(brake) => {
+                phases.push(Phase { t, s, v, a: -brake });
+                let stop = v / brake;
+                self.end = t + stop;
+                self.s_end = (s + 0.5 * v * stop).min(self.s_end);
+            }
+            Brake::Stretches(stretches) => {
+                // Stretch by stretch, as hard as each allows at the speed it is entered
+                // with (the fastest on it, as the speed only falls).
+                let (mut t, mut s, mut v) = (t, s, v);
+                let mut k = stretches.partition_point(|st| st.s1 <= s);
+                while v > 0.0 && k < stretches.len() {
+                    let st = &stretches[k];
+                    let brake = st.accel(v * v);
+                    phases.push(Phase { t, s, v, a: -brake });
+                    let left = st.s1 - s;
+                    if brake > 0.0 && v * v <= 2.0 * brake * left {
+                        // At rest within this stretch.
+                        t += v / brake;
+                        s += 0.5 * v * v / brake;
+                        v = 0.0;
+                    } else {
+                        let v1 = (v * v - 2.0 * brake * left).max(0.0).sqrt();
+                        t += 2.0 * left / (v + v1);
+                        s = st.s1;
+                        v = v1;
+                        k += 1;
+                    }
+                }
+                self.end = t;
+                self.s_end = s.min(self.s_end);
+            }
+        }
         self.s_end
     }
 }
@@ -328,6 +520,42 @@ impl Path {
         b
     }
 
+    /// The path cut into stretches, `per_segment` to each segment of a spline (one for a
+    /// joint path), each with the exact bounds of the derivatives on it: the grid of
+    /// [`Profile::along`].
+    pub fn pieces(&self, per_segment: usize) -> Vec<(f64, f64, Bounds)> {
+        let per = per_segment.max(1);
+        match self {
+            Path::Joint { .. } => vec![(0.0, 1.0, self.bounds())],
+            Path::Spline { s, q, m } => {
+                let mut out = Vec::with_capacity(s.len().saturating_sub(1) * per);
+                for k in 0..s.len().saturating_sub(1) {
+                    let h = s[k + 1] - s[k];
+                    for j in 0..per {
+                        let (ta, tb) = (j as f64 / per as f64, (j + 1) as f64 / per as f64);
+                        let mut b = Bounds::default();
+                        for i in 0..6 {
+                            let at =
+                                |t: f64| hermite(q[k][i], q[k + 1][i], m[k][i], m[k + 1][i], h, t);
+                            let (_, d1a, d2a) = at(ta);
+                            let (_, d1b, d2b) = at(tb);
+                            let mut d1 = d1a.abs().max(d1b.abs());
+                            // q' peaks inside where q'' (linear) crosses 0.
+                            if d2a * d2b < 0.0 {
+                                let t = ta + (tb - ta) * d2a / (d2a - d2b);
+                                d1 = d1.max(at(t).1.abs());
+                            }
+                            b.d1[i] = d1;
+                            b.d2[i] = d2a.abs().max(d2b.abs());
+                        }
+                        out.push((s[k] + h * ta, s[k] + h * tb, b));
+                    }
+                }
+                out
+            }
+        }
+    }
+
     /// The smallest and largest value of each joint over the whole path.
     pub fn range(&self) -> ([f64; 6], [f64; 6]) {
         let mut lo = [f64::INFINITY; 6];
@@ -421,6 +649,72 @@ mod tests {
         assert_eq!(p.at(p.end() + 1.0), (s_stop, 0.0));
         let (s_mid, _) = p.at(0.7 + v0 / 4.0);
         assert!(s_mid > s0 && s_mid < s_stop);
+    }
+
+    fn uniform(path: &Path, n: usize, speeds: &[f64; 6], accels: &[f64; 6]) -> Vec<Stretch> {
+        let b = path.bounds();
+        (0..n)
+            .map(|k| {
+                let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+                Stretch::new(s0, s1, &b, speeds, accels, None)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn timed_along_a_straight_joint_path_it_comes_close_to_the_trapezoid() {
+        let path = Path::Joint {
+            from: [0.0; 6],
+            to: [1.0, -0.5, 0.2, 0.0, 0.0, 0.3],
+        };
+        let (speeds, accels) = ([1.0; 6], [2.0; 6]);
+        let (v, a) = path.bounds().limits(&speeds, &accels);
+        let best = Profile::trapezoid(0.0, v, a, 0.0).end();
+        let p = Profile::along(0.0, uniform(&path, 400, &speeds, &accels));
+        assert!(p.end() >= best - 1e-9, "{} faster than {best}", p.end());
+        assert!(p.end() < best * 1.02, "{} against {best}", p.end());
+        assert_eq!(p.at(p.end()), (1.0, 0.0));
+        // Its speed and acceleration stay within the limits.
+        let dt = 1e-4;
+        let (mut t, mut prev) = (0.0, p.at(0.0));
+        while t < p.end() {
+            t += dt;
+            let now = p.at(t);
+            assert!(now.1 <= v * (1.0 + 1e-9), "s' {} > {v}", now.1);
+            assert!((now.1 - prev.1).abs() / dt <= a * 1.0001 + 1e-6);
+            prev = now;
+        }
+    }
+
+    #[test]
+    fn a_path_that_does_not_move_takes_no_time_and_stays_finite() {
+        let path = Path::Joint {
+            from: [0.3; 6],
+            to: [0.3; 6],
+        };
+        let mut p = Profile::along(2.0, uniform(&path, 8, &[1.0; 6], &[2.0; 6]));
+        assert!(p.end().is_finite() && p.end() - 2.0 < 1e-3, "{}", p.end());
+        let (s, v) = p.at(2.0 + 1e-9);
+        assert!(s.is_finite() && v.is_finite());
+        assert_eq!(p.at(p.end()), (1.0, 0.0));
+        assert!(p.stop_at(2.0 + 1e-9).is_finite());
+    }
+
+    #[test]
+    fn a_stop_along_stretches_brakes_within_each_stretchs_limit() {
+        let path = Path::Joint {
+            from: [0.0; 6],
+            to: [2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        };
+        let (speeds, accels) = ([1.0; 6], [2.0; 6]);
+        let mut p = Profile::along(0.0, uniform(&path, 100, &speeds, &accels));
+        let t = p.end() / 2.0;
+        let (s0, v0) = p.at(t);
+        let s_stop = p.stop_at(t);
+        // Joint 1 moves 2 rad per unit of s: s'' of at most 1 brakes it.
+        assert!((s_stop - (s0 + v0 * v0 / 2.0)).abs() < 1e-9, "{s_stop}");
+        assert!((p.end() - (t + v0)).abs() < 1e-9);
+        assert_eq!(p.at(p.end() + 1.0), (s_stop, 0.0));
     }
 
     #[test]

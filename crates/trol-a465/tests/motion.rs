@@ -7,7 +7,10 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use trol_a465::Joints;
-use trol_a465::arm::{Arm, ArmSettings, MAX_LINEAR_SPEED, Target, code, joint_limits};
+use trol_a465::arm::{
+    Arm, ArmSettings, LINE_MAX_FACTOR, MAX_LINEAR_ACCEL, MAX_LINEAR_SPEED, SERVO_LAG, Target, code,
+    joint_limits,
+};
 use trol_a465::model::LIMITS_RAD;
 
 fn homed_arm() -> Arm {
@@ -124,6 +127,7 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
     let mut rng = ChaCha8Rng::seed_from_u64(1313);
     let mut accepted = 0;
     let mut refusals = std::collections::BTreeMap::new();
+    let mut factors = Vec::new();
     for n in 0..10_000 {
         let percent = [25.0, 100.0, 150.0][n % 3];
         let mut arm = homed_arm();
@@ -142,6 +146,8 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
         for v in to.iter_mut().skip(3) {
             *v += rng.random_range(-0.6..0.6);
         }
+        let before = arm.clone();
+        let before_line = arm.clone();
         let r = arm.move_to(Target::Cart(to), true, t0);
         if r != code::OK {
             *refusals.entry(r).or_insert(0) += 1;
@@ -190,12 +196,128 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
         for i in 0..3 {
             assert!((last[i] - to[i]).abs() < 1e-6, "line {n}: ends at {last:?}");
         }
+        // Its duration against the least time it needs: the joint move between the same
+        // ends (made by the same arm), or the line at the linear limits (a trapezoid).
+        let mut joint_move = before;
+        assert_eq!(joint_move.ma(q[q.len() - 1], t0), code::OK, "line {n}");
+        let joints = joint_move.done_at(t0) - t0 - SERVO_LAG;
+        let f = percent.min(100.0) / 100.0;
+        let (lv, la) = (MAX_LINEAR_SPEED * f, MAX_LINEAR_ACCEL * f);
+        let linear = if lv * lv / la >= length {
+            2.0 * (length / la).sqrt()
+        } else {
+            length / lv + lv / la
+        };
+        let least = joints.max(linear);
+        let took = end - t0 - SERVO_LAG;
+        let factor = if least > 0.0 { took / least } else { 1.0 };
+        assert!(
+            factor <= LINE_MAX_FACTOR * (1.0 + 1e-9),
+            "line {n}: {took:.3} s where {least:.3} s would do ({factor:.1}x)"
+        );
+        factors.push(factor);
+        // Halted on the way (every fifth line): it brakes within the limits, on the line.
+        if accepted % 5 == 0 {
+            let mut halted = before_line.clone();
+            assert_eq!(halted.move_to(Target::Cart(to), true, t0), code::OK);
+            let at = t0 + rng.random_range(0.0..1.0) * took;
+            halted.halt(at);
+            let stop = halted.done_at(at) - SERVO_LAG;
+            assert!(
+                stop <= end - SERVO_LAG + 1e-9,
+                "line {n}: a halt that ends later"
+            );
+            let q = check_limits(
+                &mut halted,
+                t0,
+                percent,
+                300,
+                &format!("line {n} at {percent} %, halted"),
+            );
+            for p in &q {
+                let pos = arm.kinematics().fk(p).pos;
+                let d = pos - glam::DVec3::from_array(line(0.0));
+                let dir = glam::DVec3::from_array(line(1.0)) - glam::DVec3::from_array(line(0.0));
+                let off = if length > 0.0 {
+                    (d - dir * (d.dot(dir) / dir.length_squared()).clamp(0.0, 1.0)).length()
+                } else {
+                    d.length()
+                };
+                assert!(off < 0.02, "line {n}, halted: {off} mm off the line");
+            }
+        }
     }
+    factors.sort_by(f64::total_cmp);
+    assert_eq!(factors.len(), accepted);
+    let at = |p: f64| factors[((factors.len() - 1) as f64 * p) as usize];
+    let over = |x: f64| factors.iter().filter(|f| **f > x).count();
+    println!(
+        "duration / least time of the {} accepted lines: median {:.2}, 90 % {:.2}, 99 % {:.2}, \
+         max {:.2}; over 2x: {}, over 5x: {}, over 10x: {}",
+        factors.len(),
+        at(0.5),
+        at(0.9),
+        at(0.99),
+        at(1.0),
+        over(2.0),
+        over(5.0),
+        over(10.0)
+    );
     // Most lines are possible; the rest are refused with a reason, before anything moved.
     assert!(
         accepted > 2_500,
         "only {accepted} of 10000 lines accepted: {refusals:?}"
     );
     println!("accepted {accepted} of 10000; refused: {refusals:?}");
+    // docs/a465.md, "Straight lines", gives this distribution.
+    assert!(
+        at(0.99) < 3.0,
+        "a line at the arm's pace takes about its least time"
+    );
     assert!(refusals.contains_key(&code::SINGULAR_PATH), "{refusals:?}");
+}
+
+/// The lines that crawled when a line was timed by its worst point (issue 27: a jog of
+/// 100 mm down from READY took 335 s, a line from READY to (600, 0, 300) tool down 1,562 s,
+/// a line toward full stretch 799 s) run within LINE_MAX_FACTOR of their least time, or are
+/// refused before anything moves.
+#[test]
+fn lines_from_ready_run_at_the_arms_pace() {
+    use std::f64::consts::FRAC_PI_2;
+    enum Line {
+        Jog([f64; 3]),
+        To([f64; 6]),
+    }
+    let cases = [
+        ("jog 100 mm down", Line::Jog([0.0, 0.0, -100.0])),
+        (
+            "to (600, 0, 300) tool down",
+            Line::To([600.0, 0.0, 300.0, 0.0, FRAC_PI_2, 0.0]),
+        ),
+        ("toward full stretch", Line::Jog([300.0, 0.0, -300.0])),
+    ];
+    for (what, line) in cases {
+        let mut arm = homed_arm();
+        let q0 = arm.commanded(0.0);
+        let r = match line {
+            Line::Jog(d) => arm.jog(d, true, 0.0),
+            Line::To(c) => arm.move_to(Target::Cart(c), true, 0.0),
+        };
+        if r == code::SINGULAR_PATH {
+            assert!(!arm.is_moving(0.0), "{what}: refused but moving");
+            println!("{what}: refused (SINGULAR_PATH)");
+            continue;
+        }
+        assert_eq!(r, code::OK, "{what}");
+        let took = arm.done_at(0.0) - SERVO_LAG;
+        let end = arm.commanded(took + 1.0);
+        let length = (arm.kinematics().fk(&end).pos - arm.kinematics().fk(&q0).pos).length();
+        let least = arm.line_least_time(q0, end, length);
+        println!("{what}: {took:.3} s, least {least:.3} s");
+        assert!(
+            took <= LINE_MAX_FACTOR * least,
+            "{what}: {took} s, least {least} s"
+        );
+        assert!(took < 5.0, "{what}: {took} s");
+    }
 }

@@ -45,6 +45,11 @@ pub mod code {
     /// The motion queue is full ([`super::MOTION_QUEUE`] motions accepted and not yet done):
     /// wait (TROLFinish) and send the motion again.
     pub const QUEUE_FULL: i16 = -7;
+    /// Closing the fingers on an object at the tool centre point that is wider than their
+    /// opening: they are not around it and cannot pass through it. Nothing moves; open the
+    /// gripper wider than the object before moving onto it. (-8 to -16 and -20 to -22 are
+    /// the real controllers' backends' own codes.)
+    pub const GRIPPER_BLOCKED: i16 = -17;
 }
 
 /// How many accepted motions (the one under way included) the controller holds before it
@@ -176,6 +181,9 @@ const LINE_PIECES: usize = 4;
 /// where the wrist would have to turn far faster than the tool moves, and is refused with
 /// SINGULAR_PATH before anything moves (docs/a465.md, "Straight lines").
 pub const LINE_MAX_FACTOR: f64 = 20.0;
+/// And a line is refused for its time only when it would take this much longer still, s: a
+/// line whose ends are (nearly) the same pose needs no time, and its few stretches a little.
+pub const LINE_SLACK: f64 = 0.1;
 
 /// A motion: a path and its profile in time.
 #[derive(Clone, Debug)]
@@ -617,6 +625,17 @@ impl Arm {
                 self.held = None;
             }
         }
+        // Closing on an object at the tool centre point that is wider than the opening: the
+        // fingers are not around it, and they cannot pass through it.
+        if self.held.is_none() && target < from {
+            let blocked = self
+                .objects
+                .iter()
+                .any(|o| (centre_of(o) - tcp.pos).length() <= GRASP_DISTANCE && from < o.width);
+            if blocked {
+                return code::GRIPPER_BLOCKED;
+            }
+        }
         // Closing with an object's centre at the tool centre point takes it: the fingers stop
         // at its width and it moves with the tool from now on.
         if self.held.is_none() {
@@ -828,7 +847,7 @@ impl Arm {
         let start = self.planned_start_time(now);
         let profile = self.line_profile(&path, length, start);
         let least = self.line_least_time(q0, path.at(1.0), length);
-        if profile.end() - start > LINE_MAX_FACTOR * least {
+        if profile.end() - start > LINE_MAX_FACTOR * least + LINE_SLACK {
             return code::SINGULAR_PATH;
         }
         self.push_timed(path, profile);

@@ -526,6 +526,35 @@ fn the_pick_example_carries_the_object_and_open_drops_it_on_the_table() {
     }
 }
 
+/// Fingers that are narrower than an object at the tool centre point are not around it and
+/// cannot close through it: Close and Grip are refused with GRIPPER_BLOCKED and nothing
+/// moves; opened wider than the object first, they take it.
+#[test]
+fn the_fingers_do_not_close_through_an_object_wider_than_their_opening() {
+    use trol_a465::arm::parse_objects;
+    let mut arm = Arm::new(ArmSettings {
+        homed: true,
+        objects: parse_objects("cube 400 0 135 30\n").unwrap(),
+        table_z: 135.0,
+        ..ArmSettings::default()
+    });
+    // Half closed (20 mm), then onto the cube's centre.
+    assert_eq!(arm.grip(20.0, 0.0), code::OK);
+    let mut t = settle_at(&mut arm, [400.0, 0.0, 150.0, 0.0, DOWN, 0.0], 0.0);
+    assert_eq!(arm.fingers(t), 20.0);
+    assert_eq!(arm.close(60.0, t), code::GRIPPER_BLOCKED);
+    assert_eq!(arm.grip(5.0, t), code::GRIPPER_BLOCKED);
+    assert_eq!(arm.fingers(t + 5.0), 20.0, "nothing moved");
+    assert_eq!(arm.held(), None);
+    // Opening is never blocked; wider than the cube, closing takes it.
+    assert_eq!(arm.grip(40.0, t), code::OK);
+    t = arm.done_at(t);
+    assert_eq!(arm.close(60.0, t), code::OK);
+    t = arm.done_at(t);
+    assert_eq!(arm.held(), Some("cube"));
+    assert_eq!(arm.fingers(t), 30.0);
+}
+
 /// The motion queue is bounded: a motion beyond it is refused and changes nothing; once the
 /// arm has worked some off, motions are accepted again.
 #[test]

@@ -116,3 +116,93 @@ fn at_j5_zero_j4_keeps_its_value_after_f32_rounding() {
     let (dp, dr) = pose_error(&k.fk(&got), &Pose::from_xyzypr(v));
     assert!(dp < 1e-3 && dr < 1e-5, "{dp} mm, {dr}");
 }
+
+/// A 4x4 transform as rows.
+type M4 = [[f64; 4]; 4];
+
+fn mul(a: &M4, b: &M4) -> M4 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..4).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// Standard DH: Rz(theta) Tz(d) Tx(a) Rx(alpha).
+fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> M4 {
+    let (st, ct, sa, ca) = (theta.sin(), theta.cos(), alpha.sin(), alpha.cos());
+    [
+        [ct, -st * ca, st * sa, a * ct],
+        [st, ct * ca, -ct * sa, a * st],
+        [0.0, sa, ca, d],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// The flange of CTU's DH table (ctu_crs: offsets 0, -270, -90, 0, 0, 0 deg; alpha 90, 0,
+/// 270, 90, 270, 0 deg), with TROL's lengths, in mm.
+fn ctu_flange(q: &[f64; 6]) -> [f64; 3] {
+    let r = f64::to_radians;
+    let off = [0.0, r(-270.0), r(-90.0), 0.0, 0.0, 0.0];
+    let alpha = [r(90.0), 0.0, r(270.0), r(90.0), r(270.0), 0.0];
+    let d = [330.2, 0.0, 0.0, 330.2, 0.0, 76.2];
+    let a = [0.0, 304.8, 0.0, 0.0, 0.0, 0.0];
+    let mut t: M4 = std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j)));
+    for i in 0..6 {
+        t = mul(&t, &dh(q[i] + off[i], d[i], a[i], alpha[i]));
+    }
+    [t[0][3], t[1][3], t[2][3]]
+}
+
+/// The flange of the public ROS 2 URDF's chain (AlfZuck1/ROS2-Workspace-CRSA465: joint axes
+/// z, +y, -y, z, -y, z along a straight-up arm), with TROL's lengths, in mm.
+fn urdf_flange(q: &[f64; 6]) -> [f64; 3] {
+    let axes = [
+        [0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let up = [330.2, 0.0, 304.8, 0.0, 330.2, 76.2];
+    let mut t: M4 = std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j)));
+    for i in 0..6 {
+        let mut lift: M4 = std::array::from_fn(|r| std::array::from_fn(|c| f64::from(r == c)));
+        lift[2][3] = up[i];
+        // Rodrigues' rotation about a unit axis.
+        let [x, y, z] = axes[i];
+        let (s, c) = q[i].sin_cos();
+        let k = [[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]];
+        let mut rot: M4 = std::array::from_fn(|r| std::array::from_fn(|c| f64::from(r == c)));
+        for r in 0..3 {
+            for col in 0..3 {
+                let kk: f64 = (0..3).map(|m| k[r][m] * k[m][col]).sum();
+                rot[r][col] += s * k[r][col] + (1.0 - c) * kk;
+            }
+        }
+        t = mul(&mul(&t, &lift), &rot);
+    }
+    // The flange is the last lift's end: already in `up[5]` before J6's turn.
+    [t[0][3], t[1][3], t[2][3]]
+}
+
+/// docs/a465.md, "Joints, the zero pose and signs": the public models' joint values are
+/// TROL's with some signs turned. CTU's DH reaches TROL's flange with J2, J3 and J5
+/// negated; the ROS 2 URDF with J3 and J5 negated; neither with TROL's values as they are.
+#[test]
+fn the_public_models_match_trols_joints_with_the_documented_signs() {
+    let k = Kinematics::new([0.0; 6]);
+    let mut rng = ChaCha8Rng::seed_from_u64(93);
+    let mut worst_as_is: f64 = 0.0;
+    for _ in 0..1000 {
+        let q = random_joints(&mut rng);
+        let trol = k.fk(&q).pos;
+        let dist = |p: [f64; 3]| (glam::DVec3::from_array(p) - trol).length();
+        let ctu = [q[0], -q[1], -q[2], q[3], -q[4], q[5]];
+        assert!(dist(ctu_flange(&ctu)) < 1e-9, "CTU at {q:?}");
+        let ros = [q[0], q[1], -q[2], q[3], -q[4], q[5]];
+        assert!(dist(urdf_flange(&ros)) < 1e-9, "URDF at {q:?}");
+        worst_as_is = worst_as_is.max(dist(ctu_flange(&q)).min(dist(urdf_flange(&q))));
+    }
+    assert!(
+        worst_as_is > 100.0,
+        "the values as they are miss: {worst_as_is} mm"
+    );
+}

@@ -49,6 +49,12 @@ pub const A465_CODES: &CodeTable = &[
         name: "BIOS_QUEUE_FULL",
         meaning: "the motion queue is full: wait with TROLFinish, then send the motion again",
     },
+    CodeInfo {
+        value: code::GRIPPER_BLOCKED,
+        name: "BIOS_GRIPPER_BLOCKED",
+        meaning: "an object wider than the fingers' opening is at the tool: open the gripper \
+                  wider than the object before moving onto it",
+    },
 ];
 
 /// A backend's target as the A465 model takes it: a name from `arm`'s location table

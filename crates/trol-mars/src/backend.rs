@@ -79,14 +79,14 @@ pub static MARS_CODES: &CodeTable = &{
             meaning: "the unit stopped with the arm short of the motion's end",
         },
     ];
-    let mut all = [EXTRA[0]; 14];
+    let mut all = [EXTRA[0]; 15];
     let mut i = 0;
-    while i < 8 {
+    while i < A465_CODES.len() {
         all[i] = A465_CODES[i];
         i += 1;
     }
-    while i < 14 {
-        all[i] = EXTRA[i - 8];
+    while i < all.len() {
+        all[i] = EXTRA[i - A465_CODES.len()];
         i += 1;
     }
     all

@@ -130,14 +130,14 @@ pub static RAPL_CODES: &CodeTable = &{
                       another has not ended: call TROLFinish(FINISH_WAIT) first",
         },
     ];
-    let mut all = [EXTRA[0]; 17];
+    let mut all = [EXTRA[0]; 18];
     let mut i = 0;
-    while i < 8 {
+    while i < A465_CODES.len() {
         all[i] = A465_CODES[i];
         i += 1;
     }
-    while i < 17 {
-        all[i] = EXTRA[i - 8];
+    while i < all.len() {
+        all[i] = EXTRA[i - A465_CODES.len()];
         i += 1;
     }
     all

@@ -553,6 +553,7 @@ impl C500 {
             code::BELOW_TABLE => 33,
             code::SINGULAR_PATH => 34,
             code::QUEUE_FULL => 36,
+            code::GRIPPER_BLOCKED => 38,
             _ => 12,
         }
     }

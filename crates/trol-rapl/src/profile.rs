@@ -203,6 +203,7 @@ pub const ERROR_TARGETS: &[&str] = &[
     "BIOS_SINGULAR_PATH",
     "BIOS_BAD_ARGUMENT",
     "BIOS_QUEUE_FULL",
+    "BIOS_GRIPPER_BLOCKED",
     "BIOS_ARM_POWER",
     "BIOS_RAPL_ERROR",
     "TROL_ERR_LOCATION",
@@ -221,6 +222,7 @@ pub const SIM_ERRORS: &[(u16, &str, &str)] = &[
     (35, "LOCATION NOT DEFINED", "TROL_ERR_LOCATION"),
     (36, "MOTION QUEUE FULL", "BIOS_QUEUE_FULL"),
     (37, "ARM POWER OFF", "BIOS_ARM_POWER"),
+    (38, "GRIPPER BLOCKED", "BIOS_GRIPPER_BLOCKED"),
 ];
 
 /// A profile (the keys of the TOML file; docs/c500.md, "The profile").

@@ -187,7 +187,28 @@ pub struct Solutions {
     len: usize,
 }
 
+impl Solution {
+    /// A placeholder in the unused part of [`Solutions`].
+    const NONE: Solution = Solution {
+        q: [0.0; 6],
+        config: Config {
+            backward: false,
+            elbow_down: false,
+            flip: false,
+        },
+        within_limits: false,
+    };
+}
+
 impl Solutions {
+    /// No solution (the pose is out of reach).
+    fn none() -> Solutions {
+        Solutions {
+            items: [Solution::NONE; 8],
+            len: 0,
+        }
+    }
+
     /// The solutions.
     pub fn as_slice(&self) -> &[Solution] {
         &self.items[..self.len]
@@ -242,6 +263,9 @@ const WRIST_SINGULAR: f64 = 1e-6;
 pub struct Kinematics {
     tool: Pose,
     tool_inv: Pose,
+    /// The tool's inverse rotation into DH frame 6, once (the inverse kinematics' first
+    /// product).
+    tool_inv_dh6: DMat3,
 }
 
 impl Default for Kinematics {
@@ -250,14 +274,23 @@ impl Default for Kinematics {
     }
 }
 
+/// Four atan2(y, x) at once (SIMD; within 2 ulp of `f64::atan2`): the inverse kinematics
+/// makes its ten in three such batches.
+#[inline]
+fn atan2x4(y: [f64; 4], x: [f64; 4]) -> [f64; 4] {
+    wide::f64x4::from(y).atan2(wide::f64x4::from(x)).to_array()
+}
+
 impl Kinematics {
     /// Kinematics with the tool transform `tool` (x y z mm, yaw pitch roll rad, in the tool
     /// frame).
     pub fn new(tool: [f64; 6]) -> Kinematics {
         let tool = Pose::from_xyzypr(tool);
+        let tool_inv = tool.inverse();
         Kinematics {
             tool,
-            tool_inv: tool.inverse(),
+            tool_inv,
+            tool_inv_dh6: tool_inv.rot * tool_in_dh6().transpose(),
         }
     }
 
@@ -293,28 +326,11 @@ impl Kinematics {
     /// - reaching backward mirrors the arm: (J1 + 180°, -J2, -J3) has R03·Rz(180°), so its
     ///   wrist is (J4 + 180°, J5, J6) of the forward one with the same elbow.
     pub fn ik_all(&self, tcp: &Pose, current: &Joints) -> Solutions {
-        let flange = tcp.then(&self.tool_inv);
-        let r06 = flange.rot * tool_in_dh6().transpose();
-        let w = flange.pos - r06.z_axis * D6;
-        let mut out = Solutions {
-            items: [Solution {
-                q: [0.0; 6],
-                config: Config {
-                    backward: false,
-                    elbow_down: false,
-                    flip: false,
-                },
-                within_limits: false,
-            }; 8],
-            len: 0,
-        };
+        let flange_pos = tcp.pos + tcp.rot * self.tool_inv.pos;
+        let r06 = tcp.rot * self.tool_inv_dh6;
+        let w = flange_pos - r06.z_axis * D6;
+        let out = Solutions::none();
         let rxy = (w.x * w.x + w.y * w.y).sqrt();
-        let (q1, s1, c1) = if rxy > SINGULAR {
-            (w.y.atan2(w.x), w.y / rxy, w.x / rxy)
-        } else {
-            let (s1, c1) = current[0].sin_cos();
-            (current[0], s1, c1)
-        };
         let s = w.z - D1;
         let l2 = rxy * rxy + s * s;
         let c3 = (l2 - A2 * A2 - D4 * D4) / (2.0 * A2 * D4);
@@ -329,16 +345,30 @@ impl Kinematics {
             // above); kept so that the divisions below never divide by zero.
             return out;
         }
-        // The shoulder-wrist line: its angle φ from the vertical toward the reach, and the
-        // upper arm's angle β from it (positive sin J3); the elbow down mirrors β and J3.
-        let phi = rxy.atan2(s);
+        // J1; the shoulder-wrist line's angle φ from the vertical toward the reach; J3; and
+        // the upper arm's angle β from that line (positive sin J3; the elbow down mirrors β
+        // and J3): four atan2 at once.
+        let [q1_base, phi, q3_pos, beta_pos] =
+            atan2x4([w.y, rxy, s3_abs, D4 * s3_abs], [w.x, s, c3, A2 + D4 * c3]);
+        let (q1, s1, c1) = if rxy > SINGULAR {
+            (q1_base, w.y / rxy, w.x / rxy)
+        } else {
+            let (s1, c1) = current[0].sin_cos();
+            (current[0], s1, c1)
+        };
         let (sphi, cphi) = (rxy / l, s / l);
-        let q3_pos = s3_abs.atan2(c3);
-        let beta_pos = (D4 * s3_abs).atan2(A2 + D4 * c3);
         let (sbeta_pos, cbeta_pos) = (D4 * s3_abs / l, (A2 + D4 * c3) / l);
         let z6 = r06.z_axis;
-        for elbow_down in [false, true] {
-            let sign = if elbow_down { -1.0 } else { 1.0 };
+        // Per elbow: J2, J3 and the wrist forward and backward (None where J5 = ±180°).
+        type Wrist = (f64, f64, f64);
+        // Both elbows' frame 3 first, then their eight atan2 (J4, J5, J6, and J4 + J6 for
+        // J5 = 0) back to back.
+        let mut q23 = [(0.0, 0.0); 2];
+        let mut wrist_y = [[0.0; 4]; 2];
+        let mut wrist_x = [[0.0; 4]; 2];
+        let mut e22s = [0.0; 2];
+        let mut sws = [0.0; 2];
+        for (e, sign) in [1.0, -1.0].into_iter().enumerate() {
             let q3 = sign * q3_pos;
             let q2 = wrap_once(phi - sign * beta_pos);
             // sin, cos of J2 = φ - β, then of J2 + J3.
@@ -355,31 +385,50 @@ impl Kinematics {
             let e12 = y3.dot(z6);
             let e22 = z3.dot(z6);
             let sw = (e02 * e02 + e12 * e12).sqrt();
+            q23[e] = (q2, q3);
+            e22s[e] = e22;
+            sws[e] = sw;
+            wrist_y[e] = [e12, sw, z3.dot(r06.y_axis), y3.dot(r06.x_axis)];
+            wrist_x[e] = [e02, e22, -z3.dot(r06.x_axis), x3.dot(r06.x_axis)];
+        }
+        let angles = [
+            atan2x4(wrist_y[0], wrist_x[0]),
+            atan2x4(wrist_y[1], wrist_x[1]),
+        ];
+        let mut elbows: [Option<(f64, f64, Wrist, Wrist)>; 2] = [None, None];
+        for e in 0..2 {
+            let [q4, q5_neg, q6, sum] = angles[e];
+            let (q2, q3) = q23[e];
             // (J4, J5, J6) forward and backward.
-            let (fwd, bwd) = if sw > WRIST_SINGULAR {
-                let e20 = z3.dot(r06.x_axis);
-                let e21 = z3.dot(r06.y_axis);
-                let q4 = e12.atan2(e02);
-                let q5 = -sw.atan2(e22);
-                let q6 = e21.atan2(-e20);
-                ((q4, q5, q6), (wrap_once(q4 + PI), q5, q6))
-            } else if e22 > 0.0 {
+            elbows[e] = if sws[e] > WRIST_SINGULAR {
+                let q5 = -q5_neg;
+                Some((q2, q3, (q4, q5, q6), (wrap_once(q4 + PI), q5, q6)))
+            } else if e22s[e] > 0.0 {
                 // J5 = 0: only J4 + J6 is fixed; keep J4.
-                let sum = y3.dot(r06.x_axis).atan2(x3.dot(r06.x_axis));
                 let q4 = wrap(current[3]);
-                (
+                Some((
+                    q2,
+                    q3,
                     (q4, 0.0, wrap_once(sum - q4)),
                     (q4, 0.0, wrap(sum + PI - q4)),
-                )
+                ))
             } else {
                 // J5 = ±180°: beyond its ±105° limit, so no usable solution.
+                None
+            };
+        }
+        let q1_back = wrap_once(q1 + PI);
+        let mut out = Solutions::none();
+        for (e, el) in elbows.iter().enumerate() {
+            let Some((q2, q3, fwd, bwd)) = *el else {
                 continue;
             };
-            let arms = [
-                (false, [q1, q2, q3], fwd),
-                (true, [wrap_once(q1 + PI), -q2, -q3], bwd),
-            ];
-            for (backward, [a1, a2, a3], (q4, q5, q6)) in arms {
+            for backward in [false, true] {
+                let ([a1, a2, a3], (q4, q5, q6)) = if backward {
+                    ([q1_back, -q2, -q3], bwd)
+                } else {
+                    ([q1, q2, q3], fwd)
+                };
                 for flip in [false, true] {
                     let q = if flip {
                         [a1, a2, a3, wrap_once(q4 + PI), -q5, wrap_once(q6 + PI)]
@@ -390,7 +439,7 @@ impl Kinematics {
                         q,
                         config: Config {
                             backward,
-                            elbow_down,
+                            elbow_down: e == 1,
                             flip,
                         },
                         within_limits: within_limits(&q),

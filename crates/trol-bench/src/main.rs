@@ -161,15 +161,36 @@ fn all() -> Result<(), String> {
             ),
         ));
     }
-    let v = run(&["ik"])?;
+    // EAIK as the anchor where a Python has it (TROL_BENCH_PYTHON, else python3).
+    let python = std::env::var("TROL_BENCH_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has_eaik = std::process::Command::new(&python)
+        .args(["-c", "import eaik, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    let ik_args: Vec<&str> = if has_eaik {
+        vec!["ik", "--eaik", python.as_str()]
+    } else {
+        vec!["ik"]
+    };
+    let v = run(&ik_args)?;
     rows.push((
         "all-solutions IK of the A465".into(),
-        "trol bench ik".into(),
-        format!(
-            "{:.0} ns per pose, {:.2} solutions per pose",
-            f(&v, "ns_per_pose"),
-            f(&v, "solutions_per_pose")
-        ),
+        format!("trol bench {}", ik_args.join(" ")),
+        match v["times_faster_than_eaik"].as_f64() {
+            Some(x) => format!(
+                "{:.0} ns per pose, {:.2} solutions per pose; EAIK in the same run {:.0} ns \
+                 (batched): {x:.1} times faster",
+                f(&v, "ns_per_pose"),
+                f(&v, "solutions_per_pose"),
+                f(&v["eaik"], "ns_per_pose_batched")
+            ),
+            None => format!(
+                "{:.0} ns per pose, {:.2} solutions per pose (no EAIK anchor: set \
+                 TROL_BENCH_PYTHON to a Python with `eaik`)",
+                f(&v, "ns_per_pose"),
+                f(&v, "solutions_per_pose")
+            ),
+        },
     ));
     let v = run(&["transact", "--count", "5000", "--port", "sim"])?;
     rows.push((
@@ -451,6 +472,10 @@ pub struct IkArgs {
     /// Seed of the random poses.
     #[arg(long, default_value_t = 465)]
     seed: u64,
+    /// Time EAIK (the `eaik` package from PyPI) in the same run, with this Python (one that
+    /// has `eaik` and `numpy`: `python -m pip install eaik`), as the anchor.
+    #[arg(long, value_name = "PYTHON")]
+    eaik: Option<String>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -464,6 +489,31 @@ struct IkReport {
     max_position_error_mm: f64,
     seconds: f64,
     ns_per_pose: f64,
+    /// EAIK in the same run (`--eaik`): its figures, and how many times faster TROL's is than
+    /// its batched call.
+    eaik: Option<serde_json::Value>,
+    times_faster_than_eaik: Option<f64>,
+}
+
+/// The EAIK anchor's script (`--eaik`).
+const EAIK_SCRIPT: &str = include_str!("anchors/eaik.py");
+
+/// Run EAIK on `n` poses with `python`: its report.
+fn eaik_anchor(python: &str, n: usize, seed: u64) -> Result<serde_json::Value, String> {
+    let out = std::process::Command::new(python)
+        .arg("-c")
+        .arg(EAIK_SCRIPT)
+        .arg(n.to_string())
+        .arg(seed.to_string())
+        .output()
+        .map_err(|e| format!("cannot run {python}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "EAIK did not run with {python} (install it: {python} -m pip install eaik): {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    serde_json::from_slice(&out.stdout).map_err(|e| format!("EAIK's report is not JSON: {e}"))
 }
 
 #[derive(Args)]
@@ -756,19 +806,46 @@ fn ik(a: IkArgs) -> Result<(), String> {
         std::hint::black_box(count);
         best = best.min(seconds);
     }
+    let ns_per_pose = best * 1e9 / n as f64;
+    // EAIK is slower: a fifth of the poses does for its figure.
+    let eaik = match &a.eaik {
+        Some(python) => {
+            if !a.json {
+                eprintln!("timing EAIK on {} poses with {python} ...", (n / 5).max(1));
+            }
+            Some(eaik_anchor(python, (n / 5).max(1), a.seed)?)
+        }
+        None => None,
+    };
+    let times_faster_than_eaik = eaik
+        .as_ref()
+        .and_then(|e| e["ns_per_pose_batched"].as_f64())
+        .map(|e| e / ns_per_pose);
     let r = IkReport {
         poses: n,
         solutions,
         solutions_per_pose: solutions as f64 / n as f64,
         max_position_error_mm: max_err,
         seconds: best,
-        ns_per_pose: best * 1e9 / n as f64,
+        ns_per_pose,
+        eaik,
+        times_faster_than_eaik,
     };
     print_report(&r, a.json, |r| {
-        format!(
+        let mut t = format!(
             "{} poses, {:.2} solutions each (largest position error {:.1e} mm): {:.1} ns per pose",
             r.poses, r.solutions_per_pose, r.max_position_error_mm, r.ns_per_pose
-        )
+        );
+        if let (Some(e), Some(x)) = (&r.eaik, r.times_faster_than_eaik) {
+            t += &format!(
+                "\nEAIK in the same run ({} poses): {:.0} ns per pose batched, {:.0} ns one call \
+                 each; TROL's is {x:.1} times faster than the batched call",
+                e["poses"],
+                e["ns_per_pose_batched"].as_f64().unwrap_or(f64::NAN),
+                e["ns_per_pose_one_call_each"].as_f64().unwrap_or(f64::NAN),
+            );
+        }
+        t
     })
 }
 

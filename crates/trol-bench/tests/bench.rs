@@ -70,3 +70,51 @@ fn benches_print_json() {
         );
     }
 }
+
+/// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
+/// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
+#[test]
+fn the_ik_anchor_says_what_it_needs() {
+    let dir = scratch("eaik");
+    let o = bench(
+        &dir,
+        &[
+            "ik",
+            "--poses",
+            "500",
+            "--eaik",
+            "/nonexistent/python",
+            "--json",
+        ],
+    );
+    let (_, err) = text(&o);
+    assert!(!o.status.success());
+    assert!(err.contains("cannot run /nonexistent/python"), "{err}");
+    let python =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/py/bin/python");
+    let has_eaik = std::process::Command::new(&python)
+        .args(["-c", "import eaik"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if has_eaik {
+        let o = bench(
+            &dir,
+            &[
+                "ik",
+                "--poses",
+                "500",
+                "--eaik",
+                python.to_str().unwrap(),
+                "--json",
+            ],
+        );
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert!(
+            v["eaik"]["ns_per_pose_batched"].as_f64().unwrap() > 0.0,
+            "{v}"
+        );
+        assert!(v["times_faster_than_eaik"].as_f64().unwrap() > 0.0, "{v}");
+    }
+}

@@ -109,7 +109,12 @@ typedef uint8_t  TUCCHAR;
 #define LAST_CAT2_CODE 63
 #define TROL_GET_POSITION 128
 #define TROL_GET_GRIPPER 129
-#define LAST_CAT3_CODE 129
+#define TROL_LIST_LOCATIONS 130
+#define TROL_HERE 131
+#define TROL_DEFINE 132
+#define TROL_DELETE_LOCATION 133
+#define TROL_SAVE_LOCATIONS 134
+#define LAST_CAT3_CODE 134
 #define TROL_TERMINATE_PCP 192
 #define TROL_GET_STATUS 193
 #define TROL_GET_VERSION 194
@@ -196,6 +201,19 @@ TINT TROLGetCodes(TINT *values, TUINT max, TUINT *count);
 #define GRIPPER_HOLDS 1
 #define GRIPPER_UNKNOWN 2
 TINT TROLGetGripper(float *openingMm, TINT *held, char *name, TUINT nameSize);
+/* Added (docs/teach.md): teaching. TROLHere stores where the arm is (commanded) under locName
+ * in the form pos (POS_CART, POS_JOINT, or POS_PREC for a name starting with '#');
+ * TROLDefine stores *pLoc (six values) under locName; TROLDeleteLocation forgets locName
+ * (TROL_ERR_LOCATION if there is none); TROLSaveLocations keeps the table across a restart
+ * (the simulator writes its locations file); TROLListLocations gives up to max of the
+ * locations, sorted by name (names NUL-padded to 8 bytes), and how many there are in *count
+ * (names and locs may be NULL with max 0). A name of the wrong form for its location, or a
+ * NULL pointer, is TROL_ERR_ARG_RANGE, and nothing is sent. */
+TINT TROLHere(TLocName locName, TINT pos);
+TINT TROLDefine(TLocName locName, SLocData *pLoc);
+TINT TROLDeleteLocation(TLocName locName);
+TINT TROLSaveLocations(void);
+TINT TROLListLocations(TLocName *names, SLocData *locs, TUINT max, TUINT *count);
 
 /* Other functions */
 TUINT InitTROL(TUINT serOnly);
@@ -310,6 +328,11 @@ TUINT trol_last_transaction(TROL *c);
 TINT trol_get_version(TROL *c, TUINT *protocol, char *kind, TUINT kindSize);
 TINT trol_get_codes(TROL *c, TINT *values, TUINT max, TUINT *count);
 TINT trol_get_gripper(TROL *c, float *openingMm, TINT *held, char *name, TUINT nameSize);
+TINT trol_here(TROL *c, TLocName locName, TINT pos);
+TINT trol_define(TROL *c, TLocName locName, SLocData *pLoc);
+TINT trol_delete_location(TROL *c, TLocName locName);
+TINT trol_save_locations(TROL *c);
+TINT trol_list_locations(TROL *c, TLocName *names, SLocData *locs, TUINT max, TUINT *count);
 TINT trol_set_watchdog(TROL *c, TUINT tenths);
 void trol_set_reply_timeout(TROL *c, TUINT tenths);   /* SetL3_TO_Intervall */
 void trol_set_repeats(TROL *c, TUINT repeats);

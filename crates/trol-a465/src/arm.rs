@@ -50,6 +50,10 @@ pub mod code {
     /// gripper wider than the object before moving onto it. (-8 to -16 and -20 to -22 are
     /// the real controllers' backends' own codes.)
     pub const GRIPPER_BLOCKED: i16 = -17;
+    /// Here or Define with the location table full (docs/teach.md).
+    pub const TABLE_FULL: i16 = -18;
+    /// Save without a locations file to write (the simulator started without one).
+    pub const NO_FILE: i16 = -19;
 }
 
 /// How many accepted motions (the one under way included) the controller holds before it
@@ -90,6 +94,35 @@ pub enum Stored {
     Cart([f64; 6]),
     /// A precision point (encoder counts).
     Prec([i32; 6]),
+    /// Joint angles, radians (taught in joint form; a RAPL-II controller has none).
+    Joints([f64; 6]),
+}
+
+/// The form Here stores a location in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HereForm {
+    /// Cartesian: the tool centre point.
+    Cart,
+    /// Joint angles.
+    Joints,
+    /// A precision point: encoder counts.
+    Prec,
+}
+
+/// Six values as a locations file writes them: the shortest text that reads back the same
+/// (a value that came as the wire's 32-bit float, as the f32 it was).
+fn join_values(v: &[f64; 6]) -> String {
+    v.iter()
+        .map(|x| {
+            let narrow = *x as f32;
+            if f64::from(narrow) == *x {
+                format!("{narrow}")
+            } else {
+                format!("{x}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A target of an absolute motion.
@@ -364,6 +397,49 @@ impl Arm {
     /// A stored location.
     pub fn location(&self, name: &str) -> Option<Stored> {
         self.locations.get(name).copied()
+    }
+
+    /// Forget a location (the RAPL `DLOCN`). Whether there was one of that name.
+    pub fn delete_location(&mut self, name: &str) -> bool {
+        self.locations.remove(name).is_some()
+    }
+
+    /// Where the arm is commanded to be at `now`, in the form of `like` (HERE): cartesian
+    /// (the tool centre point with the tool in force), joint angles, or encoder counts.
+    pub fn here(&mut self, form: HereForm, now: f64) -> Stored {
+        let q = self.commanded(now);
+        match form {
+            HereForm::Cart => Stored::Cart(self.kin.fk_xyzypr(&q)),
+            HereForm::Joints => Stored::Joints(q),
+            HereForm::Prec => Stored::Prec(joints_to_counts(&q)),
+        }
+    }
+
+    /// The location table as a locations file ([`parse_locations`] reads it back): one line
+    /// per location, sorted by name.
+    pub fn locations_text(&self) -> String {
+        let mut names: Vec<&String> = self.locations.keys().collect();
+        names.sort();
+        let mut out = String::from(
+            "; TROL locations: NAME and six values (x y z mm, yaw pitch roll rad); \
+             #NAME: encoder counts; NAME joint: radians\n",
+        );
+        for name in names {
+            let line = match self.locations[name] {
+                Stored::Cart(v) => format!("{name} {}", join_values(&v)),
+                Stored::Joints(v) => format!("{name} joint {}", join_values(&v)),
+                Stored::Prec(c) => format!(
+                    "{name} {}",
+                    c.iter()
+                        .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ),
+            };
+            out.push_str(&line);
+            out.push('\n');
+        }
+        out
     }
 
     /// Which axes are homed.
@@ -1051,8 +1127,9 @@ fn dither(slot: i64, joint: usize) -> i32 {
 
 /// Read a location file: one location per line, `NAME v1 v2 v3 v4 v5 v6` (blanks or commas
 /// between). A name starting with `#` is a precision point (six encoder counts); any other
-/// is cartesian (x y z in mm, yaw pitch roll in radians). Blank lines and lines starting
-/// with `;` are ignored.
+/// is cartesian (x y z in mm, yaw pitch roll in radians), or joint angles in radians with
+/// the word `joint` before the values (`NAME joint q1 .. q6`). Blank lines and lines
+/// starting with `;` are ignored.
 pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate() {
@@ -1080,11 +1157,30 @@ pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
         if !ok_name {
             return Err(err(&format!("bad name {name:?}")));
         }
-        let values: Vec<&str> = parts.collect();
+        let mut values: Vec<&str> = parts.collect();
+        let joint = values.first() == Some(&"joint");
+        if joint {
+            if name.starts_with('#') {
+                return Err(err(
+                    "a precision point (#NAME) holds encoder counts, not joints",
+                ));
+            }
+            values.remove(0);
+        }
         if values.len() != 6 {
             return Err(err(&format!("{} values", values.len())));
         }
-        let loc = if name.starts_with('#') {
+        let loc = if joint {
+            let mut q = [0f64; 6];
+            for (i, v) in values.iter().enumerate() {
+                q[i] = v
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| err(&format!("{v:?} is not a number")))?;
+            }
+            Stored::Joints(q)
+        } else if name.starts_with('#') {
             let mut c = [0i32; 6];
             for (i, v) in values.iter().enumerate() {
                 c[i] = v

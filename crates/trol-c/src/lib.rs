@@ -725,32 +725,143 @@ pub unsafe extern "C" fn TROLGetPosition(pos: *mut SLocData, mode: TINT) -> TINT
     );
     match out {
         Some(loc) if loc.tag() as u8 == tag_byte => {
-            let mut data = [0u32; 8];
-            let n = loc.num_dims().min(8);
-            match &loc {
-                Location::Prec(v) => v
-                    .iter()
-                    .take(8)
-                    .enumerate()
-                    .for_each(|(i, x)| data[i] = *x as u32),
-                Location::Joint(v) | Location::Cart(v) => v
-                    .iter()
-                    .take(8)
-                    .enumerate()
-                    .for_each(|(i, x)| data[i] = (*x as f32).to_bits()),
-            }
-            let value = SLocData {
-                tag: loc.tag() as u8,
-                numDims: n as u8,
-                data,
-            };
             // SAFETY: as above.
-            unsafe { std::ptr::write_unaligned(pos, value) };
+            unsafe { std::ptr::write_unaligned(pos, sloc(&loc)) };
             r
         }
         Some(_) => trol_proto::application::code::TROL_ERR_BAD_RSIZE.0,
         None => r,
     }
+}
+
+/// A location as the C API's SLocData.
+fn sloc(loc: &Location) -> SLocData {
+    let mut data = [0u32; 8];
+    let n = loc.num_dims().min(8);
+    match loc {
+        Location::Prec(v) => v
+            .iter()
+            .take(8)
+            .enumerate()
+            .for_each(|(i, x)| data[i] = *x as u32),
+        Location::Joint(v) | Location::Cart(v) => v
+            .iter()
+            .take(8)
+            .enumerate()
+            .for_each(|(i, x)| data[i] = (*x as f32).to_bits()),
+    }
+    SLocData {
+        tag: loc.tag() as u8,
+        numDims: n as u8,
+        data,
+    }
+}
+
+/// A precision point's name starts with '#', and only a precision point's: else
+/// TROL_ERR_ARG_RANGE before anything is sent (docs/teach.md).
+fn precision_name(name: &Value, tag: u8) -> Result<(), TINT> {
+    match name {
+        Value::Name(n) if n.is_precision() == (tag == Tag::Prec as u8) => Ok(()),
+        _ => Err(ARG_RANGE),
+    }
+}
+
+const ANY_FORM: &[Tag] = &[Tag::Cart, Tag::Joint, Tag::Prec];
+
+/// TROLHere (added, docs/teach.md): store where the arm is (commanded) under locName, in the
+/// form pos (POS_CART, POS_JOINT, or POS_PREC for a name starting with '#').
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLHere(locName: *const TUCHAR, pos: TINT) -> TINT {
+    run(
+        &table::HERE,
+        || {
+            let n = unsafe { name(locName) }?;
+            let tag = u8::try_from(pos)
+                .ok()
+                .filter(|t| Tag::from_u8(*t).is_some())
+                .ok_or(ARG_RANGE)?;
+            precision_name(&n, tag)?;
+            Ok(vec![n, Value::Int(tag)])
+        },
+        drop,
+    )
+}
+
+/// TROLDefine (added, docs/teach.md): store *pLoc (six values: POS_CART, POS_JOINT or
+/// POS_PREC, whose name starts with '#') under locName.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLDefine(locName: *const TUCHAR, pLoc: *const SLocData) -> TINT {
+    run(
+        &table::DEFINE,
+        || {
+            let n = unsafe { name(locName) }?;
+            let loc = unsafe { loc_arg(pLoc, ANY_FORM) }?;
+            let Value::Loc(l) = &loc else {
+                return Err(ARG_RANGE);
+            };
+            precision_name(&n, l.tag() as u8)?;
+            Ok(vec![n, loc])
+        },
+        drop,
+    )
+}
+
+/// TROLDeleteLocation (added, docs/teach.md): forget locName (TROL_ERR_LOCATION if there is
+/// none).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLDeleteLocation(locName: *const TUCHAR) -> TINT {
+    run(
+        &table::DELETE_LOCATION,
+        || Ok(vec![unsafe { name(locName) }?]),
+        drop,
+    )
+}
+
+/// TROLSaveLocations (added, docs/teach.md): keep the table across a restart.
+#[unsafe(no_mangle)]
+pub extern "C" fn TROLSaveLocations() -> TINT {
+    run(&table::SAVE_LOCATIONS, || Ok(vec![]), drop)
+}
+
+/// TROLListLocations (added, docs/teach.md): up to `max` of the controller's locations,
+/// sorted by name, their names into `names` (each NUL-padded to 8 bytes, as TLocName) and
+/// their values into `locs`; how many there are into *count (which may be more than `max`).
+/// `names` and `locs` may be NULL only with `max` 0 (to ask the count); a NULL count is
+/// TROL_ERR_ARG_RANGE, and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLListLocations(
+    names: *mut [TUCHAR; 8],
+    locs: *mut SLocData,
+    max: TUINT,
+    count: *mut TUINT,
+) -> TINT {
+    if count.is_null() || (max > 0 && (names.is_null() || locs.is_null())) {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::LIST_LOCATIONS,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Locations(all) = reply {
+                got = Some(all);
+            }
+        },
+    );
+    if let Some(all) = got {
+        // SAFETY: the caller's TUINT, and arrays of `max` TLocNames and SLocDatas.
+        unsafe {
+            *count = TUINT::try_from(all.len()).unwrap_or(TUINT::MAX);
+            for (i, (n, l)) in all.iter().take(usize::from(max)).enumerate() {
+                let mut padded = [0u8; 8];
+                let text = n.as_str().as_bytes();
+                padded[..text.len()].copy_from_slice(text);
+                std::ptr::write_unaligned(names.add(i), padded);
+                std::ptr::write_unaligned(locs.add(i), sloc(l));
+            }
+        }
+    }
+    r
 }
 
 /// TROLTerminatePCP.
@@ -1545,6 +1656,11 @@ per_connection! {
     fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
     fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
     fn trol_get_codes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT = TROLGetCodes else ARG_RANGE;
+    fn trol_here(locName: *const TUCHAR, pos: TINT) -> TINT = TROLHere else ARG_RANGE;
+    fn trol_define(locName: *const TUCHAR, pLoc: *const SLocData) -> TINT = TROLDefine else ARG_RANGE;
+    fn trol_delete_location(locName: *const TUCHAR) -> TINT = TROLDeleteLocation else ARG_RANGE;
+    fn trol_save_locations() -> TINT = TROLSaveLocations else ARG_RANGE;
+    fn trol_list_locations(names: *mut [TUCHAR; 8], locs: *mut SLocData, max: TUINT, count: *mut TUINT) -> TINT = TROLListLocations else ARG_RANGE;
     fn trol_get_gripper(openingMm: *mut f32, held: *mut TINT, name: *mut std::ffi::c_char, nameSize: TUINT) -> TINT = TROLGetGripper else ARG_RANGE;
     fn trol_set_reply_timeout(tenths: TUINT) -> () = SetL3_TO_Intervall else ();
     fn trol_set_repeats(repeats: TUINT) -> () = TROLSetRepeats else ();

@@ -142,6 +142,11 @@ fn returns(def: &trol_client::CommandDef) -> &'static str {
             "0 with the reply in the out parameters, or a TROL code (TROL_ERR_UNKNOWN: a \
              controller that does not know the command)"
         }
+        ReplyKind::Locations => {
+            "0 with up to `max` names and locations in `names` and `locs`, how many there \
+             are in `*count`, or a TROL code (TROL_ERR_UNKNOWN: a controller that does not \
+             know the command)"
+        }
         ReplyKind::Bytes => "the reply's first word; its bytes are the application's",
         _ => "a return value, or a TROL code",
     }

@@ -200,7 +200,18 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if a.mars {
         return run_mars(&a);
     }
+    // A locations file that does not exist yet (its folder does) starts an empty table,
+    // which TROLSaveLocations writes there (docs/teach.md).
+    let mut new_file = false;
     let locations = match &a.locations {
+        Some(p)
+            if !p.exists()
+                && p.parent()
+                    .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir()) =>
+        {
+            new_file = true;
+            Vec::new()
+        }
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .map_err(|e| format!("cannot read {}: {e}", p.display()))?;
@@ -226,6 +237,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         },
         time_scale: a.r.time_scale,
         locations,
+        locations_file: a.locations.clone(),
         tool: [0.0; 6],
     };
     if a.rapl {
@@ -254,6 +266,18 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     );
     if let Some(file) = &a.r.from {
         say!("  settings not given as flags: from {file}");
+    }
+    match &a.locations {
+        Some(p) if new_file => say!(
+            "  locations: {} does not exist yet; TROLSaveLocations (interp: savelocations) \
+             creates it",
+            p.display()
+        ),
+        Some(p) => say!(
+            "  locations: {} (TROLSaveLocations writes them back)",
+            p.display()
+        ),
+        None => {}
     }
     if !a.server {
         say!("  {}", crate::link::activation_hint(&a.port, &name));

@@ -151,6 +151,32 @@ pub trait Backend: Send {
     fn gripper(&mut self) -> Result<Gripper, BackendError> {
         Err(BackendError::Unsupported("read its gripper"))
     }
+    /// Here: store where the arm is (commanded) under `name`, in the form `tag` (teaching,
+    /// docs/teach.md). A precision point's name starts with `#` (the server checked). By
+    /// default: GetPosition's commanded position, stored by [`Backend::define`].
+    fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
+        let here = self.position(tag, PosMode::Commanded)?;
+        self.define(name, &here)
+    }
+    /// Define: store `loc` (six values) under `name` (RAPL-II's POINT).
+    fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
+        let _ = (name, loc);
+        Err(BackendError::Unsupported("store locations"))
+    }
+    /// Forget the location `name` (RAPL-II's DLOCN); TROL_ERR_LOCATION if there is none.
+    fn delete_location(&mut self, name: LocName) -> BiosResult {
+        let _ = name;
+        Err(BackendError::Unsupported("delete locations"))
+    }
+    /// The location table: each name with its location (RAPL-II's LISTL), sorted by name.
+    fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        Err(BackendError::Unsupported("list locations"))
+    }
+    /// Keep the location table across a restart (the simulator writes its locations file; a
+    /// controller that keeps its own table answers 0).
+    fn save_locations(&mut self) -> BiosResult {
+        Err(BackendError::Unsupported("save locations"))
+    }
     /// Where the world's objects are, in words, for logs (a simulator knows; a real
     /// controller does not, and says nothing).
     fn world(&mut self) -> Option<String> {

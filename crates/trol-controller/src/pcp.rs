@@ -14,7 +14,9 @@ use trol_proto::application::code::{
 };
 use trol_proto::application::record::Value;
 use trol_proto::application::table;
-use trol_proto::application::{Catalog, CatalogError, Class, CommandDef, Location, Reply, Tag};
+use trol_proto::application::{
+    Catalog, CatalogError, Class, CommandDef, LocName, Location, Reply, Tag,
+};
 
 use crate::backend::{Backend, PosMode, Target};
 
@@ -430,7 +432,15 @@ impl Call<'_> {
         self.loc(i).map(Location::to_array6)
     }
 
-    /// A target: a name of the controller's table, or coordinates.
+    /// Argument `i` as a location name.
+    pub fn name(&self, i: usize) -> Result<LocName, Code> {
+        match self.args.get(i) {
+            Some(Value::Name(n)) => Ok(*n),
+            _ => Err(TROL_ERR_ARG_RANGE),
+        }
+    }
+
+    /// Argument `i` as a target: a name or a location.
     pub fn target(&self, i: usize) -> Result<Target, Code> {
         match self.args.get(i) {
             Some(Value::Name(n)) => Ok(Target::Name(*n)),
@@ -438,6 +448,43 @@ impl Call<'_> {
             _ => Err(TROL_ERR_ARG_RANGE),
         }
     }
+}
+
+/// A precision point's name starts with `#`, and only a precision point's (RAPL-II's rule,
+/// which the simulator's locations file follows): TROL_ERR_ARG_RANGE otherwise.
+fn precision_name_matches(name: LocName, tag: Tag) -> Result<(), Code> {
+    if name.is_precision() == (tag == Tag::Prec) {
+        Ok(())
+    } else {
+        Err(TROL_ERR_ARG_RANGE)
+    }
+}
+
+/// Here, Define, DeleteLocation and SaveLocations (CAT3, docs/teach.md): the backend's
+/// value, or the code that kept the call from being made.
+fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<i16, Code> {
+    use table::*;
+    let r = match c.def.code {
+        TROL_HERE => {
+            let (name, tag) = (
+                c.name(0)?,
+                Tag::from_u8(c.int(1)?).ok_or(TROL_ERR_ARG_RANGE)?,
+            );
+            precision_name_matches(name, tag)?;
+            b.here(name, tag)
+        }
+        TROL_DEFINE => {
+            let (name, loc) = (c.name(0)?, c.loc(1)?);
+            precision_name_matches(name, loc.tag())?;
+            if !loc.is_finite() {
+                return Err(TROL_ERR_ARG_RANGE);
+            }
+            b.define(name, loc)
+        }
+        TROL_DELETE_LOCATION => b.delete_location(c.name(0)?),
+        _ => b.save_locations(),
+    };
+    r.map_err(Code::from)
 }
 
 /// The handler of every built-in CAT1 command: one BIOS call each, arguments as the table
@@ -513,6 +560,19 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
         TROL_GET_VERSION => Reply::Version {
             protocol: PROTOCOL_VERSION,
             kind: ctx.backend.kind().into(),
+        },
+        TROL_HERE | TROL_DEFINE | TROL_DELETE_LOCATION | TROL_SAVE_LOCATIONS => {
+            match teach(ctx.backend, c) {
+                Ok(v) => Reply::Code(Code(v)),
+                Err(code) => Reply::Code(code),
+            }
+        }
+        TROL_LIST_LOCATIONS => match ctx.backend.locations() {
+            Ok(mut all) => {
+                all.truncate(MAX_LOCATIONS);
+                Reply::Locations(all)
+            }
+            Err(e) => Reply::Code(e.code()),
         },
         TROL_GET_GRIPPER => match ctx.backend.gripper() {
             Ok(g) => Reply::Gripper(g),

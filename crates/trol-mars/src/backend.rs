@@ -27,7 +27,7 @@ use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
 use trol_a465::model::joints_to_counts;
 use trol_controller::{A465_CODES, ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
-use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, Location, Tag};
+use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, LocName, Location, Tag};
 
 use crate::line::{self, Lines, Reply, st};
 use crate::profile::Profile;
@@ -79,7 +79,7 @@ pub static MARS_CODES: &CodeTable = &{
             meaning: "the unit stopped with the arm short of the motion's end",
         },
     ];
-    let mut all = [EXTRA[0]; 15];
+    let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
     let mut i = 0;
     while i < A465_CODES.len() {
         all[i] = A465_CODES[i];
@@ -209,9 +209,16 @@ pub struct MarsBackend {
     tool: [f64; 6],
     log: Option<LogFn>,
     record: Option<Recorder>,
+    /// The locations file TROLSaveLocations writes (docs/teach.md).
+    locations_file: Option<std::path::PathBuf>,
 }
 
 impl MarsBackend {
+    /// The locations file the table came from, which TROLSaveLocations writes back.
+    pub fn set_locations_file(&mut self, file: Option<std::path::PathBuf>) {
+        self.locations_file = file;
+    }
+
     /// Open a session on `port`: read what the unit printed at power-up, `ECHO:0`, a STAMP
     /// exchange, `VER?`, `ST?` and `COORDAP?`. Nothing that moves, nothing that sets up.
     pub fn connect(
@@ -249,6 +256,7 @@ impl MarsBackend {
             tool: [0.0; 6],
             log,
             record,
+            locations_file: None,
         };
         // Power-up noise: read and drop what is there.
         let mut buf = [0u8; 256];
@@ -910,6 +918,18 @@ impl Backend for MarsBackend {
     }
     fn speed(&mut self, percent: u8) -> BiosResult {
         Ok(self.planner.set_speed(f64::from(percent)))
+    }
+    fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
+        trol_controller::table::define(&mut self.planner, name, loc)
+    }
+    fn delete_location(&mut self, name: LocName) -> BiosResult {
+        trol_controller::table::delete(&mut self.planner, name)
+    }
+    fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        Ok(trol_controller::table::list(&self.planner))
+    }
+    fn save_locations(&mut self) -> BiosResult {
+        trol_controller::table::save(&self.planner, self.locations_file.as_deref())
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let q = match mode {

@@ -61,7 +61,62 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         (&SET_WATCHDOG, vec![Int(50)]),
         (&GET_CODES, vec![]),
         (&GET_GRIPPER, vec![]),
+        (&LIST_LOCATIONS, vec![]),
+        (&HERE, vec![name("p1"), Int(Tag::Cart as u8)]),
+        (
+            &DEFINE,
+            vec![
+                name("#park"),
+                Loc(Location::Prec(vec![0, 100, -200, 0, 5, 0])),
+            ],
+        ),
+        (&DELETE_LOCATION, vec![name("p1")]),
+        (&SAVE_LOCATIONS, vec![]),
     ]
+}
+
+/// ListLocations' reply (docs/protocol.md, "Locations"): names with their locations
+/// round-trip; a cut entry, a bad name or tag, a value that is not 0, is TROL_ERR_BAD_RSIZE.
+#[test]
+fn a_locations_reply_holds_only_what_the_rules_allow() {
+    use trol_proto::application::LocName;
+    let def = &table::LIST_LOCATIONS;
+    let all = vec![
+        (
+            LocName::new("#park").unwrap(),
+            Location::Prec(vec![0, 100, -200, 0, 5, 0]),
+        ),
+        (
+            LocName::new("p1").unwrap(),
+            Location::Cart(vec![400.0, 0.0, 300.0, 0.0, 1.5, 0.0]),
+        ),
+        (
+            LocName::new("pj").unwrap(),
+            Location::Joint(vec![0.0, 0.5, 1.0, 0.0, 0.25, 0.0]),
+        ),
+    ];
+    for list in [vec![], all.clone()] {
+        let bytes = Reply::Locations(list.clone()).encode();
+        assert_eq!(Reply::decode(def, &bytes).unwrap(), Reply::Locations(list));
+    }
+    let good = Reply::Locations(all).encode();
+    assert_eq!(good.len(), 2 + 3 * 33);
+    let mut bad_name = good.clone();
+    bad_name[2] = b'9';
+    let mut bad_tag = good.clone();
+    bad_tag[2 + 8] = 7;
+    for bad in [
+        good[..good.len() - 1].to_vec(),
+        [&[1u8, 0][..], &good[2..]].concat(),
+        bad_name,
+        bad_tag,
+    ] {
+        assert_eq!(
+            Reply::decode(def, &bad).unwrap_err().code(),
+            trol_proto::application::code::TROL_ERR_BAD_RSIZE,
+            "{bad:02x?}"
+        );
+    }
 }
 
 #[test]

@@ -546,13 +546,17 @@ impl Robot {
             None => None,
         };
         loop {
-            if !self.is_moving(py)? {
-                return Ok(());
-            }
+            // Signals first: a Ctrl-C that came while this process was held up (a loaded
+            // machine) is reported even if the arm has ended its motion since.
             if let Err(interrupt) = py.check_signals() {
                 // Stop the arm before the exception goes up; report the interrupt either way.
                 let _ = self.with(py, |r| r.halt());
                 return Err(interrupt);
+            }
+            if !self.is_moving(py)? {
+                // One more look: a Ctrl-C during that last poll is still this wait's.
+                py.check_signals()?;
+                return Ok(());
             }
             if deadline.is_some_and(|d| Instant::now() >= d) {
                 return Err(exception(
@@ -587,6 +591,66 @@ impl Robot {
     #[pyo3(signature = (actual = false))]
     fn precision<'py>(&self, py: Python<'py>, actual: bool) -> PyResult<Bound<'py, PyAny>> {
         location_object(py, self.position(py, Tag::Prec, actual)?)
+    }
+
+    /// TROLHere: store where the arm is (commanded) under ``name``: ``form`` ``"cart"`` (the
+    /// default), ``"joint"`` or ``"prec"`` (a precision point; its name starts with ``#``).
+    #[pyo3(signature = (name, form = "cart"))]
+    fn here(&self, py: Python<'_>, name: String, form: &str) -> PyResult<()> {
+        let tag = match form {
+            "cart" => Tag::Cart,
+            "joint" => Tag::Joint,
+            "prec" => Tag::Prec,
+            other => {
+                return Err(argument_error(
+                    py,
+                    format!("form {other:?}: expected \"cart\", \"joint\" or \"prec\""),
+                ));
+            }
+        };
+        self.with(py, move |r| r.here(&name, tag))
+    }
+
+    /// TROLDefine: store ``location`` under ``name``: a ``trol.Pose`` (or six cartesian
+    /// values), a ``trol.Joints`` or a ``trol.Precision`` (whose name starts with ``#``).
+    fn define(&self, py: Python<'_>, name: String, location: &Bound<'_, PyAny>) -> PyResult<()> {
+        let loc = if is_precision(py, location)? {
+            Location::Prec(location.extract::<Vec<i32>>()?)
+        } else if location.is_instance(&py.import("trol._types")?.getattr("Joints")?)? {
+            Location::Joint(floats(py, location, "location")?)
+        } else {
+            Location::Cart(floats(py, location, "location")?)
+        };
+        if loc.num_dims() != 6 {
+            return Err(argument_error(
+                py,
+                format!("location: six values, not {}", loc.num_dims()),
+            ));
+        }
+        self.with(py, move |r| r.define(&name, &loc))
+    }
+
+    /// TROLDeleteLocation: forget the location ``name`` (trol.RefusedError with
+    /// ``TROL_ERR_LOCATION`` if there is none).
+    fn delete_location(&self, py: Python<'_>, name: String) -> PyResult<()> {
+        self.with(py, move |r| r.delete_location(&name))
+    }
+
+    /// TROLSaveLocations: keep the location table across a restart (the simulator writes its
+    /// locations file).
+    fn save_locations(&self, py: Python<'_>) -> PyResult<()> {
+        self.with(py, |r| r.save_locations())
+    }
+
+    /// TROLListLocations: the controller's table as a dict, name to ``trol.Pose``,
+    /// ``trol.Joints`` or ``trol.Precision``, sorted by name.
+    fn locations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let all = self.with(py, |r| r.locations())?;
+        let d = pyo3::types::PyDict::new(py);
+        for (name, loc) in all {
+            d.set_item(name, location_object(py, loc)?)?;
+        }
+        Ok(d)
     }
 
     /// TROLGetGripper: a ``trol.Gripper``: the fingers' opening (mm) and what they hold, to

@@ -302,8 +302,8 @@ def test_ctrl_c_during_finish_halts_the_arm_and_raises_keyboard_interrupt() -> N
         import sys, trol
         robot = trol.Robot.open("sim", time_scale=1)
         robot.home()
-        robot.speed(10)
-        robot.joint(1, 2.0)
+        robot.speed(5)
+        robot.joint(1, 2.0)  # 13 s: a loaded machine that holds this process up a while
         print("waiting", flush=True)
         try:
             robot.finish()
@@ -323,7 +323,7 @@ def test_ctrl_c_during_finish_halts_the_arm_and_raises_keyboard_interrupt() -> N
     assert proc.returncode == 3, out
     # Halted well short of the 2 rad the move was going to.
     j1 = float(out.split("stopped at j1", 1)[1])
-    assert 0.0 < j1 < 1.0, out
+    assert 0.0 < j1 < 1.5, out
 
 
 def test_describe_names_a_code() -> None:
@@ -446,6 +446,75 @@ def test_a_1998_controller_is_driven_and_the_program_is_told_once() -> None:
             assert abs(robot.joints()[0] - 0.25) < 1e-6
             bios_called, last, transaction, epoch = robot.status_record()
             assert (bios_called, last, transaction, epoch) == (True, 0, 0, 0)
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+def _sim_with_locations(path: Path) -> subprocess.Popen[str]:
+    proc = subprocess.Popen(
+        [str(trol_binary()), "sim", "--server", "--time-scale", "50", "--homed", "--locations", str(path)],
+        stdout=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+        text=True,
+    )
+    return proc
+
+
+def _port_of(proc: subprocess.Popen[str]) -> str:
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    assert "serving on " in line, line
+    threading.Thread(target=proc.stdout.read, daemon=True).start()
+    return line.split("serving on ", 1)[1].split()[0]
+
+
+def test_teaching_stores_lists_deletes_and_survives_a_restart(tmp_path: Path) -> None:
+    """docs/teach.md from Python: here, define, locations() as a mapping, delete, move back
+    to a taught location, save; a new `trol sim` on the same file has them."""
+    taught = tmp_path / "taught.txt"  # does not exist yet: save creates it
+    proc = _sim_with_locations(taught)
+    try:
+        with trol.Robot.open(_port_of(proc), baud=38400) as robot:
+            assert robot.locations() == {}
+            robot.move(trol.Pose(420, -50, 330, 0, math.pi / 2, 0))
+            robot.finish()
+            at = robot.joints()
+            robot.here("p1")
+            robot.here("pj", "joint")
+            robot.here("#pp", "prec")
+            robot.define("up", trol.Pose(300, 0, 500, 0, 1.5, 0))
+            robot.define("jj", trol.Joints(0, 0.2, 0.4, 0, 0.5, 0))
+            table = robot.locations()
+            assert list(table) == ["#pp", "jj", "p1", "pj", "up"]
+            assert isinstance(table["p1"], trol.Pose) and abs(table["p1"].x - 420) < 0.01
+            assert isinstance(table["pj"], trol.Joints)
+            assert isinstance(table["#pp"], trol.Precision)
+            with pytest.raises(trol.ArgumentError):
+                robot.here("pp", "prec")  # a precision point's name starts with '#'
+            with pytest.raises(trol.ArgumentError):
+                robot.here("p2", "sideways")
+            robot.delete_location("up")
+            with pytest.raises(trol.RefusedError) as e:
+                robot.delete_location("up")
+            assert e.value.name == "TROL_ERR_LOCATION"
+            robot.ready()
+            robot.finish()
+            robot.move("pj")
+            robot.finish()
+            assert all(abs(a - b) < 1e-3 for a, b in zip(robot.joints(), at))
+            robot.save_locations()
+    finally:
+        proc.kill()
+        proc.wait()
+    assert "pj joint" in taught.read_text()
+    proc = _sim_with_locations(taught)
+    try:
+        with trol.Robot.open(_port_of(proc), baud=38400) as robot:
+            assert list(robot.locations()) == ["#pp", "jj", "p1", "pj"]
+            robot.move("#pp")
+            robot.finish()
+            assert all(abs(a - b) < 1e-3 for a, b in zip(robot.joints(), at))
     finally:
         proc.kill()
         proc.wait()

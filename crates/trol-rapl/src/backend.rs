@@ -130,7 +130,7 @@ pub static RAPL_CODES: &CodeTable = &{
                       another has not ended: call TROLFinish(FINISH_WAIT) first",
         },
     ];
-    let mut all = [EXTRA[0]; 18];
+    let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
     let mut i = 0;
     while i < A465_CODES.len() {
         all[i] = A465_CODES[i];
@@ -1389,6 +1389,29 @@ impl RaplBackend {
     }
 
     /// A scratch name not used by a motion under way or queued.
+    /// Why a teaching command cannot go to the C500 (said in the log), before anything is
+    /// sent: a joint location (RAPL-II keeps cartesian locations and precision points), or a
+    /// scratch location's name.
+    fn teach_refusal(&mut self, name: &LocName, tag: Tag) -> Option<i16> {
+        if tag == Tag::Joint {
+            self.note(
+                "refused before sending: RAPL-II keeps cartesian locations and precision \
+                 points (#NAME), not joint angles"
+                    .into(),
+            );
+            return Some(UNSUPPORTED);
+        }
+        if Self::is_scratch(name.as_str()) {
+            self.note(format!(
+                "refused before sending: {name} is a scratch location of this backend (T1 to \
+                 T{}, for MoveII and Appro); choose another name",
+                QUEUE + 2
+            ));
+            return Some(code_of("BIOS_BAD_ARGUMENT"));
+        }
+        None
+    }
+
     fn scratch_name(&mut self) -> String {
         self.scratch = (self.scratch % (QUEUE + 2)) + 1;
         format!("T{}", self.scratch)
@@ -1398,6 +1421,27 @@ impl RaplBackend {
     /// target name and what the motion must end at, or the code that refused it.
     fn point(&mut self, loc: &Location) -> Result<Result<(String, Expect), i16>, BackendError> {
         let name = self.scratch_name();
+        self.point_named(name, loc)
+    }
+
+    /// Whether `name` (any case) is one of the scratch locations this backend defines for
+    /// MoveII and Appro: a program's location of that name would be overwritten.
+    fn is_scratch(name: &str) -> bool {
+        let upper = name.to_ascii_uppercase();
+        upper
+            .strip_prefix('T')
+            .and_then(|n| n.parse::<usize>().ok())
+            .is_some_and(|n| (1..=QUEUE + 2).contains(&n))
+    }
+
+    /// POINT `name` (upper case; `#` added for a precision point) with `loc`, read back with
+    /// LISTL: the RAPL name and what a motion to it must end at, or the code that refused it.
+    fn point_named(
+        &mut self,
+        name: String,
+        loc: &Location,
+    ) -> Result<Result<(String, Expect), i16>, BackendError> {
+        let name = name.trim_start_matches('#').to_ascii_uppercase();
         let (name, values, expect) = match loc {
             Location::Cart(_) => match self.frames.to_rapl(loc.to_array6()) {
                 Ok(v) => (name, v, Expect::World(v)),
@@ -1890,6 +1934,102 @@ impl Backend for RaplBackend {
                 Err(c) => Ok(c),
             },
         })
+    }
+    fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
+        self.report_unasked()?;
+        if let Some(c) = self.teach_refusal(&name, tag) {
+            return Ok(c);
+        }
+        let upper = name.as_str().to_ascii_uppercase();
+        // HERE moves nothing: whatever happens to it, no motion was sent.
+        match self.command(&format!("HERE {upper}")).map_err(not_run)? {
+            0 => {}
+            c => return Ok(c),
+        }
+        // Success only once LISTL shows the location.
+        match self.listed(&name)? {
+            Some(_) => Ok(0),
+            None => {
+                let e = format!(
+                    "`HERE {upper}` was answered with success, but LISTL does not list {upper}"
+                );
+                self.note(e.clone());
+                Err(BackendError::Link(e))
+            }
+        }
+    }
+    fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
+        self.report_unasked()?;
+        if let Some(c) = self.teach_refusal(&name, loc.tag()) {
+            return Ok(c);
+        }
+        // POINT and its read back, as for a scratch location of MoveII.
+        match self.point_named(name.as_str().to_string(), loc)? {
+            Ok(_) => Ok(0),
+            Err(c) => Ok(c),
+        }
+    }
+    fn delete_location(&mut self, name: LocName) -> BiosResult {
+        self.report_unasked()?;
+        if let Some(c) = self.teach_refusal(&name, Tag::Cart) {
+            return Ok(c);
+        }
+        if self.listed(&name)?.is_none() {
+            return Err(BackendError::UnknownLocation(name));
+        }
+        let upper = name.as_str().to_ascii_uppercase();
+        match self.command(&format!("DLOCN {upper}")).map_err(not_run)? {
+            0 => {}
+            c => return Ok(c),
+        }
+        match self.listed(&name)? {
+            None => Ok(0),
+            Some(_) => {
+                let e =
+                    format!("`DLOCN {upper}` was answered with success, but LISTL still lists it");
+                self.note(e.clone());
+                Err(BackendError::Link(e))
+            }
+        }
+    }
+    fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        self.report_unasked()?;
+        let r = self.output("LISTL")?;
+        let rows = text::read_listl(&r.text).map_err(BackendError::Link)?;
+        let mut all = Vec::new();
+        for (n, l) in rows {
+            if Self::is_scratch(&n) {
+                continue;
+            }
+            let Ok(name) = LocName::new(&n.to_ascii_lowercase()) else {
+                self.note(format!("LISTL: {n} is no TROL location name; left out"));
+                continue;
+            };
+            let loc = match l {
+                Listed::Cart(v) => match self.frames.from_rapl(v) {
+                    Ok(t) => Location::from_array6(Tag::Cart, t),
+                    Err(u) => return Err(BackendError::Refused(self.unsettled(u))),
+                },
+                Listed::Prec(p) => {
+                    let counts: Option<Vec<i32>> =
+                        p.iter().map(|x| i32::try_from(*x).ok()).collect();
+                    match counts {
+                        Some(c) => Location::Prec(c),
+                        None => {
+                            self.note(format!("LISTL: {n}'s pulses do not fit 32 bits; left out"));
+                            continue;
+                        }
+                    }
+                }
+            };
+            all.push((name, loc));
+        }
+        all.sort_by(|a, b| a.0.as_str().cmp(b.0.as_str()));
+        Ok(all)
+    }
+    fn save_locations(&mut self) -> BiosResult {
+        // The C500 keeps its location table itself (in its battery-backed memory).
+        Ok(0)
     }
     fn open(&mut self, force: u8) -> BiosResult {
         self.report_unasked()?;

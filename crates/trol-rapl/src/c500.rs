@@ -603,6 +603,8 @@ impl C500 {
         Some(match self.locations.get(name)? {
             Stored::Cart(v) => arm::Target::Cart(*v),
             Stored::Prec(c) => arm::Target::Prec(self.model_counts(*c)),
+            // (RAPL-II has no joint locations: this controller never stores one.)
+            Stored::Joints(q) => arm::Target::Joints(*q),
         })
     }
 
@@ -820,6 +822,7 @@ impl C500 {
                                 Listed::Cart(self.frames.to_rapl(*v).unwrap_or([0.0; 6]))
                             }
                             Stored::Prec(p) => Listed::Prec(p.map(i64::from)),
+                            Stored::Joints(q) => Listed::Prec(self.pulses_of(q)),
                         };
                         (n.clone(), listed)
                     })

@@ -17,7 +17,7 @@ use trol_controller::{
     embedded_with,
 };
 use trol_port::memory::MemoryLine;
-use trol_proto::application::{CodeTable, Gripper, Held, Location, Tag};
+use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag};
 use trol_proto::link::LinkConfig;
 
 /// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's.
@@ -38,6 +38,9 @@ pub struct SimSettings {
     pub time_scale: f64,
     /// Locations loaded at start.
     pub locations: Vec<(String, Stored)>,
+    /// The locations file they came from, which TROLSaveLocations writes back (none: Save
+    /// answers BIOS_NO_FILE).
+    pub locations_file: Option<std::path::PathBuf>,
     /// The tool transform at start.
     pub tool: [f64; 6],
 }
@@ -48,6 +51,7 @@ impl Default for SimSettings {
             arm: ArmSettings::default(),
             time_scale: 1.0,
             locations: Vec::new(),
+            locations_file: None,
             tool: [0.0; 6],
         }
     }
@@ -59,6 +63,7 @@ pub struct SimBackend {
     epoch: Instant,
     scale: f64,
     view: Option<SharedArm>,
+    locations_file: Option<std::path::PathBuf>,
 }
 
 /// A copy of the simulated arm for a view (a browser page): the arm's motions are planned,
@@ -96,6 +101,7 @@ impl SimBackend {
             epoch: Instant::now(),
             scale: settings.time_scale.max(1e-3),
             view: None,
+            locations_file: settings.locations_file,
         }
     }
 
@@ -210,6 +216,22 @@ impl Backend for SimBackend {
     }
     fn speed(&mut self, percent: u8) -> BiosResult {
         Ok(self.arm.set_speed(percent as f64))
+    }
+    fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
+        let now = self.now();
+        trol_controller::table::here(&mut self.arm, name, tag, now)
+    }
+    fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
+        trol_controller::table::define(&mut self.arm, name, loc)
+    }
+    fn delete_location(&mut self, name: LocName) -> BiosResult {
+        trol_controller::table::delete(&mut self.arm, name)
+    }
+    fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        Ok(trol_controller::table::list(&self.arm))
+    }
+    fn save_locations(&mut self) -> BiosResult {
+        trol_controller::table::save(&self.arm, self.locations_file.as_deref())
     }
     fn after_request(&mut self) {
         self.publish();

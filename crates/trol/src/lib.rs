@@ -95,6 +95,7 @@ pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
         },
         time_scale: cfg.time_scale,
         locations: config_locations(cfg)?,
+        locations_file: cfg.locations.clone(),
         tool: cfg.tool,
     })
 }

@@ -404,7 +404,8 @@ impl Robot {
                 ..LinkConfig::default()
             };
             let locations = crate::config_locations(cfg)?;
-            return Robot::mars(device, profile, locations, link);
+            // TROLSaveLocations writes trol.cfg's locations file back (docs/teach.md).
+            return Robot::mars(device, profile, (locations, cfg.locations.clone()), link);
         }
         #[cfg(feature = "rapl")]
         if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
@@ -491,13 +492,18 @@ impl Robot {
     /// Embed the controller with the MARS 8 backend: open DEVICE (a serial device with
     /// RTS/CTS, or `socket://HOST:PORT`) at the profile's baud rate, read the unit's state
     /// (nothing moves), and serve TROL to this process over an in-memory line
-    /// (docs/mars.md). TROL's own location table starts with `locations`.
+    /// (docs/mars.md). TROL's own location table starts with `locations`: the locations and
+    /// the file they came from, which TROLSaveLocations writes back (docs/teach.md).
     pub fn mars(
         device: &str,
         profile: trol_mars::Profile,
-        locations: Vec<(String, trol_a465::arm::Stored)>,
+        locations: (
+            Vec<(String, trol_a465::arm::Stored)>,
+            Option<std::path::PathBuf>,
+        ),
         link: LinkConfig,
     ) -> Result<Robot> {
+        let (locations, file) = locations;
         let settings = PortSettings {
             baud: profile.baud,
             rts_cts: true,
@@ -514,6 +520,8 @@ impl Robot {
             locations,
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let mut backend = backend;
+        backend.set_locations_file(file);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
@@ -1301,6 +1309,55 @@ impl Robot {
         }
     }
 
+    /// TROLHere: store where the arm is (commanded) under `name`, in the form `tag`
+    /// (cartesian, joint angles, or a precision point, whose name starts with `#`). On the
+    /// simulator and a MARS 8 the table is TROL's (kept across a restart by
+    /// [`Robot::save_locations`]); on a C500 it is the controller's own (docs/teach.md).
+    pub fn here(&mut self, name: &str, tag: Tag) -> Result<()> {
+        let def = &table::HERE;
+        let args = [loc_name(def, name)?, Value::Int(tag as u8)];
+        precision_name(def, name, tag)?;
+        self.cat1(def, &args).map(drop)
+    }
+
+    /// TROLDefine: store `loc` (six values: cartesian, joint angles or encoder counts) under
+    /// `name` (a precision point's name starts with `#`).
+    pub fn define(&mut self, name: &str, loc: &Location) -> Result<()> {
+        let def = &table::DEFINE;
+        let args = [loc_name(def, name)?, Value::Loc(loc.clone())];
+        precision_name(def, name, loc.tag())?;
+        self.cat1(def, &args).map(drop)
+    }
+
+    /// TROLDeleteLocation: forget the location `name` (TROL_ERR_LOCATION if there is none).
+    pub fn delete_location(&mut self, name: &str) -> Result<()> {
+        let def = &table::DELETE_LOCATION;
+        let args = [loc_name(def, name)?];
+        self.cat1(def, &args).map(drop)
+    }
+
+    /// TROLSaveLocations: keep the location table across a restart (the simulator writes its
+    /// locations file; without one it answers BIOS_NO_FILE).
+    pub fn save_locations(&mut self) -> Result<()> {
+        self.cat1(&table::SAVE_LOCATIONS, &[]).map(drop)
+    }
+
+    /// TROLListLocations: the controller's table, each name with its location, sorted by
+    /// name.
+    pub fn locations(&mut self) -> Result<Vec<(String, Location)>> {
+        let def = &table::LIST_LOCATIONS;
+        match self.call(def, &[])? {
+            Reply::Locations(all) => Ok(all
+                .into_iter()
+                .map(|(n, l)| (n.as_str().to_string(), l))
+                .collect()),
+            other => Err(Error::BadReply {
+                command: def.name,
+                len: other.encode().len(),
+            }),
+        }
+    }
+
     /// TROLGetCodes: the controller's BIOS codes, each with its name and meaning.
     pub fn get_codes(&mut self) -> Result<Vec<CodeEntry>> {
         let def = &table::GET_CODES;
@@ -1388,6 +1445,22 @@ fn small(def: &CommandDef, v: u16) -> Result<Value> {
             what: format!("{v} out of range"),
         })
     })
+}
+
+/// A precision point's name starts with `#`, and only a precision point's (RAPL-II's rule).
+fn precision_name(def: &CommandDef, name: &str, tag: Tag) -> Result<()> {
+    if name.starts_with('#') == (tag == Tag::Prec) {
+        return Ok(());
+    }
+    Err(Error::Argument(RequestError::Range {
+        command: def.name,
+        arg: "locName",
+        what: if tag == Tag::Prec {
+            format!("{name:?}: a precision point's name starts with '#'")
+        } else {
+            format!("{name:?}: a name starting with '#' is a precision point's (use the prec form)")
+        },
+    }))
 }
 
 fn loc_name(def: &CommandDef, name: &str) -> Result<Value> {

@@ -73,7 +73,13 @@ struct Session {
     robot: Option<Robot>,
     catalog: Catalog,
     json: bool,
+    /// The location names completion offers: the location file's at the start, then what
+    /// Here, Define, DeleteLocation and ListLocations said (docs/teach.md).
+    names: Names,
 }
+
+/// Location names, shared with the line editor's completion.
+type Names = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
 
 /// A reply as JSON.
 fn reply_json(
@@ -130,6 +136,18 @@ fn reply_json(
             .collect::<Vec<_>>()}),
         trol::Reply::Reals { values, .. } => json!({"values": values}),
         trol::Reply::Bytes { bytes, .. } => json!({"bytes": bytes}),
+        trol::Reply::Locations(all) => json!({"locations": all
+            .iter()
+            .map(|(name, loc)| json!({
+                "name": name.as_str(),
+                "form": match loc.tag() {
+                    trol::Tag::Cart => "cart",
+                    trol::Tag::Joint => "joint",
+                    trol::Tag::Prec => "prec",
+                },
+                "values": loc.to_array6(),
+            }))
+            .collect::<Vec<_>>()}),
         trol::Reply::Gripper(g) => json!({"gripper": {
             "opening_mm": g.opening_mm,
             "held": match &g.held {
@@ -145,6 +163,33 @@ fn reply_json(
         o.extend(e.clone());
     }
     o
+}
+
+/// Keep the names completion offers up to date after a call that succeeded.
+fn note_names(names: &Names, def: &CommandDef, args: &[Value], reply: &trol::Reply) {
+    if !reply.value().is_success() {
+        return;
+    }
+    let Ok(mut names) = names.lock() else {
+        return;
+    };
+    let named = match args.first() {
+        Some(Value::Name(n)) => Some(n.as_str().to_string()),
+        _ => None,
+    };
+    match (def.code, reply) {
+        (_, trol::Reply::Locations(all)) => {
+            *names = all.iter().map(|(n, _)| n.as_str().to_string()).collect();
+        }
+        (table::TROL_HERE | table::TROL_DEFINE, _) => {
+            if let Some(n) = named.filter(|n| !names.contains(n)) {
+                names.push(n);
+                names.sort();
+            }
+        }
+        (table::TROL_DELETE_LOCATION, _) => names.retain(|n| Some(n) != named.as_ref()),
+        _ => {}
+    }
 }
 
 /// A failure as JSON.
@@ -330,6 +375,9 @@ impl Session {
             } else {
                 robot.call(def, args)
             };
+            if let Ok(r) = &reply {
+                note_names(&self.names, def, args, r);
+            }
             return match reply {
                 Ok(r) => Ok((r.text(codes), reply_json(def, &r, codes))),
                 Err(e) => {
@@ -484,6 +532,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
         json: a.json,
         robot: None,
         catalog: trol::described::catalog(a.commands.as_deref())?,
+        names: Names::default(),
     };
     catch_interrupts();
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
@@ -572,7 +621,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
 /// takes: its choices, the straight flag, and location names (those of the location file).
 struct Helper {
     catalog: Catalog,
-    locations: Vec<String>,
+    locations: Names,
 }
 
 /// The arguments already typed after the command in `head` (a location literal with its
@@ -626,6 +675,7 @@ impl rustyline::completion::Completer for Helper {
                     .map(|d| d.short_name().to_ascii_lowercase()),
             );
             words.extend(OWN.iter().map(|o| o.0.to_string()));
+            words.extend(table::ALIASES.iter().map(|(alias, _)| alias.to_string()));
         } else if inside {
             // Inside a location literal: numbers, nothing to offer.
         } else if let Some(def) = head
@@ -636,8 +686,10 @@ impl rustyline::completion::Completer for Helper {
             let n = args_typed(&head[..start]);
             if let Some(arg) = def.args.get(n) {
                 words.extend(commands::words_for(&arg.kind).into_iter().map(String::from));
-                if matches!(arg.kind, trol_proto::application::ArgKind::Name) {
-                    words.extend(self.locations.iter().cloned());
+                if matches!(arg.kind, trol_proto::application::ArgKind::Name)
+                    && let Ok(names) = self.locations.lock()
+                {
+                    words.extend(names.iter().cloned());
                 }
             }
         } else if head.trim_start().to_ascii_lowercase().starts_with("help ") {
@@ -671,8 +723,9 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
     use rustyline::error::ReadlineError;
     let mut rl: rustyline::Editor<Helper, rustyline::history::DefaultHistory> =
         rustyline::Editor::new().map_err(|e| format!("cannot start line editing: {e}"))?;
-    // Location names to offer: the location file's (the embedded simulator's table).
-    let locations = session
+    // Location names to offer: the location file's (the embedded simulator's table), then
+    // whatever the teaching commands said.
+    let locations: Vec<String> = session
         .conn
         .config()
         .ok()
@@ -681,9 +734,12 @@ fn repl(session: &mut Session) -> Result<ExitCode, String> {
         .and_then(|t| trol_a465::arm::parse_locations(&t).ok())
         .map(|l| l.into_iter().map(|(name, _)| name).collect())
         .unwrap_or_default();
+    if let Ok(mut names) = session.names.lock() {
+        *names = locations;
+    }
     rl.set_helper(Some(Helper {
         catalog: session.catalog.clone(),
-        locations,
+        locations: session.names.clone(),
     }));
     let hist = history_file();
     if let Some(h) = &hist {

@@ -77,9 +77,16 @@ impl Catalog {
         self.defs.iter().find(|d| d.code == code)
     }
 
-    /// The command with this name (any case, with or without the TROL prefix).
+    /// The command with this name (any case, with or without the TROL prefix), or with one
+    /// of its RAPL-II names (`listl`, `dlocn`, `point`: [`super::table::ALIASES`]).
     pub fn find(&self, name: &str) -> Option<&CommandDef> {
-        self.defs.iter().find(|d| d.is_named(name))
+        self.defs.iter().find(|d| d.is_named(name)).or_else(|| {
+            let code = super::table::ALIASES
+                .iter()
+                .find(|(alias, _)| alias.eq_ignore_ascii_case(name))?
+                .1;
+            self.get(code)
+        })
     }
 
     /// Every command, in code order.

@@ -144,6 +144,9 @@ pub enum ReplyKind {
     /// GetGripper's: 0, the opening (f32, mm), what is held (0 nothing, 1 an object, 2
     /// unknown) and the object's name (0 to 32 printable bytes, with 1 only).
     Gripper,
+    /// ListLocations': 0, then for each location its name (8 bytes, NUL-padded), its tag and
+    /// six values as in GetPosition (docs/protocol.md, "Locations").
+    Locations,
     /// The return value and any bytes (read by the application itself).
     Bytes,
 }

@@ -7,7 +7,7 @@
 
 use super::code::{Code, CodeInfo, CodeTable, TROL_ERR_BAD_RSIZE};
 use super::command::{CommandDef, ReplyKind};
-use super::location::{ARM_DIMS, Location, Tag};
+use super::location::{ARM_DIMS, LocName, Location, Tag};
 use super::record::{format_location, format_number, get_location, put_location};
 
 /// The longest kind a GetVersion reply carries, bytes.
@@ -110,6 +110,8 @@ pub enum Reply {
     Codes(Vec<CodeEntry>),
     /// TROLGetGripper: the fingers' opening and what they hold.
     Gripper(Gripper),
+    /// TROLListLocations: the controller's table, each name with its location (six values).
+    Locations(Vec<(LocName, Location)>),
     /// The return value and bytes the application reads itself.
     Bytes {
         /// The return value.
@@ -124,9 +126,11 @@ impl Reply {
     pub fn value(&self) -> Code {
         match self {
             Reply::Code(v) | Reply::Reals { value: v, .. } | Reply::Bytes { value: v, .. } => *v,
-            Reply::Position(_) | Reply::Version { .. } | Reply::Codes(_) | Reply::Gripper(_) => {
-                Code(0)
-            }
+            Reply::Position(_)
+            | Reply::Version { .. }
+            | Reply::Codes(_)
+            | Reply::Gripper(_)
+            | Reply::Locations(_) => Code(0),
             Reply::Status { bios_called, .. } => Code(i16::from(*bios_called)),
         }
     }
@@ -184,6 +188,13 @@ impl Reply {
                         out.push(1);
                         out.extend(name.bytes().filter(printable).take(MAX_KIND));
                     }
+                }
+            }
+            Reply::Locations(all) => {
+                for (name, loc) in all.iter().take(super::table::MAX_LOCATIONS) {
+                    out.extend_from_slice(&name.bytes());
+                    out.push(loc.tag() as u8);
+                    put_location(&mut out, &Location::from_array6(loc.tag(), loc.to_array6()));
                 }
             }
             Reply::Bytes { bytes, .. } => out.extend_from_slice(bytes),
@@ -270,6 +281,22 @@ impl Reply {
                     return Err(bad());
                 }
                 Ok(Reply::Gripper(Gripper { opening_mm, held }))
+            }
+            ReplyKind::Locations => {
+                const ENTRY: usize = 8 + 1 + 4 * ARM_DIMS;
+                if value.0 != 0
+                    || rest.len() % ENTRY != 0
+                    || rest.len() / ENTRY > super::table::MAX_LOCATIONS
+                {
+                    return Err(bad());
+                }
+                let mut all = Vec::with_capacity(rest.len() / ENTRY);
+                for entry in rest.chunks_exact(ENTRY) {
+                    let name = LocName::from_bytes(&entry[..8]).map_err(|_| bad())?;
+                    let tag = Tag::from_u8(entry[8]).ok_or_else(bad)?;
+                    all.push((name, get_location(tag, &entry[9..])));
+                }
+                Ok(Reply::Locations(all))
             }
             ReplyKind::Codes => {
                 if value.0 != 0 {
@@ -376,6 +403,14 @@ impl Reply {
                     Held::Unknown => "what it holds unknown to the controller".to_string(),
                 }
             ),
+            Reply::Locations(all) if all.is_empty() => "no locations".to_string(),
+            Reply::Locations(all) => {
+                let each: Vec<String> = all
+                    .iter()
+                    .map(|(name, loc)| format!("{name} {}", format_location(loc)))
+                    .collect();
+                each.join("; ")
+            }
             Reply::Codes(codes) => {
                 let each: Vec<String> = codes
                     .iter()

@@ -15,6 +15,7 @@ use super::location::Tag;
 const CART_ONLY: &[Tag] = &[Tag::Cart];
 const JOINT_ONLY: &[Tag] = &[Tag::Joint];
 const TARGETS: &[Tag] = &[Tag::Cart, Tag::Prec];
+const ANY_FORM: &[Tag] = &[Tag::Cart, Tag::Joint, Tag::Prec];
 
 const fn int(name: &'static str, min: u8, max: u8) -> Arg {
     Arg {
@@ -39,6 +40,31 @@ const LOC_NAME: Arg = Arg {
     kind: ArgKind::Name,
 };
 const FORCE: Arg = int("perForce", 1, 100);
+/// A location's form: the choice GetPosition takes, and Here.
+const FORM: Arg = Arg {
+    name: "pos",
+    kind: ArgKind::Choice(&[
+        Choice {
+            word: "cart",
+            constant: "POS_CART",
+            value: Tag::Cart as u8,
+        },
+        Choice {
+            word: "joint",
+            constant: "POS_JOINT",
+            value: Tag::Joint as u8,
+        },
+        Choice {
+            word: "prec",
+            constant: "POS_PREC",
+            value: Tag::Prec as u8,
+        },
+    ]),
+};
+
+/// The most locations a controller's table holds (what TROLListLocations can carry in one
+/// reply, with room to spare; assumption for the simulator, docs/teach.md).
+pub const MAX_LOCATIONS: usize = 1000;
 
 /// FINISH_STATUS: Finish returns 1 while the arm moves, 0 when it is done.
 pub const FINISH_STATUS: u8 = 0;
@@ -217,6 +243,45 @@ commands! {
         reply: ReplyKind::Gripper, success: &[], wait: Wait::Reply,
         help: "read the gripper: the fingers' opening (mm) and what they hold",
     }
+    /// TROLListLocations(): the controller's table, each name with its location (added:
+    /// RAPL-II's LISTL; docs/teach.md).
+    TROL_LIST_LOCATIONS = 130 => LIST_LOCATIONS {
+        name: "TROLListLocations",
+        args: &[],
+        reply: ReplyKind::Locations, success: &[], wait: Wait::Reply,
+        help: "list the controller's locations: each name with its value",
+    }
+    /// TROLHere(locName, pos): store where the arm is under a name (added: teaching, RAPL-II's
+    /// HERE; docs/teach.md).
+    TROL_HERE = 131 => HERE {
+        name: "TROLHere",
+        args: &[LOC_NAME, FORM],
+        reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
+        help: "store where the arm is (commanded) under a name: cart, joint or prec (a prec name starts with #)",
+    }
+    /// TROLDefine(locName, pLoc): store a given location under a name (added: RAPL-II's
+    /// POINT; docs/teach.md).
+    TROL_DEFINE = 132 => DEFINE {
+        name: "TROLDefine",
+        args: &[LOC_NAME, loc("pLoc", ANY_FORM, 6, 6)],
+        reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
+        help: "store a given location (cartesian, joint or precision point) under a name",
+    }
+    /// TROLDeleteLocation(locName) (added: RAPL-II's DLOCN; docs/teach.md).
+    TROL_DELETE_LOCATION = 133 => DELETE_LOCATION {
+        name: "TROLDeleteLocation",
+        args: &[LOC_NAME],
+        reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
+        help: "delete a location from the controller's table",
+    }
+    /// TROLSaveLocations(): keep the table across a restart (added: the simulator writes its
+    /// locations file; a C500 keeps its own; docs/teach.md).
+    TROL_SAVE_LOCATIONS = 134 => SAVE_LOCATIONS {
+        name: "TROLSaveLocations",
+        args: &[],
+        reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
+        help: "keep the location table across a restart (the simulator writes its locations file)",
+    }
     /// TROLTerminatePCP().
     TROL_TERMINATE_PCP = 192 => TERMINATE_PCP {
         name: "TROLTerminatePCP",
@@ -258,14 +323,27 @@ commands! {
     }
 }
 
-/// The commands this successor added to the manual's table (GetGripper, GetVersion,
-/// SetWatchdog, GetCodes): a controller that speaks only the manual's protocol answers them
+/// The commands this successor added to the manual's table (the teaching commands,
+/// GetGripper, GetVersion, SetWatchdog, GetCodes): a controller that speaks only the manual's protocol answers them
 /// TROL_ERR_UNKNOWN.
 pub const ADDED: &[u8] = &[
     TROL_GET_GRIPPER,
+    TROL_LIST_LOCATIONS,
+    TROL_HERE,
+    TROL_DEFINE,
+    TROL_DELETE_LOCATION,
+    TROL_SAVE_LOCATIONS,
     TROL_GET_VERSION,
     TROL_SET_WATCHDOG,
     TROL_GET_CODES,
+];
+
+/// Other names of commands, as RAPL-II calls them (the interpreter takes them: `listl`,
+/// `dlocn p1`, `point p1 c(...)`).
+pub const ALIASES: &[(&str, u8)] = &[
+    ("listl", TROL_LIST_LOCATIONS),
+    ("dlocn", TROL_DELETE_LOCATION),
+    ("point", TROL_DEFINE),
 ];
 
 /// The version of TROL's protocol this library speaks: 3 is this successor's (the manual's
@@ -330,7 +408,7 @@ mod tests {
         }
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
-        assert_eq!(LAST_CAT3_CODE, 129);
+        assert_eq!(LAST_CAT3_CODE, 134);
         assert_eq!(LAST_CAT4_CODE, 196);
     }
 

@@ -478,6 +478,44 @@ fn trolgetgripper_tells_a_missed_grasp_from_a_held_object() {
     );
 }
 
+/// Teaching from C (issue 28, docs/teach.md): TROLHere, TROLDefine, TROLListLocations,
+/// TROLDeleteLocation, TROLSaveLocations; a wrong name form and a NULL count are refused
+/// with TROL_ERR_ARG_RANGE, and the saved file holds what was taught.
+#[test]
+fn teaching_from_c_stores_lists_deletes_and_saves() {
+    let dir_files = [
+        ("taught.txt", ""),
+        (
+            "trol.cfg",
+            "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\nlocations = taught.txt\n",
+        ),
+    ];
+    let out = run_c("teach", Link::Shared, &dir_files, &[]);
+    let dir = std::env::temp_dir().join(format!("trol-c-teach-{}", std::process::id()));
+    let saved = std::fs::read_to_string(dir.join("taught.txt")).unwrap();
+    assert!(
+        saved.contains("\np1 4") && !saved.contains("#park"),
+        "{saved}"
+    );
+    for line in [
+        "here p1 -> 0",
+        "here without # as prec -> -32003",
+        "define #park -> 0",
+        "count only -> 0",
+        "count 2",
+        "NULL count -> -32003",
+        "after teaching: 0, 2 location(s): #park(tag 0) p1(tag 2)",
+        "delete #park -> 0",
+        "delete #park again -> -32102",
+        "after deleting: 0, 1 location(s): p1(tag 2)",
+        "move p1 -> 0",
+        "at x 420.0 y -50.0 z 330.0",
+        "save -> 0",
+    ] {
+        assert!(out.contains(line), "{line:?} in {out}");
+    }
+}
+
 /// trol_strerror names a controller's own BIOS codes once InitTROL has read them
 /// (TROLGetCodes), whatever kind of controller it is.
 #[test]

@@ -1695,3 +1695,58 @@ fn a_busy_serial_port_names_its_holder_and_a_device_its_other_end() {
     let lines = other.wait_for("this end of the line", 10).join("\n");
     assert!(lines.contains("trol init --port OTHER_END"), "{lines}");
 }
+
+/// Teaching in the interpreter (issue 28, docs/teach.md): `here`, RAPL-II's `listl`, `point`
+/// and `dlocn`, `savelocations`; the list as JSON; a taught location survives a restart of
+/// the (embedded) simulator through its locations file.
+#[test]
+fn interp_teaches_lists_deletes_and_saves_locations() {
+    let dir = scratch("teach");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\nlocations = taught.txt\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("taught.txt"), "").unwrap();
+    let script = "moveii c(420, -50, 330, 0, 1.5708, 0)\nfinish\nhere p1\nhere #pp prec\n\
+                  point up c(400, 0, 450, 0, 1.5708, 0)\nlistl\ndlocn up\nready\nfinish\n\
+                  move p1\nfinish\ngetposition cart\nsavelocations\n";
+    let o = trol(&dir, &["interp"], script);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[2].starts_with("here p1  ->  0 (success)"), "{out}");
+    assert!(
+        lines[5].contains("#pp p(")
+            && lines[5].contains("; p1 c(420, -50, 330")
+            && lines[5].contains("; up c(400, 0, 450"),
+        "{out}"
+    );
+    assert!(lines[11].contains("c(420, -50, 330"), "{out}");
+    let saved = std::fs::read_to_string(dir.join("taught.txt")).unwrap();
+    let p1: Vec<f64> = saved
+        .lines()
+        .find_map(|l| l.strip_prefix("p1 "))
+        .unwrap_or_else(|| panic!("{saved}"))
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(
+        (p1[0] - 420.0).abs() < 1e-3 && (p1[2] - 330.0).abs() < 1e-3,
+        "{saved}"
+    );
+    assert!(!saved.contains("\nup "), "{saved}");
+    // A new session, a new simulator: the table is back; as JSON.
+    let o = trol(&dir, &["interp", "--json"], "listl\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let names: Vec<&str> = v["locations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["#pp", "p1"], "{v}");
+    assert_eq!(v["locations"][1]["form"], "cart");
+}

@@ -96,7 +96,8 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: UNSUPPORTED,
             name: "BIOS_UNSUPPORTED",
-            meaning: "RAPL-II has no form for this call (homing one axis: use TROLHome(0))",
+            meaning: "RAPL-II has no form for this call (homing one axis: use TROLHome(0); a \
+                      joint location: use a precision point, #NAME)",
         },
         CodeInfo {
             value: NO_JOINT_UNITS,

@@ -548,3 +548,96 @@ fn a_scratch_location_not_confirmed_sends_no_move() {
         .unwrap();
     r.finish().unwrap();
 }
+
+/// Teaching through the RAPL-II backend (issue 28, docs/teach.md), on every variant
+/// configured alike: HERE, POINT, DLOCN and LISTL, each confirmed by LISTL before it counts
+/// as done; a taught location is moved to; what RAPL-II cannot hold (joint angles, a name
+/// the backend uses for its scratch locations) is refused before anything is sent.
+#[test]
+fn teaching_maps_to_here_point_dlocn_and_listl_on_every_variant() {
+    use trol_rapl::backend::UNSUPPORTED;
+    for sim_profile in [
+        Profile::simulator(),
+        Profile {
+            ack: Ack::Never,
+            ..Profile::simulator()
+        },
+        Profile {
+            units: Units::Inch,
+            angles: "roll -pitch yaw".into(),
+            joint_units: "radians".into(),
+            baud: 9600,
+            ..Profile::simulator()
+        },
+    ] {
+        let described = {
+            let arm = Arm::new(ArmSettings::default());
+            C500::new(sim_profile.clone(), arm, Vec::new()).describe()
+        };
+        let (port, sim) = start(sim_profile.clone(), None);
+        let mut b = RaplBackend::connect(port, described).unwrap();
+        let case = format!("{sim_profile:?}");
+        // Somewhere, taught two ways.
+        let target = [380.0, 20.0, 200.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+        let loc = Location::from_array6(Tag::Cart, target);
+        assert_eq!(b.move_to(&Target::Location(loc), false).unwrap(), 0);
+        wait_idle(&mut b);
+        let at = b
+            .position(Tag::Joint, PosMode::Commanded)
+            .unwrap()
+            .to_array6();
+        assert_eq!(b.here(name("p1"), Tag::Cart).unwrap(), 0, "{case}");
+        assert_eq!(b.here(name("#pp"), Tag::Prec).unwrap(), 0, "{case}");
+        let up = Location::from_array6(Tag::Cart, [420.0, -60.0, 320.0, 0.0, 1.5, 0.0]);
+        assert_eq!(b.define(name("up"), &up).unwrap(), 0, "{case}");
+        let names: Vec<String> = b
+            .locations()
+            .unwrap()
+            .into_iter()
+            .map(|(n, _)| n.as_str().to_string())
+            .collect();
+        assert_eq!(names, ["#pp", "p1", "test_001", "up"], "{case}");
+        let listed = b.locations().unwrap();
+        let p1 = listed[1].1.to_array6();
+        for i in 0..3 {
+            assert!((p1[i] - target[i]).abs() < 0.05, "{case}: {p1:?}");
+        }
+        // Away and back to each taught form.
+        for n in ["p1", "#pp"] {
+            assert_eq!(b.move_to(&Target::Name(name("up")), false).unwrap(), 0);
+            wait_idle(&mut b);
+            assert_eq!(b.move_to(&Target::Name(name(n)), false).unwrap(), 0);
+            wait_idle(&mut b);
+            let back = b
+                .position(Tag::Joint, PosMode::Commanded)
+                .unwrap()
+                .to_array6();
+            for i in 0..6 {
+                assert!(
+                    (back[i] - at[i]).abs() < 2e-3,
+                    "{case} {n}: {back:?} {at:?}"
+                );
+            }
+        }
+        // Delete: gone, and deleting it again is TROL_ERR_LOCATION.
+        assert_eq!(b.delete_location(name("up")).unwrap(), 0);
+        assert!(matches!(
+            b.delete_location(name("up")),
+            Err(BackendError::UnknownLocation(_))
+        ));
+        // Refused before sending.
+        let sent = sim.ran().len();
+        assert_eq!(b.here(name("pj"), Tag::Joint).unwrap(), UNSUPPORTED);
+        assert_ne!(b.here(name("t1"), Tag::Cart).unwrap(), 0);
+        assert_eq!(sim.ran().len(), sent, "{:?}", &sim.ran()[sent..]);
+        // The C500 keeps its table itself.
+        assert_eq!(b.save_locations().unwrap(), 0);
+        let ran = sim.ran();
+        for word in ["HERE P1", "HERE #PP", "POINT UP", "DLOCN UP", "LISTL"] {
+            assert!(
+                ran.iter().any(|l| l.starts_with(word)),
+                "{case}: {word} in {ran:?}"
+            );
+        }
+    }
+}

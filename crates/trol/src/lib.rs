@@ -68,10 +68,20 @@ fn read_config_file(path: &std::path::Path) -> Result<String> {
         .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into())
 }
 
-/// The locations trol.cfg's `locations =` file holds (none without one).
+/// The locations trol.cfg's `locations =` file holds (none without one). A file that does
+/// not exist yet, in a folder that does, starts an empty table: TROLSaveLocations creates it
+/// (docs/teach.md).
 #[cfg(any(feature = "sim", feature = "mars"))]
 pub fn config_locations(cfg: &Config) -> Result<Vec<(String, trol_a465::arm::Stored)>> {
     match &cfg.locations {
+        Some(path)
+            if !path.exists()
+                && path
+                    .parent()
+                    .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir()) =>
+        {
+            Ok(Vec::new())
+        }
         Some(path) => parse_locations(&read_config_file(path)?)
             .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into()),
         None => Ok(Vec::new()),

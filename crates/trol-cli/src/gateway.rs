@@ -52,6 +52,15 @@ pub struct GatewayArgs {
     /// about ten times a second, between requests and during waits.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR)]
     view: Option<String>,
+    /// With --view: the page is also a pendant that drives the arm through this gateway
+    /// (jog, speed, store a location, move to one, delete, Halt; docs/teach.md), from this
+    /// machine only, with the token printed at start. Every request goes through the same
+    /// fail-safe rules as the host's.
+    #[arg(long, requires = "view")]
+    control: bool,
+    /// With --control: an address besides this machine's that may drive the arm.
+    #[arg(long, value_name = "IP", requires = "control")]
+    control_from: Vec<std::net::IpAddr>,
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {
@@ -122,11 +131,21 @@ fn serve_backend<B: trol_controller::Backend>(
 ) -> Result<(), String> {
     // The view first: an address in use ends the start before anything is served. It reads
     // what the backend reports, and lives as long as the gateway serves.
+    let (pendant, inbox) = trol_controller::Pendant::channel();
+    let control = a.control.then(|| trol_view::Control {
+        from: a.control_from.clone(),
+        ..trol_view::Control::new(pendant, codes)
+    });
+    let token = control.as_ref().map(|c| c.token.clone());
     let view = match &a.view {
         Some(addr) => {
             let slot = trol_controller::SharedReport::default();
-            let view = trol_view::serve_reported(addr, slot.clone())
-                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
+            let view = trol_view::serve_controlled(
+                addr,
+                trol_view::Source::Reported(slot.clone()),
+                control,
+            )
+            .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
             Some((slot, view))
         }
         None => None,
@@ -136,6 +155,12 @@ fn serve_backend<B: trol_controller::Backend>(
     say!("trol gateway: serving on {name}");
     if let Some((_, v)) = &view {
         say!("  the view: {}", v.url());
+        if let Some(t) = &token {
+            say!(
+                "  the pendant (it drives the arm; keep the address to yourself): {}#token={t}",
+                v.url()
+            );
+        }
         if let Some(w) = v.exposure() {
             tracing::warn!("{w}");
         }
@@ -158,6 +183,9 @@ fn serve_backend<B: trol_controller::Backend>(
         Mode::Terminal
     };
     let mut controller = Controller::new(opened.port, cfg, Pcp::new(backend), mode);
+    if a.control {
+        controller.set_pendant(inbox);
+    }
     if let Some((slot, _)) = &view {
         controller.report_into(slot.clone(), Duration::from_millis(100));
     }

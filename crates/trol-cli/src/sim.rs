@@ -112,6 +112,15 @@ pub struct SimArgs {
     /// name an address to serve others): open it in a browser. Not with --rapl.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with_all = ["rapl", "mars"])]
     view: Option<String>,
+    /// With --view: the page is also a pendant that drives the arm (jog, speed, store a
+    /// location, move to one, delete, Halt; docs/teach.md). It takes requests from this
+    /// machine only, with the token printed at start (open the printed address).
+    #[arg(long, requires = "view")]
+    control: bool,
+    /// With --control: an address besides this machine's that may drive the arm (repeat for
+    /// more). The view's address must be one that machine reaches.
+    #[arg(long, value_name = "IP", requires = "control")]
+    control_from: Vec<std::net::IpAddr>,
     /// With --mars: faults on standard input, one per line, to try a program's handling:
     /// `power off`, `power on`, `stop on` (the motion stop), `stop off`, `silent on` (the unit
     /// stops answering), `silent off`, `say TEXT` (a line the unit prints unasked),
@@ -245,9 +254,15 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     // The view first: an address in use ends the start before anything is served.
     let mut backend = SimBackend::new(settings);
+    let (pendant, inbox) = trol_controller::Pendant::channel();
+    let control = a.control.then(|| trol_view::Control {
+        from: a.control_from.clone(),
+        ..trol_view::Control::new(pendant, trol_sim::SIM_CODES)
+    });
+    let token = control.as_ref().map(|c| c.token.clone());
     let view = match &a.view {
         Some(addr) => Some(
-            trol_view::serve(addr, backend.share())
+            trol_view::serve_controlled(addr, trol_view::Source::Sim(backend.share()), control)
                 .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?,
         ),
         None => None,
@@ -284,6 +299,12 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     if let Some(v) = &view {
         say!("  the view: {}", v.url());
+        if let Some(t) = &token {
+            say!(
+                "  the pendant (it drives the arm; keep the address to yourself): {}#token={t}",
+                v.url()
+            );
+        }
         if let Some(w) = v.exposure() {
             tracing::warn!("{w}");
         }
@@ -305,6 +326,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         Mode::Terminal
     };
     let mut controller = Controller::new(opened.port, cfg, pcp, mode);
+    if a.control {
+        controller.set_pendant(inbox);
+    }
     if let Some(pci) = a.manual {
         say!(
             "  speaking only the manual's protocol (a 1998 PCP server): LRC, no memory of the \
@@ -338,6 +362,7 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
             catalog.reply_text(e.request, e.reply, codes),
         );
         match e.event {
+            ServerEvent::Executed if e.from_pendant => say!("pendant: {req} -> {reply}"),
             ServerEvent::Executed => say!("{req} -> {reply}"),
             ServerEvent::Repeated => {
                 say!("{req} -> {reply} (a repeat: answered from memory, not run again)")

@@ -547,3 +547,54 @@ fn the_gateway_s_view_shows_the_arm_the_c500_reports() {
     assert_eq!(s["reported"], true, "{s}");
     assert!(s["gripper_mm"].is_null(), "{s}");
 }
+
+/// POST a pendant request to the view at `url` (`http://host:port/`): the JSON answer.
+fn pendant_post(url: &str, path: &str) -> serde_json::Value {
+    use std::io::{Read, Write};
+    let addr = url.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = std::net::TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(20)))
+        .unwrap();
+    write!(s, "POST {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut all = String::new();
+    s.read_to_string(&mut all).unwrap();
+    let body = all.split_once("\r\n\r\n").map_or("", |(_, b)| b);
+    serde_json::from_str(body).unwrap_or_else(|e| panic!("{e}: {all}"))
+}
+
+/// The gateway's pendant (`--view --control`, docs/teach.md): its requests reach the C500
+/// through the backend's fail-safe rules: a joint moves, the place is stored with HERE.
+#[test]
+fn the_gateway_s_pendant_drives_the_c500() {
+    let dir = scratch("rapl-gateway-pendant");
+    let sim = rapl_sim(&dir, &["--time-scale", "20", "--homed"]);
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &sim.name,
+            "--profile",
+            "c500.toml",
+            "--server",
+            "--view",
+            "127.0.0.1:0",
+            "--control",
+        ],
+        "serving on ",
+    );
+    let line = gw.wait_for("#token=", 30).pop().unwrap();
+    let pendant = line.split(": ").last().unwrap().trim().to_string();
+    let (url, token) = pendant.split_once("#token=").unwrap();
+    let joint = pendant_post(
+        url,
+        &format!("/control/joint?joint=1&radians=0.2&token={token}"),
+    );
+    assert_eq!(joint["ok"], true, "{joint}");
+    let s = view_state_at(url, [0.2, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    assert_eq!(s["reported"], true, "{s}");
+    let here = pendant_post(url, &format!("/control/here?name=p7&token={token}"));
+    assert_eq!(here["ok"], true, "{here}");
+    let wrong = pendant_post(url, &format!("/control/here?name=p8&token=x{token}"));
+    assert_eq!(wrong["ok"], false, "{wrong}");
+}

@@ -270,3 +270,188 @@ fn demo_and_sim_serve_the_view_and_refuse_what_they_cannot_do() {
     assert!(err.contains("name another"), "{err}");
     assert!(!out.contains("serving on"), "{out}");
 }
+
+/// POST `path` to `addr` (and `method` other than POST): (status line, JSON body).
+fn send(addr: &str, method: &str, path: &str) -> (String, serde_json::Value) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(
+        s,
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nContent-Length: 0\r\n\r\n"
+    )
+    .unwrap();
+    let mut all = String::new();
+    s.read_to_string(&mut all).unwrap();
+    let (head, body) = all.split_once("\r\n\r\n").unwrap_or((&all, ""));
+    (
+        head.lines().next().unwrap_or("").to_string(),
+        serde_json::from_str(body).unwrap_or(serde_json::Value::Null),
+    )
+}
+
+/// The view of `trol sim` started with `args`: (the process, its view's address, the token
+/// the pendant printed, if any).
+fn sim_with_view(dir: &Path, extra: &[&str]) -> (Background, String, Option<String>) {
+    let mut args = vec![
+        "sim",
+        "--port",
+        "listen://127.0.0.1:0",
+        "--server",
+        "--homed",
+        "--view",
+        "127.0.0.1:0",
+    ];
+    args.extend_from_slice(extra);
+    let sim = Background::start(dir, &args, "serving on ");
+    let seen = sim.wait_for("the view: ", 10);
+    let url = seen
+        .last()
+        .unwrap()
+        .split("the view: ")
+        .nth(1)
+        .unwrap()
+        .trim();
+    let addr = url
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    let token = extra.contains(&"--control").then(|| {
+        let line = sim.wait_for("#token=", 10).pop().unwrap();
+        line.split("#token=").nth(1).unwrap().trim().to_string()
+    });
+    (sim, addr, token)
+}
+
+/// Without --control the view only shows: every pendant request is refused and nothing
+/// moves. With it, a wrong token or another method is refused too; a right one runs the
+/// command through the controller's checks, and a refusal of the arm comes back in words.
+#[test]
+fn the_pendant_is_off_unless_asked_and_takes_only_its_token() {
+    let dir = scratch("pendant-http");
+    let (_sim, addr, _) = sim_with_view(&dir, &[]);
+    let (status, body) = send(&addr, "GET", "/control");
+    assert!(
+        status.contains("200") && body["control"] == false,
+        "{status} {body}"
+    );
+    let (_, before) = get(&addr, "/state");
+    for path in [
+        "/control/jog?dx=10&token=x",
+        "/control/halt",
+        "/control/here?name=p1",
+    ] {
+        let (status, body) = send(&addr, "POST", path);
+        assert!(status.contains("403"), "{path}: {status}");
+        assert!(
+            body["error"].as_str().unwrap().contains("--control"),
+            "{body}"
+        );
+    }
+    let (_, after) = get(&addr, "/state");
+    let j = |s: &str| six(&serde_json::from_str::<serde_json::Value>(s).unwrap());
+    close("nothing moved", j(&before), j(&after));
+
+    let dir = scratch("pendant-http-on");
+    let (_sim, addr, token) = sim_with_view(&dir, &["--control"]);
+    let token = token.expect("a token printed at start");
+    assert_eq!(token.len(), 32);
+    let (_, body) = send(&addr, "GET", "/control");
+    assert_eq!(body["control"], true);
+    let (status, _) = send(&addr, "POST", "/control/jog?dx=10&token=wrong");
+    assert!(status.contains("403"), "{status}");
+    let (status, _) = send(&addr, "PUT", &format!("/control/halt?token={token}"));
+    assert!(status.contains("405"), "{status}");
+    let (status, _) = send(&addr, "GET", &format!("/control/halt?token={token}"));
+    assert!(status.contains("405"), "{status}");
+    let (status, body) = send(&addr, "POST", &format!("/control/jog?dx=abc&token={token}"));
+    assert!(status.contains("400"), "{status} {body}");
+    // At READY the arm stands straight up: 10 mm along x is out of its reach.
+    let (status, body) = send(&addr, "POST", &format!("/control/jog?dx=10&token={token}"));
+    assert!(status.contains("200"), "{status}");
+    assert_eq!(body["ok"], false, "{body}");
+    assert_eq!(body["text"], "-2 (BIOS_OUT_OF_REACH)", "{body}");
+    let (_, body) = send(
+        &addr,
+        "POST",
+        &format!("/control/here?name=%23p&token={token}"),
+    );
+    assert!(
+        body["error"].as_str().unwrap_or("").contains("precision"),
+        "{body}"
+    );
+    let (_, body) = send(
+        &addr,
+        "POST",
+        &format!("/control/here?name=top&token={token}"),
+    );
+    assert_eq!(body["ok"], true, "{body}");
+    let (status, body) = send(&addr, "GET", &format!("/control/locations?token={token}"));
+    assert!(status.contains("200"), "{status}");
+    assert_eq!(body["locations"][0]["name"], "top", "{body}");
+}
+
+/// The pendant in headless Chromium (tests/browser/pendant.mjs), with the page's own buttons:
+/// jog +x 10 mm moves the tool 10 mm along x; a place stored as p1 is found again after a
+/// jog away; Halt during a long move stops it short; the page without the token shows no
+/// pendant, and a wrong token is refused.
+#[test]
+fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
+    assert!(
+        Path::new(CHROMIUM).exists(),
+        "{CHROMIUM} is missing: install Debian's `chromium` (scripts/test.sh does)"
+    );
+    assert!(
+        browser_dir().join("node_modules/playwright-core").exists(),
+        "Playwright is missing: run `npm ci` in tests/browser (scripts/test.sh does)"
+    );
+    let dir = scratch("pendant-browser");
+    let (_sim, addr, token) = sim_with_view(&dir, &["--control"]);
+    let url = format!("http://{addr}/#token={}", token.unwrap());
+    let page = Background::start_program_within(
+        "node",
+        &dir,
+        &[browser_dir().join("pendant.mjs").to_str().unwrap(), &url],
+        "pendant ",
+        180,
+    );
+    // Each step's line (`error ...` ends the script: it is in the lines before).
+    let json = |lines: Vec<String>, marker: &str| -> serde_json::Value {
+        let line = lines.last().cloned().unwrap_or_default();
+        let text = line
+            .strip_prefix(marker)
+            .unwrap_or_else(|| panic!("{lines:?}"));
+        serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {line}"))
+    };
+    let jog = json(page.wait_for("jog ", 120), "jog ");
+    let xyz =
+        |v: &serde_json::Value| -> [f64; 3] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
+    assert_eq!(jog["answer"]["ok"], true, "{jog}");
+    let (a, b) = (xyz(&jog["before"]), xyz(&jog["after"]));
+    assert!((b[0] - a[0] - 10.0).abs() < 0.2, "{jog}");
+    assert!(
+        (b[1] - a[1]).abs() < 0.2 && (b[2] - a[2]).abs() < 0.2,
+        "{jog}"
+    );
+
+    let store = json(page.wait_for("store ", 120), "store ");
+    assert_eq!(store["stored"]["ok"], true, "{store}");
+    assert_eq!(store["back"]["ok"], true, "{store}");
+    let (p1, away, there) = (xyz(&store["p1"]), xyz(&store["away"]), xyz(&store["there"]));
+    assert!((away[2] - p1[2] - 40.0).abs() < 0.2, "{store}");
+    for i in 0..3 {
+        assert!((there[i] - p1[i]).abs() < 0.2, "{store}");
+    }
+
+    let halt = json(page.wait_for("halt ", 120), "halt ");
+    assert_eq!(halt["long"]["ok"], true, "{halt}");
+    assert_eq!(halt["halt"]["ok"], true, "{halt}");
+    let moved = halt["stopped"][0].as_f64().unwrap() - halt["start"][0].as_f64().unwrap();
+    assert!(
+        moved > 0.0 && moved < std::f64::consts::FRAC_PI_2 - 0.2,
+        "{halt}"
+    );
+
+    let refused = json(page.wait_for("refused ", 60), "refused ");
+    assert_eq!(refused["hidden"], true, "{refused}");
+    assert_eq!(refused["wrong_status"], 403, "{refused}");
+}

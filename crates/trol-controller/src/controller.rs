@@ -22,6 +22,64 @@ pub enum Mode {
     Server,
 }
 
+/// A way to the controller besides its TROL line: the browser's pendant (`trol sim --view
+/// --control`, docs/teach.md). Each request runs between two transactions of the line, as
+/// the server's own, through the same checks; what GetStatus tells the line's host is kept.
+/// Clone it for each thread.
+#[derive(Clone, Debug)]
+pub struct Pendant {
+    tx: std::sync::mpsc::SyncSender<PendantCall>,
+}
+
+/// A request from the pendant and where its reply goes.
+type PendantCall = (Vec<u8>, std::sync::mpsc::SyncSender<Vec<u8>>);
+
+/// Why a pendant request got no reply.
+#[derive(Debug, thiserror::Error)]
+pub enum PendantError {
+    /// The controller did not take it up in time (it is busy with a long call of the line,
+    /// or too many pendant requests wait).
+    #[error("the controller did not answer within {0:?}")]
+    Timeout(Duration),
+    /// The controller has stopped.
+    #[error("the controller has stopped")]
+    Gone,
+}
+
+/// The controller's end of a [`Pendant`] ([`Controller::set_pendant`]).
+#[derive(Debug)]
+pub struct PendantInbox(std::sync::mpsc::Receiver<PendantCall>);
+
+impl Pendant {
+    /// A pendant and the inbox a controller takes its requests from (for a view that must
+    /// start before the controller exists).
+    pub fn channel() -> (Pendant, PendantInbox) {
+        let (tx, rx) = std::sync::mpsc::sync_channel(PENDANT_QUEUE);
+        (Pendant { tx }, PendantInbox(rx))
+    }
+
+    /// Send `request` (a record) and wait at most `limit` for its reply.
+    pub fn call(&self, request: Vec<u8>, limit: Duration) -> Result<Vec<u8>, PendantError> {
+        let (back, reply) = std::sync::mpsc::sync_channel(1);
+        match self.tx.try_send((request, back)) {
+            Ok(()) => {}
+            Err(std::sync::mpsc::TrySendError::Full(_)) => {
+                return Err(PendantError::Timeout(Duration::ZERO));
+            }
+            Err(std::sync::mpsc::TrySendError::Disconnected(_)) => {
+                return Err(PendantError::Gone);
+            }
+        }
+        reply.recv_timeout(limit).map_err(|e| match e {
+            std::sync::mpsc::RecvTimeoutError::Timeout => PendantError::Timeout(limit),
+            std::sync::mpsc::RecvTimeoutError::Disconnected => PendantError::Gone,
+        })
+    }
+}
+
+/// How many pendant requests may wait for the controller at once.
+const PENDANT_QUEUE: usize = 8;
+
 /// What the log hook is told after each transaction.
 #[derive(Debug)]
 pub struct LogEntry<'a> {
@@ -37,6 +95,8 @@ pub struct LogEntry<'a> {
     /// true for every request it executed, whatever happened to the reply afterwards, so a
     /// log that counts these counts every execution.
     pub executed: bool,
+    /// Whether it came from the pendant ([`Pendant`]), not the TROL line.
+    pub from_pendant: bool,
     /// The backend's word on its world (a simulator's objects), if it has one.
     pub world: Option<String>,
 }
@@ -76,6 +136,8 @@ pub struct Controller<P, B> {
     trip: Option<WatchdogTrip>,
     /// Where the backend's reports go, how often, and when the last was taken.
     reports: Option<(SharedReport, Duration, Instant)>,
+    /// Requests from the pendant, if one was made.
+    pendant: Option<PendantInbox>,
 }
 
 impl<P: Port, B: Backend> Controller<P, B> {
@@ -93,6 +155,45 @@ impl<P: Port, B: Backend> Controller<P, B> {
             tripped: false,
             trip: None,
             reports: None,
+            pendant: None,
+        }
+    }
+
+    /// A pendant for this controller (docs/teach.md): requests sent through it run between
+    /// the line's transactions.
+    pub fn pendant(&mut self) -> Pendant {
+        let (pendant, inbox) = Pendant::channel();
+        self.set_pendant(inbox);
+        pendant
+    }
+
+    /// Take requests from a pendant made before ([`Pendant::channel`]).
+    pub fn set_pendant(&mut self, inbox: PendantInbox) {
+        self.pendant = Some(inbox);
+    }
+
+    /// Run what the pendant asked for since the last step, each logged as from the pendant.
+    fn serve_pendant(&mut self) {
+        let Some(rx) = &self.pendant else {
+            return;
+        };
+        let calls: Vec<PendantCall> = rx.0.try_iter().collect();
+        for (request, back) in calls {
+            let reply = self.pcp.handle_aside(&request);
+            self.pcp.backend_mut().after_request();
+            if let Some(log) = self.log.as_mut() {
+                let world = self.pcp.backend_mut().world();
+                log(&LogEntry {
+                    catalog: self.pcp.catalog(),
+                    request: &request,
+                    reply: &reply,
+                    event: ServerEvent::Executed,
+                    executed: true,
+                    from_pendant: true,
+                    world,
+                });
+            }
+            let _ = back.try_send(reply);
         }
     }
 
@@ -177,6 +278,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
 
     /// Run one step: serve for at most `slice` in the current mode.
     pub fn step(&mut self, slice: Duration) -> std::io::Result<()> {
+        self.serve_pendant();
         match self.mode {
             Mode::Terminal => {
                 let port = self.server.driver_mut().port_mut();
@@ -296,6 +398,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 reply: &self.last.1,
                 event,
                 executed,
+                from_pendant: false,
                 world,
             });
         }

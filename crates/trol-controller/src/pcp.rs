@@ -302,6 +302,24 @@ impl<B: Backend> Pcp<B> {
         self.pending.is_some()
     }
 
+    /// Execute a request that came another way than the TROL line (the browser's pendant,
+    /// [`crate::Pendant`]): as [`Pcp::handle`], but what GetStatus tells the host about its
+    /// own last call is kept, and a reply that would wait (Finish(FINISH_WAIT)) is refused
+    /// (TROL_ERR_UNKNOWN; the pendant asks FINISH_STATUS instead).
+    pub fn handle_aside(&mut self, request: &[u8]) -> Vec<u8> {
+        let kept = self.status;
+        let pending = self.pending;
+        let reply = match self.handle(request) {
+            Handled::Reply(r) => r,
+            Handled::Pending => {
+                Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode()
+            }
+        };
+        self.status = kept;
+        self.pending = pending;
+        reply
+    }
+
     /// MsgReceived: execute a request; its reply, or [`Handled::Pending`].
     pub fn handle(&mut self, request: &[u8]) -> Handled {
         self.handled += 1;

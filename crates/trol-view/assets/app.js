@@ -323,3 +323,98 @@ const first = await fetch('/state').then(r => r.ok ? r.json() : null).catch(() =
 if (first) update(first);
 new EventSource('/events').onmessage = e => update(JSON.parse(e.data));
 render();
+
+// --- the pendant (only with --control, and the token from the printed address) ---
+const token = new URLSearchParams(location.hash.slice(1)).get('token');
+const pendant = document.getElementById('pendant');
+const result = document.getElementById('result');
+let pendantCalls = 0;
+
+async function control(path, params = {}, method = 'POST') {
+  const query = new URLSearchParams({ ...params, token: token || '' });
+  let answer;
+  try {
+    const response = await fetch(`/control/${path}?${query}`, { method });
+    answer = await response.json();
+  } catch (e) {
+    answer = { ok: false, error: `no answer: ${e}` };
+  }
+  const words = answer.error || `${answer.command}: ${answer.text}`;
+  result.textContent = words;
+  result.className = answer.ok ? '' : 'refused';
+  document.body.dataset.pendantResult = JSON.stringify(answer);
+  pendantCalls += 1;
+  document.body.dataset.pendantCalls = String(pendantCalls);
+  return answer;
+}
+
+function cell(row, text) {
+  const td = row.insertCell();
+  td.textContent = text;
+  return td;
+}
+
+async function refreshLocations() {
+  const answer = await control('locations', {}, 'GET');
+  const list = document.getElementById('locations');
+  list.replaceChildren();
+  for (const loc of answer.locations || []) {
+    const row = list.insertRow();
+    row.dataset.name = loc.name;
+    cell(row, loc.name);
+    cell(row, loc.form);
+    const v = loc.values.map(x => (loc.form === 'cart' && Math.abs(x) > 10 ? x.toFixed(1) : x.toFixed(3)));
+    cell(row, v.slice(0, 3).join(' '));
+    const go = document.createElement('button');
+    go.textContent = 'move to';
+    go.dataset.move = loc.name;
+    go.onclick = () => control('move', { name: loc.name });
+    cell(row, '').appendChild(go);
+    const del = document.createElement('button');
+    del.textContent = 'delete';
+    del.dataset.delete = loc.name;
+    del.onclick = async () => { await control('delete', { name: loc.name }); refreshLocations(); };
+    cell(row, '').appendChild(del);
+  }
+}
+
+async function startPendant() {
+  let on = false;
+  try {
+    on = (await (await fetch('/control')).json()).control === true;
+  } catch (e) {
+    on = false;
+  }
+  document.body.dataset.control = String(on && !!token);
+  if (!on || !token) return;
+  pendant.hidden = false;
+  document.getElementById('halt').onclick = () => control('halt');
+  for (const b of pendant.querySelectorAll('[data-jog]')) {
+    b.onclick = () => {
+      const [axis, sign] = b.dataset.jog.split(',');
+      const step = Number(document.getElementById('jog-step').value) * Number(sign);
+      const straight = document.getElementById('jog-straight').checked ? 1 : 0;
+      control('jog', { [`d${axis}`]: step, straight });
+    };
+  }
+  for (const b of pendant.querySelectorAll('[data-joint]')) {
+    b.onclick = () => {
+      const deg = Number(document.getElementById('joint-step').value) * Number(b.dataset.joint);
+      control('joint', { joint: document.getElementById('joint-num').value, radians: deg * Math.PI / 180 });
+    };
+  }
+  document.getElementById('speed-set').onclick = () =>
+    control('speed', { percent: document.getElementById('speed').value });
+  document.getElementById('home').onclick = () => control('home');
+  document.getElementById('here').onclick = async () => {
+    await control('here', {
+      name: document.getElementById('here-name').value,
+      form: document.getElementById('here-form').value,
+    });
+    refreshLocations();
+  };
+  document.getElementById('loc-refresh').onclick = refreshLocations;
+  document.getElementById('loc-save').onclick = () => control('save');
+  refreshLocations();
+}
+startPendant();

@@ -18,11 +18,19 @@
 //! dropped once its socket's buffer is full and a write has waited a second; one that closes
 //! is noticed within a round; at most [`MAX_CLIENTS`] connections are served at once.
 //!
+//! With `--control`, the page is also a pendant that drives the arm ([`pendant`]); without
+//! it, nothing can be moved through the view.
+//!
 //! The server is a few dozen lines on `std::net` instead of an HTTP crate: it serves GET
-//! only, and each event stream needs a write timeout of its own, which std gives directly.
+//! (and the pendant's POST, whose arguments are in the query), and each event stream needs a
+//! write timeout of its own, which std gives directly.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs, missing_debug_implementations)]
+
+pub mod pendant;
+
+pub use pendant::Control;
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -220,7 +228,8 @@ impl ViewServer {
         (!self.addr.ip().is_loopback()).then(|| {
             format!(
                 "the view at {} is open to every machine that can reach this one, without a \
-                 password (it only shows the arm; nothing can be moved through it)",
+                 password (it shows the arm; only this machine, or an address named with \
+                 --control-from, can drive it, and only with --control and its token)",
                 self.addr
             )
         })
@@ -249,6 +258,16 @@ pub fn serve_reported(addr: &str, shared: SharedReport) -> std::io::Result<ViewS
 
 /// Serve the view of `source` on `addr`.
 pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
+    serve_controlled(addr, shared, None)
+}
+
+/// Serve the view of `source` on `addr`, and with `control` the pendant ([`pendant`]).
+pub fn serve_controlled(
+    addr: &str,
+    shared: Source,
+    control: Option<Control>,
+) -> std::io::Result<ViewServer> {
+    let control = Arc::new(control);
     let listener = TcpListener::bind(addr).map_err(|e| {
         let hint = match e.kind() {
             std::io::ErrorKind::AddrInUse => {
@@ -285,6 +304,7 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
                     continue;
                 }
                 let shared = frames.clone();
+                let control = control.clone();
                 let flag = flag.clone();
                 let (count, heads) = (clients.clone(), waiting.clone());
                 let spawned = std::thread::Builder::new()
@@ -300,7 +320,7 @@ pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
                             too_many(&mut conn);
                             return;
                         }
-                        let _ = answer(conn, head, &shared, &flag);
+                        let _ = answer(conn, head, &shared, &flag, control.as_ref().as_ref());
                         count.fetch_sub(1, Ordering::SeqCst);
                     });
                 if spawned.is_err() {
@@ -395,6 +415,7 @@ fn answer(
     head: Option<(String, String)>,
     shared: &Frames,
     stop: &AtomicBool,
+    control: Option<&Control>,
 ) -> std::io::Result<()> {
     conn.set_read_timeout(Some(Duration::from_secs(5)))?;
     // A client that stops reading is dropped: every write must go through within a second.
@@ -407,6 +428,16 @@ fn answer(
             b"the request's head is too large\n",
         );
     };
+    if path == "/control" || path.starts_with("/control/") || path.starts_with("/control?") {
+        let peer = conn.peer_addr().ok().map(|a| a.ip());
+        let (status, body) = pendant::answer(&method, &path, peer, control);
+        return respond(
+            &mut conn,
+            status,
+            "application/json",
+            body.to_string().as_bytes(),
+        );
+    }
     if method != "GET" {
         return respond(
             &mut conn,

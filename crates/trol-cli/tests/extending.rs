@@ -191,6 +191,18 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
         TROL_SET_WATCHDOG => robot.set_watchdog(std::time::Duration::ZERO),
         TROL_GET_CODES => robot.get_codes().map(drop),
         TROL_GET_GRIPPER => robot.gripper().map(drop),
+        TROL_LIST_LOCATIONS => robot.locations().map(drop),
+        TROL_HERE => robot.here("p2", Tag::Cart),
+        TROL_DEFINE => robot.define(
+            "p3",
+            &trol::Location::Cart(vec![400.0, 0.0, 300.0, 0.0, 1.5, 0.0]),
+        ),
+        TROL_DELETE_LOCATION => robot.delete_location("p2"),
+        // The embedded simulator here has no locations file: the controller says so.
+        TROL_SAVE_LOCATIONS => match robot.save_locations() {
+            Err(e) if e.code().0 == trol_a465::arm::code::NO_FILE => Ok(()),
+            other => other,
+        },
         other => panic!("command {other} of the table has no method on Robot"),
     }
 }

@@ -299,7 +299,10 @@ def test_halt_from_another_thread_stops_a_move_while_one_waits() -> None:
 def test_ctrl_c_during_finish_halts_the_arm_and_raises_keyboard_interrupt() -> None:
     script = textwrap.dedent(
         """
-        import sys, trol
+        import signal, sys, trol
+        # Ctrl-C as an interactive Python has it, whatever this process inherited (a shell
+        # without job control starts background jobs with SIGINT ignored).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         robot = trol.Robot.open("sim", time_scale=1)
         robot.home()
         robot.speed(5)

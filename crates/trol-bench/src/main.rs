@@ -202,6 +202,20 @@ fn all() -> Result<(), String> {
             f(&v, "transactions_per_second")
         ),
     ));
+    for (baud, count) in [("38400", "200"), ("9600", "60")] {
+        let args = ["transact", "--paced", baud, "--count", count];
+        let v = run(&args)?;
+        rows.push((
+            format!("a small transaction over a line paced at {baud} baud"),
+            format!("trol bench {}", args.join(" ")),
+            format!(
+                "{:.2} ms each, {:.0} bytes: {:.1} % of the line's limit",
+                f(&v, "us_per_transaction") / 1000.0,
+                f(&v, "bytes_per_transaction"),
+                f(&v, "share_of_line_limit") * 100.0
+            ),
+        ));
+    }
     let v = run(&["moves"])?;
     let moves = v.as_array().cloned().unwrap_or_default();
     let within = moves
@@ -445,6 +459,11 @@ pub struct TransactArgs {
     /// How many transactions.
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     count: u32,
+    /// Against the simulator over an in-memory line paced at this baud rate (10 bit times a
+    /// byte, as a serial line): also the bytes per transaction, the line's own limit, and the
+    /// share of it TROL reaches.
+    #[arg(long, value_name = "BAUD", value_parser = clap::value_parser!(u32).range(300..=4_000_000))]
+    paced: Option<u32>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -459,6 +478,67 @@ struct TransactReport {
     seconds: f64,
     us_per_transaction: f64,
     transactions_per_second: f64,
+    /// Over a paced line (`--paced`): its baud rate, the bytes of one transaction (both
+    /// directions), the time those bytes take on the line, and that time's share of the
+    /// measured one.
+    baud: Option<u32>,
+    bytes_per_transaction: Option<f64>,
+    line_limit_us: Option<f64>,
+    share_of_line_limit: Option<f64>,
+}
+
+/// A port that counts the bytes both ways.
+struct Counted<P> {
+    inner: P,
+    bytes: std::sync::Arc<std::sync::atomic::AtomicU64>,
+}
+
+impl<P: trol_port::Port> trol_port::Port for Counted<P> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.bytes
+            .fetch_add(bytes.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> std::io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        self.bytes
+            .fetch_add(n as u64, std::sync::atomic::Ordering::Relaxed);
+        Ok(n)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}
+
+/// The simulator over an in-memory line paced at `baud`, with the host's bytes counted.
+fn paced_robot(
+    baud: u32,
+) -> Result<(trol::Robot, std::sync::Arc<std::sync::atomic::AtomicU64>), String> {
+    use trol_controller::{Controller, Embedded, Mode, Pcp};
+    let (host, ctl) = memory::pair(Some(baud));
+    let cfg = LinkConfig::for_line(baud, Duration::ZERO);
+    let controller = Controller::new(
+        ctl,
+        cfg,
+        Pcp::new(trol_sim::SimBackend::new(trol_sim::SimSettings::default())),
+        Mode::Server,
+    );
+    let handle = Embedded::spawn(controller);
+    let bytes = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let port = Counted {
+        inner: host,
+        bytes: bytes.clone(),
+    };
+    let mut robot = trol::Robot::over(Box::new(port), cfg, None);
+    robot.keep(handle);
+    trol::check_server(&mut robot).map_err(|e| e.to_string())?;
+    Ok((robot, bytes))
 }
 
 #[derive(Args)]
@@ -850,26 +930,66 @@ fn ik(a: IkArgs) -> Result<(), String> {
 }
 
 fn transact(a: TransactArgs) -> Result<(), String> {
-    let (mut robot, cfg) = a.conn.robot()?;
+    let (mut robot, port, counted) = match a.paced {
+        Some(baud) => {
+            let (robot, bytes) = paced_robot(baud)?;
+            (
+                robot,
+                format!("sim over a line paced at {baud} baud"),
+                Some(bytes),
+            )
+        }
+        None => {
+            let (robot, cfg) = a.conn.robot()?;
+            (robot, cfg.port, None)
+        }
+    };
     // One to warm up (the first transaction on a line pays for its set-up).
     robot.speed(100).map_err(|e| e.to_string())?;
+    let before = counted
+        .as_ref()
+        .map_or(0, |b| b.load(std::sync::atomic::Ordering::Relaxed));
     let started = Instant::now();
     for _ in 0..a.count {
         robot.speed(100).map_err(|e| e.to_string())?;
     }
     let seconds = started.elapsed().as_secs_f64();
+    let us = seconds * 1e6 / f64::from(a.count);
+    let bytes = counted.map(|b| {
+        (b.load(std::sync::atomic::Ordering::Relaxed) - before) as f64 / f64::from(a.count)
+    });
+    let limit = a
+        .paced
+        .zip(bytes)
+        .map(|(baud, n)| n * 10.0 / f64::from(baud) * 1e6);
     let r = TransactReport {
-        port: cfg.port,
+        port,
         transactions: a.count,
         seconds,
-        us_per_transaction: seconds * 1e6 / f64::from(a.count),
+        us_per_transaction: us,
         transactions_per_second: f64::from(a.count) / seconds,
+        baud: a.paced,
+        bytes_per_transaction: bytes,
+        line_limit_us: limit,
+        share_of_line_limit: limit.map(|l| l / us),
     };
     print_report(&r, a.json, |r| {
-        format!(
+        let mut t = format!(
             "{} transactions on {}: {:.1} us each, {:.0} per second",
             r.transactions, r.port, r.us_per_transaction, r.transactions_per_second
-        )
+        );
+        if let (Some(n), Some(l), Some(share)) = (
+            r.bytes_per_transaction,
+            r.line_limit_us,
+            r.share_of_line_limit,
+        ) {
+            t += &format!(
+                "\n{n:.1} bytes per transaction on the line: {l:.1} us of line time, {:.1} % \
+                 of the line's limit",
+                share * 100.0
+            );
+        }
+        t
     })
 }
 

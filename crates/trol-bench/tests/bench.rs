@@ -23,6 +23,21 @@ fn benches_print_json() {
     assert_eq!(v["transactions"], 50);
     assert_eq!(v["port"], "sim");
 
+    // Over a paced line: the bytes of a transaction and the share of the line's limit.
+    let o = bench(
+        &dir,
+        &["transact", "--count", "20", "--paced", "115200", "--json"],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["baud"], 115200);
+    // A small CAT1 transaction: ENQ, header, EOT and the ACKs, both ways.
+    let bytes = v["bytes_per_transaction"].as_f64().unwrap();
+    assert!((20.0..40.0).contains(&bytes), "{v}");
+    let share = v["share_of_line_limit"].as_f64().unwrap();
+    assert!(share > 0.0 && share <= 1.0, "{v}");
+
     let o = bench(
         &dir,
         &["link", "--bytes", "600", "--baud", "115200", "--json"],

@@ -172,6 +172,16 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
             .map(|i| (to[i] - from[i]).powi(2))
             .sum::<f64>()
             .sqrt();
+        // A point's distance from the line's segment.
+        let off_line = |pos: glam::DVec3| -> f64 {
+            let d = pos - glam::DVec3::from_array(line(0.0));
+            let dir = glam::DVec3::from_array(line(1.0)) - glam::DVec3::from_array(line(0.0));
+            if length > 0.0 {
+                (d - dir * (d.dot(dir) / dir.length_squared()).clamp(0.0, 1.0)).length()
+            } else {
+                d.length()
+            }
+        };
         let mut prev = arm.kinematics().fk(&q[1]).pos;
         for p in &q[2..q.len() - 1] {
             let pos = arm.kinematics().fk(p).pos;
@@ -182,14 +192,7 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
                 step / dt
             );
             prev = pos;
-            // Distance from the segment.
-            let d = pos - glam::DVec3::from_array(line(0.0));
-            let dir = glam::DVec3::from_array(line(1.0)) - glam::DVec3::from_array(line(0.0));
-            let off = if length > 0.0 {
-                (d - dir * (d.dot(dir) / dir.length_squared()).clamp(0.0, 1.0)).length()
-            } else {
-                d.length()
-            };
+            let off = off_line(pos);
             assert!(off < 0.02, "line {n}: {off} mm off the line");
         }
         let last = arm.kinematics().fk_xyzypr(&q[q.len() - 1]);
@@ -235,14 +238,7 @@ fn ten_thousand_random_straight_lines_never_jump_and_stay_within_the_limits() {
                 &format!("line {n} at {percent} %, halted"),
             );
             for p in &q {
-                let pos = arm.kinematics().fk(p).pos;
-                let d = pos - glam::DVec3::from_array(line(0.0));
-                let dir = glam::DVec3::from_array(line(1.0)) - glam::DVec3::from_array(line(0.0));
-                let off = if length > 0.0 {
-                    (d - dir * (d.dot(dir) / dir.length_squared()).clamp(0.0, 1.0)).length()
-                } else {
-                    d.length()
-                };
+                let off = off_line(arm.kinematics().fk(p).pos);
                 assert!(off < 0.02, "line {n}, halted: {off} mm off the line");
             }
         }

@@ -97,7 +97,8 @@ pub static RAPL_CODES: &CodeTable = &{
             value: UNSUPPORTED,
             name: "BIOS_UNSUPPORTED",
             meaning: "RAPL-II has no form for this call (homing one axis: use TROLHome(0); a \
-                      joint location: use a precision point, #NAME)",
+                      joint location: use a precision point, #NAME; saving locations: the \
+                      C500 keeps them itself)",
         },
         CodeInfo {
             value: NO_JOINT_UNITS,
@@ -2029,8 +2030,16 @@ impl Backend for RaplBackend {
         Ok(all)
     }
     fn save_locations(&mut self) -> BiosResult {
-        // The C500 keeps its location table itself (in its battery-backed memory).
-        Ok(0)
+        // The C500 keeps its location table itself; no public source says whether that
+        // memory outlives a power cycle, nor names a command that makes it. Success would
+        // claim what cannot be told.
+        self.note(
+            "refused: the C500 keeps its locations itself; whether they outlive a power \
+             cycle is the controller's, and TROL has no command to make sure (write them \
+             down with LISTL)"
+                .into(),
+        );
+        Ok(UNSUPPORTED)
     }
     fn open(&mut self, force: u8) -> BiosResult {
         self.report_unasked()?;

@@ -208,6 +208,8 @@ const LINE_TOLERANCE_RAD: f64 = 1e-4;
 const LINE_MAX_SAMPLES: usize = 200_000;
 /// Stretches of the time grid per segment of a straight line's spline ([`Profile::along`]).
 const LINE_PIECES: usize = 4;
+/// Beyond this many segments, one stretch each.
+const LINE_MANY_SEGMENTS: usize = 5_000;
 /// The longest a straight line may take, as a multiple of the least time it needs (its
 /// joints' joint-interpolated move between the same ends, or its length at the linear
 /// limits, whichever is longer): a line that needs more passes too near a singular pose,
@@ -869,8 +871,15 @@ impl Arm {
     fn line_profile(&self, path: &Path, length: f64, start: f64) -> Profile {
         let (speeds, accels) = joint_limits(self.speed);
         let linear = Some((length, self.linear_limits()));
+        // A line with very many samples (near a singular pose) gets one stretch per segment:
+        // its grid is fine already, and the memory stays bounded.
+        let per = if path.segments() > LINE_MANY_SEGMENTS {
+            1
+        } else {
+            LINE_PIECES
+        };
         let stretches = path
-            .pieces(LINE_PIECES)
+            .pieces(per)
             .iter()
             .map(|(s0, s1, b)| Stretch::new(*s0, *s1, b, &speeds, &accels, linear))
             .collect();

@@ -520,6 +520,14 @@ impl Path {
         b
     }
 
+    /// How many segments: a spline's between its samples, 1 for a joint path.
+    pub fn segments(&self) -> usize {
+        match self {
+            Path::Joint { .. } => 1,
+            Path::Spline { s, .. } => s.len().saturating_sub(1),
+        }
+    }
+
     /// The path cut into stretches, `per_segment` to each segment of a spline (one for a
     /// joint path), each with the exact bounds of the derivatives on it: the grid of
     /// [`Profile::along`].

@@ -249,10 +249,11 @@ fn all() -> Result<(), String> {
         "the whole path to a C500 at 38400 baud".into(),
         "trol bench gateway --count 20 --moves 10".into(),
         format!(
-            "round trip {:.1} ms, GetPosition {:.0} ms, {}",
+            "round trip {:.1} ms, GetPosition {:.0} ms, {}; RobWork's way {:.1} ms (anchor)",
             f(&v["speed_round_trip"], "median_ms"),
             f(&v["get_position_cart_actual"], "median_ms"),
-            finish.join(", ")
+            finish.join(", "),
+            f(&v["robwork_second_motion"], "median_ms"),
         ),
     ));
     let v = run(&["view", "--seconds", "5"])?;
@@ -333,6 +334,9 @@ struct FinishReport {
 #[derive(Serialize)]
 struct GatewayReport {
     baud: u32,
+    /// RobWork's way, on the RAPL-II line alone: the same absolute motion sent again, its
+    /// answer held by the controller until the first ended; from the stand to that answer.
+    robwork_second_motion: Spread,
     speed_round_trip: Spread,
     get_position_cart_actual: Spread,
     finish: Vec<FinishReport>,
@@ -997,12 +1001,20 @@ fn transact(a: TransactArgs) -> Result<(), String> {
 /// simulated C500 (time scale 1). The C500's loop notes when the arm comes to a stand.
 struct GatewayPath {
     robot: trol::Robot,
+    twin: C500Twin,
+}
+
+/// The simulated C500 (time scale 1) serving a line paced at the profile's baud rate; its
+/// loop notes when the arm comes to a stand.
+struct C500Twin {
     stopped_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
+    /// When a command that waited for the arm (a motion behind another) went on.
+    released_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     c500: Option<std::thread::JoinHandle<()>>,
 }
 
-impl Drop for GatewayPath {
+impl Drop for C500Twin {
     fn drop(&mut self) {
         self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
         if let Some(t) = self.c500.take() {
@@ -1011,21 +1023,15 @@ impl Drop for GatewayPath {
     }
 }
 
-fn gateway_path(
-    baud: u32,
-    completion: trol_rapl::profile::Completion,
-) -> Result<GatewayPath, String> {
+/// The simulated C500 and the RAPL-II backend's session with it.
+fn c500_line(profile: trol_rapl::Profile) -> Result<(trol_rapl::RaplBackend, C500Twin), String> {
     use std::sync::atomic::AtomicBool;
     use std::sync::{Arc, Mutex};
-    let profile = trol_rapl::Profile {
-        baud,
-        completion,
-        ..trol_rapl::Profile::simulator()
-    };
-    let (rapl_host, mut rapl_ctl) = memory::pair(Some(baud));
+    let (rapl_host, mut rapl_ctl) = memory::pair(Some(profile.baud));
     let stop = Arc::new(AtomicBool::new(false));
     let stopped_at = Arc::new(Mutex::new(None));
-    let (flag, noted) = (stop.clone(), stopped_at.clone());
+    let released_at = Arc::new(Mutex::new(None));
+    let (flag, noted, released) = (stop.clone(), stopped_at.clone(), released_at.clone());
     let c500_profile = profile.clone();
     let c500 = std::thread::spawn(move || {
         let arm = trol_a465::arm::Arm::new(trol_a465::arm::ArmSettings {
@@ -1034,6 +1040,7 @@ fn gateway_path(
         });
         let mut c = trol_rapl::C500::new(c500_profile, arm, Vec::new());
         let mut was_moving = false;
+        let mut was_waiting = false;
         let _ = trol_rapl::c500::serve_with(
             &mut rapl_ctl,
             &mut c,
@@ -1046,11 +1053,96 @@ fn gateway_path(
                     *noted.lock().unwrap() = Some(Instant::now());
                 }
                 was_moving = moving;
+                let waiting = c.is_waiting();
+                if was_waiting && !waiting {
+                    *released.lock().unwrap() = Some(Instant::now());
+                }
+                was_waiting = waiting;
             },
         );
     });
     let backend = trol_rapl::RaplBackend::connect(Box::new(rapl_host), profile)
         .map_err(|e| format!("the gateway could not open the simulated C500: {e}"))?;
+    Ok((
+        backend,
+        C500Twin {
+            stopped_at,
+            released_at,
+            stop,
+            c500: Some(c500),
+        },
+    ))
+}
+
+/// The completions `trol bench gateway` compares: the profile's name for each and the
+/// settings that make it.
+fn completions() -> Vec<(&'static str, trol_rapl::Profile)> {
+    use trol_rapl::profile::Completion;
+    let base = trol_rapl::Profile::simulator();
+    let finish = trol_rapl::Profile {
+        completion: Completion::Finish,
+        ctrl_c_ends_finish: true,
+        ..base.clone()
+    };
+    vec![
+        ("status (the default)", base.clone()),
+        (
+            "w5",
+            trol_rapl::Profile {
+                completion: Completion::W5,
+                ..base.clone()
+            },
+        ),
+        ("finish, W2 confirms", finish.clone()),
+        (
+            "finish, finish_ack_means_arrived",
+            trol_rapl::Profile {
+                finish_ack_means_arrived: true,
+                twin: trol_rapl::profile::Twin {
+                    finish_stopped: 37,
+                    ..finish.twin.clone()
+                },
+                ..finish
+            },
+        ),
+    ]
+}
+
+/// RobWork's way (c500-rapl.md §1.1 item 7): the motion, then the same absolute motion
+/// again, whose answer the controller holds until the first has ended; the time from the
+/// arm's stand to that answer, on the RAPL-II line alone (no TROL link, no server).
+fn robwork_anchor(baud: u32, moves: u32) -> Result<Spread, String> {
+    let (mut backend, twin) = c500_line(trol_rapl::Profile {
+        baud,
+        ..trol_rapl::Profile::simulator()
+    })?;
+    let t = Duration::from_secs(30);
+    let mut after = Vec::new();
+    for i in 0..moves {
+        let deg = if i % 2 == 0 { 17.19 } else { 0.0 };
+        let ma = format!("MA 0,0,0,0,0,{deg}");
+        *twin.released_at.lock().unwrap() = None;
+        for _ in 0..2 {
+            let r = backend
+                .type_line(&ma, t)
+                .map_err(|e| format!("`{ma}`: {e}"))?;
+            if !r.ack {
+                return Err(format!("`{ma}` was not acknowledged: {:?}", r.text));
+            }
+        }
+        let answered = Instant::now();
+        // The second MA waited in the controller until the first motion ended.
+        let Some(stood) = *twin.released_at.lock().unwrap() else {
+            return Err("the second MA was answered before the first motion ended".into());
+        };
+        after.push(answered.duration_since(stood).as_secs_f64() * 1e3);
+    }
+    Ok(Spread::of(after))
+}
+
+fn gateway_path(profile: trol_rapl::Profile) -> Result<GatewayPath, String> {
+    let baud = profile.baud;
+    let (backend, twin) = c500_line(profile)?;
     let (trol_host, trol_ctl) = memory::pair(Some(baud));
     let cfg = LinkConfig::for_line(baud, Duration::ZERO);
     let controller = trol_controller::Controller::new(
@@ -1062,18 +1154,16 @@ fn gateway_path(
     let handle = trol_controller::Embedded::spawn(controller);
     let mut robot = trol::Robot::over(Box::new(trol_host), cfg, Some(handle));
     robot.set_codes(trol_rapl::RAPL_CODES);
-    Ok(GatewayPath {
-        robot,
-        stopped_at,
-        stop,
-        c500: Some(c500),
-    })
+    Ok(GatewayPath { robot, twin })
 }
 
 fn gateway(a: GatewayArgs) -> Result<(), String> {
-    use trol_rapl::profile::Completion;
     let err = |e: trol::Error| e.to_string();
-    let mut path = gateway_path(a.baud, Completion::Status)?;
+    let base = trol_rapl::Profile {
+        baud: a.baud,
+        ..trol_rapl::Profile::simulator()
+    };
+    let mut path = gateway_path(base)?;
     let robot = &mut path.robot;
     robot.speed(100).map_err(err)?;
     let mut speed = Vec::new();
@@ -1091,31 +1181,36 @@ fn gateway(a: GatewayArgs) -> Result<(), String> {
     drop(path);
 
     let mut finish = Vec::new();
-    for completion in [Completion::Status, Completion::W5] {
-        let mut path = gateway_path(a.baud, completion)?;
+    for (completion, profile) in completions() {
+        let mut path = gateway_path(trol_rapl::Profile {
+            baud: a.baud,
+            ..profile
+        })?;
         let mut after = Vec::new();
         for i in 0..a.moves {
             // Joint 6 by 0.3 rad, back and forth: about a quarter of a second at full speed.
             let step = if i % 2 == 0 { 0.3 } else { -0.3 };
-            *path.stopped_at.lock().unwrap() = None;
+            *path.twin.stopped_at.lock().unwrap() = None;
             path.robot.joint(6, step).map_err(err)?;
             path.robot.finish().map_err(err)?;
             let returned = Instant::now();
-            let Some(stood) = *path.stopped_at.lock().unwrap() else {
+            let Some(stood) = *path.twin.stopped_at.lock().unwrap() else {
                 return Err(format!(
-                    "Finish returned before the arm stood (completion {completion:?})"
+                    "Finish returned before the arm stood (completion {completion})"
                 ));
             };
             after.push(returned.duration_since(stood).as_secs_f64() * 1e3);
         }
         finish.push(FinishReport {
-            completion: format!("{completion:?}").to_ascii_lowercase(),
+            completion: completion.to_string(),
             moves: a.moves,
             after_motion_end: Spread::of(after),
         });
     }
+    let robwork = robwork_anchor(a.baud, a.moves)?;
     let r = GatewayReport {
         baud: a.baud,
+        robwork_second_motion: robwork,
         speed_round_trip: Spread::of(speed),
         get_position_cart_actual: Spread::of(position),
         finish,
@@ -1145,6 +1240,10 @@ fn gateway(a: GatewayArgs) -> Result<(), String> {
                 &f.after_motion_end,
             );
         }
+        t += &line(
+            "RobWork's way (the motion sent twice; the RAPL-II line alone), after the end",
+            &r.robwork_second_motion,
+        );
         t.trim_end().to_string()
     })
 }

@@ -60,13 +60,30 @@ fn benches_print_json() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert!(v["get_position_cart_actual"]["median_ms"].as_f64().unwrap() > 0.0);
     let finish = v["finish"].as_array().unwrap();
-    assert_eq!(finish.len(), 2, "{out}");
+    let names: Vec<&str> = finish
+        .iter()
+        .map(|f| f["completion"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "status (the default)",
+            "w5",
+            "finish, W2 confirms",
+            "finish, finish_ack_means_arrived"
+        ],
+        "{out}"
+    );
     for f in finish {
         assert!(
             f["after_motion_end"]["max_ms"].as_f64().unwrap() >= 0.0,
             "{f}"
         );
     }
+    // FINISH's answer alone comes sooner than STATUS and W2 (no clock bound: an order).
+    let median = |i: usize| finish[i]["after_motion_end"]["median_ms"].as_f64().unwrap();
+    assert!(median(3) < median(0), "{out}");
+    assert!(v["robwork_second_motion"]["median_ms"].as_f64().unwrap() >= 0.0);
 
     let o = bench(&dir, &["--help"]);
     assert!(text(&o).0.contains("all "), "{:?}", text(&o));

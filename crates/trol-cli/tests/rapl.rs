@@ -133,6 +133,11 @@ c_examples_on_variants! {
     c_examples_nul_after_digit => "nul-after-digit",
     c_examples_no_echo => "no-echo",
     c_examples_not_homed => "not-homed",
+    c_examples_finish => "finish",
+    c_examples_finish_trusted => "finish-trusted",
+    c_examples_finish_at_once => "finish-at-once",
+    c_examples_finish_refused => "finish-refused",
+    c_examples_finish_deaf => "finish-deaf",
 }
 
 #[test]

@@ -51,7 +51,7 @@ use crate::frames::{Frames, Unsettled};
 use crate::profile::{
     Ack, Completion, Entry, Halt, JointUnits, MotionAck, Profile, RefusalForm, Units,
 };
-use crate::session::{CTRL_Z, Reply, Session, SessionConfig, SessionError};
+use crate::session::{ACK, CTRL_Z, Reply, Session, SessionConfig, SessionError};
 use crate::text::{self, Listed};
 
 /// The arm has no power (LIMP, an e-stop).
@@ -266,6 +266,9 @@ struct Outstanding {
     since: std::time::Instant,
     seen_moving: bool,
     still: Option<(std::time::Instant, [f64; 6])>,
+    /// FINISH was answered for it without settling its end (`completion = "finish"`): its
+    /// end is looked for by STATUS.
+    finish_tried: bool,
 }
 
 impl Outstanding {
@@ -275,6 +278,7 @@ impl Outstanding {
             since: std::time::Instant::now(),
             seen_moving,
             still: None,
+            finish_tried: false,
         }
     }
 }
@@ -297,6 +301,14 @@ enum Gate {
     Busy,
 }
 
+/// How long one look for FINISH's answer listens (`completion = "finish"`): the end is seen
+/// the moment it comes within it; a request of the host waits at most this long.
+pub const FINISH_LISTEN: Duration = Duration::from_millis(200);
+
+/// The longest Ctrl-C may take to end a waiting FINISH (its prompt, and the line quiet
+/// after it) before the controller counts as one that does not take it.
+pub const CTRL_C_ENDS_FINISH_WITHIN: Duration = Duration::from_millis(500);
+
 /// How many motions may wait behind the one under way (the simulated arm's queue).
 pub const QUEUE: usize = trol_a465::arm::MOTION_QUEUE;
 
@@ -318,6 +330,10 @@ pub struct RaplBackend {
     /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
     /// "end"`): the controller's interpreter is busy until then.
     awaiting: Option<String>,
+    /// FINISH was typed and its answer is being read (`completion = "finish"`).
+    finishing: bool,
+    /// FINISH was refused as a command this controller does not take: not tried again.
+    finish_off: bool,
     unasked: String,
     scratch: usize,
     log: VecDeque<String>,
@@ -360,6 +376,8 @@ impl RaplBackend {
             queue: VecDeque::new(),
             deferred: None,
             awaiting: None,
+            finishing: false,
+            finish_off: false,
             unasked: String::new(),
             scratch: 0,
             log: VecDeque::new(),
@@ -479,10 +497,15 @@ impl RaplBackend {
     /// Ctrl-C, as a terminal's user presses it: the line is cancelled and the controller's
     /// prompt awaited (on a controller whose halt is Ctrl-C, this stops the arm).
     pub fn interrupt(&mut self) -> Result<(), BackendError> {
+        self.ctrl_c().map(drop)
+    }
+
+    /// Ctrl-C, and what came back up to the prompt.
+    fn ctrl_c(&mut self) -> Result<String, BackendError> {
         let now = self.now();
         self.session.resync(now);
         match self.pump() {
-            Ok(Ok(_)) => Ok(()),
+            Ok(Ok(r)) => Ok(r.text),
             Ok(Err(e)) => Err(BackendError::Unsure(e.to_string())),
             Err(e) => Err(BackendError::Unsure(e.to_string())),
         }
@@ -716,6 +739,7 @@ impl RaplBackend {
                 "`{line}` not sent: the RAPL-II session is closed"
             )));
         }
+        self.release()?;
         if let Some(motion) = &self.awaiting {
             return Err(BackendError::Link(format!(
                 "`{line}` not sent: this controller answers `{motion}` only at the motion's end \
@@ -856,6 +880,7 @@ impl RaplBackend {
     /// Whether a motion may be sent now: power and homing checked, and whether the arm is
     /// busy (a motion of ours not seen to end, a queue, or the DONE row).
     fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
+        self.release()?;
         // A controller that answers a motion at its end takes nothing before: the next motion
         // waits for that answer, as the controller itself would.
         while self.awaiting.is_some() {
@@ -1045,6 +1070,14 @@ impl RaplBackend {
     /// ours is under way; starts the next queued motion once the last has ended. Whether
     /// anything still moves.
     fn poll(&mut self) -> Result<bool, BackendError> {
+        if self.finishing {
+            return self.await_finish();
+        }
+        self.poll_status()
+    }
+
+    /// One look at the arm by STATUS (and W2), as [`RaplBackend::poll`] describes.
+    fn poll_status(&mut self) -> Result<bool, BackendError> {
         if self.await_end()? {
             return Ok(true);
         }
@@ -1130,6 +1163,166 @@ impl RaplBackend {
             return Err(BackendError::Unsure(e));
         }
         Ok(true)
+    }
+
+    /// Whether FINISH should go out now: `completion = "finish"`, a motion of ours under way
+    /// whose end FINISH has not yet answered for, and the line free.
+    fn finish_due(&self) -> bool {
+        self.profile.completion == Completion::Finish
+            && !self.finish_off
+            && !self.finishing
+            && self.awaiting.is_none()
+            && self.outstanding.as_ref().is_some_and(|o| !o.finish_tried)
+    }
+
+    /// Type FINISH; its answer is read by [`RaplBackend::await_finish`].
+    fn type_finish(&mut self) -> Result<(), BackendError> {
+        self.report_unasked()?;
+        let now = self.now();
+        if let Err(e) = self.session.send_line("FINISH", self.motion_timeout(), now) {
+            self.note(format!("`FINISH` not sent: {e}"));
+            return Err(BackendError::Link(e.to_string()));
+        }
+        self.finishing = true;
+        Ok(())
+    }
+
+    /// Listen for FINISH's answer (at most [`FINISH_LISTEN`]): still moving (true), or the
+    /// motion's end, confirmed by W2 unless the profile says FINISH's ACK means arrival.
+    /// Where it settles nothing, the end is looked for by STATUS.
+    fn await_finish(&mut self) -> Result<bool, BackendError> {
+        let until = std::time::Instant::now() + FINISH_LISTEN;
+        let ev = match self.pump_until(None, Some(until)) {
+            Ok(ev) => ev,
+            Err(e) => {
+                self.finishing = false;
+                return Err(BackendError::Unsure(format!("`FINISH`: {e}")));
+            }
+        };
+        let Some(ev) = ev else {
+            let late = self
+                .outstanding
+                .as_ref()
+                .is_some_and(|o| o.since.elapsed() > self.motion_timeout());
+            if late {
+                let line = self
+                    .outstanding
+                    .take()
+                    .map(|o| o.motion.line)
+                    .unwrap_or_default();
+                self.queue.clear();
+                let _ = self.release();
+                return Err(BackendError::Unsure(format!(
+                    "`{line}`: FINISH was not answered within motion_timeout_s ({} s): Ctrl-C \
+                     sent; whether the motion ran to its end is not known",
+                    self.profile.motion_timeout_s
+                )));
+            }
+            return Ok(true);
+        };
+        self.finishing = false;
+        let line = self
+            .outstanding
+            .as_ref()
+            .map(|o| o.motion.line.clone())
+            .unwrap_or_default();
+        let answer = match ev {
+            Ok(r) => self.answer("FINISH", r, false),
+            Err(e) => Err(if e.surely_not_run() {
+                BackendError::Link(format!("`FINISH`: {e}"))
+            } else {
+                BackendError::Unsure(format!("`FINISH` after `{line}`: {e}"))
+            }),
+        };
+        match answer {
+            Ok(Answer::Done(_)) => {
+                if self.profile.finish_ack_means_arrived || self.arrived()? {
+                    self.outstanding = None;
+                    return self.next_in_queue();
+                }
+                self.note(format!(
+                    "FINISH answered after `{line}`, but W2 does not put the arm at the motion's \
+                     end: its end is looked for by STATUS"
+                ));
+            }
+            Ok(Answer::Refused(n, t)) if self.profile.finish_ack_means_arrived => {
+                // This controller answers FINISH with an error only when the motion stopped
+                // short (the profile says so).
+                self.outstanding = None;
+                let dropped = std::mem::take(&mut self.queue).len();
+                self.note(format!(
+                    "`{line}` ended short: FINISH answered {n:03}-{t}{}",
+                    if dropped > 0 {
+                        format!("; {dropped} queued motion(s) dropped, not sent")
+                    } else {
+                        String::new()
+                    }
+                ));
+                return Err(BackendError::Refused(self.code_of_refusal(n)));
+            }
+            Ok(Answer::Refused(n, t)) => {
+                if self.code_of_refusal(n) == code_of("BIOS_BAD_ARGUMENT") {
+                    self.finish_off = true;
+                    self.note(format!(
+                        "FINISH refused ({n:03}-{t}): this controller does not take it in \
+                         immediate mode; the end of each motion is looked for by STATUS"
+                    ));
+                } else {
+                    self.note(format!(
+                        "FINISH after `{line}` answered {n:03}-{t}: its end is looked for by \
+                         STATUS"
+                    ));
+                }
+            }
+            Err(e) => {
+                self.outstanding = None;
+                self.queue.clear();
+                return Err(e);
+            }
+        }
+        if let Some(o) = self.outstanding.as_mut() {
+            o.finish_tried = true;
+        }
+        self.poll_status()
+    }
+
+    /// End a FINISH that waits (Ctrl-C, before anything else is typed): the motion runs on.
+    /// A controller that does not answer at once leaves the arm's state unknown: UNSURE,
+    /// the motion and the queue given up.
+    fn release(&mut self) -> Result<(), BackendError> {
+        if !self.finishing {
+            return Ok(());
+        }
+        self.finishing = false;
+        let t = std::time::Instant::now();
+        let r = self.ctrl_c();
+        let took = t.elapsed();
+        // An ACK before the prompt is FINISH's own answer: the motion ended by itself, and
+        // the Ctrl-C may never have been taken.
+        let answered = matches!(&r, Ok(text) if text.contains(char::from(ACK)));
+        if r.is_ok() && !answered && took <= CTRL_C_ENDS_FINISH_WITHIN {
+            return Ok(());
+        }
+        let line = self
+            .outstanding
+            .take()
+            .map(|o| o.motion.line)
+            .unwrap_or_default();
+        self.queue.clear();
+        let e = format!(
+            "Ctrl-C did not end the FINISH that waited for `{line}` within {} ms ({}): this \
+             controller may not take Ctrl-C while FINISH waits (the profile says \
+             ctrl_c_ends_finish = true); the arm may still be moving, and nothing further was \
+             sent",
+            CTRL_C_ENDS_FINISH_WITHIN.as_millis(),
+            match r {
+                Ok(_) if answered => "FINISH answered by itself".to_string(),
+                Ok(_) => format!("its prompt came after {} ms", took.as_millis()),
+                Err(e) => e.to_string(),
+            }
+        );
+        self.note(e.clone());
+        Err(BackendError::Unsure(e))
     }
 
     fn next_in_queue(&mut self) -> Result<bool, BackendError> {
@@ -1764,8 +1957,10 @@ impl Backend for RaplBackend {
         if let Some(e) = self.deferred.take() {
             return Err(e);
         }
-        if let Some((at, m)) = self.last_poll {
-            if at.elapsed() < Duration::from_millis(self.profile.poll_ms) {
+        if self.finish_due() {
+            self.type_finish()?;
+        } else if let Some((at, m)) = self.last_poll {
+            if !self.finishing && at.elapsed() < Duration::from_millis(self.profile.poll_ms) {
                 return Ok(m);
             }
         }

@@ -25,7 +25,9 @@ use trol_a465::model::{counts_to_joints, joints_to_counts};
 
 use crate::aci::Slave;
 use crate::frames::Frames;
-use crate::profile::{Ack, Entry, Halt, JointUnits, Profile, RefusalForm, SIM_ERRORS, Units};
+use crate::profile::{
+    Ack, Entry, Halt, JointUnits, Profile, RefusalForm, SIM_ERRORS, TwinFinish, Units,
+};
 use crate::session::{ACK, CTRL_C, CTRL_Z, XOFF, XON};
 use crate::text::{self, Listed, Position, Status};
 
@@ -52,8 +54,11 @@ enum Mode {
 
 #[derive(Debug)]
 enum Waiting {
-    /// FINISH: ACK once the arm is idle.
+    /// A motion answered at its end (`motion_ack = "end"`): ACK once the arm is idle.
     Finish,
+    /// The FINISH command: ACK once the arm is idle (or the `finish_stopped` error when the
+    /// motion stopped short).
+    FinishCommand,
     /// A motion behind another: run it once the arm is idle.
     Motion(String),
 }
@@ -111,6 +116,28 @@ pub const VARIANTS: &[(&str, &str)] = &[
     ),
     ("no-echo", "echo off (RAPL-II's CONFIG ECHO)"),
     ("not-homed", "the arm is not homed at power-up"),
+    (
+        "finish",
+        "completion = \"finish\": FINISH waits in immediate mode, Ctrl-C ends it",
+    ),
+    (
+        "finish-trusted",
+        "as finish, and FINISH after a motion stopped short answers 037, never ACK \
+         (finish_ack_means_arrived)",
+    ),
+    (
+        "finish-at-once",
+        "as finish, but FINISH answers at once while the arm still moves",
+    ),
+    (
+        "finish-refused",
+        "as finish, but FINISH is refused in immediate mode (program mode only, as R2JSON lists it)",
+    ),
+    (
+        "finish-deaf",
+        "as finish, but Ctrl-C is ignored while FINISH waits (the profile's \
+         ctrl_c_ends_finish is wrong)",
+    ),
 ];
 
 /// The profile of variant `name` (see [`VARIANTS`]), and whether its arm starts homed.
@@ -209,6 +236,25 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
             },
             ..base
         },
+        "finish" | "finish-trusted" | "finish-at-once" | "finish-refused" | "finish-deaf" => {
+            let twin = crate::profile::Twin {
+                finish: match name {
+                    "finish-at-once" => TwinFinish::AtOnce,
+                    "finish-refused" => TwinFinish::Refused,
+                    _ => TwinFinish::Waits,
+                },
+                finish_ctrl_c: name != "finish-deaf",
+                finish_stopped: if name == "finish-trusted" { 37 } else { 0 },
+                ..twin
+            };
+            Profile {
+                completion: crate::profile::Completion::Finish,
+                ctrl_c_ends_finish: true,
+                finish_ack_means_arrived: name == "finish-trusted",
+                twin,
+                ..base
+            }
+        }
         _ => return None,
     };
     Some((p, name != "not-homed"))
@@ -235,6 +281,8 @@ pub struct C500 {
     last_error: String,
     ctrl_z: u8,
     limp: bool,
+    /// The last motion stopped short of its end (an emergency stop, a halt).
+    stopped_short: bool,
     locations: BTreeMap<String, Stored>,
     log: Vec<String>,
 }
@@ -307,6 +355,7 @@ impl C500 {
             last_error: "000-NO ERROR.".into(),
             ctrl_z: 0,
             limp: false,
+            stopped_short: false,
             locations,
             log: Vec::new(),
             profile,
@@ -370,6 +419,9 @@ impl C500 {
             match b {
                 XOFF => self.host_xoff = true,
                 XON => self.host_xoff = false,
+                CTRL_C
+                    if matches!(self.waiting, Some(Waiting::FinishCommand))
+                        && !self.profile.twin.finish_ctrl_c => {}
                 CTRL_C => {
                     // At once, even while a command waits.
                     self.typeahead.clear();
@@ -377,6 +429,7 @@ impl C500 {
                     // how this controller halts.
                     self.waiting = None;
                     if self.profile.halt == Halt::CtrlC && self.arm.is_moving(now) {
+                        self.stopped_short = true;
                         self.arm.halt(now);
                     }
                     self.line.clear();
@@ -399,6 +452,10 @@ impl C500 {
         if self.waiting.is_some() && !self.arm.is_moving(now) {
             match self.waiting.take() {
                 Some(Waiting::Finish) => self.ok(""),
+                Some(Waiting::FinishCommand) => match self.profile.twin.finish_stopped {
+                    n if n > 0 && self.stopped_short => self.refuse(n),
+                    _ => self.ok(""),
+                },
                 Some(Waiting::Motion(line)) => self.execute(&line, now),
                 None => {}
             }
@@ -573,6 +630,7 @@ impl C500 {
             return self.refuse(Self::code_error(c));
         }
         self.acked_at = now;
+        self.stopped_short = false;
         if !self.profile.twin.motion_warning.is_empty() {
             let w = format!("\r\n{}\r\n", self.profile.twin.motion_warning);
             self.out.extend(w.bytes());
@@ -725,16 +783,22 @@ impl C500 {
                 self.motion_answer(c, now)
             }
             ("HALT" | "ABORT", _) => {
+                if self.arm.is_moving(now) {
+                    self.stopped_short = true;
+                }
                 self.arm.halt(now);
                 self.ok("")
             }
-            ("FINISH", _) => {
-                if self.arm.is_moving(now) {
-                    self.waiting = Some(Waiting::Finish);
-                } else {
-                    self.ok("")
+            ("FINISH", _) => match self.profile.twin.finish {
+                TwinFinish::Refused => self.refuse(12),
+                TwinFinish::Waits if self.arm.is_moving(now) => {
+                    self.waiting = Some(Waiting::FinishCommand);
                 }
-            }
+                _ => match self.profile.twin.finish_stopped {
+                    n if n > 0 && self.stopped_short => self.refuse(n),
+                    _ => self.ok(""),
+                },
+            },
             ("GRIP", Some([d])) => {
                 let c = self.arm.grip(d * mm, now);
                 self.answer(c)
@@ -909,6 +973,11 @@ impl C500 {
         self.arm.ma(joints, now)
     }
 
+    /// Whether a command waits for the arm (FINISH, or a motion behind another).
+    pub fn is_waiting(&self) -> bool {
+        self.waiting.is_some()
+    }
+
     /// Whether the arm moves at `now`.
     pub fn arm_moving(&mut self, now: f64) -> bool {
         self.arm.is_moving(now)
@@ -918,6 +987,9 @@ impl C500 {
     /// `estop_line` prints it unasked.
     pub fn power_off(&mut self, now: f64) {
         self.limp = true;
+        if self.arm.is_moving(now) {
+            self.stopped_short = true;
+        }
         self.arm.halt(now);
         if !self.profile.twin.estop_line.is_empty() {
             let l = format!("\r\n{}\r\n", self.profile.twin.estop_line);

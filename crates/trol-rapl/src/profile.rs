@@ -111,7 +111,11 @@ pub enum Completion {
     Status,
     /// Poll W5: all joint velocities 0.
     W5,
-    /// Send FINISH and wait for its answer (holds the line for the whole motion).
+    /// Send FINISH while the host waits for the motion and listen for its answer: the end is
+    /// known as soon as the controller says so (FINISH holds the interpreter, so a Halt goes
+    /// as Ctrl-C first). Needs `ctrl_c_ends_finish = true`, checked on the arm. The arm's
+    /// position (W2) confirms the end unless `finish_ack_means_arrived`; where it does not,
+    /// the end is looked for by STATUS as with `status`.
     Finish,
 }
 
@@ -256,6 +260,15 @@ pub struct Profile {
     pub completion: Completion,
     /// How a motion is stopped.
     pub halt: Halt,
+    /// Ctrl-C ends a FINISH that waits at once, with the prompt, and leaves the motion
+    /// running (no public source says; check it on the arm, docs/c500.md "Settle the
+    /// conventions"). `completion = "finish"` needs it, so that a Halt always gets through.
+    pub ctrl_c_ends_finish: bool,
+    /// FINISH's ACK alone means the motion arrived: this controller answers a FINISH whose
+    /// motion stopped short (an emergency stop, a fault) with an error line, never ACK (no
+    /// public source says; check it on the arm). Without it, W2 confirms each end (about
+    /// 0.1 s more at 38400 baud).
+    pub finish_ack_means_arrived: bool,
     /// When a motion's ACK comes: at its `start` or its `end` (`trol rapl probe` cannot
     /// tell without a motion; docs/c500.md has the supervised step).
     pub motion_ack: MotionAck,
@@ -335,6 +348,26 @@ pub struct Twin {
     pub estop_line: String,
     /// A numbered line it prints before the ACK of every motion ("": none).
     pub motion_warning: String,
+    /// How it takes FINISH in immediate mode (R2JSON lists FINISH for program mode only).
+    pub finish: TwinFinish,
+    /// Whether Ctrl-C ends a FINISH that waits (else it is ignored until the motion ends).
+    pub finish_ctrl_c: bool,
+    /// The error number it answers FINISH with when the last motion stopped short (an
+    /// emergency stop: 037), whether FINISH waited for it or came after; 0: ACK, as for an
+    /// arrival.
+    pub finish_stopped: u16,
+}
+
+/// How the simulated C500 takes FINISH typed in immediate mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TwinFinish {
+    /// It waits for the motion's end, then answers.
+    Waits,
+    /// It answers at once, moving or not.
+    AtOnce,
+    /// It refuses it (012-COMMAND ERROR.).
+    Refused,
 }
 
 impl Default for Twin {
@@ -346,6 +379,9 @@ impl Default for Twin {
             done_lag_ms: 0,
             estop_line: String::new(),
             motion_warning: String::new(),
+            finish: TwinFinish::Waits,
+            finish_ctrl_c: true,
+            finish_stopped: 0,
         }
     }
 }
@@ -469,6 +505,8 @@ impl Default for Profile {
             joint_units: String::new(),
             completion: Completion::Status,
             halt: Halt::Halt,
+            ctrl_c_ends_finish: false,
+            finish_ack_means_arrived: false,
             motion_ack: MotionAck::Start,
             prompt: ">>".into(),
             help_at_start: true,
@@ -607,9 +645,29 @@ impl Profile {
             );
         }
         if self.completion == Completion::Finish {
+            if !self.ctrl_c_ends_finish {
+                return Err(
+                    "`completion = \"finish\"` holds the controller's interpreter while a motion \
+                     runs, so a Halt must end the FINISH with Ctrl-C first: set \
+                     `ctrl_c_ends_finish = true` once the arm showed that Ctrl-C answers at once \
+                     while FINISH waits (docs/c500.md, \"Settle the conventions\"), or use \
+                     \"status\""
+                        .into(),
+                );
+            }
+            if self.motion_ack == MotionAck::End || self.halt == Halt::CtrlC {
+                return Err(
+                    "`completion = \"finish\"` needs `motion_ack = \"start\"` and a halt other than \
+                     \"ctrl-c\" (Ctrl-C ends the FINISH, the halt then stops the arm); a \
+                     controller that answers a motion at its end needs no FINISH"
+                        .into(),
+                );
+            }
+        }
+        if self.finish_ack_means_arrived && self.completion != Completion::Finish {
             return Err(
-                "`completion = \"finish\"` holds the line for the whole motion, so a Halt could \
-                 not reach the arm: use \"status\" or \"w5\""
+                "`finish_ack_means_arrived = true` is about FINISH: it needs `completion = \
+                 \"finish\"`"
                     .into(),
             );
         }
@@ -731,6 +789,20 @@ mod tests {
         assert_eq!(again, p);
         let s = Profile::simulator();
         assert_eq!(Profile::parse(&s.to_toml()).unwrap(), s);
+    }
+
+    #[test]
+    fn finish_needs_the_statements_that_keep_halt_and_success_true() {
+        let e = Profile::parse("completion = \"finish\"").unwrap_err();
+        assert!(e.contains("ctrl_c_ends_finish = true"), "{e}");
+        let p = Profile::parse("completion = \"finish\"\nctrl_c_ends_finish = true").unwrap();
+        assert!(!p.finish_ack_means_arrived);
+        let e =
+            Profile::parse("completion = \"finish\"\nctrl_c_ends_finish = true\nhalt = \"ctrl-c\"")
+                .unwrap_err();
+        assert!(e.contains("motion_ack = \"start\""), "{e}");
+        let e = Profile::parse("finish_ack_means_arrived = true").unwrap_err();
+        assert!(e.contains("needs `completion = \"finish\"`"), "{e}");
     }
 
     #[test]

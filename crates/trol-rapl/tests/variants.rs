@@ -322,6 +322,46 @@ impl Run<'_> {
             }
         }
 
+        // Halt while Finish waits (as a Ctrl-C handler or another thread asks): with
+        // `completion = "finish"` a FINISH holds the controller's interpreter then.
+        let before = self.sim.planned_end();
+        let r = self.robot.joint(1, -1.5);
+        if r.is_ok() && self.accepted(&before) && self.sim.moving() {
+            let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            let flag = cancel.clone();
+            let t = std::thread::spawn(move || {
+                // A twentieth of the motion's controller time, at the twin's time scale 20.
+                std::thread::sleep(Duration::from_millis(100));
+                flag.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+            let w = self.robot.finish_unless(&cancel);
+            t.join().expect("the canceller");
+            let turned = (self.sim.planned_end()[0] - before[0]).abs();
+            self.outcomes.push(format!(
+                "halt while finish waits: {w:?} / turned {turned:.3} rad"
+            ));
+            let halted = matches!(w, Ok(trol::Waited::Halted));
+            if w.is_ok() && turned > 1.4 {
+                self.false_success.push(format!(
+                    "{}: Halt while Finish waited said done, but the joint turned {turned:.3} \
+                     of 1.5 rad",
+                    self.label
+                ));
+            }
+            if self.halt_must_work && (!halted || turned > 1.4) {
+                self.missed.push(format!(
+                    "{}: halt while finish waits: {w:?}, turned {turned}",
+                    self.label
+                ));
+            }
+            let _ = self.robot.finish();
+        } else if self.halt_must_work {
+            self.missed.push(format!(
+                "{}: joint 1 for the halt while finish waits: {r:?}",
+                self.label
+            ));
+        }
+
         // An emergency stop mid-motion: Finish fails with a named code.
         let before = self.sim.planned_end();
         let r = self.robot.joint(1, -1.0);
@@ -359,7 +399,7 @@ impl Run<'_> {
 /// Variants the matching profile cannot drive in full: TROL must fail safe there. A warning
 /// line before ACK leaves every motion UNSURE; a controller that echoes nothing cannot be
 /// typed to.
-const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo"];
+const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo", "finish-deaf"];
 
 fn run_variant(name: &str) {
     let (twin, homed) = trol_rapl::c500::variant(name).expect("a variant");
@@ -404,9 +444,7 @@ fn run_variant(name: &str) {
             robot,
             pulses: trol_rapl::frames::Frames::of(&twin),
             works: which == "matching profile" && !FAIL_SAFE.contains(&name),
-            halt_must_work: which == "matching profile"
-                && name != "no-echo"
-                && name != "warning-then-ack",
+            halt_must_work: which == "matching profile" && !FAIL_SAFE.contains(&name),
             false_success: Vec::new(),
             unasked: Vec::new(),
             missed: Vec::new(),
@@ -414,6 +452,13 @@ fn run_variant(name: &str) {
             tally: [0; 4],
         };
         run.script();
+        if which == "matching profile" && name.starts_with("finish") {
+            let finishes = sim.ran().iter().filter(|l| l.as_str() == "FINISH").count();
+            if finishes == 0 {
+                bad.push(format!("{label}: FINISH was never typed"));
+            }
+            run.outcomes.push(format!("FINISH typed {finishes} times"));
+        }
         let [ok, refused, unsure, at_finish] = run.tally;
         // The figure docs/reliability.md cites (`-- --nocapture` shows it).
         eprintln!(
@@ -425,6 +470,9 @@ fn run_variant(name: &str) {
             run.unasked.len()
         );
         report.push(format!("{label}:\n  {}", run.outcomes.join("\n  ")));
+        if std::env::var_os("TROL_SHOW").is_some() {
+            eprintln!("{}", report.last().unwrap());
+        }
         bad.extend(run.false_success);
         bad.extend(run.unasked);
         bad.extend(run.missed);
@@ -473,4 +521,9 @@ variants! {
     nul_after_digit => "nul-after-digit",
     no_echo => "no-echo",
     not_homed => "not-homed",
+    finish => "finish",
+    finish_trusted => "finish-trusted",
+    finish_at_once => "finish-at-once",
+    finish_refused => "finish-refused",
+    finish_deaf => "finish-deaf",
 }

@@ -4,7 +4,7 @@
 # Python. Does its own set-up on a fresh machine with the Rust toolchain, a C compiler,
 # Python 3.10 or later and Node.js: cargo fetches the crates, pip the Python packages (into
 # target/py, a virtual environment), npm Playwright (into tests/browser/node_modules), and
-# apt Debian's Chromium if it is missing and this runs as root.
+# apt Debian's Chromium and libmodbus-dev if they are missing and this runs as root.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -39,6 +39,19 @@ browser_setup() {
   (cd tests/browser && npm ci --no-audit --no-fund --loglevel=error)
 }
 stage "browser set-up (Chromium, Playwright)" browser_setup
+
+# libmodbus, the anchor of `trol bench pty` (its test runs the anchor where the headers are).
+modbus_setup() {
+  if [ ! -f /usr/include/modbus/modbus.h ]; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+      apt-get update && apt-get install -y --no-install-recommends libmodbus-dev
+    else
+      echo "scripts/test.sh: note: without libmodbus-dev the pty bench's test checks only" \
+        "that it says how to get it (sudo apt-get install libmodbus-dev)" >&2
+    fi
+  fi
+}
+stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 
 stage "cargo test --workspace" cargo test --workspace
 # The client with its live view (a feature the utilities and libtrol leave out).

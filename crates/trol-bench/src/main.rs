@@ -7,6 +7,7 @@
 extern crate trol_cli;
 
 mod faults;
+mod pty;
 mod view;
 
 use std::process::ExitCode;
@@ -98,6 +99,14 @@ enum Bench {
     ///
     /// Example: trol bench gateway --count 50 --moves 20 --json
     Gateway(GatewayArgs),
+    /// A small CAT1 transaction (TROLSpeed) between two processes over a pty pair, against
+    /// `trol sim` on the other end, and the anchor in the same run: a libmodbus RTU round trip
+    /// (a register written, 8 bytes each way) over a pty pair between two processes, built
+    /// here from anchors/modbus_rtu.c with the C compiler and libmodbus (Debian:
+    /// libmodbus-dev); rounds alternate.
+    ///
+    /// Example: trol bench pty --count 2000 --rounds 3 --json
+    Pty(pty::PtyArgs),
     /// What the live view (`trol sim --view`) costs the controller: its CPU while an
     /// application drives the arm through whole motions, with nobody watching, with event
     /// streams open as a page holds one, and with a browser showing the page (--browser);
@@ -201,6 +210,20 @@ fn all() -> Result<(), String> {
             f(&v, "us_per_transaction"),
             f(&v, "transactions_per_second")
         ),
+    ));
+    let args = ["pty", "--count", "2000", "--rounds", "3"];
+    rows.push((
+        "a small transaction over a pty pair, two processes".into(),
+        format!("trol bench {}", args.join(" ")),
+        match run(&args) {
+            Ok(v) => format!(
+                "{:.1} us each; libmodbus RTU round trip in the same run {:.1} us: {:.2} times",
+                f(&v, "trol_us"),
+                f(&v, "libmodbus_us"),
+                f(&v, "ratio")
+            ),
+            Err(e) => format!("not measured: {e}"),
+        },
     ));
     for (baud, count) in [("38400", "200"), ("9600", "60")] {
         let args = ["transact", "--paced", baud, "--count", count];
@@ -652,6 +675,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Moves(a) => moves(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
+        Bench::Pty(a) => pty::pty(a),
         Bench::View(a) => view::view(a),
         Bench::All => all(),
     }

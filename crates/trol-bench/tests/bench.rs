@@ -103,6 +103,30 @@ fn benches_print_json() {
     }
 }
 
+/// The transaction over a pty pair and its libmodbus anchor: where libmodbus is installed
+/// (CI installs it) both figures; where it is not, an error that says how to get it.
+#[test]
+fn the_pty_bench_has_its_libmodbus_anchor() {
+    let dir = scratch("bench-pty");
+    let o = bench(&dir, &["pty", "--count", "200", "--rounds", "2", "--json"]);
+    let (out, err) = text(&o);
+    let has_libmodbus = std::path::Path::new("/usr/include/modbus/modbus.h").is_file();
+    if has_libmodbus {
+        assert!(o.status.success(), "{err}");
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["rounds"].as_array().unwrap().len(), 2, "{out}");
+        let (t, m) = (
+            v["trol_us"].as_f64().unwrap(),
+            v["libmodbus_us"].as_f64().unwrap(),
+        );
+        assert!(t > 0.0 && m > 0.0, "{out}");
+        assert!((v["ratio"].as_f64().unwrap() - t / m).abs() < 1e-9, "{out}");
+    } else {
+        assert!(!o.status.success(), "{out}");
+        assert!(err.contains("libmodbus-dev"), "{err}");
+    }
+}
+
 /// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
 /// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
 #[test]

@@ -2296,9 +2296,9 @@ impl Backend for RaplBackend {
         })
     }
     fn report(&mut self) -> Option<ArmReport> {
-        // W2 is read-only; not while a motion answered at its end holds the session, nor
-        // once the session failed.
-        if self.closed || self.awaiting.is_some() || self.deferred.is_some() {
+        // W2 is read-only; not while a motion answered at its end or a FINISH holds the
+        // session (the view would end the FINISH at every update), nor once it failed.
+        if self.closed || self.awaiting.is_some() || self.finishing || self.deferred.is_some() {
             return None;
         }
         let p = self.read_position(PosMode::Actual).ok()?;

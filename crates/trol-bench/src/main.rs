@@ -60,6 +60,73 @@ fn precise_timers() {
     }
 }
 
+/// `trol sim` with `args`, as its own process (its output read on a thread), and for each of
+/// `markers` the text after it in the first line that has it (within 20 s). The process is
+/// killed when the caller drops its [`SimProcess`].
+fn start_trol_sim(args: &[&str], markers: &[&str]) -> Result<(SimProcess, Vec<String>), String> {
+    use std::io::BufRead;
+    let mut child = std::process::Command::new(trol_binary()?)
+        .args(args)
+        .env_remove("TROL_CONFIG")
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .map_err(|e| format!("cannot start trol sim: {e}"))?;
+    let out = child.stdout.take().expect("piped");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(out).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let sim = SimProcess(child);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let mut found: Vec<Option<String>> = vec![None; markers.len()];
+    while found.iter().any(Option::is_none) {
+        let left = deadline.saturating_duration_since(Instant::now());
+        let Ok(line) = rx.recv_timeout(left) else {
+            return Err(format!(
+                "trol sim {} did not say where it serves within 20 s",
+                args.join(" ")
+            ));
+        };
+        for (m, f) in markers.iter().zip(found.iter_mut()) {
+            if let Some(rest) = line.split(m).nth(1) {
+                *f = Some(rest.trim().to_string());
+            }
+        }
+    }
+    Ok((sim, found.into_iter().flatten().collect()))
+}
+
+/// The first word of `text` (the port in `serving on PORT ...`).
+fn first_word(text: &str) -> String {
+    text.split_whitespace()
+        .next()
+        .unwrap_or_default()
+        .to_string()
+}
+
+/// A `trol sim` process, killed when dropped.
+struct SimProcess(std::process::Child);
+
+impl SimProcess {
+    fn id(&self) -> u32 {
+        self.0.id()
+    }
+}
+
+impl Drop for SimProcess {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// The `trol` binary beside this one (`trol bench view` starts `trol sim --view`).
 fn trol_binary() -> Result<std::path::PathBuf, String> {
     let me = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;

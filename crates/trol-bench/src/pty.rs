@@ -3,9 +3,8 @@
 //! round trip over a pty pair between two processes (anchors/modbus_rtu.c, built here with the
 //! machine's C compiler and libmodbus), in alternating rounds.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
@@ -46,55 +45,14 @@ struct PtyReport {
     ratio: f64,
 }
 
-/// `trol sim` serving on a new pty, killed when dropped.
-struct Sim {
-    child: Child,
-    port: String,
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn start_sim() -> Result<Sim, String> {
-    let mut child = Command::new(super::trol_binary()?)
-        .args(["sim", "--port", "pty", "--server", "--homed"])
-        .env_remove("TROL_CONFIG")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .map_err(|e| format!("cannot start trol sim: {e}"))?;
-    let out = child.stdout.take().expect("piped");
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(out).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let deadline = Instant::now() + Duration::from_secs(20);
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        let Ok(line) = rx.recv_timeout(left) else {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err("trol sim did not say where it serves within 20 s".into());
-        };
-        if let Some(rest) = line.split("serving on ").nth(1) {
-            let port = rest
-                .split_whitespace()
-                .next()
-                .unwrap_or_default()
-                .to_string();
-            return Ok(Sim { child, port });
-        }
-    }
+/// `trol sim` serving on a new pty (killed when dropped), and the pty's name.
+fn start_sim() -> Result<(super::SimProcess, String), String> {
+    let (process, found) = super::start_trol_sim(
+        &["sim", "--port", "pty", "--server", "--homed"],
+        &["serving on "],
+    )?;
+    let port = super::first_word(&found[0]);
+    Ok((process, port))
 }
 
 /// A folder of this run's own, removed when dropped.
@@ -186,10 +144,10 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 pub fn pty(a: PtyArgs) -> Result<(), String> {
     let (_dir, exe) = build_anchor(&a.cc)?;
-    let sim = start_sim()?;
+    let (_sim, port) = start_sim()?;
     let mut rounds = Vec::new();
     for _ in 0..a.rounds {
-        let trol_us = trol_round(&sim.port, a.count)?;
+        let trol_us = trol_round(&port, a.count)?;
         let libmodbus_us = anchor_round(&exe, a.count)?;
         rounds.push(Round {
             trol_us,

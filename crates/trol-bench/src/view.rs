@@ -11,7 +11,7 @@
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -61,23 +61,16 @@ struct ViewReport {
     updates_while_still: usize,
 }
 
-/// The `trol sim --view` process, killed when dropped.
+/// The `trol sim --view` process (killed when dropped), where it serves, and its view.
 struct Sim {
-    child: Child,
+    process: super::SimProcess,
     port: String,
     url: String,
 }
 
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
 fn start_sim() -> Result<Sim, String> {
-    let mut child = Command::new(super::trol_binary()?)
-        .args([
+    let (process, found) = super::start_trol_sim(
+        &[
             "sim",
             "--port",
             "listen://127.0.0.1:0",
@@ -85,44 +78,14 @@ fn start_sim() -> Result<Sim, String> {
             "--homed",
             "--view",
             "127.0.0.1:0",
-        ])
-        .env_remove("TROL_CONFIG")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .map_err(|e| format!("cannot start trol sim: {e}"))?;
-    let out = child.stdout.take().expect("piped");
-    // Its first lines say where it serves; read them on a thread, with a limit.
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(out).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let deadline = Instant::now() + Duration::from_secs(20);
-    let (mut port, mut url) = (None, None);
-    while port.is_none() || url.is_none() {
-        let left = deadline.saturating_duration_since(Instant::now());
-        let Ok(line) = rx.recv_timeout(left) else {
-            let _ = child.kill();
-            let _ = child.wait();
-            return Err("trol sim --view did not say where it serves within 20 s".into());
-        };
-        if let Some(rest) = line.split("serving on ").nth(1) {
-            port = rest.split_whitespace().next().map(str::to_string);
-        }
-        if let Some(rest) = line.split("the view: ").nth(1) {
-            url = Some(rest.trim().to_string());
-        }
-    }
+        ],
+        &["serving on ", "the view: "],
+    )?;
+    let port = super::first_word(&found[0]);
     Ok(Sim {
-        child,
-        port: port.expect("read"),
-        url: url.expect("read"),
+        process,
+        port,
+        url: found[1].clone(),
     })
 }
 
@@ -217,7 +180,7 @@ pub fn view(a: ViewArgs) -> Result<(), String> {
         return Err(format!("--viewers: give 1 to {}", trol_view::MAX_CLIENTS));
     }
     let sim = start_sim()?;
-    let pid = sim.child.id();
+    let pid = sim.process.id();
     let addr = sim
         .url
         .trim_start_matches("http://")

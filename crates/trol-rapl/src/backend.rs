@@ -1022,11 +1022,7 @@ impl RaplBackend {
             .pump_until(None, Some(until))
             .map_err(|e| BackendError::Unsure(format!("`{line}`: {e}")))?;
         let Some(ev) = ev else {
-            let late = self
-                .outstanding
-                .as_ref()
-                .is_some_and(|o| o.since.elapsed() > self.motion_timeout());
-            if late {
+            if self.past_motion_timeout() {
                 self.awaiting = None;
                 self.outstanding = None;
                 self.queue.clear();
@@ -1165,6 +1161,22 @@ impl RaplBackend {
         Ok(true)
     }
 
+    /// Give up the motion under way and the queue (nothing more of them is sent); its line.
+    fn give_up(&mut self) -> String {
+        self.queue.clear();
+        self.outstanding
+            .take()
+            .map(|o| o.motion.line)
+            .unwrap_or_default()
+    }
+
+    /// Whether the motion under way was sent longer ago than `motion_timeout_s`.
+    fn past_motion_timeout(&self) -> bool {
+        self.outstanding
+            .as_ref()
+            .is_some_and(|o| o.since.elapsed() > self.motion_timeout())
+    }
+
     /// Whether FINISH should go out now: `completion = "finish"`, a motion of ours under way
     /// whose end FINISH has not yet answered for, and the line free.
     fn finish_due(&self) -> bool {
@@ -1200,17 +1212,8 @@ impl RaplBackend {
             }
         };
         let Some(ev) = ev else {
-            let late = self
-                .outstanding
-                .as_ref()
-                .is_some_and(|o| o.since.elapsed() > self.motion_timeout());
-            if late {
-                let line = self
-                    .outstanding
-                    .take()
-                    .map(|o| o.motion.line)
-                    .unwrap_or_default();
-                self.queue.clear();
+            if self.past_motion_timeout() {
+                let line = self.give_up();
                 let _ = self.release();
                 return Err(BackendError::Unsure(format!(
                     "`{line}`: FINISH was not answered within motion_timeout_s ({} s): Ctrl-C \
@@ -1303,12 +1306,7 @@ impl RaplBackend {
         if r.is_ok() && !answered && took <= CTRL_C_ENDS_FINISH_WITHIN {
             return Ok(());
         }
-        let line = self
-            .outstanding
-            .take()
-            .map(|o| o.motion.line)
-            .unwrap_or_default();
-        self.queue.clear();
+        let line = self.give_up();
         let e = format!(
             "Ctrl-C did not end the FINISH that waited for `{line}` within {} ms ({}): this \
              controller may not take Ctrl-C while FINISH waits (the profile says \

@@ -660,6 +660,8 @@ fn with_the_lrc_a_lost_repeat_bit_never_runs_a_request_twice() {
         let counted = runs.clone();
         let controller = std::thread::spawn(move || {
             let mut server = Server::new(b, cfg);
+            // As after TROL's worded activation line: this host numbers its requests.
+            server.responder_mut().set_numbered_host(true);
             let mut events = Vec::new();
             let started = Instant::now();
             while events.len() < 2 && started.elapsed() < Duration::from_secs(20) {

@@ -298,6 +298,11 @@ impl<P: Port, B: Backend> Controller<P, B> {
                         ..*link.config()
                     };
                     link.set_config(cfg);
+                    // TROL's worded line says the host numbers its requests (so a number
+                    // seen twice is a repeat); a 1998 host's bare line says nothing of it.
+                    self.server
+                        .responder_mut()
+                        .set_numbered_host(activation != crate::terminal::Activation::Manual);
                     // A 1998 host (the bare line) gets the manual's record sizes.
                     self.pcp
                         .set_manual_host(activation == crate::terminal::Activation::Manual);

@@ -370,3 +370,105 @@ fn requests_are_never_numbered_zero_and_a_reply_numbered_zero_is_taken() {
     }
     assert_eq!(i.stale_replies(), 0);
 }
+
+/// One request from a host that is a bare layer 2 (a host written from the manual): sends
+/// `request` under `pci`, lets the responder run it (counted in `ran`) and takes the reply.
+fn manual_host_request(
+    w: &mut Wire,
+    host: &mut trol_proto::Link,
+    r: &mut Responder,
+    request: &[u8],
+    pci: u16,
+    ran: &mut u32,
+) -> Vec<u8> {
+    use trol_proto::link::Outcome;
+    host.send(request, pci, w.now).unwrap();
+    let mut sent = false;
+    loop {
+        let mut outcome = None;
+        let mut rev = None;
+        w.run(host, r, Duration::from_secs(60), |h, r| {
+            outcome = h.poll_outcome();
+            rev = r.poll_event();
+            outcome.is_some() || rev == Some(ResponderEvent::Request)
+        });
+        if rev == Some(ResponderEvent::Request) {
+            // The server's rule (trol-comm's Server): a suspect duplicate is answered
+            // ROBOT_UNSURE and not run; anything else runs (a CAT1 reply: 0, success).
+            if r.request_is_suspect_duplicate() {
+                let unsure = trol_proto::application::Reply::Code(
+                    trol_proto::application::code::TROL_ERR_ROBOT_UNSURE,
+                )
+                .encode();
+                r.respond(&unsure, w.now);
+            } else {
+                *ran += 1;
+                r.respond(&[0, 0], w.now);
+            }
+        }
+        match outcome {
+            Some(Outcome::Sent) if !sent => {
+                sent = true;
+                host.receive(w.now).unwrap();
+            }
+            Some(Outcome::Received) => return host.take_received().unwrap().1,
+            Some(other) => panic!("the manual's host failed: {other:?}"),
+            None => {}
+        }
+    }
+}
+
+/// A host written from the manual alone leaves the PCI as it is ("not needed"): every
+/// request carries the same number, never the REPEAT bit. With the LRC, a controller that
+/// took a number seen twice for a repeat whose bit noise cleared refused every motion such
+/// a host sent (issue 38): each request runs, as the manual's controller ran them. A host
+/// that numbers its requests (three different numbers seen, or TROL's worded activation
+/// line) is still held to the rule.
+#[test]
+fn a_host_that_does_not_number_its_requests_has_each_one_run_with_the_lrc() {
+    use trol_proto::link::BlockCheck;
+    let cfg = LinkConfig {
+        check: BlockCheck::Lrc,
+        ..LinkConfig::default()
+    };
+    let joint = [9u8, 2, 0, 0, 0x80, 0x3e]; // Joint(2, 0.25)
+    for pci in [0u16, 0x0007] {
+        let mut w = Wire::new();
+        let mut host = trol_proto::Link::new(cfg);
+        let mut r = Responder::new(cfg);
+        r.listen(w.now);
+        let mut ran = 0;
+        for _ in 0..5 {
+            let reply = manual_host_request(&mut w, &mut host, &mut r, &joint, pci, &mut ran);
+            assert_eq!(reply, [0, 0], "PCI {pci:#x}: success, not ROBOT_UNSURE");
+        }
+        assert_eq!(ran, 5, "PCI {pci:#x}: every request ran");
+        assert!(!r.host_numbers_requests());
+    }
+    // A host that numbers: 1, 2, 3 run; 3 again without REPEAT is the same request.
+    let unsure =
+        trol_proto::application::Reply::Code(trol_proto::application::code::TROL_ERR_ROBOT_UNSURE)
+            .encode();
+    let mut w = Wire::new();
+    let mut host = trol_proto::Link::new(cfg);
+    let mut r = Responder::new(cfg);
+    r.listen(w.now);
+    let mut ran = 0;
+    for n in 1..=3u16 {
+        manual_host_request(&mut w, &mut host, &mut r, &joint, n, &mut ran);
+    }
+    assert!(r.host_numbers_requests());
+    let reply = manual_host_request(&mut w, &mut host, &mut r, &joint, 3, &mut ran);
+    assert_eq!(reply, unsure);
+    assert_eq!(ran, 3, "the same request again did not run");
+    // After TROL's worded activation line the rule holds from the first request.
+    let mut w = Wire::new();
+    let mut host = trol_proto::Link::new(cfg);
+    let mut r = Responder::new(cfg);
+    r.set_numbered_host(true);
+    r.listen(w.now);
+    let mut ran = 0;
+    manual_host_request(&mut w, &mut host, &mut r, &joint, 1, &mut ran);
+    let reply = manual_host_request(&mut w, &mut host, &mut r, &joint, 1, &mut ran);
+    assert_eq!((reply, ran), (unsure, 1));
+}

@@ -43,6 +43,11 @@ pub struct Responder {
     repeats_answered: u64,
     /// The manual's layer 3 (a 1998 controller, simulated), if set.
     manual: Option<ManualLayer3>,
+    /// The host said it numbers its requests (it activated with TROL's worded line).
+    numbered_host: bool,
+    /// The numbers of the last requests run, newest first: a host whose numbers are seen
+    /// to change numbers its requests; one of 1998 leaves the PCI alone.
+    recent_numbers: [Option<u8>; 3],
 }
 
 /// How a responder that speaks only the manual's layer 3 (a 1998 PCP server) numbers its
@@ -68,7 +73,33 @@ impl Responder {
             memory: None,
             repeats_answered: 0,
             manual: None,
+            numbered_host: false,
+            recent_numbers: [None; 3],
         }
+    }
+
+    /// Whether the host numbers its requests, as TROL's host does: it said so (a host that
+    /// activated server mode with TROL's worded line, [`Responder::set_numbered_host`]), or
+    /// its last three requests carried three different numbers, none 0. A host written
+    /// from the manual alone leaves the PCI as it is (the manual: "not needed"), so the
+    /// same number on two requests means nothing from it; from a numbering host it means
+    /// the same request again.
+    pub fn host_numbers_requests(&self) -> bool {
+        if self.numbered_host {
+            return true;
+        }
+        match self.recent_numbers {
+            [Some(a), Some(b), Some(c)] => a != 0 && b != 0 && c != 0 && a != b && b != c && a != c,
+            _ => false,
+        }
+    }
+
+    /// Say whether the host numbers its requests (`true` after TROL's worded activation
+    /// line; `false` after the manual's bare one, or for a new host). Forgets the numbers
+    /// seen so far.
+    pub fn set_numbered_host(&mut self, numbered: bool) {
+        self.numbered_host = numbered;
+        self.recent_numbers = [None; 3];
     }
 
     /// Speak only the manual's layer 3, as a 1998 controller does: no memory of the last
@@ -98,10 +129,16 @@ impl Responder {
     /// bit lost to noise the LRC let through (a relative move would run twice). It must not
     /// run; the server answers TROL_ERR_ROBOT_UNSURE. CRC-16 protects the bit; a controller
     /// without memory (the manual's layer 3) cannot tell.
+    ///
+    /// Only a host that numbers its requests ([`Responder::host_numbers_requests`]) is held
+    /// to this: a 1998 host sends every request under the same PCI (0), and each runs, as
+    /// the manual's controller ran them.
     pub fn request_is_suspect_duplicate(&self) -> bool {
         self.manual.is_none()
             && self.link.config().check == crate::link::BlockCheck::Lrc
             && !pci_is_repeat(self.request_pci)
+            && pci_number(self.request_pci) != 0
+            && self.host_numbers_requests()
             && self.request.first().is_some_and(|code| *code < 128)
             && self
                 .memory
@@ -182,6 +219,15 @@ impl Responder {
     pub fn respond(&mut self, reply: &[u8], now: Instant) {
         if self.state != State::Executing {
             return;
+        }
+        if !self.request_is_suspect_duplicate() && !self.request_is_unknown_repeat() {
+            // A request that ran (or was refused on its own merits): its number is the
+            // host's newest.
+            self.recent_numbers = [
+                Some(pci_number(self.request_pci)),
+                self.recent_numbers[0],
+                self.recent_numbers[1],
+            ];
         }
         self.reply.clear();
         self.reply.extend_from_slice(reply);

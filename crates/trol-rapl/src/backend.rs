@@ -259,6 +259,28 @@ struct Motion {
     expect: Expect,
 }
 
+/// A motion computed from where the arm stands (Joint, MI, Depart, Jog): sent while another
+/// runs, it waits in the queue and is computed when its turn comes, from where the motion
+/// before it ended (the manual's controller queued them so, as RAPL-II does).
+type Later = Box<dyn FnOnce(&mut RaplBackend) -> BiosResult + Send>;
+
+/// What waits in the backend's queue.
+enum Queued {
+    /// A motion whose line and end are known now.
+    Motion(Motion),
+    /// A motion computed when its turn comes; what the call asked for, for the log.
+    Later(String, Later),
+}
+
+impl Queued {
+    fn line(&self) -> &str {
+        match self {
+            Queued::Motion(m) => &m.line,
+            Queued::Later(what, _) => what,
+        }
+    }
+}
+
 /// A motion the controller accepted whose end has not been seen.
 #[derive(Debug)]
 struct Outstanding {
@@ -325,7 +347,7 @@ pub struct RaplBackend {
     tool: [f64; 6],
     last_poll: Option<(std::time::Instant, bool)>,
     outstanding: Option<Outstanding>,
-    queue: VecDeque<Motion>,
+    queue: VecDeque<Queued>,
     deferred: Option<BackendError>,
     /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
     /// "end"`): the controller's interpreter is busy until then.
@@ -933,10 +955,28 @@ impl RaplBackend {
                 "`{}` waits for the motion under way to end",
                 m.line
             ));
-            self.queue.push_back(m);
+            self.queue.push_back(Queued::Motion(m));
             return Ok(0);
         }
         self.launch(m)
+    }
+
+    /// A relative motion: now, computed from where the arm stands, when it stands; queued
+    /// and computed when its turn comes while another runs. `what` names it in the log.
+    fn relative(&mut self, what: String, busy: bool, now: Later) -> BiosResult {
+        if !busy {
+            return now(self);
+        }
+        if self.queue.len() >= QUEUE {
+            self.note(format!("`{what}` refused: {QUEUE} motions wait already"));
+            return Ok(sim_code::QUEUE_FULL);
+        }
+        self.note(format!(
+            "`{what}` waits for the motion under way to end; it is computed from where that \
+             one ends"
+        ));
+        self.queue.push_back(Queued::Later(what, now));
+        Ok(0)
     }
 
     /// Type a motion line; on the success form it is under way.
@@ -1324,11 +1364,29 @@ impl RaplBackend {
     }
 
     fn next_in_queue(&mut self) -> Result<bool, BackendError> {
-        let Some(m) = self.queue.pop_front() else {
+        let Some(q) = self.queue.pop_front() else {
             return Ok(false);
         };
-        let line = m.line.clone();
-        match self.launch(m)? {
+        let line = q.line().to_string();
+        let r = match q {
+            Queued::Motion(m) => self.launch(m),
+            Queued::Later(_, f) => {
+                // Computed now, from where the arm stands (the motion before it ended): the
+                // rest of the queue waits aside, so that the arm counts as standing.
+                let rest = std::mem::take(&mut self.queue);
+                let r = f(self);
+                if matches!(r, Ok(0)) {
+                    self.queue = rest;
+                } else if !rest.is_empty() {
+                    self.note(format!(
+                        "{} queued motion(s) dropped after `{line}` failed: not sent",
+                        rest.len()
+                    ));
+                }
+                r
+            }
+        };
+        match r? {
             0 => Ok(true),
             c => {
                 self.note(format!("queued `{line}` was refused when its turn came"));
@@ -1829,18 +1887,24 @@ impl RaplBackend {
             JointUnits::Radians => q,
         };
         let line = format!("{cmd} {}", join(&v));
+        let deg = q.map(f64::to_degrees);
         self.motion_with(false, |b, busy| {
-            let deg = q.map(f64::to_degrees);
-            let expect = if relative {
-                let p = match b.standing()? {
-                    Ok(p) => p,
-                    Err(c) => return Ok(c),
-                };
-                Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]))
-            } else {
-                Expect::Joints(deg)
-            };
-            b.submit(Motion { line, expect }, busy)
+            if !relative {
+                let expect = Expect::Joints(deg);
+                return b.submit(Motion { line, expect }, busy);
+            }
+            b.relative(
+                line.clone(),
+                busy,
+                Box::new(move |b| {
+                    let p = match b.standing()? {
+                        Ok(p) => p,
+                        Err(c) => return Ok(c),
+                    };
+                    let expect = Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]));
+                    b.submit(Motion { line, expect }, false)
+                }),
+            )
         })
     }
 }
@@ -1946,9 +2010,16 @@ impl Backend for RaplBackend {
         Ok(r)
     }
     fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
-        self.motion_with(false, |b, busy| match b.here()? {
-            Ok(p) => b.move_pose(&p.then(&Pose::from_xyzypr(disp)), straight, busy),
-            Err(c) => Ok(c),
+        let what = format!("Depart {}", join(&disp));
+        self.motion_with(false, |b, busy| {
+            b.relative(
+                what,
+                busy,
+                Box::new(move |b| match b.here()? {
+                    Ok(p) => b.move_pose(&p.then(&Pose::from_xyzypr(disp)), straight, false),
+                    Err(c) => Ok(c),
+                }),
+            )
         })
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
@@ -2041,32 +2112,46 @@ impl Backend for RaplBackend {
                 Ok(v) => v,
                 Err(u) => return Ok(self.unsettled(u)),
             };
+            let line = format!("JOG {}", join(&v));
             return self.motion_with(false, |b, busy| {
-                let p = match b.standing()? {
-                    Ok(p) => p,
-                    Err(c) => return Ok(c),
-                };
-                let mut w = p.world;
-                for i in 0..3 {
-                    w[i] += v[i];
-                }
-                b.submit(
-                    Motion {
-                        line: format!("JOG {}", join(&v)),
-                        expect: Expect::World(w),
-                    },
+                b.relative(
+                    line.clone(),
                     busy,
+                    Box::new(move |b| {
+                        let p = match b.standing()? {
+                            Ok(p) => p,
+                            Err(c) => return Ok(c),
+                        };
+                        let mut w = p.world;
+                        for i in 0..3 {
+                            w[i] += v[i];
+                        }
+                        b.submit(
+                            Motion {
+                                line,
+                                expect: Expect::World(w),
+                            },
+                            false,
+                        )
+                    }),
                 )
             });
         }
-        self.motion_with(false, |b, busy| match b.here()? {
-            Ok(mut p) => {
-                p.pos.x += d[0];
-                p.pos.y += d[1];
-                p.pos.z += d[2];
-                b.move_pose(&p, false, busy)
-            }
-            Err(c) => Ok(c),
+        let what = format!("Jog {}", join(&d));
+        self.motion_with(false, |b, busy| {
+            b.relative(
+                what,
+                busy,
+                Box::new(move |b| match b.here()? {
+                    Ok(mut p) => {
+                        p.pos.x += d[0];
+                        p.pos.y += d[1];
+                        p.pos.z += d[2];
+                        b.move_pose(&p, false, false)
+                    }
+                    Err(c) => Ok(c),
+                }),
+            )
         })
     }
     fn joint(&mut self, joint: u8, radians: f64) -> BiosResult {
@@ -2074,19 +2159,26 @@ impl Backend for RaplBackend {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
         let deg = radians.to_degrees();
+        let line = format!("JOINT {joint},{}", text::num(deg));
         self.motion_with(false, |b, busy| {
-            let p = match b.standing()? {
-                Ok(p) => p,
-                Err(c) => return Ok(c),
-            };
-            let mut q = p.joints;
-            q[usize::from(joint - 1)] += deg;
-            b.submit(
-                Motion {
-                    line: format!("JOINT {joint},{}", text::num(deg)),
-                    expect: Expect::Joints(q),
-                },
+            b.relative(
+                line.clone(),
                 busy,
+                Box::new(move |b| {
+                    let p = match b.standing()? {
+                        Ok(p) => p,
+                        Err(c) => return Ok(c),
+                    };
+                    let mut q = p.joints;
+                    q[usize::from(joint - 1)] += deg;
+                    b.submit(
+                        Motion {
+                            line,
+                            expect: Expect::Joints(q),
+                        },
+                        false,
+                    )
+                }),
             )
         })
     }

@@ -120,7 +120,8 @@ typedef uint8_t  TUCCHAR;
 #define TROL_GET_VERSION 194
 #define TROL_SET_WATCHDOG 195
 #define TROL_GET_CODES 196
-#define LAST_CAT4_CODE 196
+#define TROL_GET_REPLY_TIME 197
+#define LAST_CAT4_CODE 197
 
 /* The manual requires structure alignment off or 16 bit. */
 #pragma pack(push, 2)
@@ -192,6 +193,11 @@ TINT TROLSetWatchdog(TUINT tenths);
  * their values into values, how many there are into *count; InitTROL and trol_connect read
  * them, and trol_strerror names each as that controller does. */
 TINT TROLGetCodes(TINT *values, TUINT max, TUINT *count);
+/* Added (docs/protocol.md "Reply time"). TROLGetReplyTime: the longest the controller takes
+ * to answer a request, in seconds; InitTROL and trol_connect read it, and each call then
+ * waits that and a margin for its reply (a dead controller is noticed within seconds),
+ * unless SetL3_TO_Intervall set the reply timeout. */
+TINT TROLGetReplyTime(float *seconds);
 /* Added (docs/protocol.md "Gripper"). TROLGetGripper: the fingers' opening (mm) and what they
  * hold, to check a grasp: GRIPPER_EMPTY (closed on air, or open), GRIPPER_HOLDS (the object's
  * name in name, nameSize bytes, NUL-terminated; empty when the controller knows none), or
@@ -327,6 +333,7 @@ TINT trol_get_status_of(TROL *c, int *lastBIOSRetVal, TUINT *transaction, TUINT 
 TUINT trol_last_transaction(TROL *c);
 TINT trol_get_version(TROL *c, TUINT *protocol, char *kind, TUINT kindSize);
 TINT trol_get_codes(TROL *c, TINT *values, TUINT max, TUINT *count);
+TINT trol_get_reply_time(TROL *c, float *seconds);
 TINT trol_get_gripper(TROL *c, float *openingMm, TINT *held, char *name, TUINT nameSize);
 TINT trol_here(TROL *c, TLocName locName, TINT pos);
 TINT trol_define(TROL *c, TLocName locName, SLocData *pLoc);

@@ -47,8 +47,10 @@ fn a_noisy_line_neither_executes_nor_accepts_a_corrupted_block() {
 fn cut_lines_lose_no_move_and_repeat_none() {
     for side in ["request", "reply"] {
         for recovery in ["api", "getstatus"] {
-            // 60 ms is ridden through by the repeats; 150 ms makes calls fail (and the
-            // GetStatus method then decides).
+            // 4 and 10 link timeouts of 15 ms: a line silent that long is taken for a dead
+            // controller (docs/reliability.md: a call then fails within three timeouts, the
+            // request run or not, and the GetStatus method decides); nothing may be lost or
+            // run twice either way.
             for cut in ["60", "150"] {
                 let r = run(&[
                     "--mode",
@@ -60,7 +62,7 @@ fn cut_lines_lose_no_move_and_repeat_none() {
                     "--cut-ms",
                     cut,
                     "--count",
-                    "40",
+                    "80",
                     "--seed",
                     "3",
                 ]);

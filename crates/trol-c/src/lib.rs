@@ -1063,6 +1063,32 @@ pub unsafe extern "C" fn TROLGetCodes(values: *mut TINT, max: TUINT, count: *mut
     r
 }
 
+/// TROLGetReplyTime: the longest the controller takes to answer a request, in seconds
+/// (docs/protocol.md, "Reply time"), into *seconds; InitTROL and trol_connect read it, and
+/// each call then waits that and a margin for its reply unless SetL3_TO_Intervall set the
+/// reply timeout. A NULL pointer is TROL_ERR_ARG_RANGE, and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLGetReplyTime(seconds: *mut f32) -> TINT {
+    if seconds.is_null() {
+        return ARG_RANGE;
+    }
+    let mut got = None;
+    let r = run(
+        &table::GET_REPLY_TIME,
+        || Ok(vec![]),
+        |reply| {
+            if let Reply::Reals { values, .. } = reply {
+                got = values.first().copied();
+            }
+        },
+    );
+    if let Some(t) = got {
+        // SAFETY: the caller's float.
+        unsafe { *seconds = t as f32 };
+    }
+    r
+}
+
 /// TROLSetWatchdog: the controller halts the arm when no call arrives for tenths/10 s
 /// (1..250); 0 turns it off.
 #[unsafe(no_mangle)]
@@ -1656,6 +1682,7 @@ per_connection! {
     fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
     fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
     fn trol_get_codes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT = TROLGetCodes else ARG_RANGE;
+    fn trol_get_reply_time(seconds: *mut f32) -> TINT = TROLGetReplyTime else ARG_RANGE;
     fn trol_here(locName: *const TUCHAR, pos: TINT) -> TINT = TROLHere else ARG_RANGE;
     fn trol_define(locName: *const TUCHAR, pLoc: *const SLocData) -> TINT = TROLDefine else ARG_RANGE;
     fn trol_delete_location(locName: *const TUCHAR) -> TINT = TROLDeleteLocation else ARG_RANGE;

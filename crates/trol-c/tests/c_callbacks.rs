@@ -53,6 +53,13 @@ fn scripted_controller(line: TcpLine) {
             Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode()
         })
         .unwrap();
+    // InitTROL(1): GetReplyTime, likewise unknown: the calls keep the manual's reply timeout.
+    server
+        .serve(Duration::from_secs(20), &mut |req| {
+            assert_eq!(req.first(), Some(&table::TROL_GET_REPLY_TIME), "{req:02x?}");
+            Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode()
+        })
+        .unwrap();
     let mut driver = Driver::new(server.into_port());
     let receive = |driver: &mut Driver<TcpLine>| {
         let mut link = L2::new(cfg);

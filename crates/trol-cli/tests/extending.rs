@@ -190,6 +190,7 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
         TROL_GET_VERSION => robot.check_version().map(drop),
         TROL_SET_WATCHDOG => robot.set_watchdog(std::time::Duration::ZERO),
         TROL_GET_CODES => robot.get_codes().map(drop),
+        TROL_GET_REPLY_TIME => robot.reply_time().map(drop),
         TROL_GET_GRIPPER => robot.gripper().map(drop),
         TROL_LIST_LOCATIONS => robot.locations().map(drop),
         TROL_HERE => robot.here("p2", Tag::Cart),

@@ -142,6 +142,22 @@ pub fn timeout_policy(catalog: Catalog) -> TimeoutPolicy {
     })
 }
 
+/// The ErrAppTimeOut policy against a controller of this protocol, which answers every
+/// request at once (Home and motions at their start; the host waits for the arm by polling):
+/// no limit for Finish(FINISH_WAIT) and whatever else `catalog`'s descriptions say waits
+/// without limit, nothing more for the others. The manual's 90 s more for Home were for a
+/// 1998 server that answered Home at its end; here they would only keep a call waiting on
+/// a controller that died.
+pub fn prompt_policy(catalog: Catalog) -> TimeoutPolicy {
+    std::sync::Arc::new(move |request: &[u8]| {
+        let def = catalog.get(*request.first()?)?;
+        match def.extra_wait(request) {
+            None => Some(ExtraWait::Unlimited),
+            Some(_) => None,
+        }
+    })
+}
+
 /// Which requests ErrAppTimeOut waits longer for, by their bytes (the host API builds it
 /// from its commands' descriptions).
 pub type TimeoutPolicy = std::sync::Arc<dyn Fn(&[u8]) -> Option<ExtraWait> + Send + Sync>;

@@ -22,7 +22,7 @@ pub use channel::{Channel, LineChannel, NOTHING_ARRIVED, PORT_FAILED};
 pub use driver::{Clock, Direction, Driver, TraceFn};
 pub use handlers::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, ExtraWait, FailureContext, Recovery,
-    TimeoutAction, TimeoutPolicy, timeout_policy,
+    TimeoutAction, TimeoutPolicy, prompt_policy, timeout_policy,
 };
 pub use server::{Server, ServerEvent};
 pub use transactor::{DEFAULT_REPEATS, TransError, Transactor};

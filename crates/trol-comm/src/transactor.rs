@@ -4,7 +4,7 @@ use std::io;
 use std::time::Duration;
 
 use trol_port::Port;
-use trol_proto::link::{LinkConfig, LinkError, SendError};
+use trol_proto::link::{LinkConfig, LinkError, ReceiveError, SendError};
 use trol_proto::transaction::{Decision, Failure, Initiator, InitiatorEvent, TransCode};
 
 use crate::channel::LineChannel;
@@ -249,11 +249,31 @@ impl<P: Port> Transactor<P> {
                         Some(LinkError::Send(SendError::TimeoutEnq))
                     ) && self.initiator.link().stats().bytes_in == heard_before
                         && (repeated == 0 || went_quiet);
-                    if !refused && !aborted && !silent && repeated < self.repeats {
+                    // The controller took a block of the request and went silent before
+                    // acknowledging the next (a process killed or frozen, a line cut
+                    // mid-request): the request never reached its EOT, so it did not run,
+                    // and a repeat would only add the manual's reset and an ENQ timeout.
+                    // (Noise damages an ACK; it does not swallow it: that is WrongCchar.)
+                    let stopped = matches!(
+                        self.last_comm_error(),
+                        Some(LinkError::Send(SendError::TimeoutEtx))
+                    );
+                    if !refused && !aborted && !silent && !stopped && repeated < self.repeats {
                         first_failure.get_or_insert(code);
                         repeated += 1;
                         heard_before = self.initiator.link().stats().bytes_in;
-                        went_quiet = code == TransCode::Timeout;
+                        // The controller went quiet with the request in hand: no reply in
+                        // time, or its reply broke off (a timeout, not damage).
+                        went_quiet = code == TransCode::Timeout
+                            || matches!(
+                                self.last_comm_error(),
+                                Some(LinkError::Receive(
+                                    ReceiveError::TimeoutSoh
+                                        | ReceiveError::TimeoutStx
+                                        | ReceiveError::TimeoutTermc
+                                        | ReceiveError::TimeoutEot
+                                ))
+                            );
                         let now = self.driver.clock().now();
                         if self.initiator.repeat(now) {
                             continue;

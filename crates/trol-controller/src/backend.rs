@@ -111,6 +111,12 @@ pub trait Backend: Send {
     fn kind(&self) -> &'static str;
     /// Name and meaning of every BIOS code it returns.
     fn codes(&self) -> &'static CodeTable;
+    /// The longest a call of it takes (but a wait without limit): what the server answers
+    /// TROLGetReplyTime, and the host waits for a reply, with a margin. A backend that waits
+    /// for a robot controller of its own says how long it waits for it.
+    fn reply_time(&self) -> std::time::Duration {
+        std::time::Duration::from_millis(500)
+    }
     /// Approach `target` displaced by `disp` in its tool frame.
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult;
     /// Close the gripper with `force` percent.

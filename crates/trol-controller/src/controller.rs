@@ -143,7 +143,7 @@ pub struct Controller<P, B> {
 impl<P: Port, B: Backend> Controller<P, B> {
     /// A controller on `port` in `mode`.
     pub fn new(port: P, cfg: LinkConfig, pcp: Pcp<B>, mode: Mode) -> Self {
-        Controller {
+        let mut c = Controller {
             server: Server::new(port, cfg),
             pcp,
             mode,
@@ -156,7 +156,24 @@ impl<P: Port, B: Backend> Controller<P, B> {
             trip: None,
             reports: None,
             pendant: None,
-        }
+        };
+        c.check_requests();
+        c
+    }
+
+    /// With the manual's LRC, a request is taken only when it is one of the commands this
+    /// server knows, its fields fitting its record (and its PCI the host's numbering):
+    /// damage the sum let through is asked for again, never run as another command
+    /// (`Responder::set_request_check`). Called again when a command is added.
+    pub fn check_requests(&mut self) {
+        let catalog = self.pcp.catalog().clone();
+        let fits = trol_proto::link::Plausible::new(move |_pci, request| {
+            request
+                .first()
+                .and_then(|code| catalog.get(*code))
+                .is_some_and(|def| trol_proto::application::record::decode(def, request).is_ok())
+        });
+        self.server.responder_mut().set_request_check(Some(fits));
     }
 
     /// A pendant for this controller (docs/teach.md): requests sent through it run between
@@ -259,6 +276,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.terminal = Terminal::manual_only();
         self.pcp.set_manual_only(true);
         self.server.responder_mut().set_manual(Some(pci));
+        // The 1998 server checked nothing beyond the sum.
+        self.server.responder_mut().set_request_check(None);
     }
 
     /// The mode.
@@ -303,6 +322,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     self.server
                         .responder_mut()
                         .set_numbered_host(activation != crate::terminal::Activation::Manual);
+                    self.check_requests();
                     // A 1998 host (the bare line) gets the manual's record sizes.
                     self.pcp
                         .set_manual_host(activation == crate::terminal::Activation::Manual);

@@ -604,6 +604,10 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
                 .map(Into::into)
                 .collect(),
         ),
+        TROL_GET_REPLY_TIME => Reply::Reals {
+            value: Code(0),
+            values: vec![ctx.backend.reply_time().as_secs_f64()],
+        },
         TROL_SET_WATCHDOG => match c.int(0) {
             Ok(0) => {
                 *ctx.watchdog = None;

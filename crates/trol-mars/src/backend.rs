@@ -773,6 +773,10 @@ impl Backend for MarsBackend {
     fn codes(&self) -> &'static CodeTable {
         MARS_CODES
     }
+    fn reply_time(&self) -> Duration {
+        // The unit's silence is found out after REPLY_LIMIT; the rest of a call is line time.
+        REPLY_LIMIT + Duration::from_millis(500)
+    }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let t = self.target(target)?;
         self.motion(|a, now| a.appro(t, disp, straight, now))

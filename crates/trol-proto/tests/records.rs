@@ -60,6 +60,7 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         (&GET_VERSION, vec![]),
         (&SET_WATCHDOG, vec![Int(50)]),
         (&GET_CODES, vec![]),
+        (&GET_REPLY_TIME, vec![]),
         (&GET_GRIPPER, vec![]),
         (&LIST_LOCATIONS, vec![]),
         (&HERE, vec![name("p1"), Int(Tag::Cart as u8)]),

@@ -472,3 +472,117 @@ fn a_host_that_does_not_number_its_requests_has_each_one_run_with_the_lrc() {
     let reply = manual_host_request(&mut w, &mut host, &mut r, &joint, 1, &mut ran);
     assert_eq!((reply, ran), (unsure, 1));
 }
+
+/// A header built by hand with the manual's LRC over whatever bytes it carries (so that a
+/// damaged field whose sum noise made up for passes the block check).
+fn lrc_header(len: u16, pci: u16, first: [u8; 2]) -> Vec<u8> {
+    use trol_proto::link::control::{ETX, SOH};
+    let mut body = Vec::new();
+    body.extend_from_slice(&len.to_le_bytes());
+    body.extend_from_slice(&pci.to_le_bytes());
+    body.extend_from_slice(&first);
+    let mut h = vec![SOH];
+    h.extend_from_slice(&body);
+    h.extend_from_slice(&trol_proto::link::frame::lrc(&body).to_le_bytes());
+    h.push(ETX);
+    h
+}
+
+/// With the manual's LRC, a request whose damage the sum missed is asked for again when it
+/// does not fit what the controller knows (issue 38, item 4): a Finish whose mode noise made
+/// 2, or a request whose transaction number is nowhere near the host's, is NAKed ERR_BCC
+/// and the clean header that comes again runs; the same bytes twice are taken (a peer that
+/// means them gets the layer above's answer). Deterministic: the damaged header is built by
+/// hand with a sum that holds.
+#[test]
+fn with_the_lrc_an_implausible_request_is_asked_for_again() {
+    use trol_proto::link::control::{ACK, ENQ, EOT, NAK};
+    use trol_proto::link::{BlockCheck, NakCode, Plausible};
+    let cfg = LinkConfig {
+        check: BlockCheck::Lrc,
+        ..LinkConfig::default()
+    };
+    let mut w = Wire::new();
+    let mut r = Responder::new(cfg);
+    // The controller's layer 4: Finish takes mode 0 or 1.
+    r.set_request_check(Some(Plausible::new(|_, req| {
+        !(req.first() == Some(&4) && req.get(1).is_some_and(|m| *m > 1))
+    })));
+    r.set_numbered_host(true);
+    r.listen(w.now);
+    let mut peer = Script::default();
+    // Send bytes that the responder answers; what it answered.
+    fn send(w: &mut Wire, r: &mut Responder, peer: &mut Script, bytes: &[u8]) -> Vec<u8> {
+        peer.received.clear();
+        peer.to_send.extend_from_slice(bytes);
+        w.run(peer, r, Duration::from_secs(5), |p, _| {
+            !p.received.is_empty()
+        });
+        std::mem::take(&mut peer.received)
+    }
+    // A request: ENQ, the headers in turn (each answered), EOT; the responder's event.
+    fn request(
+        w: &mut Wire,
+        r: &mut Responder,
+        peer: &mut Script,
+        headers: &[Vec<u8>],
+    ) -> (Vec<Vec<u8>>, Option<ResponderEvent>) {
+        assert_eq!(send(w, r, peer, &[ENQ]), [ACK]);
+        let answers = headers.iter().map(|h| send(w, r, peer, h)).collect();
+        peer.to_send.push(EOT);
+        let mut ev = None;
+        w.run(peer, r, Duration::from_secs(5), |_, r| {
+            ev = r.poll_event();
+            ev.is_some()
+        });
+        (answers, ev)
+    }
+    // Answer [0, 0]; the host takes the reply (ENQ, header, EOT).
+    fn answer(w: &mut Wire, r: &mut Responder, peer: &mut Script) {
+        r.respond(&[0, 0], w.now);
+        peer.received.clear();
+        w.run(peer, r, Duration::from_secs(5), |p, _| p.received == [ENQ]);
+        assert_eq!(send(w, r, peer, &[ACK]).len(), 10, "the reply's header");
+        assert_eq!(send(w, r, peer, &[ACK]), [EOT]);
+        let mut ev = None;
+        w.run(peer, r, Duration::from_secs(5), |_, r| {
+            ev = r.poll_event();
+            ev.is_some()
+        });
+        assert_eq!(ev, Some(ResponderEvent::Done));
+    }
+    // Transaction 1, Finish(STATUS), clean: it runs.
+    let (a, ev) = request(&mut w, &mut r, &mut peer, &[lrc_header(2, 1, [4, 0])]);
+    assert_eq!((a, ev), (vec![vec![ACK]], Some(ResponderEvent::Request)));
+    answer(&mut w, &mut r, &mut peer);
+    // Transaction 2: its mode byte 0 -> 2 and its number 2 -> 0 (the sum holds): NAK, then
+    // the clean header is taken and runs as sent.
+    let damaged = lrc_header(2, 0, [4, 2]);
+    let (a, ev) = request(
+        &mut w,
+        &mut r,
+        &mut peer,
+        &[damaged, lrc_header(2, 2, [4, 0])],
+    );
+    assert_eq!(a, vec![vec![NAK, NakCode::Bcc.byte()], vec![ACK]]);
+    assert_eq!(ev, Some(ResponderEvent::Request));
+    assert_eq!(r.request(), [4, 0]);
+    assert_eq!(pci_number(r.request_pci()), 2);
+    answer(&mut w, &mut r, &mut peer);
+    // Transaction 3 under a number far from the host's (noise in the PCI): asked again.
+    let (a, _) = request(
+        &mut w,
+        &mut r,
+        &mut peer,
+        &[lrc_header(2, 0x83, [17, 50]), lrc_header(2, 3, [17, 50])],
+    );
+    assert_eq!(a, vec![vec![NAK, NakCode::Bcc.byte()], vec![ACK]]);
+    assert_eq!(pci_number(r.request_pci()), 3);
+    answer(&mut w, &mut r, &mut peer);
+    // The same implausible bytes twice (a host that means them): taken the second time.
+    let odd = lrc_header(2, 4, [4, 7]);
+    let (a, ev) = request(&mut w, &mut r, &mut peer, &[odd.clone(), odd]);
+    assert_eq!(a, vec![vec![NAK, NakCode::Bcc.byte()], vec![ACK]]);
+    assert_eq!(ev, Some(ResponderEvent::Request));
+    assert_eq!(r.request(), [4, 7]);
+}

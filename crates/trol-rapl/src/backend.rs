@@ -128,8 +128,8 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: BUSY,
             name: "BIOS_BUSY",
-            meaning: "a motion computed from where the arm is (Depart, Jog, Joint, MI) while \
-                      another has not ended: call TROLFinish(FINISH_WAIT) first",
+            meaning: "a tool change while a motion has not ended (it would change what a \
+                      queued motion's target means): call TROLFinish(FINISH_WAIT) first",
         },
     ];
     let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
@@ -904,11 +904,11 @@ impl RaplBackend {
     fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
         self.release()?;
         // A controller that answers a motion at its end takes nothing before: the next motion
-        // waits for that answer, as the controller itself would.
-        while self.awaiting.is_some() {
-            if !self.await_end()? {
-                break;
-            }
+        // waits in the queue for that answer, as the controller itself would, and the call
+        // returns at once (a request that waited for the motion's end would outlast the
+        // host's reply timeout; Halt and Finish get through meanwhile).
+        if self.awaiting.is_some() && self.await_end()? {
+            return Ok(Gate::Busy);
         }
         self.report_unasked()?;
         if let Some(e) = self.deferred.take() {
@@ -1976,6 +1976,11 @@ impl Backend for RaplBackend {
     }
     fn codes(&self) -> &'static CodeTable {
         RAPL_CODES
+    }
+    fn reply_time(&self) -> Duration {
+        // One command the C500 does not answer (the profile's reply timeout), after a
+        // FINISH that waits was ended with Ctrl-C and listened for once.
+        self.reply_timeout() + CTRL_C_ENDS_FINISH_WITHIN + FINISH_LISTEN
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let target = target.clone();

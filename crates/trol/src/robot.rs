@@ -23,7 +23,7 @@ use trol_sim::SimSettings;
 use crate::config::Config;
 
 /// The ErrAppTimeOut policy of a catalog's commands (the manual's default handler's).
-pub use trol_comm::timeout_policy;
+pub use trol_comm::{prompt_policy, timeout_policy};
 /// GetPosition's mode.
 pub use trol_controller::PosMode;
 
@@ -183,6 +183,29 @@ pub const POLL: Duration = Duration::from_millis(20);
 /// whatever the reply timeout of other calls.
 pub const POLL_REPLY_TIMEOUT: Duration = Duration::from_secs(2);
 
+/// What a call waits for its reply beyond the time the controller says it takes at most
+/// (TROLGetReplyTime): the line's time and a loaded machine's scheduling.
+pub const REPLY_MARGIN: Duration = Duration::from_millis(500);
+
+/// What the simulator's backend answers TROLGetReplyTime (the default of
+/// `Backend::reply_time`).
+#[cfg(feature = "sim")]
+const SIM_REPLY_TIME: Duration = Duration::from_millis(500);
+
+/// The shortest reply timeout a controller's reply time gives a call.
+pub const MIN_PROMPT_REPLY_TIMEOUT: Duration = Duration::from_millis(1500);
+
+/// The reply timeout of every call but a wait without limit (Finish(FINISH_WAIT)) to a
+/// controller that said how long it takes to answer (TROLGetReplyTime, asked by the version
+/// check; an in-process controller's backend says it directly), unless the application set
+/// one (SetL3_TO_Intervall): that time and [`REPLY_MARGIN`], at least
+/// [`MIN_PROMPT_REPLY_TIMEOUT`]. So a controller that died, froze or whose line went silent
+/// is noticed within seconds (this, then one unanswered ENQ: 2.5 s for the simulator)
+/// instead of the manual's 15 s and more. A 1998 controller keeps the manual's.
+pub fn prompt_reply_timeout(reply_time: Duration) -> Duration {
+    (reply_time + REPLY_MARGIN).max(MIN_PROMPT_REPLY_TIMEOUT)
+}
+
 /// Wait until the arm is done, for a robot shared between threads: the lock is taken for each
 /// poll only, so another thread's `halt()` gets through between two polls.
 pub fn wait_idle(robot: &std::sync::Mutex<Robot>) -> Result<()> {
@@ -278,6 +301,11 @@ pub struct Robot {
     repeats_set: bool,
     /// The controller speaks only the manual's protocol (its GetStatus is the manual's).
     manual_peer: bool,
+    /// The reply timeout of a call to a controller that said how long it takes to answer
+    /// ([`prompt_reply_timeout`]); `None`: the manual's reply timeout.
+    prompt: Option<Duration>,
+    /// The application set the reply timeout (SetL3_TO_Intervall): every call keeps it.
+    reply_timeout_set: bool,
     /// What the user should hear once about this connection ([`Robot::take_notice`]).
     notice: Option<String>,
 }
@@ -481,9 +509,11 @@ impl Robot {
             None,
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let reply_time = trol_controller::Backend::reply_time(&backend);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
         robot.codes = trol_rapl::RAPL_CODES;
         Ok(robot)
     }
@@ -522,9 +552,11 @@ impl Robot {
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
         let mut backend = backend;
         backend.set_locations_file(file);
+        let reply_time = trol_controller::Backend::reply_time(&backend);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
         robot.codes = trol_mars::MARS_CODES;
         Ok(robot)
     }
@@ -547,6 +579,7 @@ impl Robot {
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.set_reply_time(SIM_REPLY_TIME);
         robot.view = Some(view);
         Ok(robot)
     }
@@ -571,7 +604,9 @@ impl Robot {
     #[cfg(feature = "sim")]
     fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
         let (line, handle) = trol_sim::embedded(settings, cfg);
-        Robot::over(Box::new(line), cfg, Some(handle))
+        let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.set_reply_time(SIM_REPLY_TIME);
+        robot
     }
 
     /// Connect over a port that is already open (for tests, relays, and controllers of the
@@ -587,13 +622,10 @@ impl Robot {
     pub fn over(port: Box<dyn Port>, cfg: LinkConfig, embedded: Option<Embedded>) -> Robot {
         let catalog = Catalog::builtin();
         let mut transactor = Transactor::new(port, cfg);
-        transactor.set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
-            catalog.clone(),
-        ))));
         if embedded.is_none() {
             transactor.set_repeats(0);
         }
-        Robot {
+        let mut robot = Robot {
             transactor,
             catalog,
             own_handlers: false,
@@ -611,8 +643,38 @@ impl Robot {
             lrc_tried: false,
             repeats_set: false,
             manual_peer: false,
+            prompt: None,
+            reply_timeout_set: false,
             notice: None,
+        };
+        robot.default_handlers();
+        robot
+    }
+
+    /// The manual's default handlers, unless the application installed its own: their
+    /// ErrAppTimeOut waits as the commands' descriptions say (90 s more for Home), or, for a
+    /// controller that answers at once, only where a description asks for no limit.
+    fn default_handlers(&mut self) {
+        if self.own_handlers {
+            return;
         }
+        let policy = if self.prompt.is_some() {
+            prompt_policy(self.catalog.clone())
+        } else {
+            timeout_policy(self.catalog.clone())
+        };
+        self.transactor
+            .set_handlers(Box::new(DefaultHandlers::with_policy(policy)));
+    }
+
+    /// Say how long the controller takes at most to answer a request (what
+    /// TROLGetReplyTime answers; an in-process controller's backend says it): every call
+    /// but a wait without limit then waits [`prompt_reply_timeout`] for its reply, unless
+    /// the application set the reply timeout, and the default ErrAppTimeOut grants Home no
+    /// 90 s more (that was for a 1998 server, which answered Home at its end).
+    pub fn set_reply_time(&mut self, reply_time: Duration) {
+        self.prompt = Some(prompt_reply_timeout(reply_time));
+        self.default_handlers();
     }
 
     /// Whether the controller speaks only the manual's protocol (a 1998 TROL server: found by
@@ -644,6 +706,8 @@ impl Robot {
         }
         if !self.manual_peer {
             self.manual_peer = true;
+            self.prompt = None;
+            self.default_handlers();
             self.epoch = None;
             if !self.repeats_set {
                 self.transactor.set_repeats(0);
@@ -792,12 +856,7 @@ impl Robot {
     /// the application installed ([`Robot::set_handlers`]) stay as they are.
     pub fn add_command(&mut self, def: CommandDef) -> Result<()> {
         self.catalog.add(def).map_err(SetupError::from)?;
-        if !self.own_handlers {
-            self.transactor
-                .set_handlers(Box::new(DefaultHandlers::with_policy(timeout_policy(
-                    self.catalog.clone(),
-                ))));
-        }
+        self.default_handlers();
         Ok(())
     }
 
@@ -843,6 +902,7 @@ impl Robot {
             }));
         }
         self.transactor.set_reply_timeout_tenths(tenths);
+        self.reply_timeout_set = true;
         Ok(())
     }
 
@@ -982,17 +1042,40 @@ impl Robot {
             "request {}",
             self.catalog.request_text(&request)
         );
-        // A poll of a wait: a short reply timeout (POLL_REPLY_TIMEOUT).
+        // A poll of a wait: a short reply timeout (POLL_REPLY_TIMEOUT); any call but a wait
+        // without limit to a controller that answers at once: PROMPT_REPLY_TIMEOUT, unless
+        // the application set the reply timeout.
         let poll = def.code == table::FINISH.code
             && matches!(args.first(), Some(Value::Int(v)) if *v == FINISH_STATUS);
+        let prompt = self
+            .prompt
+            .filter(|_| !self.reply_timeout_set && def.extra_wait(&request).is_some());
+        let short = match (poll, prompt) {
+            (true, Some(p)) => Some(p.min(POLL_REPLY_TIMEOUT)),
+            (true, None) => Some(POLL_REPLY_TIMEOUT),
+            (false, p) => p,
+        };
         let usual = self.transactor.initiator().reply_timeout();
-        if poll && usual > POLL_REPLY_TIMEOUT {
+        let shortened = short.filter(|s| *s < usual);
+        if let Some(t) = shortened {
+            self.transactor.initiator_mut().set_reply_timeout(t);
+        }
+        // With the manual's LRC: the reply is taken only in a form this request can have.
+        let lrc = self.transactor.initiator().link().config().check == BlockCheck::Lrc;
+        if lrc {
             self.transactor
                 .initiator_mut()
-                .set_reply_timeout(POLL_REPLY_TIMEOUT);
+                .link_mut()
+                .set_plausible(Some(reply_check(def, self.codes)));
         }
         let sent = self.trans(def.name, &request);
-        if poll {
+        if lrc {
+            self.transactor
+                .initiator_mut()
+                .link_mut()
+                .set_plausible(None);
+        }
+        if shortened.is_some() {
             self.transactor.initiator_mut().set_reply_timeout(usual);
         }
         let bytes = sent.inspect_err(|e| {
@@ -1409,7 +1492,29 @@ impl Robot {
                 "the controller's BIOS codes (TROLGetCodes): {e}; its codes are named by number"
             ),
         }
+        // How long it takes to answer: each call waits that and a margin for its reply.
+        match self.reply_time() {
+            Ok(t) => self.set_reply_time(t),
+            Err(e @ Error::Link { .. }) => return Err(e),
+            other => tracing::debug!(
+                "TROLGetReplyTime: {other:?}; calls wait the manual's reply timeout"
+            ),
+        }
         Ok(v)
+    }
+
+    /// TROLGetReplyTime: the longest the controller takes to answer a request (the version
+    /// check asks it, and each call then waits that and a margin for its reply).
+    pub fn reply_time(&mut self) -> Result<Duration> {
+        match self.call(&table::GET_REPLY_TIME, &[])? {
+            Reply::Reals { values, .. } if values.first().is_some_and(|t| *t >= 0.0) => {
+                Ok(Duration::from_secs_f64(values[0].min(600.0)))
+            }
+            _ => Err(Error::BadReply {
+                command: table::GET_REPLY_TIME.name,
+                len: 0,
+            }),
+        }
     }
 
     /// TROLSetWatchdog: the controller halts the arm when no call arrives for `limit` (in
@@ -1430,6 +1535,28 @@ impl Robot {
     pub fn last_transaction(&self) -> u8 {
         self.transactor.transaction_number()
     }
+}
+
+/// With the manual's LRC, which lets damage through that a CRC finds: a reply to a request
+/// of `def` is plausible when its PCI's reserved bits are clear and it decodes in the form
+/// the command has, a return value being one the command counts as success or one the
+/// controller's code table knows. Layer 2 asks again for one that is not (the same bytes
+/// twice are taken), so a damaged reply is not taken for another answer.
+fn reply_check(def: &CommandDef, codes: &'static CodeTable) -> trol_proto::link::Plausible {
+    let def = *def;
+    trol_proto::link::Plausible::new(move |pci, bytes| {
+        if pci & 0xFE00 != 0 {
+            return false;
+        }
+        let known = |v: Code| def.is_success(v.0) || v.info(codes).is_some();
+        match Reply::decode(&def, bytes) {
+            Ok(Reply::Code(v)) => known(v),
+            Ok(Reply::Reals { value, .. }) => known(value),
+            Ok(Reply::Status { last, .. }) => last.is_success() || last.info(codes).is_some(),
+            Ok(_) => true,
+            Err(_) => false,
+        }
+    })
 }
 
 fn cart(v: &[f64]) -> Value {

@@ -1572,3 +1572,126 @@ fn saving_without_a_locations_file_says_how_to_get_one() {
     assert_eq!(e.code().0, trol_a465::arm::code::NO_FILE, "{e}");
     assert!(e.to_string().contains("--locations FILE"), "{e}");
 }
+
+/// Where a controller dies in [`dead_controller`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Death {
+    /// Before the request: not one byte more (a frozen process, a cut line).
+    Before,
+    /// Mid-request: it acknowledges ENQ, takes the header and says nothing more.
+    MidRequest,
+    /// With the request complete (EOT): it may have run it; no reply comes.
+    RequestComplete,
+    /// During its reply: ENQ, acknowledged, then half a header and nothing more.
+    DuringReply,
+}
+
+/// A controller of this protocol (the simulator behind TROL's server) that serves until
+/// `die` is set, then meets the next request as `how` says, its end of the line kept open
+/// (as a cable whose far end died), and comes back (a server listening again, the line's
+/// leftovers flushed) once `revive` is set.
+fn dead_controller(how: Death, die: Arc<AtomicBool>, revive: Arc<AtomicBool>) -> Robot {
+    let (host, ctl) = trol_port::memory::pair(None);
+    std::thread::spawn(move || {
+        let mut pcp = Pcp::new(SimBackend::new(settings()));
+        let handle = |pcp: &mut Pcp<SimBackend>, req: &[u8]| match pcp.handle(req) {
+            trol_controller::Handled::Reply(r) => r,
+            trol_controller::Handled::Pending => Reply::Code(Code(0)).encode(),
+        };
+        let mut server = trol_comm::Server::new(ctl, LinkConfig::default());
+        while !die.load(Ordering::SeqCst) {
+            let _ = server.serve(Duration::from_millis(20), &mut |req| handle(&mut pcp, req));
+        }
+        let mut port = server.into_port();
+        let far = Instant::now() + Duration::from_secs(30);
+        let byte = |port: &mut trol_port::memory::MemoryLine| {
+            let mut b = [0u8; 1];
+            while port.recv(&mut b, far).unwrap_or(0) == 0 {
+                if Instant::now() > far {
+                    return None;
+                }
+            }
+            Some(b[0])
+        };
+        const ENQ: u8 = 0x99;
+        const ACK: u8 = 0xB4;
+        const SOH: u8 = 0x1E;
+        const EOT: u8 = 0x87;
+        if how != Death::Before {
+            while byte(&mut port) != Some(ENQ) {}
+            port.send(&[ACK]).unwrap();
+            let mut header = [0u8; 10];
+            for b in header.iter_mut() {
+                *b = byte(&mut port).unwrap_or(0);
+            }
+            if how != Death::MidRequest {
+                port.send(&[ACK]).unwrap();
+                let len = usize::from(u16::from_le_bytes([header[1], header[2]]));
+                if len > 2 {
+                    // One frame (every request here is short): data, frame-ID, BCC, end.
+                    for _ in 0..len - 2 + 5 {
+                        byte(&mut port);
+                    }
+                    port.send(&[ACK]).unwrap();
+                }
+                while byte(&mut port).is_some_and(|b| b != EOT) {}
+                if how == Death::DuringReply {
+                    port.send(&[ENQ]).unwrap();
+                    byte(&mut port);
+                    port.send(&[SOH, 2, 0, 1]).unwrap();
+                }
+            }
+        }
+        // Dead, the line open, until it comes back.
+        while !revive.load(Ordering::SeqCst) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(Duration::from_millis(200));
+        let _ = port.flush_input();
+        let mut server = trol_comm::Server::new(port, LinkConfig::default());
+        let stop = Instant::now() + Duration::from_secs(60);
+        while Instant::now() < stop {
+            let _ = server.serve(Duration::from_millis(20), &mut |req| handle(&mut pcp, req));
+        }
+    });
+    let mut robot = Robot::over(Box::new(host), LinkConfig::default(), None);
+    trol::check_server(&mut robot).expect("the version check");
+    robot
+}
+
+/// No call waits more than 3 s for a dead controller, whatever it was doing (issue 38): the
+/// simulator says it answers within 0.5 s (TROLGetReplyTime, asked by the version check),
+/// so a call waits 1.5 s for its reply (`trol::prompt_reply_timeout`) and then one ENQ
+/// timeout (1 s) for its repeat; a controller that stops mid-request is not repeated into
+/// (the request never reached its EOT, so it did not run). The line stays open throughout (an in-memory line
+/// that nobody closes, as a cable whose far end died); once the controller is back, the
+/// next call works. The times are docs/reliability.md's.
+#[test]
+fn no_call_waits_more_than_3_s_for_a_dead_controller() {
+    for how in [
+        Death::Before,
+        Death::MidRequest,
+        Death::RequestComplete,
+        Death::DuringReply,
+    ] {
+        let die = Arc::new(AtomicBool::new(false));
+        let revive = Arc::new(AtomicBool::new(false));
+        let mut robot = dead_controller(how, die.clone(), revive.clone());
+        robot.home(0).unwrap();
+        robot.finish().unwrap();
+        die.store(true, Ordering::SeqCst);
+        // Let the controller's loop see it between two transactions.
+        std::thread::sleep(Duration::from_millis(100));
+        let t = Instant::now();
+        let e = robot.joint(1, 0.1).unwrap_err();
+        let took = t.elapsed();
+        eprintln!("{how:?}: TROLJoint failed after {took:?}: {e}");
+        assert_eq!(e.code(), TROL_ERR_COMM, "{how:?}: {e}");
+        // At most 3.0 s by the timeouts; the bound leaves a loaded machine its scheduling.
+        assert!(took < Duration::from_secs(4), "{how:?}: {took:?}");
+        revive.store(true, Ordering::SeqCst);
+        std::thread::sleep(Duration::from_millis(400));
+        let back = robot.position(Tag::Joint, PosMode::Actual);
+        assert!(back.is_ok(), "{how:?}: the next call: {back:?}");
+    }
+}

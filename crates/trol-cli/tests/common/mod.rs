@@ -125,6 +125,11 @@ impl Background {
         }
     }
 
+    /// The process's id (to freeze it with SIGSTOP, as a hung controller).
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
     /// The output lines so far.
     pub fn output(&self) -> Vec<String> {
         self.lines.try_iter().collect()

@@ -321,6 +321,17 @@ commands! {
         reply: ReplyKind::Codes, success: &[], wait: Wait::Reply,
         help: "the controller's BIOS codes: the value, name and meaning of each",
     }
+    /// TROLGetReplyTime(): the longest this controller takes to answer a request, in
+    /// seconds (added: every request but a wait without limit is answered at once, motions
+    /// and Home at their start; a real controller's backend may wait that long for the
+    /// arm's own controller). The host waits that, and a margin, for each reply, so a
+    /// controller that died is noticed within seconds (docs/protocol.md "Reply time").
+    TROL_GET_REPLY_TIME = 197 => GET_REPLY_TIME {
+        name: "TROLGetReplyTime",
+        args: &[],
+        reply: ReplyKind::Reals { min: 1, max: 1 }, success: &[], wait: Wait::Reply,
+        help: "the longest the controller takes to answer a request, seconds",
+    }
 }
 
 /// The commands this successor added to the manual's table (the teaching commands,
@@ -336,6 +347,7 @@ pub const ADDED: &[u8] = &[
     TROL_GET_VERSION,
     TROL_SET_WATCHDOG,
     TROL_GET_CODES,
+    TROL_GET_REPLY_TIME,
 ];
 
 /// Other names of commands, as RAPL-II calls them (the interpreter takes them: `listl`,
@@ -409,7 +421,7 @@ mod tests {
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
         assert_eq!(LAST_CAT3_CODE, 134);
-        assert_eq!(LAST_CAT4_CODE, 196);
+        assert_eq!(LAST_CAT4_CODE, 197);
     }
 
     #[test]

@@ -22,7 +22,7 @@ mod sender;
 
 pub use codes::{LinkError, NakClass, NakCode, ReceiveError, SendError};
 pub use config::{BlockCheck, LinkConfig, Timeouts};
-pub use receiver::{Received, Receiver};
+pub use receiver::{Plausible, Received, Receiver};
 pub use sender::{MessageTooLong, Sender};
 
 use crate::time::Instant;
@@ -128,6 +128,12 @@ impl Link {
     pub fn set_config(&mut self, cfg: LinkConfig) {
         self.sender.set_config(cfg);
         self.receiver.set_config(cfg);
+    }
+
+    /// With the manual's LRC: check each whole message received before its last block is
+    /// acknowledged ([`Plausible`]); `None`, the block check alone. No effect with CRC-16.
+    pub fn set_plausible(&mut self, plausible: Option<Plausible>) {
+        self.receiver.set_plausible(plausible);
     }
 
     /// Counters.

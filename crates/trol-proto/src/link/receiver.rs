@@ -71,6 +71,42 @@ pub struct Receiver {
     naks: u8,
     deadline: Option<Instant>,
     out: Vec<u8>,
+    /// With the LRC: what the message must be to be taken ([`Plausible`]).
+    plausible: Option<Plausible>,
+    /// The last message refused as implausible (PCI, bytes): the same bytes again are
+    /// taken, since noise does not repeat itself (a peer that means them gets its answer).
+    doubted: Option<(u16, Vec<u8>)>,
+}
+
+/// With the manual's LRC, which lets damage through that a CRC finds, a check of a whole
+/// message (its PCI and bytes) before its last block is acknowledged: what the layers above
+/// know it must be (a request of a known command whose fields fit its record; the reply the
+/// pending request can have). An implausible message is asked for again (NAK ERR_BCC) when
+/// it travels in the header alone, and its transfer aborted (NAK ERR_FID, fatal: layer 3
+/// sends the request again) when it has frames, whose header a NAK would not bring again.
+/// The same bytes a second time are taken.
+#[derive(Clone)]
+pub struct Plausible(std::sync::Arc<PlausibleFn>);
+
+/// The check inside a [`Plausible`]: `(pci, message) -> passes`.
+type PlausibleFn = dyn Fn(u16, &[u8]) -> bool + Send + Sync;
+
+impl Plausible {
+    /// The check `f(pci, message)`.
+    pub fn new(f: impl Fn(u16, &[u8]) -> bool + Send + Sync + 'static) -> Self {
+        Plausible(std::sync::Arc::new(f))
+    }
+
+    /// Whether `message` under `pci` passes.
+    pub fn check(&self, pci: u16, message: &[u8]) -> bool {
+        (self.0)(pci, message)
+    }
+}
+
+impl std::fmt::Debug for Plausible {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Plausible(..)")
+    }
 }
 
 impl Receiver {
@@ -88,7 +124,36 @@ impl Receiver {
             naks: 0,
             deadline: None,
             out: Vec::new(),
+            plausible: None,
+            doubted: None,
         }
+    }
+
+    /// Check each message with the LRC ([`Plausible`]); `None`: the block check alone.
+    pub fn set_plausible(&mut self, plausible: Option<Plausible>) {
+        self.plausible = plausible;
+        self.doubted = None;
+    }
+
+    /// With the LRC and a [`Plausible`] check: whether the whole message passes (or came
+    /// twice the same); an implausible one is remembered.
+    fn plausible(&mut self, pci: u16, whole: &[u8]) -> bool {
+        let Some(check) = &self.plausible else {
+            return true;
+        };
+        if self.cfg.check != BlockCheck::Lrc || check.check(pci, whole) {
+            return true;
+        }
+        if self
+            .doubted
+            .as_ref()
+            .is_some_and(|(p, m)| *p == pci && m == whole)
+        {
+            self.doubted = None;
+            return true;
+        }
+        self.doubted = Some((pci, whole.to_vec()));
+        false
     }
 
     /// The settings.
@@ -266,7 +331,7 @@ impl Receiver {
         }
     }
 
-    fn check_block(&self, block: Block) -> Check {
+    fn check_block(&mut self, block: Block) -> Check {
         let b = &self.block;
         let last = b[b.len() - 1];
         let (start, start_err) = match block {
@@ -313,6 +378,12 @@ impl Receiver {
                 {
                     return Check::Retry(NakCode::Bcc);
                 }
+                if frame::frame_count(usize::from(len)) == 0 {
+                    let first = first.to_vec();
+                    if !self.plausible(pci, &first) {
+                        return Check::Retry(NakCode::Bcc);
+                    }
+                }
             }
             Block::Frame(i) => {
                 let data = &b[1..n - 5];
@@ -336,6 +407,18 @@ impl Receiver {
                     whole.extend_from_slice(data);
                     if frame::line_pci(check, self.pci, &whole) != self.line_pci {
                         return Check::Retry(NakCode::Bcc);
+                    }
+                }
+                // With the LRC: the whole message as the layers above know it must be.
+                if i + 1 == frame::frame_count(self.len)
+                    && check == BlockCheck::Lrc
+                    && self.plausible.is_some()
+                {
+                    let mut whole = Vec::with_capacity(self.len);
+                    whole.extend_from_slice(&self.message);
+                    whole.extend_from_slice(data);
+                    if !self.plausible(self.pci, &whole) {
+                        return Check::Fatal(NakCode::Fid);
                     }
                 }
             }

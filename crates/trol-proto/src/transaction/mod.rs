@@ -43,7 +43,7 @@ mod initiator;
 mod responder;
 
 pub use initiator::{Initiator, InitiatorEvent};
-pub use responder::{ManualLayer3, Responder, ResponderEvent};
+pub use responder::{ManualLayer3, NUMBER_WINDOW, Responder, ResponderEvent, pci_fits};
 
 use crate::link::{ReceiveError, SendError};
 use std::time::Duration;

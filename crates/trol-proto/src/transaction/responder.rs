@@ -48,6 +48,30 @@ pub struct Responder {
     /// The numbers of the last requests run, newest first: a host whose numbers are seen
     /// to change numbers its requests; one of 1998 leaves the PCI alone.
     recent_numbers: [Option<u8>; 3],
+    /// What the link's LRC check ([`Responder::set_request_check`]) knows of the host's
+    /// numbering: bit 8 set when the host numbers its requests, bits 0..7 the number of the
+    /// last request run.
+    numbering: std::sync::Arc<std::sync::atomic::AtomicU16>,
+}
+
+/// How far ahead of the last request run a numbering host's next request may be (requests
+/// the controller never got in between, each failed at the host).
+pub const NUMBER_WINDOW: u8 = 4;
+
+/// Whether a request's PCI fits a host that numbers its requests, whose last request run was
+/// `last`: the reserved bits 9..15 clear, and the number the next few (or `last` marked
+/// REPEAT). With the LRC, a PCI that does not fit is damage the sum missed.
+pub fn pci_fits(pci: u16, last: u8) -> bool {
+    let n = pci_number(pci);
+    if pci & 0xFE00 != 0 || n == 0 {
+        return false;
+    }
+    if pci_is_repeat(pci) {
+        return n == last;
+    }
+    // Numbers run 1..=255 and then 1 again.
+    let ahead = (i16::from(n) - i16::from(last)).rem_euclid(255);
+    (1..=i16::from(NUMBER_WINDOW)).contains(&ahead)
 }
 
 /// How a responder that speaks only the manual's layer 3 (a 1998 PCP server) numbers its
@@ -75,7 +99,39 @@ impl Responder {
             manual: None,
             numbered_host: false,
             recent_numbers: [None; 3],
+            numbering: Default::default(),
         }
+    }
+
+    /// With the manual's LRC: check every request before its last block is acknowledged
+    /// (docs/protocol.md, "What the LRC cannot see"): `fits(request)` says whether its bytes
+    /// are a request the controller knows, whose fields fit its record (the controller's
+    /// command table); and from a host that numbers its requests, the PCI must fit
+    /// ([`pci_fits`]). A request that does not is damage the sum let through: asked for
+    /// again, never run as another command. `None`: the block check alone.
+    pub fn set_request_check(&mut self, fits: Option<crate::link::Plausible>) {
+        let Some(fits) = fits else {
+            self.link.set_plausible(None);
+            return;
+        };
+        let numbering = self.numbering.clone();
+        self.link
+            .set_plausible(Some(crate::link::Plausible::new(move |pci, request| {
+                let known = numbering.load(std::sync::atomic::Ordering::Relaxed);
+                let numbered = known & 0x0100 != 0;
+                fits.check(pci, request) && (!numbered || pci_fits(pci, (known & 0xFF) as u8))
+            })));
+    }
+
+    fn share_numbering(&self) {
+        let last = self.recent_numbers[0].unwrap_or(0);
+        let known = if self.host_numbers_requests() && last != 0 {
+            0x0100 | u16::from(last)
+        } else {
+            0
+        };
+        self.numbering
+            .store(known, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Whether the host numbers its requests, as TROL's host does: it said so (a host that
@@ -100,6 +156,7 @@ impl Responder {
     pub fn set_numbered_host(&mut self, numbered: bool) {
         self.numbered_host = numbered;
         self.recent_numbers = [None; 3];
+        self.share_numbering();
     }
 
     /// Speak only the manual's layer 3, as a 1998 controller does: no memory of the last
@@ -228,6 +285,7 @@ impl Responder {
                 self.recent_numbers[0],
                 self.recent_numbers[1],
             ];
+            self.share_numbering();
         }
         self.reply.clear();
         self.reply.extend_from_slice(reply);

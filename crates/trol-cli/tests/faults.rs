@@ -1,0 +1,82 @@
+//! A controller process that freezes (SIGSTOP: a debugger, a suspended machine, a hung
+//! process) on a line that stays open, a pty and a TCP connection (issue 38): the call fails
+//! within seconds, not the manual's 15 s; once the controller thaws, the next call works,
+//! and the request the host gave up on never ran.
+
+mod common;
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use common::{Background, scratch};
+use trol::{PosMode, Robot, Tag};
+
+fn signal(pid: u32, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &pid.to_string()])
+        .status()
+        .expect("kill runs")
+        .success();
+    assert!(ok, "kill {sig} {pid}");
+}
+
+fn frozen_controller_on(port: &str) {
+    let dir = scratch(&format!("frozen-{port}"));
+    let sim = Background::start(
+        &dir,
+        &[
+            "sim",
+            "--server",
+            "--homed",
+            "--time-scale",
+            "20",
+            "--port",
+            port,
+        ],
+        "serving on ",
+    );
+    let name = if let Some(addr) = sim.name.strip_prefix("listen://") {
+        format!("socket://{addr}")
+    } else {
+        sim.name.clone()
+    };
+    let mut robot = Robot::connect(&name, 9600).expect("connect");
+    robot.joint(1, 0.2).unwrap();
+    robot.finish().unwrap();
+    let before = robot.position(Tag::Joint, PosMode::Actual).unwrap();
+    signal(sim.pid(), "-STOP");
+    let t = Instant::now();
+    let e = robot.joint(1, 0.3).unwrap_err();
+    let took = t.elapsed();
+    eprintln!("{port}: TROLJoint failed after {took:?}: {e}");
+    assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{e}");
+    // 1 s by the timeouts (one unanswered ENQ); the bound leaves a loaded machine room.
+    assert!(took < Duration::from_secs(4), "{port}: {took:?}");
+    signal(sim.pid(), "-CONT");
+    // The next call works; the Joint the host gave up on did not run.
+    let mut after = None;
+    for _ in 0..20 {
+        match robot.position(Tag::Joint, PosMode::Actual) {
+            Ok(p) => {
+                after = Some(p);
+                break;
+            }
+            Err(_) => std::thread::sleep(Duration::from_millis(200)),
+        }
+    }
+    let after = after.expect("a call works once the controller thawed");
+    let moved = (after.to_array6()[0] - before.to_array6()[0]).abs();
+    assert!(moved < 1e-3, "{port}: the given-up Joint ran ({moved} rad)");
+    robot.joint(1, -0.2).unwrap();
+    robot.finish().unwrap();
+}
+
+#[test]
+fn a_frozen_controller_on_a_pty_fails_the_call_within_seconds() {
+    frozen_controller_on("pty");
+}
+
+#[test]
+fn a_frozen_controller_over_tcp_fails_the_call_within_seconds() {
+    frozen_controller_on("listen://127.0.0.1:0");
+}

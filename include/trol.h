@@ -288,7 +288,11 @@ void TROLSetFatalError(TROLFatalErrorFn handler);
  * with the reason from trol_connect_error() (this thread's last). trol_disconnect closes and
  * frees it (the controller stays in server mode; trol_terminate_pcp ends that).
  * trol_strerror: a return code as "NAME: meaning", a static string (BIOS codes as the default
- * connection's controller names them, TROLGetCodes). Every manual function
+ * connection's controller names them, TROLGetCodes; in an error handler, its connection's);
+ * trol_strerror_for: as connection c's controller names them. GetLastCommErr and
+ * GetLastCommSide are per connection (trol_get_last_comm_err, trol_get_last_comm_side; the
+ * manual's names read the default connection's, or in an error handler its own): no
+ * connection's call resets another's. Every manual function
  * TROLName(args) has trol_name(TROL *, args) (NULL: TROL_ERR_ARG_RANGE, nothing sent). The
  * manual's functions above drive one default connection, as before. An error handler that
  * calls TROL on its own connection gets TROL_ERR_COMM at once; other connections work. */
@@ -308,6 +312,9 @@ int trol_connect_error_kind(void);
 void trol_connect_versions(TUINT *ours, TUINT *theirs);
 void trol_disconnect(TROL *c);
 const char *trol_strerror(int code);
+const char *trol_strerror_for(const TROL *c, int code);
+TUINT trol_get_last_comm_err(TROL *c);
+TUINT trol_get_last_comm_side(TROL *c);
 TINT trol_appro(TROL *c, TLocName locName, SLocData *pDisp, TUINT straight);
 TINT trol_appro_ii(TROL *c, SLocData *pTarget, SLocData *pDisp, TUINT straight);
 TINT trol_close(TROL *c, TUINT perForce);

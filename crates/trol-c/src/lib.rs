@@ -119,13 +119,7 @@ const FRESH: State = State {
 };
 
 /// The default connection: the manual's functions drive it.
-static STATE: TROL = TROL {
-    inner: Mutex::new(FRESH),
-};
-
-static LAST_COMM_ERR: AtomicU16 = AtomicU16::new(0);
-/// Which service failed last: 0 none, [`COMM_SIDE_SEND`], [`COMM_SIDE_RECEIVE`].
-static LAST_COMM_SIDE: AtomicU16 = AtomicU16::new(0);
+static STATE: TROL = TROL::fresh(FRESH);
 /// GetLastCommSide: SendData failed.
 pub const COMM_SIDE_SEND: TUINT = 1;
 /// GetLastCommSide: ReceiveData failed.
@@ -138,18 +132,40 @@ fn note_comm(error: Option<trol_proto::link::LinkError>) {
         Some(e @ trol_proto::link::LinkError::Receive(_)) => (e.code(), COMM_SIDE_RECEIVE),
         None => (0, 0),
     };
-    LAST_COMM_ERR.store(code, Ordering::Relaxed);
-    LAST_COMM_SIDE.store(side, Ordering::Relaxed);
+    note_code(code, side);
 }
 
+/// Keep a layer-2 code for the connection of this call (GetLastCommErr, GetLastCommSide):
+/// each connection has its own, so one connection's calls never reset another's.
 fn note_code(code: u16, side: TUINT) {
-    LAST_COMM_ERR.store(code, Ordering::Relaxed);
-    LAST_COMM_SIDE.store(side, Ordering::Relaxed);
+    let c = conn();
+    c.last_err.store(code, Ordering::Relaxed);
+    c.last_side.store(side, Ordering::Relaxed);
 }
 
 /// The C type `TROL`: one connection with its settings and handlers (opaque to C).
 pub struct TROL {
     inner: Mutex<State>,
+    /// GetLastCommErr's code and GetLastCommSide's side for this connection: outside the
+    /// lock, so that a handler may read them while its call holds it.
+    last_err: AtomicU16,
+    /// Which service failed last: 0 none, [`COMM_SIDE_SEND`], [`COMM_SIDE_RECEIVE`].
+    last_side: AtomicU16,
+    /// The BIOS codes this connection's controller told (TROLGetCodes, read when it
+    /// connected), for trol_strerror and trol_strerror_for: a lock of its own, never held
+    /// during a call, so that an error handler may ask.
+    told: Mutex<Option<&'static trol_client::CodeTable>>,
+}
+
+impl TROL {
+    const fn fresh(state: State) -> TROL {
+        TROL {
+            inner: Mutex::new(state),
+            last_err: AtomicU16::new(0),
+            last_side: AtomicU16::new(0),
+            told: Mutex::new(None),
+        }
+    }
 }
 
 thread_local! {
@@ -1153,7 +1169,7 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         // probe that fails is how InitTROL(0) finds a controller in terminal mode.
         let handlers = CHandlers::of(callbacks, &robot);
         robot.set_handlers(Box::new(handlers));
-        *TOLD_CODES.lock().unwrap_or_else(|p| p.into_inner()) = Some(robot.codes());
+        *STATE.told.lock().unwrap_or_else(|p| p.into_inner()) = Some(robot.codes());
         state().robot = Some(robot);
         INITTROL_SUCCESS
     })
@@ -1398,7 +1414,7 @@ pub extern "C" fn FlushBuffer() {
 /// may call it.
 #[unsafe(no_mangle)]
 pub extern "C" fn GetLastCommErr() -> TUINT {
-    LAST_COMM_ERR.load(Ordering::Relaxed)
+    conn().last_err.load(Ordering::Relaxed)
 }
 
 /// GetLastCommSide (added): which service GetLastCommErr's failure belongs to:
@@ -1407,7 +1423,7 @@ pub extern "C" fn GetLastCommErr() -> TUINT {
 /// both sides).
 #[unsafe(no_mangle)]
 pub extern "C" fn GetLastCommSide() -> TUINT {
-    LAST_COMM_SIDE.load(Ordering::Relaxed)
+    conn().last_side.load(Ordering::Relaxed)
 }
 
 fn set_callbacks(f: impl FnOnce(&mut Callbacks)) {
@@ -1545,12 +1561,13 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
         let handlers = CHandlers::of(fresh.callbacks, &robot);
         robot.set_handlers(Box::new(handlers));
         CONNECT_ERROR.with_borrow_mut(|e| *e = ConnectError::default());
-        Box::into_raw(Box::new(TROL {
-            inner: Mutex::new(State {
-                robot: Some(robot),
-                ..fresh
-            }),
-        }))
+        let c = TROL::fresh(State {
+            robot: None,
+            ..fresh
+        });
+        *c.told.lock().unwrap_or_else(|p| p.into_inner()) = Some(robot.codes());
+        c.inner.lock().unwrap_or_else(|p| p.into_inner()).robot = Some(robot);
+        Box::into_raw(Box::new(c))
     })
 }
 
@@ -1598,20 +1615,33 @@ pub unsafe extern "C" fn trol_disconnect(c: *mut TROL) {
     })
 }
 
-/// The BIOS codes the default connection's controller told (TROLGetCodes, read by
-/// InitTROL), for trol_strerror: a lock of its own, never held during a call, so that an
-/// error handler may ask.
-static TOLD_CODES: Mutex<Option<&'static trol_client::CodeTable>> = Mutex::new(None);
-
 /// trol_strerror: a return code as text, "NAME: meaning": TROL's codes, and BIOS codes as the
-/// default connection's controller names them (after InitTROL; before it, the simulated
-/// A465's; a code nobody named, by number). The string is static.
+/// controller names them: the controller of the connection whose call runs on this thread
+/// (an error handler's), else the default connection's (after InitTROL; before it, the
+/// simulated A465's; a code nobody named, by number). The string is static.
 #[unsafe(no_mangle)]
 pub extern "C" fn trol_strerror(code: std::ffi::c_int) -> *const std::ffi::c_char {
+    strerror_of(conn(), code)
+}
+
+/// trol_strerror_for: trol_strerror with the BIOS codes of connection `c`'s controller (as
+/// trol_connect read them); NULL: the default connection's. The string is static.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_strerror_for(
+    c: *const TROL,
+    code: std::ffi::c_int,
+) -> *const std::ffi::c_char {
+    // SAFETY: a handle from trol_connect that the caller has not disconnected, or NULL.
+    let c = unsafe { c.as_ref() }.unwrap_or(&STATE);
+    strerror_of(c, code)
+}
+
+fn strerror_of(c: &TROL, code: std::ffi::c_int) -> *const std::ffi::c_char {
     type Texts = Vec<(std::ffi::c_int, usize, std::ffi::CString)>;
     static TEXTS: Mutex<Texts> = Mutex::new(Vec::new());
     guard(c"TROL_ERR_COMM".as_ptr(), || {
-        let table = TOLD_CODES
+        let table = c
+            .told
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .unwrap_or_else(trol_client::default_codes);
@@ -1682,6 +1712,8 @@ per_connection! {
     fn trol_get_version(protocol: *mut TUINT, kind: *mut std::ffi::c_char, kindSize: TUINT) -> TINT = TROLGetVersion else ARG_RANGE;
     fn trol_set_watchdog(tenths: TUINT) -> TINT = TROLSetWatchdog else ARG_RANGE;
     fn trol_get_codes(values: *mut TINT, max: TUINT, count: *mut TUINT) -> TINT = TROLGetCodes else ARG_RANGE;
+    fn trol_get_last_comm_err() -> TUINT = GetLastCommErr else 0;
+    fn trol_get_last_comm_side() -> TUINT = GetLastCommSide else 0;
     fn trol_get_reply_time(seconds: *mut f32) -> TINT = TROLGetReplyTime else ARG_RANGE;
     fn trol_here(locName: *const TUCHAR, pos: TINT) -> TINT = TROLHere else ARG_RANGE;
     fn trol_define(locName: *const TUCHAR, pLoc: *const SLocData) -> TINT = TROLDefine else ARG_RANGE;

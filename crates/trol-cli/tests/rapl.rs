@@ -603,3 +603,60 @@ fn the_gateway_s_pendant_drives_the_c500() {
     let wrong = pendant_post(url, &format!("/control/here?name=p8&token=x{token}"));
     assert_eq!(wrong["ok"], false, "{wrong}");
 }
+
+/// Per-connection state in C (issue 38, item 5): a program with two connections, a C500
+/// through rapl: and a simulated A465, names each controller's BIOS codes as that controller
+/// does (trol_strerror_for), and one connection's failure stays its own: the second
+/// controller killed, its last communication error is kept while another thread's calls on
+/// the first succeed (it used to be one per process, reset by any call).
+#[test]
+fn c_connections_keep_their_own_codes_and_errors() {
+    use std::io::{BufRead, BufReader, Write};
+    let dir = scratch("rapl-comm-state");
+    let c500 = rapl_sim(&dir, &["--homed"]);
+    let sim = Background::start(&dir, &["sim", "--server"], "serving on ");
+    let exe = cbuild::compile(
+        &cbuild::root().join("crates/trol-cli/tests/c/comm_state.c"),
+        "comm_state",
+        cbuild::Link::Static,
+    );
+    let mut child = cbuild::program(&exe)
+        .current_dir(&dir)
+        .args([format!("rapl:{}", c500.name), sim.name.clone()])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut text = String::new();
+    loop {
+        let mut line = String::new();
+        assert!(
+            out.read_line(&mut line).unwrap() > 0,
+            "it ended early:\n{text}"
+        );
+        text.push_str(&line);
+        if line.starts_with("stop b") {
+            break;
+        }
+    }
+    drop(sim);
+    writeln!(child.stdin.as_mut().unwrap()).unwrap();
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut out, &mut rest).unwrap();
+    text.push_str(&rest);
+    assert!(child.wait().unwrap().success(), "{text}");
+    assert!(text.contains("a -8: BIOS_ARM_POWER"), "{text}");
+    assert!(text.contains("b -8: code -8: not one of TROL's"), "{text}");
+    assert!(text.contains("b -1: BIOS_NOT_HOMED"), "{text}");
+    assert!(
+        text.contains("b: -32001, last comm error 0x0008 (side 1), changed 0 times"),
+        "{text}"
+    );
+    assert!(
+        text.contains("a: 0 calls failed, last comm error 0x0000"),
+        "{text}"
+    );
+    assert!(text.contains("default connection: 0x0000"), "{text}");
+    assert!(text.ends_with("done\n"), "{text}");
+}

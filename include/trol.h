@@ -313,6 +313,12 @@ void trol_connect_versions(TUINT *ours, TUINT *theirs);
 void trol_disconnect(TROL *c);
 const char *trol_strerror(int code);
 const char *trol_strerror_for(const TROL *c, int code);
+/* In an error handler shared by several connections: trol_current() is the connection whose
+ * call failed (NULL: the default one), and trol_get_user(c) the pointer the application kept
+ * with it by trol_set_user(c, user) (NULL c: the default connection's). */
+TROL *trol_current(void);
+void trol_set_user(TROL *c, void *user);
+void *trol_get_user(const TROL *c);
 TUINT trol_get_last_comm_err(TROL *c);
 TUINT trol_get_last_comm_side(TROL *c);
 TINT trol_appro(TROL *c, TLocName locName, SLocData *pDisp, TUINT straight);

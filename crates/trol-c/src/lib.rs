@@ -36,7 +36,7 @@ use trol_proto::application::{CommandDef, LocName, Location, Reply, Tag};
 use trol_proto::transaction::TransCode;
 
 use trol_client::config::Config;
-use trol_client::{Error, Robot, timeout_policy};
+use trol_client::{Error, Robot};
 
 const ARG_RANGE: TINT = TROL_ERR_ARG_RANGE.0;
 const COMM: TINT = TROL_ERR_COMM.0;
@@ -155,6 +155,9 @@ pub struct TROL {
     /// connected), for trol_strerror and trol_strerror_for: a lock of its own, never held
     /// during a call, so that an error handler may ask.
     told: Mutex<Option<&'static trol_client::CodeTable>>,
+    /// The application's pointer for this connection (trol_set_user), for a handler
+    /// shared by several connections to tell them apart.
+    user: std::sync::atomic::AtomicPtr<std::ffi::c_void>,
 }
 
 impl TROL {
@@ -164,6 +167,7 @@ impl TROL {
             last_err: AtomicU16::new(0),
             last_side: AtomicU16::new(0),
             told: Mutex::new(None),
+            user: std::sync::atomic::AtomicPtr::new(std::ptr::null_mut()),
         }
     }
 }
@@ -292,7 +296,7 @@ struct CHandlers(Callbacks, trol_comm::TimeoutPolicy);
 
 impl CHandlers {
     fn of(callbacks: Callbacks, robot: &Robot) -> CHandlers {
-        CHandlers(callbacks, timeout_policy(robot.catalog().clone()))
+        CHandlers(callbacks, robot.timeout_policy())
     }
 }
 
@@ -1517,6 +1521,34 @@ fn on_conn<R>(c: *mut TROL, fallback: R, f: impl FnOnce() -> R) -> R {
     let r = f();
     CONN.set(previous);
     r
+}
+
+/// trol_current: the connection whose call runs on this thread (in an error handler, the
+/// connection of the call that failed), or NULL for the default connection (the manual's
+/// functions) or outside any call. A handler shared by several connections tells them
+/// apart by it (and by trol_get_user).
+#[unsafe(no_mangle)]
+pub extern "C" fn trol_current() -> *mut TROL {
+    CONN.get()
+        .map_or(std::ptr::null_mut(), |c| c as *const TROL as *mut TROL)
+}
+
+/// trol_set_user: keep the application's pointer `user` with connection `c` (NULL: the
+/// default connection), for its handlers (trol_get_user(trol_current())).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_set_user(c: *mut TROL, user: *mut std::ffi::c_void) {
+    // SAFETY: a handle from trol_connect that the caller has not disconnected, or NULL.
+    let c = unsafe { c.as_ref() }.unwrap_or(&STATE);
+    c.user.store(user, Ordering::Relaxed);
+}
+
+/// trol_get_user: the pointer trol_set_user kept with connection `c` (NULL: the default
+/// connection's); NULL if none.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_get_user(c: *const TROL) -> *mut std::ffi::c_void {
+    // SAFETY: as trol_set_user.
+    let c = unsafe { c.as_ref() }.unwrap_or(&STATE);
+    c.user.load(Ordering::Relaxed)
 }
 
 /// trol_connect: connect to the controller on `port` (as trol.cfg's second line names it:

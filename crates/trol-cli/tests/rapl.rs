@@ -608,7 +608,8 @@ fn the_gateway_s_pendant_drives_the_c500() {
 /// through rapl: and a simulated A465, names each controller's BIOS codes as that controller
 /// does (trol_strerror_for), and one connection's failure stays its own: the second
 /// controller killed, its last communication error is kept while another thread's calls on
-/// the first succeed (it used to be one per process, reset by any call).
+/// the first succeed (it used to be one per process, reset by any call); one ErrOnSend for
+/// both tells which one failed (trol_current, trol_get_user).
 #[test]
 fn c_connections_keep_their_own_codes_and_errors() {
     use std::io::{BufRead, BufReader, Write};
@@ -658,5 +659,6 @@ fn c_connections_keep_their_own_codes_and_errors() {
         "{text}"
     );
     assert!(text.contains("default connection: 0x0000"), "{text}");
+    assert!(text.contains("the shared handler saw: b"), "{text}");
     assert!(text.ends_with("done\n"), "{text}");
 }

@@ -651,6 +651,18 @@ impl Robot {
         robot
     }
 
+    /// The default ErrAppTimeOut's policy for this connection: the commands' descriptions
+    /// (90 s more for Home), or, for a controller that said how long it takes to answer
+    /// ([`Robot::set_reply_time`]), only where a description asks for no limit. For handler
+    /// sets of the application's that fall back on the default (the C library's).
+    pub fn timeout_policy(&self) -> trol_comm::TimeoutPolicy {
+        if self.prompt.is_some() {
+            prompt_policy(self.catalog.clone())
+        } else {
+            timeout_policy(self.catalog.clone())
+        }
+    }
+
     /// The manual's default handlers, unless the application installed its own: their
     /// ErrAppTimeOut waits as the commands' descriptions say (90 s more for Home), or, for a
     /// controller that answers at once, only where a description asks for no limit.
@@ -658,11 +670,7 @@ impl Robot {
         if self.own_handlers {
             return;
         }
-        let policy = if self.prompt.is_some() {
-            prompt_policy(self.catalog.clone())
-        } else {
-            timeout_policy(self.catalog.clone())
-        };
+        let policy = self.timeout_policy();
         self.transactor
             .set_handlers(Box::new(DefaultHandlers::with_policy(policy)));
     }

@@ -3,7 +3,8 @@
  * simulated A465 on a pty. trol_strerror_for names each controller's BIOS codes as that
  * controller does; after the second controller dies (the test kills it when this program
  * says "stop b"), its connection's last communication error stays while another thread's
- * calls on the first connection succeed, and the first connection's stays 0.
+ * calls on the first connection succeed, and the first connection's stays 0; one error
+ * handler installed on both tells which connection failed (trol_current, trol_get_user).
  * Driven by crates/trol-cli/tests/rapl.rs.
  */
 #include <pthread.h>
@@ -14,6 +15,17 @@
 
 static TROL *a, *b;
 static int a_failed = 0;
+static const char *handler_saw = "nothing";
+
+/* One ErrOnSend for both connections: it tells them apart by trol_current(). */
+static TUINT on_send(SInData *in, TUINT *PCI)
+{
+    (void)in;
+    (void)PCI;
+    const char *who = trol_get_user(trol_current());
+    handler_saw = who ? who : "(no user pointer)";
+    return RECOVERY_FAIL;
+}
 
 static void *use_a(void *arg)
 {
@@ -39,6 +51,10 @@ int main(int argc, char **argv)
         printf("trol_connect: %s\n", trol_connect_error());
         return 1;
     }
+    trol_set_user(a, "a");
+    trol_set_user(b, "b");
+    trol_set_err_on_send(a, on_send);
+    trol_set_err_on_send(b, on_send);
     printf("a -8: %s\n", trol_strerror_for(a, -8));
     printf("b -8: %s\n", trol_strerror_for(b, -8));
     printf("b -1: %s\n", trol_strerror_for(b, -1));
@@ -65,6 +81,7 @@ int main(int argc, char **argv)
     printf("a: %d calls failed, last comm error 0x%04x\n", a_failed,
            (unsigned)trol_get_last_comm_err(a));
     printf("default connection: 0x%04x\n", (unsigned)GetLastCommErr());
+    printf("the shared handler saw: %s\n", handler_saw);
     trol_disconnect(a);
     trol_disconnect(b);
     printf("done\n");

@@ -153,6 +153,16 @@ fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f6
     {
         return Err(bad(type_name(obj)));
     }
+    // A buffer of bytes or integers (memoryview, array.array): its items are small ints
+    // to Python, and `mi(memoryview(b"abcdef"))` was an MI of 97..102 rad. Only a buffer of
+    // reals is taken.
+    for attr in ["format", "typecode"] {
+        if let Ok(code) = obj.getattr(attr).and_then(|f| f.extract::<String>())
+            && !matches!(code.trim_start_matches(['@', '=', '<', '>', '!']), "d" | "f" | "e")
+        {
+            return Err(bad(format!("a {} of format {code:?}", type_name(obj))));
+        }
+    }
     // numpy: the array's (or scalar's) dtype kind: f float, i int, u unsigned.
     let real_dtype = |o: &Bound<'_, PyAny>| -> Option<Result<(), String>> {
         let dtype = o.getattr("dtype").ok()?;
@@ -186,6 +196,42 @@ fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f6
         out.push(item.extract::<f64>().map_err(|_| bad(type_name(&item)))?);
     }
     Ok(out)
+}
+
+/// A whole number argument. A bool is refused: `joint(True, 0.1)` moved joint 1.
+fn whole(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<u16> {
+    use pyo3::types::PyBool;
+    let got = obj
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_default();
+    if obj.is_instance_of::<PyBool>() {
+        return Err(argument_error(
+            py,
+            format!("{what}: expected a whole number, got a bool"),
+        ));
+    }
+    obj.extract::<u16>()
+        .map_err(|_| argument_error(py, format!("{what}: expected a whole number, got {got}")))
+}
+
+/// A real number argument (an int or a float; not a bool).
+fn real(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<f64> {
+    use pyo3::types::PyBool;
+    let got = obj
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_default();
+    if obj.is_instance_of::<PyBool>() {
+        return Err(argument_error(
+            py,
+            format!("{what}: expected a number, got a bool"),
+        ));
+    }
+    obj.extract::<f64>()
+        .map_err(|_| argument_error(py, format!("{what}: expected a number, got {got}")))
 }
 
 fn is_precision(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<bool> {
@@ -245,6 +291,9 @@ fn gripper_object<'py>(py: Python<'py>, g: trol::Gripper) -> PyResult<Bound<'py,
 fn arg_value(py: Python<'_>, name: &str, kind: ArgKind, obj: &Bound<'_, PyAny>) -> PyResult<Value> {
     let bad = |what: &str| argument_error(py, format!("`{name}`: expected {what}"));
     Ok(match kind {
+        ArgKind::Int { .. } if obj.is_instance_of::<pyo3::types::PyBool>() => {
+            return Err(bad("a whole number 0..255, not a bool"));
+        }
         ArgKind::Int { .. } => Value::Int(
             obj.extract::<u8>()
                 .map_err(|_| bad("a whole number 0..255"))?,
@@ -271,6 +320,9 @@ fn arg_value(py: Python<'_>, name: &str, kind: ArgKind, obj: &Bound<'_, PyAny>) 
                 .extract::<String>()
                 .map_err(|_| bad("a location name"))?;
             Value::Name(LocName::new(&s).map_err(|e| argument_error(py, e.to_string()))?)
+        }
+        ArgKind::Real if obj.is_instance_of::<pyo3::types::PyBool>() => {
+            return Err(bad("a number, not a bool"));
         }
         ArgKind::Real => Value::Real(obj.extract::<f64>().map_err(|_| bad("a number"))?),
         ArgKind::Loc { tags, .. } => {
@@ -473,7 +525,14 @@ impl Robot {
     }
 
     /// TROLJoint: move joint ``number`` (1..6) by ``radians``.
-    fn joint(&self, py: Python<'_>, number: u16, radians: f64) -> PyResult<()> {
+    fn joint(
+        &self,
+        py: Python<'_>,
+        number: &Bound<'_, PyAny>,
+        radians: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let number = whole(py, number, "joint: number")?;
+        let radians = real(py, radians, "joint: radians")?;
         self.with(py, move |r| r.joint(number, radians))
     }
 
@@ -490,12 +549,14 @@ impl Robot {
     }
 
     /// TROLSpeed: percent of the maximum speed (1..150).
-    fn speed(&self, py: Python<'_>, percent: u16) -> PyResult<()> {
+    fn speed(&self, py: Python<'_>, percent: &Bound<'_, PyAny>) -> PyResult<()> {
+        let percent = whole(py, percent, "speed: percent")?;
         self.with(py, move |r| r.speed(percent))
     }
 
     /// TROLGrip: the fingers to ``mm`` (0..50), at full force.
-    fn grip(&self, py: Python<'_>, mm: u16) -> PyResult<()> {
+    fn grip(&self, py: Python<'_>, mm: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mm = whole(py, mm, "grip: mm")?;
         self.with(py, move |r| r.grip(mm))
     }
 
@@ -715,6 +776,29 @@ impl Robot {
         }
         let limit = std::time::Duration::from_secs_f64(seconds);
         self.with(py, move |r| r.set_watchdog(limit))
+    }
+
+    /// TROLSetRepeats: how often a request whose reply was lost is sent again, marked as a
+    /// repeat, so that it runs exactly once (0..10; 0 is the manual's behaviour: the call
+    /// fails and ``status()`` tells whether it ran). Without it: 2 to a controller that
+    /// remembers its last request, 0 to one that speaks only the manual's protocol.
+    fn set_repeats(&self, py: Python<'_>, repeats: &Bound<'_, PyAny>) -> PyResult<()> {
+        let n = whole(py, repeats, "set_repeats: repeats")?;
+        if n > 10 {
+            return Err(argument_error(
+                py,
+                format!("set_repeats: {n} is outside 0 .. 10"),
+            ));
+        }
+        self.with(py, move |r| {
+            r.set_repeats(n as u8);
+            Ok(())
+        })
+    }
+
+    /// How often a request whose reply was lost is sent again (``set_repeats``).
+    fn repeats(&self, py: Python<'_>) -> PyResult<u8> {
+        self.with(py, |r| Ok(r.repeats()))
     }
 
     /// Know the commands described in a TOML file (docs/extending.md), for ``call``.

@@ -3,6 +3,7 @@ every exception class with its code, threads, Ctrl-C, numpy and list inputs."""
 
 from __future__ import annotations
 
+import array
 import math
 import os
 import signal
@@ -118,6 +119,9 @@ def test_lists_tuples_and_numpy_arrays_are_accepted(sim_robot: trol.Robot, joint
         np.array([True, False]),
         [0.1, "0.2"],
         [0.1, None],
+        memoryview(b"abcdef"),
+        memoryview(bytearray(b"abcdef")),
+        array.array("b", [1, 2, 3]),
     ],
 )
 def test_values_that_are_not_real_numbers_are_refused_and_nothing_moves(
@@ -156,6 +160,10 @@ def test_refused_calls_raise_refused_error_with_the_code_and_its_name(robot: tro
         lambda r: r.speed(151),
         lambda r: r.home(7),
         lambda r: r.joint(7, 0.1),
+        lambda r: r.joint(True, 0.1),
+        lambda r: r.joint(1, True),
+        lambda r: r.speed(True),
+        lambda r: r.call("TROLJoint", True, 0.1),
         lambda r: r.ma([0.0] * 7),
         lambda r: r.ma([]),
         lambda r: r.ma("abc"),
@@ -394,6 +402,15 @@ def test_added_commands_are_called_by_name() -> None:
     finally:
         proc.kill()
         proc.wait()
+
+
+def test_repeats_can_be_turned_off(sim_robot: trol.Robot) -> None:
+    assert sim_robot.repeats() == 2
+    sim_robot.set_repeats(0)
+    assert sim_robot.repeats() == 0
+    with pytest.raises(trol.ArgumentError):
+        sim_robot.set_repeats(11)
+    assert sim_robot.repeats() == 0
 
 
 def test_version_and_watchdog(sim_robot: trol.Robot) -> None:

@@ -348,6 +348,20 @@ impl<P: Port, B: Backend> Controller<P, B> {
                         return Err(e);
                     }
                 };
+                // A request refused unrun (a repeat this controller cannot place, or the
+                // LRC's duplicate): the log names it and its answer, not the one before.
+                if matches!(
+                    ev,
+                    ServerEvent::UnknownRepeat | ServerEvent::SuspectDuplicate
+                ) {
+                    self.last = (
+                        self.server.request().to_vec(),
+                        trol_proto::application::Reply::Code(
+                            trol_proto::application::code::TROL_ERR_ROBOT_UNSURE,
+                        )
+                        .encode(),
+                    );
+                }
                 // A request that arrived whole feeds the watchdog; noise on the line does not.
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::ReceiveFailed(_)) || self.ran {
                     self.last_seen = Instant::now();

@@ -1695,3 +1695,64 @@ fn no_call_waits_more_than_3_s_for_a_dead_controller() {
         assert!(back.is_ok(), "{how:?}: the next call: {back:?}");
     }
 }
+
+/// A repeat that reaches a controller which remembers no request (it restarted after the
+/// host first sent it) is refused unrun, and the controller's log names that request and
+/// its answer (it said `undecodable request []`, the entry of no request, issue 38); the
+/// answer's text says the controller cannot tell whether it ran, not that a link to the
+/// robot was lost.
+#[test]
+fn a_refused_repeat_is_logged_by_its_own_name() {
+    use trol_comm::{Driver, receive_data, send_data};
+    use trol_controller::{Controller, Mode};
+    let (host, ctl) = trol_port::memory::pair(None);
+    let mut controller = Controller::new(
+        ctl,
+        LinkConfig::default(),
+        Pcp::new(SimBackend::new(settings())),
+        Mode::Server,
+    );
+    let logged = Arc::new(std::sync::Mutex::new(Vec::new()));
+    let keep = logged.clone();
+    controller.set_log(Box::new(move |e| {
+        keep.lock().unwrap().push(format!(
+            "{} -> {}",
+            e.catalog.request_text(e.request),
+            e.catalog
+                .reply_text(e.request, e.reply, trol_sim::SIM_CODES)
+        ));
+    }));
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let server = std::thread::spawn(move || controller.run(&flag));
+    let mut driver = Driver::new(host);
+    let mut link = trol_proto::Link::new(LinkConfig::default());
+    // TROLJoint(1, 0.25), marked REPEAT under number 7.
+    let joint = trol_proto::application::record::encode(
+        &trol::table::JOINT,
+        &[trol::Value::Int(1), trol::Value::Real(0.25)],
+    )
+    .unwrap();
+    send_data(&mut driver, &mut link, &joint, 0x0107).unwrap();
+    let (_, reply) = receive_data(&mut driver, &mut link, Duration::from_secs(10)).unwrap();
+    assert_eq!(reply, Reply::Code(TROL_ERR_ROBOT_UNSURE).encode());
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while logged.lock().unwrap().is_empty() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    stop.store(true, Ordering::SeqCst);
+    let _ = server.join();
+    let log = logged.lock().unwrap().join("\n");
+    assert!(
+        log.starts_with("TROLJoint 1 0.25 -> -32054 (TROL_ERR_ROBOT_UNSURE)"),
+        "{log}"
+    );
+    assert!(!log.contains("undecodable"), "{log}");
+    let meaning = TROL_ERR_ROBOT_UNSURE
+        .meaning(trol_sim::SIM_CODES)
+        .unwrap_or_default();
+    assert!(
+        meaning.contains("cannot tell whether the command ran"),
+        "{meaning}"
+    );
+}

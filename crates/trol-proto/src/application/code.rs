@@ -102,8 +102,10 @@ pub const TROL_CODES: &CodeTable = &[
     CodeInfo {
         value: TROL_ERR_ROBOT_UNSURE.0,
         name: "TROL_ERR_ROBOT_UNSURE",
-        meaning: "the controller lost its link to the robot after the command was sent: it \
-                  may have run (GetStatus reports the BIOS as called); check the position",
+        meaning: "the controller cannot tell whether the command ran (its link to the robot \
+                  failed after the command was sent, or the request came again after the \
+                  controller restarted or with its repeat mark damaged): check the position \
+                  before sending it again",
     },
     CodeInfo {
         value: TROL_RETVAL_RANGE.0,

@@ -1165,8 +1165,13 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         if !ok {
             return INITTROL_FAILURE;
         }
-        if let Some(notice) = robot.take_notice() {
-            eprintln!("InitTROL: note: {notice}");
+        if let Some(notice) = robot.take_notice()
+            && trol_client::notice_due("InitTROL", &cfg.port, &notice)
+        {
+            eprintln!(
+                "InitTROL: note: {notice} (said once for this port; TROL_VERBOSE=1 says it at \
+                 every start)"
+            );
         }
         // The application's handlers from now on: InitTROL's own probes (is a server there,
         // which version, which codes; the activation) are not the application's calls, and a
@@ -1586,8 +1591,13 @@ pub unsafe extern "C" fn trol_connect(port: *const std::ffi::c_char, baud: TLONG
                 return connect_failed(format!("trol_connect({name}): {e}"), kind, versions);
             }
         };
-        if let Some(notice) = robot.take_notice() {
-            eprintln!("trol_connect({name}): note: {notice}");
+        if let Some(notice) = robot.take_notice()
+            && trol_client::notice_due("trol_connect", name, &notice)
+        {
+            eprintln!(
+                "trol_connect({name}): note: {notice} (said once for this port; TROL_VERBOSE=1 \
+                 says it at every start)"
+            );
         }
         let fresh = FRESH;
         let handlers = CHandlers::of(fresh.callbacks, &robot);

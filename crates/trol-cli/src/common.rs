@@ -108,8 +108,13 @@ impl Conn {
         // this protocol version, and tells its BIOS codes. The embedded controller starts in
         // server mode with the tool of trol.cfg, and answers the same.
         trol::check_server(&mut robot).map_err(|e| e.to_string())?;
-        if let Some(notice) = robot.take_notice() {
-            crate::tell!("trol: note: {notice}");
+        if let Some(notice) = robot.take_notice()
+            && trol::notice_due("trol", &cfg.port, &notice)
+        {
+            crate::tell!(
+                "trol: note: {notice} (said once for this port; TROL_VERBOSE=1 says it at every \
+                 start)"
+            );
         }
         tracing::info!(port = %cfg.port, baud = cfg.baud, "connected");
         Ok((robot, cfg))

@@ -1541,17 +1541,22 @@ fn a_1998_controller_runs_1998_programs_with_the_manuals_trol_cfg() {
                 &format!("{name}-1998-{pci}"),
                 cbuild::Link::Static,
             );
+            // The note once per port (a cache folder of this test's own), not at every
+            // start of a 1998 program.
             let run = cbuild::program(&exe)
                 .current_dir(&dir)
                 .env_remove("TROL_CONFIG")
+                .env_remove("TROL_VERBOSE")
+                .env("XDG_CACHE_HOME", dir.join("cache"))
                 .output()
                 .unwrap();
             let (out, err) = text(&run);
             assert!(run.status.success(), "{name}: {out}\n{err}");
             assert!(out.contains(done), "{out}");
-            assert!(
+            assert_eq!(
                 err.contains("InitTROL: note: the controller speaks only the manual's"),
-                "{err}"
+                name == "pick",
+                "{name}: {err}"
             );
         }
         let log = sim.output_until("TROLDepart", 1, 30).join("\n");

@@ -324,3 +324,40 @@ fn type_line(robot: &mut Robot, line: &str, answer: &str) -> Result<Typed> {
         seen.extend_from_slice(&buf[..n]);
     }
 }
+
+/// Whether a program should print the connection's notice `notice` for `port` now: once per
+/// program (`surface`, e.g. `InitTROL`) and port on this machine, so that a 1998 program
+/// that starts many times a day is told what its controller costs it the first time, not at
+/// every start; always with `TROL_VERBOSE` set (to anything but 0) or where no cache folder
+/// can keep the mark ($XDG_CACHE_HOME/trol or ~/.cache/trol, a file per notice).
+pub fn notice_due(surface: &str, port: &str, notice: &str) -> bool {
+    if std::env::var("TROL_VERBOSE").is_ok_and(|v| !v.is_empty() && v != "0") {
+        return true;
+    }
+    let Some(dir) = std::env::var_os("XDG_CACHE_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| std::path::Path::new(&h).join(".cache")))
+        .map(|d| d.join("trol").join("notices"))
+    else {
+        return true;
+    };
+    // FNV-1a of what is noted: the same notice on the same port by the same program.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in surface
+        .bytes()
+        .chain([0])
+        .chain(port.bytes())
+        .chain([0])
+        .chain(notice.bytes())
+    {
+        h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+    }
+    let mark = dir.join(format!("{h:016x}"));
+    if mark.exists() {
+        return false;
+    }
+    // A mark that cannot be written: say it (and again next time).
+    let _ = std::fs::create_dir_all(&dir)
+        .and_then(|_| std::fs::write(&mark, format!("{surface}\n{port}\n{notice}\n")));
+    true
+}

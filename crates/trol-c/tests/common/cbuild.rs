@@ -106,7 +106,10 @@ fn compile_now(source: &Path, name: &str, link: Link) -> PathBuf {
 /// A command that runs a compiled program, finding libtrol.so.
 pub fn program(path: &Path) -> Command {
     let mut cmd = Command::new(path);
+    // Every notice at every start (as before notices were said once per port): a test's
+    // output does not depend on what an earlier run left in the cache folder.
     cmd.env("LD_LIBRARY_PATH", lib_dir())
-        .env_remove("TROL_CONFIG");
+        .env_remove("TROL_CONFIG")
+        .env("TROL_VERBOSE", "1");
     cmd
 }

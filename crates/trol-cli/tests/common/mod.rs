@@ -27,6 +27,8 @@ pub fn trol(dir: &Path, args: &[&str], stdin: &str) -> Output {
         .current_dir(dir)
         .env_remove("TROL_CONFIG")
         .env_remove("RUST_LOG")
+        // Every notice at every start: the output does not depend on the cache folder.
+        .env("TROL_VERBOSE", "1")
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

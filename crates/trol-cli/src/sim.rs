@@ -100,7 +100,8 @@ pub struct SimArgs {
     /// colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
     /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
     /// nul-after-digit, no-echo, not-homed. With --mars (docs/mars.md): default, echo,
-    /// noise, moving-lag, refusal-line, refusal-error-bit, stop-latches, lf-only, r-blocks.
+    /// noise, moving-lag, refusal-line, refusal-error-bit, stop-latches, lf-only, r-blocks,
+    /// gripper-moving.
     #[arg(long, value_name = "NAME")]
     variant: Option<String>,
     /// With --rapl or --mars: print the profile that describes this simulated controller

@@ -91,6 +91,7 @@ pick_on_variants! {
     pick_stop_latches => "stop-latches",
     pick_lf_only => "lf-only",
     pick_r_blocks => "r-blocks",
+    pick_gripper_moving => "gripper-moving",
 }
 
 #[test]

@@ -705,14 +705,18 @@ impl MarsBackend {
             .map_err(|_| BackendError::Unsure(format!("AP{axis}={v}: not a number")))
     }
 
-    fn gripper_step(&mut self) -> Result<bool, BackendError> {
+    /// Whether the fingers still move; `unit_moving`: the unit's moving bit now. The
+    /// fingers have arrived only once they are at their target *and* the unit says nothing
+    /// moves (it still drove them for a moment after they came within 10 units, and a
+    /// motion sent then was refused BIOS_BUSY); or they stalled on an object.
+    fn gripper_step(&mut self, unit_moving: bool) -> Result<bool, BackendError> {
         let Some(w) = self.gripper.clone() else {
             return Ok(false);
         };
         let axis = self.gripper_axis();
         let p = self.read_gripper()?;
         let now = self.now();
-        let arrived = (p - w.target).abs() <= 10.0;
+        let arrived = (p - w.target).abs() <= 10.0 && !unit_moving;
         let stalled = match w.last {
             Some((lp, lt)) if now - lt >= 0.2 => (p - lp).abs() < 50.0 * (now - lt) / 0.2,
             _ => false,
@@ -801,7 +805,7 @@ impl Backend for MarsBackend {
             }
             return Ok(false);
         }
-        let grip = self.gripper_step()?;
+        let grip = self.gripper_step(s & st::MOVING != 0)?;
         let Some(m) = self.motion.clone() else {
             return Ok(grip);
         };

@@ -48,6 +48,9 @@ pub struct Switches {
     pub lf_only: bool,
     /// R: holds every later command until it is answered.
     pub r_blocks: bool,
+    /// The moving bit is up while the gripper axis moves too (the public sources do not say
+    /// whether `ST?`'s moving bit covers it).
+    pub gripper_moving: bool,
 }
 
 impl Default for Switches {
@@ -60,6 +63,7 @@ impl Default for Switches {
             stop_latches: false,
             lf_only: false,
             r_blocks: false,
+            gripper_moving: false,
         }
     }
 }
@@ -86,6 +90,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "r-blocks",
         "R: holds every later command until it is answered",
+    ),
+    (
+        "gripper-moving",
+        "the moving bit is up while the gripper moves too",
     ),
 ];
 
@@ -115,6 +123,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         "lf-only" => Switches { lf_only: true, ..d },
         "r-blocks" => Switches {
             r_blocks: true,
+            ..d
+        },
+        "gripper-moving" => Switches {
+            gripper_moving: true,
             ..d
         },
         _ => return None,
@@ -382,6 +394,9 @@ impl Mars8 {
         let lagging = (t - self.last_motion_cmd) * 1000.0 / self.scale.max(1e-9)
             < self.sw.moving_lag_ms as f64;
         if self.axes_moving(t) && !lagging {
+            s |= st::MOVING;
+        }
+        if self.sw.gripper_moving && !self.gripper.done(t) {
             s |= st::MOVING;
         }
         if self.queue.len() >= QUEUE {

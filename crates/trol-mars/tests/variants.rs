@@ -215,6 +215,21 @@ fn the_variant(name: &str) {
         "{name}: {g:?}"
     );
     twin.with(|u| u.set_object(None));
+    // Open, Finish, then a motion, as a 1998 program does (issue 38: the motion was refused
+    // BIOS_BUSY now and then, Finish having taken the fingers as arrived while the unit
+    // still drove them).
+    let here = twin.joints();
+    let mut there = here;
+    there[0] += 0.05;
+    for i in 0..6 {
+        assert_eq!(code(r.open_gripper(50)), 0, "{name}: open {i}");
+        assert_eq!(code(r.finish()), 0, "{name}: finish {i}");
+        assert_eq!(code(r.ma(&there)), 0, "{name}: ma {i}");
+        assert_eq!(code(r.close_gripper(50)), 0, "{name}: close {i}");
+        assert_eq!(code(r.finish()), 0, "{name}: finish {i}");
+        assert_eq!(code(r.ma(&here)), 0, "{name}: ma after close {i}");
+        assert_eq!(code(r.finish()), 0, "{name}: finish after ma {i}");
+    }
 
     // Halt mid-motion: the arm stops short; nothing reports the motion as done. (At 2 %
     // speed the motion takes seconds, so the Halt finds it under way on a busy machine.)

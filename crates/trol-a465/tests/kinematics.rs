@@ -206,3 +206,45 @@ fn the_public_models_match_trols_joints_with_the_documented_signs() {
         "the values as they are miss: {worst_as_is} mm"
     );
 }
+
+/// docs/a465.md and docs/mars.md: CTU's flange frame (ctu_crs's DH, its joints TROL's with
+/// J2, J3, J5 negated) is TROL's turned by Ry(90 deg) about its own y axis, R_CTU = R_TROL
+/// Ry(90 deg), at every pose (1,000 random ones); the docs said 180 deg about the flange's
+/// normal (issue 38). With ctu_crs's own base length (d1 = 305.2 mm against TROL's 330.2) a
+/// point's z in CTU's frame is TROL's minus 25 mm.
+#[test]
+fn ctus_flange_frame_is_trols_turned_90_deg_about_y() {
+    let k = Kinematics::new([0.0; 6]);
+    let mut rng = ChaCha8Rng::seed_from_u64(90);
+    let r = f64::to_radians;
+    let ry90 = glam::DMat3::from_rotation_y(r(90.0));
+    for _ in 0..1000 {
+        let q = random_joints(&mut rng);
+        let p = k.fk(&q);
+        let ctu = [q[0], -q[1], -q[2], q[3], -q[4], q[5]];
+        let off = [0.0, r(-270.0), r(-90.0), 0.0, 0.0, 0.0];
+        let alpha = [r(90.0), 0.0, r(270.0), r(90.0), r(270.0), 0.0];
+        // ctu_crs's own lengths: d1 305.2 mm.
+        let d = [305.2, 0.0, 0.0, 330.2, 0.0, 76.2];
+        let a = [0.0, 304.8, 0.0, 0.0, 0.0, 0.0];
+        let mut t: M4 = std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j)));
+        for i in 0..6 {
+            t = mul(&t, &dh(ctu[i] + off[i], d[i], a[i], alpha[i]));
+        }
+        let rot = glam::DMat3::from_cols_array_2d(&[
+            [t[0][0], t[1][0], t[2][0]],
+            [t[0][1], t[1][1], t[2][1]],
+            [t[0][2], t[1][2], t[2][2]],
+        ]);
+        let want = p.rot * ry90;
+        let off_rot = (0..3)
+            .map(|c| (rot.col(c) - want.col(c)).length())
+            .fold(0.0, f64::max);
+        assert!(off_rot < 1e-9, "{q:?}: {off_rot}");
+        let pos = glam::DVec3::new(t[0][3], t[1][3], t[2][3]);
+        assert!(
+            (pos - (p.pos - glam::DVec3::new(0.0, 0.0, 25.0))).length() < 1e-9,
+            "{q:?}"
+        );
+    }
+}

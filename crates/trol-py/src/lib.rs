@@ -433,7 +433,7 @@ impl Robot {
             ));
         }
         let port = port.to_string();
-        let robot = py.detach(|| trol::Robot::open(&port, baud.unwrap_or(9600)));
+        let robot = py.detach(|| trol::Robot::open_unchecked(&port, baud.unwrap_or(9600)));
         connected(py, robot, check)
     }
 

@@ -335,9 +335,18 @@ fn not_built(port: &str, feature: &str, what: &str) -> Error {
 impl Robot {
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
-    /// with default settings. Nothing is sent: [`Robot::connect`] also checks the controller,
-    /// and [`crate::activate`] starts a controller's server first (InitTROL(0), `trol init`).
+    /// with default settings, and check the controller as every surface does: the same as
+    /// [`Robot::connect`] (it skipped the check once, so that a program that opened a
+    /// connection this way never learnt the controller's version, codes or reply time).
     pub fn open(port: &str, baud: u32) -> Result<Robot> {
+        Robot::connect(port, baud)
+    }
+
+    /// Open the port and send nothing: for a tool that activates a controller in terminal
+    /// mode first ([`crate::activate`]: InitTROL(0), `trol init`) or relays its bytes. The
+    /// connection learns nothing of its controller until [`crate::check_server`] runs:
+    /// without it, no repeats and the manual's reply timeout.
+    pub fn open_unchecked(port: &str, baud: u32) -> Result<Robot> {
         Robot::open_checked(port, baud, None)
     }
 
@@ -347,7 +356,7 @@ impl Robot {
     /// [`SetupError::Incompatible`]) and the controller's BIOS codes (GetCodes, for
     /// [`Robot::codes`]).
     pub fn connect(port: &str, baud: u32) -> Result<Robot> {
-        let mut robot = Robot::open(port, baud)?;
+        let mut robot = Robot::open_unchecked(port, baud)?;
         crate::check_server(&mut robot)?;
         Ok(robot)
     }
@@ -359,13 +368,13 @@ impl Robot {
         Ok(robot)
     }
 
-    /// Like [`Robot::open`], with the link's block check (`check` in trol.cfg): no fallback
-    /// to the manual's LRC.
+    /// Like [`Robot::open_unchecked`], with the link's block check (`check` in trol.cfg): no
+    /// fallback to the manual's LRC.
     pub fn open_with(port: &str, baud: u32, check: BlockCheck) -> Result<Robot> {
         Robot::open_checked(port, baud, Some(check))
     }
 
-    /// [`Robot::open`] with the block check trol.cfg names, if any: without one, CRC-16,
+    /// [`Robot::open_unchecked`] with the block check trol.cfg names, if any: without one, CRC-16,
     /// and the manual's LRC if the controller refuses every CRC-16 block at first contact
     /// and takes LRC ones (a controller that speaks only the manual's protocol).
     pub fn open_checked(port: &str, baud: u32, check: Option<BlockCheck>) -> Result<Robot> {

@@ -254,7 +254,8 @@ TUINT TransSR(SInData *req, SOutData *resp);
  * inside a handler they work on the line of the failed transaction, elsewhere on the
  * connection's. ReceiveData's out->data stays valid until the next ReceiveData on this
  * thread. SendData and ReceiveData return 0 or the layer-2 code (0x00FF: the port failed;
- * 0x0081 ERR_TIMEOUT_SOH from ReceiveData: no message started within the reply timeout). */
+ * 0x0081 ERR_TIMEOUT_SOH from ReceiveData: no message started within the reply timeout;
+ * 0x00FF at once, and nothing received, when out or PCI is NULL). */
 TUINT SendData(SInData *in, TUINT PCI);
 TUINT ReceiveData(SOutData *out, TUINT *PCI);
 TBOOL BufferEmpty(void);              /* 1: no byte waits in the input */

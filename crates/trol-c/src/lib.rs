@@ -1300,10 +1300,14 @@ unsafe fn hand_out(
 pub unsafe extern "C" fn TransSR(req: *mut SInData, resp: *mut SInData) -> TUINT {
     guard(TransCode::ErrSend as TUINT, || {
         note_comm(None);
+        // TRANS_ERR_SEND: nothing was sent (the manual's codes have no other for it); the
+        // reason on stderr.
         let Some(request) = (unsafe { bytes_of(req) }) else {
+            eprintln!("TransSR: req is NULL (or its data): nothing sent");
             return TransCode::ErrSend as TUINT;
         };
         if resp.is_null() {
+            eprintln!("TransSR: resp is NULL: nothing sent");
             return TransCode::ErrSend as TUINT;
         }
         let result = {
@@ -1381,7 +1385,13 @@ pub unsafe extern "C" fn SendData(in_: *mut SInData, PCI: TUINT) -> TUINT {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn ReceiveData(out: *mut SInData, PCI: *mut TUINT) -> TUINT {
     guard(trol_comm::PORT_FAILED, || {
-        if out.is_null() {
+        // Both are the manual's outputs: a NULL one is refused at once (it used to wait
+        // for a message it could not hand over).
+        if out.is_null() || PCI.is_null() {
+            eprintln!(
+                "ReceiveData: {} is NULL: nothing received",
+                if out.is_null() { "out" } else { "PCI" }
+            );
             return trol_comm::PORT_FAILED;
         }
         match on_line(|l| l.receive_data()).unwrap_or(Err(trol_comm::PORT_FAILED)) {

@@ -629,3 +629,21 @@ fn fatal_error_has_a_default_the_manuals_extension_code_links_against() {
         assert!(out.contains("MyMoveNowhere -> -32102"), "{link:?}: {out}");
     }
 }
+
+/// NULL where the manual's layer functions write their results is refused at once (issue
+/// 38): ReceiveData(&out, NULL) waited 15 s; each says why on stderr; the next call works.
+#[test]
+fn null_results_are_refused_at_once() {
+    let text = run_c(
+        "null_args",
+        Link::Static,
+        &[("trol.cfg", "9600\nsim\n0 0 0 0 0 0\n")],
+        &[],
+    );
+    assert!(
+        text.contains("ReceiveData(&out, NULL) -> 0x00ff after 0.0 s"),
+        "{text}"
+    );
+    assert!(text.contains("TransSR(NULL, &resp) -> 1"), "{text}");
+    assert!(text.contains("TROLSpeed(50) -> 0"), "{text}");
+}

@@ -766,7 +766,30 @@ impl MarsBackend {
     }
 
     fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
+        // A precision point given here is the unit's IRC counts (what GetPosition(POS_PREC)
+        // answers); the arm model plans in the A465 controller's.
+        if let Target::Location(Location::Prec(irc)) = t {
+            let loc = Location::Prec(self.irc_to_a465(irc).to_vec());
+            return trol_controller::arm_target(&self.planner, &Target::Location(loc));
+        }
         trol_controller::arm_target(&self.planner, t)
+    }
+
+    /// The unit's IRC counts (missing ones 0) as the A465 controller's encoder counts, which
+    /// the arm model and TROL's location table keep.
+    fn irc_to_a465(&self, irc: &[i32]) -> [i32; 6] {
+        let c: [f64; 6] = std::array::from_fn(|i| f64::from(irc.get(i).copied().unwrap_or(0)));
+        joints_to_counts(&self.profile.irc_to_joints(&c))
+    }
+
+    /// The A465 controller's counts as the unit's IRC counts.
+    fn a465_to_irc(&self, counts: &[i32]) -> Vec<i32> {
+        let c: [f64; 6] = std::array::from_fn(|i| f64::from(counts.get(i).copied().unwrap_or(0)));
+        let q = trol_a465::model::counts_to_joints(&c);
+        self.profile
+            .joints_to_irc(&q)
+            .map(|v| v.round() as i32)
+            .to_vec()
     }
 }
 
@@ -928,13 +951,23 @@ impl Backend for MarsBackend {
         Ok(self.planner.set_speed(f64::from(percent)))
     }
     fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
-        trol_controller::table::define(&mut self.planner, name, loc)
+        let loc = match loc {
+            Location::Prec(irc) => Location::Prec(self.irc_to_a465(irc).to_vec()),
+            other => other.clone(),
+        };
+        trol_controller::table::define(&mut self.planner, name, &loc)
     }
     fn delete_location(&mut self, name: LocName) -> BiosResult {
         trol_controller::table::delete(&mut self.planner, name)
     }
     fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
-        Ok(trol_controller::table::list(&self.planner))
+        Ok(trol_controller::table::list(&self.planner)
+            .into_iter()
+            .map(|(n, l)| match l {
+                Location::Prec(c) => (n, Location::Prec(self.a465_to_irc(&c))),
+                other => (n, other),
+            })
+            .collect())
     }
     fn save_locations(&mut self) -> BiosResult {
         trol_controller::table::save(&self.planner, self.locations_file.as_deref())
@@ -949,7 +982,14 @@ impl Backend for MarsBackend {
         };
         Ok(match tag {
             Tag::Joint => Location::from_array6(Tag::Joint, q),
-            Tag::Prec => Location::Prec(joints_to_counts(&q).to_vec()),
+            // The unit's own counts (the A465 controller's were answered before, which a
+            // MARS 8 has none of).
+            Tag::Prec => Location::Prec(
+                self.profile
+                    .joints_to_irc(&q)
+                    .map(|v| v.round() as i32)
+                    .to_vec(),
+            ),
             Tag::Cart => Location::from_array6(Tag::Cart, self.planner.kinematics().fk_xyzypr(&q)),
         })
     }

@@ -151,6 +151,39 @@ fn the_variant(name: &str) {
     );
     let got = r.position(Tag::Joint, PosMode::Actual).unwrap().to_array6();
     assert!(near(&got, &q1, 2e-3), "{name}: {got:?}");
+    // A precision point is the unit's own IRC counts (issue 38: the A465 controller's were
+    // answered), and one given back is where the arm goes.
+    let irc = r.position(Tag::Prec, PosMode::Actual).unwrap().to_array6();
+    let want = p.joints_to_irc(&twin.joints());
+    assert!(near(&irc, &want, 1.5), "{name}: {irc:?} for {want:?}");
+    let q2 = [0.2, 0.1, 0.8, -0.3, 0.5, 0.4];
+    let target: Vec<i32> = p.joints_to_irc(&q2).map(|v| v.round() as i32).to_vec();
+    assert_eq!(
+        code(r.move_ii(&Location::Prec(target.clone()), false)),
+        0,
+        "{name}"
+    );
+    assert_eq!(code(r.finish()), 0, "{name}");
+    assert!(
+        near(&twin.joints(), &q2, 2e-3),
+        "{name}: {:?}",
+        twin.joints()
+    );
+    assert_eq!(
+        code(r.define("#pp", &Location::Prec(target.clone()))),
+        0,
+        "{name}"
+    );
+    let listed = r.locations().unwrap();
+    let pp = listed
+        .iter()
+        .find(|(n, _)| n.as_str() == "#pp")
+        .map(|(_, l)| l.to_array6());
+    let back = pp.unwrap_or([f64::NAN; 6]);
+    let sent: [f64; 6] = std::array::from_fn(|i| f64::from(target[i]));
+    assert!(near(&back, &sent, 1.5), "{name}: {back:?} for {sent:?}");
+    assert_eq!(code(r.ma(&q1)), 0, "{name}");
+    assert_eq!(code(r.finish()), 0, "{name}");
 
     // A straight line to a cartesian location: the tool stays on the line.
     let kin = Kinematics::default();

@@ -138,16 +138,23 @@ fn dh(theta: f64, d: f64, a: f64, alpha: f64) -> M4 {
 /// The flange of CTU's DH table (ctu_crs: offsets 0, -270, -90, 0, 0, 0 deg; alpha 90, 0,
 /// 270, 90, 270, 0 deg), with TROL's lengths, in mm.
 fn ctu_flange(q: &[f64; 6]) -> [f64; 3] {
+    let t = ctu_frame(q, 330.2);
+    [t[0][3], t[1][3], t[2][3]]
+}
+
+/// The flange frame of CTU's DH table with its base length `d1` (TROL's 330.2 mm, or
+/// ctu_crs's own 305.2).
+fn ctu_frame(q: &[f64; 6], d1: f64) -> M4 {
     let r = f64::to_radians;
     let off = [0.0, r(-270.0), r(-90.0), 0.0, 0.0, 0.0];
     let alpha = [r(90.0), 0.0, r(270.0), r(90.0), r(270.0), 0.0];
-    let d = [330.2, 0.0, 0.0, 330.2, 0.0, 76.2];
+    let d = [d1, 0.0, 0.0, 330.2, 0.0, 76.2];
     let a = [0.0, 304.8, 0.0, 0.0, 0.0, 0.0];
     let mut t: M4 = std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j)));
     for i in 0..6 {
         t = mul(&t, &dh(q[i] + off[i], d[i], a[i], alpha[i]));
     }
-    [t[0][3], t[1][3], t[2][3]]
+    t
 }
 
 /// The flange of the public ROS 2 URDF's chain (AlfZuck1/ROS2-Workspace-CRSA465: joint axes
@@ -222,15 +229,8 @@ fn ctus_flange_frame_is_trols_turned_90_deg_about_y() {
         let q = random_joints(&mut rng);
         let p = k.fk(&q);
         let ctu = [q[0], -q[1], -q[2], q[3], -q[4], q[5]];
-        let off = [0.0, r(-270.0), r(-90.0), 0.0, 0.0, 0.0];
-        let alpha = [r(90.0), 0.0, r(270.0), r(90.0), r(270.0), 0.0];
         // ctu_crs's own lengths: d1 305.2 mm.
-        let d = [305.2, 0.0, 0.0, 330.2, 0.0, 76.2];
-        let a = [0.0, 304.8, 0.0, 0.0, 0.0, 0.0];
-        let mut t: M4 = std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j)));
-        for i in 0..6 {
-            t = mul(&t, &dh(ctu[i] + off[i], d[i], a[i], alpha[i]));
-        }
+        let t = ctu_frame(&ctu, 305.2);
         let rot = glam::DMat3::from_cols_array_2d(&[
             [t[0][0], t[1][0], t[2][0]],
             [t[0][1], t[1][1], t[2][1]],

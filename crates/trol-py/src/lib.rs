@@ -158,7 +158,10 @@ fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f6
     // reals is taken.
     for attr in ["format", "typecode"] {
         if let Ok(code) = obj.getattr(attr).and_then(|f| f.extract::<String>())
-            && !matches!(code.trim_start_matches(['@', '=', '<', '>', '!']), "d" | "f" | "e")
+            && !matches!(
+                code.trim_start_matches(['@', '=', '<', '>', '!']),
+                "d" | "f" | "e"
+            )
         {
             return Err(bad(format!("a {} of format {code:?}", type_name(obj))));
         }
@@ -198,40 +201,40 @@ fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f6
     Ok(out)
 }
 
-/// A whole number argument. A bool is refused: `joint(True, 0.1)` moved joint 1.
-fn whole(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<u16> {
-    use pyo3::types::PyBool;
-    let got = obj
-        .get_type()
-        .name()
-        .map(|n| n.to_string())
-        .unwrap_or_default();
-    if obj.is_instance_of::<PyBool>() {
-        return Err(argument_error(
-            py,
-            format!("{what}: expected a whole number, got a bool"),
-        ));
-    }
-    obj.extract::<u16>()
-        .map_err(|_| argument_error(py, format!("{what}: expected a whole number, got {got}")))
+/// A number argument of type `T` (`kind` says which, for the message). A bool is refused:
+/// Python counts it as an int, and `joint(True, 0.1)` moved joint 1.
+fn number<'py, T: pyo3::conversion::FromPyObjectOwned<'py>>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    what: &str,
+    kind: &str,
+) -> PyResult<T> {
+    let got = if obj.is_instance_of::<pyo3::types::PyBool>() {
+        "a bool".to_string()
+    } else {
+        match obj.extract::<T>() {
+            Ok(v) => return Ok(v),
+            Err(_) => obj
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default(),
+        }
+    };
+    Err(argument_error(
+        py,
+        format!("{what}: expected {kind}, got {got}"),
+    ))
+}
+
+/// A whole number argument (not a bool).
+fn whole<'py>(py: Python<'py>, obj: &Bound<'py, PyAny>, what: &str) -> PyResult<u16> {
+    number(py, obj, what, "a whole number")
 }
 
 /// A real number argument (an int or a float; not a bool).
-fn real(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<f64> {
-    use pyo3::types::PyBool;
-    let got = obj
-        .get_type()
-        .name()
-        .map(|n| n.to_string())
-        .unwrap_or_default();
-    if obj.is_instance_of::<PyBool>() {
-        return Err(argument_error(
-            py,
-            format!("{what}: expected a number, got a bool"),
-        ));
-    }
-    obj.extract::<f64>()
-        .map_err(|_| argument_error(py, format!("{what}: expected a number, got {got}")))
+fn real<'py>(py: Python<'py>, obj: &Bound<'py, PyAny>, what: &str) -> PyResult<f64> {
+    number(py, obj, what, "a number")
 }
 
 fn is_precision(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<bool> {

@@ -961,6 +961,28 @@ impl RaplBackend {
         self.launch(m)
     }
 
+    /// A motion line whose end is computed from where the arm stands (JOINT, MI, JOG): now,
+    /// or when its turn comes ([`RaplBackend::relative`]); `end` gives its end from there.
+    fn relative_line(
+        &mut self,
+        line: String,
+        busy: bool,
+        end: impl FnOnce(&text::Position) -> Expect + Send + 'static,
+    ) -> BiosResult {
+        self.relative(
+            line.clone(),
+            busy,
+            Box::new(move |b| {
+                let p = match b.standing()? {
+                    Ok(p) => p,
+                    Err(c) => return Ok(c),
+                };
+                let expect = end(&p);
+                b.submit(Motion { line, expect }, false)
+            }),
+        )
+    }
+
     /// A relative motion: now, computed from where the arm stands, when it stands; queued
     /// and computed when its turn comes while another runs. `what` names it in the log.
     fn relative(&mut self, what: String, busy: bool, now: Later) -> BiosResult {
@@ -1893,18 +1915,9 @@ impl RaplBackend {
                 let expect = Expect::Joints(deg);
                 return b.submit(Motion { line, expect }, busy);
             }
-            b.relative(
-                line.clone(),
-                busy,
-                Box::new(move |b| {
-                    let p = match b.standing()? {
-                        Ok(p) => p,
-                        Err(c) => return Ok(c),
-                    };
-                    let expect = Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]));
-                    b.submit(Motion { line, expect }, false)
-                }),
-            )
+            b.relative_line(line, busy, move |p| {
+                Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]))
+            })
         })
     }
 }
@@ -2119,27 +2132,13 @@ impl Backend for RaplBackend {
             };
             let line = format!("JOG {}", join(&v));
             return self.motion_with(false, |b, busy| {
-                b.relative(
-                    line.clone(),
-                    busy,
-                    Box::new(move |b| {
-                        let p = match b.standing()? {
-                            Ok(p) => p,
-                            Err(c) => return Ok(c),
-                        };
-                        let mut w = p.world;
-                        for i in 0..3 {
-                            w[i] += v[i];
-                        }
-                        b.submit(
-                            Motion {
-                                line,
-                                expect: Expect::World(w),
-                            },
-                            false,
-                        )
-                    }),
-                )
+                b.relative_line(line, busy, move |p| {
+                    let mut w = p.world;
+                    for i in 0..3 {
+                        w[i] += v[i];
+                    }
+                    Expect::World(w)
+                })
             });
         }
         let what = format!("Jog {}", join(&d));
@@ -2166,25 +2165,11 @@ impl Backend for RaplBackend {
         let deg = radians.to_degrees();
         let line = format!("JOINT {joint},{}", text::num(deg));
         self.motion_with(false, |b, busy| {
-            b.relative(
-                line.clone(),
-                busy,
-                Box::new(move |b| {
-                    let p = match b.standing()? {
-                        Ok(p) => p,
-                        Err(c) => return Ok(c),
-                    };
-                    let mut q = p.joints;
-                    q[usize::from(joint - 1)] += deg;
-                    b.submit(
-                        Motion {
-                            line,
-                            expect: Expect::Joints(q),
-                        },
-                        false,
-                    )
-                }),
-            )
+            b.relative_line(line, busy, move |p| {
+                let mut q = p.joints;
+                q[usize::from(joint - 1)] += deg;
+                Expect::Joints(q)
+            })
         })
     }
     fn ma(&mut self, q: [f64; 6]) -> BiosResult {

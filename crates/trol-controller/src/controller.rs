@@ -258,6 +258,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
         if !self.tripped && self.last_seen.elapsed() >= limit {
             self.tripped = true;
             let halt = self.pcp.backend_mut().halt().map_err(|e| e.to_string());
+            self.pcp.halted_by_someone_else();
             self.pcp.backend_mut().after_request();
             self.trip = Some(WatchdogTrip { after: limit, halt });
         }

@@ -10,7 +10,7 @@
 //! when it is due. [`crate::Controller`] runs it behind layer 3.
 
 use trol_proto::application::code::{
-    Code, TROL_ERR_ARG_RANGE, TROL_ERR_ROBOT_UNSURE, TROL_RETVAL_RANGE,
+    Code, TROL_ERR_ARG_RANGE, TROL_ERR_HALTED, TROL_ERR_ROBOT_UNSURE, TROL_RETVAL_RANGE,
 };
 use trol_proto::application::record::Value;
 use trol_proto::application::table;
@@ -157,6 +157,13 @@ pub struct Pcp<B> {
     manual_only: bool,
     /// Requests run so far ([`Pcp::handle`] calls).
     handled: u64,
+    /// The request being handled came another way than the TROL line ([`Pcp::handle_aside`]).
+    aside: bool,
+    /// The host on the line started a motion that no Finish of its own has seen end.
+    open_motion: bool,
+    /// That motion was halted by someone else (the pendant, the watchdog): the host's next
+    /// Finish that finds the arm standing answers TROL_ERR_HALTED, once.
+    halted_aside: bool,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -183,6 +190,9 @@ impl<B: Backend> Pcp<B> {
             manual_host: false,
             manual_only: false,
             handled: 0,
+            aside: false,
+            open_motion: false,
+            halted_aside: false,
         };
         for def in table::BUILTIN {
             let handler = match def.class() {
@@ -309,7 +319,13 @@ impl<B: Backend> Pcp<B> {
     pub fn handle_aside(&mut self, request: &[u8]) -> Vec<u8> {
         let kept = self.status;
         let pending = self.pending;
-        let reply = match self.handle(request) {
+        self.aside = true;
+        let handled = self.handle(request);
+        self.aside = false;
+        if request.first() == Some(&table::HALT.code) {
+            self.halted_by_someone_else();
+        }
+        let reply = match handled {
             Handled::Reply(r) => r,
             Handled::Pending => {
                 Reply::Code(trol_proto::application::code::TROL_ERR_UNKNOWN).encode()
@@ -317,6 +333,44 @@ impl<B: Backend> Pcp<B> {
         };
         self.status = kept;
         self.pending = pending;
+        reply
+    }
+
+    /// The arm was halted by someone else than the host on the line (the pendant, the
+    /// watchdog): if the host has a motion under way, its next Finish that finds the arm
+    /// standing answers TROL_ERR_HALTED (issue 37: a Halt from anywhere is seen everywhere).
+    pub fn halted_by_someone_else(&mut self) {
+        if self.open_motion && !self.manual_only {
+            self.halted_aside = true;
+        }
+    }
+
+    /// Keep track of the host's motions: a motion opens, the host's own Halt or a Finish
+    /// that saw the arm standing closes. A Finish's success `reply` becomes TROL_ERR_HALTED
+    /// when someone else halted the motion (GetStatus says so too).
+    fn follow_motions(&mut self, code: u8, reply: Code) -> Code {
+        if self.aside || self.manual_only {
+            return reply;
+        }
+        if code == table::FINISH.code {
+            if reply == Code(0) {
+                self.open_motion = false;
+                if std::mem::take(&mut self.halted_aside) {
+                    self.status.transaction = self.status.current;
+                    self.status.bios_called = true;
+                    self.status.last_error_code = TROL_ERR_HALTED;
+                    return TROL_ERR_HALTED;
+                }
+            }
+        } else if code == table::HALT.code {
+            self.open_motion = false;
+            self.halted_aside = false;
+        } else if code != table::SPEED.code && code != table::SET_TOOL_TRANSFORM.code {
+            if reply == Code(0) {
+                self.open_motion = true;
+                self.halted_aside = false;
+            }
+        }
         reply
     }
 
@@ -349,7 +403,9 @@ impl<B: Backend> Pcp<B> {
         match handler {
             Handler::Cat1(h) => match h(&mut self.backend, &call) {
                 Ok(Executed::Now(v)) => {
-                    Handled::Reply(Reply::Code(self.status.record_bios(v)).encode())
+                    let value = self.status.record_bios(v);
+                    let value = self.follow_motions(def.code, value);
+                    Handled::Reply(Reply::Code(value).encode())
                 }
                 Ok(Executed::WhenIdle(v)) => {
                     let value = self.status.record_bios(v);
@@ -390,7 +446,7 @@ impl<B: Backend> Pcp<B> {
         let pending = self.pending?;
         let value = match self.backend.moving() {
             Ok(true) => return None,
-            Ok(false) => pending.value,
+            Ok(false) => self.follow_motions(table::FINISH.code, pending.value),
             Err(e) => {
                 self.status.record_refusal(e.code());
                 e.code()

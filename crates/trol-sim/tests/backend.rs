@@ -17,6 +17,8 @@ struct Recorder {
     sim: SimBackend,
     targets: Vec<Target>,
     broken: bool,
+    /// The arm keeps moving until a Halt (a long motion, whatever the simulation's speed).
+    hold: bool,
 }
 
 impl Recorder {
@@ -48,12 +50,13 @@ impl Backend for Recorder {
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
         self.link()?;
-        self.sim.moving()
+        Ok(self.hold || self.sim.moving()?)
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
         self.sim.grip(dist)
     }
     fn halt(&mut self) -> BiosResult {
+        self.hold = false;
         self.sim.halt()
     }
     fn home(&mut self, axis: u8) -> BiosResult {
@@ -109,6 +112,7 @@ fn server() -> Pcp<Recorder> {
         sim: SimBackend::new(settings),
         targets: Vec::new(),
         broken: false,
+        hold: false,
     })
 }
 
@@ -248,4 +252,66 @@ fn finish_wait_replies_only_when_the_arm_is_idle_without_blocking_the_server() {
     assert_eq!(pcp.handle(&request), Handled::Pending);
     pcp.backend_mut().broken = true;
     assert_eq!(pcp.poll(), Some(TROL_ERR_ROBOT.0.to_le_bytes().to_vec()));
+}
+
+/// A Halt from someone else than the host on the line (the pendant, through
+/// `handle_aside`) ends the host's Finish with TROL_ERR_HALTED, once, and GetStatus says so;
+/// the host's own Halt, a Halt with no motion of the host's under way, or a new motion after
+/// it leave Finish as it was.
+#[test]
+fn a_halt_from_the_pendant_ends_the_hosts_finish_as_halted_once() {
+    use trol_proto::application::code::TROL_ERR_HALTED;
+    let halt = record::encode(&table::HALT, &[]).unwrap();
+    let wait = record::encode(&table::FINISH, &[Value::Int(FINISH_WAIT)]).unwrap();
+    let status = |pcp: &mut Pcp<Recorder>| {
+        reply(pcp, &table::FINISH, &[Value::Int(table::FINISH_STATUS)])
+    };
+    let joint = |pcp: &mut Pcp<Recorder>| {
+        let r = reply(pcp, &table::JOINT, &[Value::Int(1), Value::Real(0.1)]);
+        assert_eq!(r, Reply::Code(Code(0)));
+        pcp.backend_mut().hold = true;
+    };
+    let mut pcp = server();
+
+    // Finish(FINISH_WAIT) pending while the pendant halts.
+    joint(&mut pcp);
+    assert_eq!(pcp.handle(&wait), Handled::Pending);
+    assert_eq!(pcp.poll(), None, "the arm still moves");
+    assert_eq!(pcp.handle_aside(&halt), [0, 0]);
+    assert_eq!(pcp.poll(), Some(TROL_ERR_HALTED.0.to_le_bytes().to_vec()));
+    match reply(&mut pcp, &table::GET_STATUS, &[]) {
+        Reply::Status { last, bios_called, .. } => {
+            assert_eq!(last, TROL_ERR_HALTED);
+            assert!(bios_called);
+        }
+        other => panic!("{other:?}"),
+    }
+    // Once: the next Finish is the ordinary one.
+    assert_eq!(status(&mut pcp), Reply::Code(Code(0)));
+
+    // Polled with FINISH_STATUS: 1 while moving, then the halt, once.
+    joint(&mut pcp);
+    assert_eq!(status(&mut pcp), Reply::Code(Code(1)));
+    assert_eq!(pcp.handle_aside(&halt), [0, 0]);
+    assert_eq!(status(&mut pcp), Reply::Code(TROL_ERR_HALTED));
+    assert_eq!(status(&mut pcp), Reply::Code(Code(0)));
+
+    // The host's own Halt: it knows; Finish answers 0.
+    joint(&mut pcp);
+    assert_eq!(reply(&mut pcp, &table::HALT, &[]), Reply::Code(Code(0)));
+    assert_eq!(status(&mut pcp), Reply::Code(Code(0)));
+
+    // A pendant Halt when the host's motion had already been seen to end: nothing to report.
+    joint(&mut pcp);
+    pcp.backend_mut().hold = false;
+    finish(&mut pcp);
+    assert_eq!(pcp.handle_aside(&halt), [0, 0]);
+    finish(&mut pcp);
+
+    // A new motion of the host's after the pendant's Halt: its own Finish is its own.
+    joint(&mut pcp);
+    assert_eq!(pcp.handle_aside(&halt), [0, 0]);
+    let r = reply(&mut pcp, &table::JOINT, &[Value::Int(1), Value::Real(-0.1)]);
+    assert_eq!(r, Reply::Code(Code(0)));
+    finish(&mut pcp);
 }

@@ -16,7 +16,9 @@
 //! each request ([`trol_sim::SimBackend::share`]); this server's threads compute
 //! the state from that copy and the simulation's clock. A client that stops reading is
 //! dropped once its socket's buffer is full and a write has waited a second; one that closes
-//! is noticed within a round; at most [`MAX_CLIENTS`] connections are served at once.
+//! is noticed within a round. Each kind of request has its own limit: [`MAX_CLIENTS`] for the
+//! page, its files and `/state`, [`MAX_STREAMS`] `/events` streams, and [`MAX_CONTROL`]
+//! pendant requests, so that no number of open pages keeps a Halt from the pendant out.
 //!
 //! With `--control`, the page is also a pendant that drives the arm ([`pendant`]); without
 //! it, nothing can be moved through the view.
@@ -50,9 +52,18 @@ pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
 /// How often a moving arm's state is sent.
 pub const EVENT_INTERVAL: Duration = Duration::from_millis(20);
 
-/// At most this many requests are answered at once (each page holds one event stream and
-/// opens a few more while it loads); more get 503.
+/// At most this many requests for the page, its files and `/state` are answered at once
+/// (a page opens a few while it loads); more get 503.
 pub const MAX_CLIENTS: usize = 32;
+
+/// At most this many `/events` streams are held open at once (one per open page); more get
+/// 503. Apart from [`MAX_CLIENTS`] and [`MAX_CONTROL`]: open pages never keep the page's
+/// files, nor the pendant, out.
+pub const MAX_STREAMS: usize = 32;
+
+/// At most this many pendant requests (`/control/...`) are answered at once, apart from every
+/// viewer: a Halt from the pendant never waits behind open pages (issue 37).
+pub const MAX_CONTROL: usize = 8;
 
 /// At most this many connections may be still sending their request's head; more are
 /// closed with 503 at once. Apart from [`MAX_CLIENTS`], so that connections that send nothing
@@ -283,7 +294,7 @@ pub fn serve_controlled(
     let local = listener.local_addr()?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let clients = Arc::new(AtomicUsize::new(0));
+    let clients = Arc::new(Slots::default());
     let frames = Arc::new(Frames::new(shared));
     let waiting = Arc::new(AtomicUsize::new(0));
     std::thread::Builder::new()
@@ -315,13 +326,14 @@ pub fn serve_controlled(
                         let Ok(head) = head else {
                             return;
                         };
-                        if count.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
-                            count.fetch_sub(1, Ordering::SeqCst);
+                        let (slots, max) = count.of(head.as_ref().map(|h| h.1.as_str()));
+                        if slots.fetch_add(1, Ordering::SeqCst) >= max {
+                            slots.fetch_sub(1, Ordering::SeqCst);
                             too_many(&mut conn);
                             return;
                         }
                         let _ = answer(conn, head, &shared, &flag, control.as_ref().as_ref());
-                        count.fetch_sub(1, Ordering::SeqCst);
+                        slots.fetch_sub(1, Ordering::SeqCst);
                     });
                 if spawned.is_err() {
                     waiting.fetch_sub(1, Ordering::SeqCst);
@@ -329,6 +341,29 @@ pub fn serve_controlled(
             }
         })?;
     Ok(ViewServer { addr: local, stop })
+}
+
+/// The requests answered now, by kind: each kind has its own limit.
+#[derive(Default)]
+struct Slots {
+    files: AtomicUsize,
+    streams: AtomicUsize,
+    control: AtomicUsize,
+}
+
+impl Slots {
+    /// The counter of a request for `path` and its limit.
+    fn of(&self, path: Option<&str>) -> (&AtomicUsize, usize) {
+        let path = path.unwrap_or("");
+        let bare = path.split('?').next().unwrap_or(path);
+        if bare == "/control" || bare.starts_with("/control/") {
+            (&self.control, MAX_CONTROL)
+        } else if bare == "/events" {
+            (&self.streams, MAX_STREAMS)
+        } else {
+            (&self.files, MAX_CLIENTS)
+        }
+    }
 }
 
 /// Turn a connection away: the server is full.

@@ -52,6 +52,13 @@ pub const TROL_ERR_ROBOT: Code = Code(-32053);
 /// The controller lost its link to the robot's firmware after the command was sent: it may
 /// have run, and GetStatus reports the BIOS as called (controller; not in the manual).
 pub const TROL_ERR_ROBOT_UNSURE: Code = Code(-32054);
+/// The controller sent every stop it has (for a C500: HALT, ABORT, Ctrl-C) and did not see
+/// the arm standing: it may still be moving (controller, Halt; not in the manual).
+pub const TROL_ERR_NOT_STOPPED: Code = Code(-32055);
+/// The motion this Finish waited for was halted by someone else (the pendant, another
+/// program on the controller, the watchdog): the arm stands short of its target
+/// (controller, Finish; not in the manual).
+pub const TROL_ERR_HALTED: Code = Code(-32056);
 /// The BIOS returned a value in TROL's range; GetStatus has the real one (controller, CAT1/2).
 pub const TROL_RETVAL_RANGE: Code = Code(-32101);
 /// The named location does not exist (controller, Move and Appro).
@@ -106,6 +113,18 @@ pub const TROL_CODES: &CodeTable = &[
                   failed after the command was sent, or the request came again after the \
                   controller restarted or with its repeat mark damaged): check the position \
                   before sending it again",
+    },
+    CodeInfo {
+        value: TROL_ERR_NOT_STOPPED.0,
+        name: "TROL_ERR_NOT_STOPPED",
+        meaning: "the controller sent every stop it has and did not see the arm standing: it \
+                  may still be moving; use the emergency stop",
+    },
+    CodeInfo {
+        value: TROL_ERR_HALTED.0,
+        name: "TROL_ERR_HALTED",
+        meaning: "the motion was halted by someone else (the pendant, another program, the \
+                  watchdog): the arm stands short of its target",
     },
     CodeInfo {
         value: TROL_RETVAL_RANGE.0,

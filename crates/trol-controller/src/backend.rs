@@ -80,6 +80,10 @@ pub enum BackendError {
     /// cannot read, for example.
     #[error("this controller cannot {0}")]
     Unsupported(&'static str),
+    /// Halt: every stop the controller has was sent, and the arm was not seen standing: it
+    /// may still be moving (TROL_ERR_NOT_STOPPED), with what the controller said.
+    #[error("the arm was not seen standing after every stop: {0}")]
+    NotStopped(String),
 }
 
 impl BackendError {
@@ -91,6 +95,7 @@ impl BackendError {
             BackendError::Unsure(_) => TROL_ERR_ROBOT_UNSURE,
             BackendError::Refused(v) => Code(*v),
             BackendError::Unsupported(_) => trol_proto::application::code::TROL_ERR_UNKNOWN,
+            BackendError::NotStopped(_) => trol_proto::application::code::TROL_ERR_NOT_STOPPED,
         }
     }
 }
@@ -127,7 +132,10 @@ pub trait Backend: Send {
     fn moving(&mut self) -> Result<bool, BackendError>;
     /// Set the finger distance, mm.
     fn grip(&mut self, dist: u8) -> BiosResult;
-    /// Stop all motion.
+    /// Stop all motion, and return success only once the arm is seen standing (issue 37): a
+    /// backend that drives a real controller reads the arm after its stop, tries the
+    /// controller's other stops where it is not standing, and answers
+    /// [`BackendError::NotStopped`] when none was seen to work.
     fn halt(&mut self) -> BiosResult;
     /// Start homing one axis (1..6) or all (0); the server replies once [`Backend::moving`]
     /// says it is done.

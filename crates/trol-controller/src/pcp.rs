@@ -133,10 +133,16 @@ pub enum RegisterError {
     Taken(#[from] CatalogError),
 }
 
+/// The longest a Halt from the pendant waits for the arm to stand before it answers
+/// TROL_ERR_NOT_STOPPED (the A465 brakes within 0.4 s).
+const HALT_ASIDE_LIMIT: std::time::Duration = std::time::Duration::from_secs(2);
+
 /// The reply a long call waits to send.
 #[derive(Clone, Copy, Debug)]
 struct Pending {
     value: Code,
+    /// The command whose reply waits (Finish(FINISH_WAIT), Halt).
+    code: u8,
 }
 
 /// The PCP server's layer 4 over a backend.
@@ -320,7 +326,24 @@ impl<B: Backend> Pcp<B> {
         let kept = self.status;
         let pending = self.pending;
         self.aside = true;
-        let handled = self.handle(request);
+        let mut handled = self.handle(request);
+        if handled == Handled::Pending && request.first() == Some(&table::HALT.code) {
+            // A Halt answers once the arm stands (the simulator's brakes for at most
+            // 0.4 s; a real controller's backend has seen it standing already).
+            let until = std::time::Instant::now() + HALT_ASIDE_LIMIT;
+            handled = loop {
+                if let Some(r) = self.poll() {
+                    break Handled::Reply(r);
+                }
+                if std::time::Instant::now() >= until {
+                    self.pending = None;
+                    break Handled::Reply(
+                        Reply::Code(trol_proto::application::code::TROL_ERR_NOT_STOPPED).encode(),
+                    );
+                }
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            };
+        }
         self.aside = false;
         if request.first() == Some(&table::HALT.code) {
             self.halted_by_someone_else();
@@ -365,11 +388,12 @@ impl<B: Backend> Pcp<B> {
         } else if code == table::HALT.code {
             self.open_motion = false;
             self.halted_aside = false;
-        } else if code != table::SPEED.code && code != table::SET_TOOL_TRANSFORM.code {
-            if reply == Code(0) {
-                self.open_motion = true;
-                self.halted_aside = false;
-            }
+        } else if code != table::SPEED.code
+            && code != table::SET_TOOL_TRANSFORM.code
+            && reply == Code(0)
+        {
+            self.open_motion = true;
+            self.halted_aside = false;
         }
         reply
     }
@@ -412,7 +436,10 @@ impl<B: Backend> Pcp<B> {
                     if !value.is_success() {
                         return Handled::Reply(Reply::Code(value).encode());
                     }
-                    self.pending = Some(Pending { value });
+                    self.pending = Some(Pending {
+                        value,
+                        code: def.code,
+                    });
                     match self.poll() {
                         Some(reply) => Handled::Reply(reply),
                         None => Handled::Pending,
@@ -446,7 +473,7 @@ impl<B: Backend> Pcp<B> {
         let pending = self.pending?;
         let value = match self.backend.moving() {
             Ok(true) => return None,
-            Ok(false) => self.follow_motions(table::FINISH.code, pending.value),
+            Ok(false) => self.follow_motions(pending.code, pending.value),
             Err(e) => {
                 self.status.record_refusal(e.code());
                 e.code()
@@ -577,7 +604,9 @@ fn builtin_cat1<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<Executed, Code> {
             .map(|m| Executed::Now(i16::from(m)))
             .map_err(Code::from),
         TROL_GRIP => now(b.grip(c.int(0)?)),
-        TROL_HALT => now(b.halt()),
+        // Answered once the arm stands: a backend of a real controller has seen it standing
+        // (issue 37), the simulator's arm brakes along its path first.
+        TROL_HALT => b.halt().map(Executed::WhenIdle).map_err(Code::from),
         // Answered at once: the host waits by polling FINISH_STATUS (as for a motion), so a
         // Halt from another thread gets through while the arm homes.
         TROL_HOME => now(b.home(c.int(0)?)),

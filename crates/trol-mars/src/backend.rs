@@ -94,6 +94,15 @@ pub static MARS_CODES: &CodeTable = &{
 
 /// How long a reply may take (a command at 19200 baud takes a few ms).
 pub const REPLY_LIMIT: Duration = Duration::from_secs(2);
+/// How long a stop may take to show on the unit: the A465's longest braking (0.4 s) and a
+/// margin for the reads.
+pub const STOP_WITHIN: Duration = Duration::from_millis(900);
+/// The gap between two `COORDAP?` reads that show the arm standing.
+pub const STILL_GAP: Duration = Duration::from_millis(250);
+/// How far a joint may move between two reads of a standing arm, degrees.
+pub const STILL_DEG: f64 = 0.02;
+/// The longest a Halt takes, both its stops included (within the reply time).
+pub const HALT_WITHIN: Duration = Duration::from_millis(2100);
 /// The unit's parameter for how smoothly segments join (ctu-crs sends 5).
 pub const DISCONT: u32 = 5;
 /// Lines sent between two checks of the queue-full bit.
@@ -521,6 +530,89 @@ impl MarsBackend {
         Ok(())
     }
 
+    /// Halt as the arm shows it (issue 37): `STOP:`, and where the arm is not seen standing
+    /// within [`STOP_WITHIN`], `PURGE:` (which resets the motors; the arm counts as not
+    /// homed after it). Success only once the moving bit is clear and two `COORDAP?` reads
+    /// [`STILL_GAP`] apart agree; otherwise TROL_ERR_NOT_STOPPED, and what was under way is
+    /// kept, so that Finish goes on reporting the arm as the unit shows it.
+    fn stop_and_see(&mut self) -> BiosResult {
+        let until = Instant::now() + HALT_WITHIN;
+        let mut said = Vec::new();
+        for stop in ["STOP:", "PURGE:"] {
+            if Instant::now() >= until {
+                break;
+            }
+            if let Err(e) = self.send(&line::command(stop)) {
+                said.push(format!("{stop} not sent: {e}"));
+                continue;
+            }
+            if stop == "PURGE:" {
+                // The motors were reset: the regulator set-up goes again, and the arm is
+                // homed again before it moves.
+                self.set_up = false;
+                self.homed = [false; 6];
+                self.planner.set_homed(self.homed);
+                self.say("Halt: PURGE: sent; the arm must be homed again (TROLHome)");
+            }
+            if let Err(f) = self.sync() {
+                said.push(format!("{stop} {}", f.text()));
+                continue;
+            }
+            match self.seen_standing(until) {
+                Ok(true) if Instant::now() <= until + STILL_GAP => {
+                    if !said.is_empty() {
+                        self.say(&format!(
+                            "Halt: the arm stands after {stop}, where {} did not stop it",
+                            said.join("; ")
+                        ));
+                    }
+                    self.abandon();
+                    return Ok(code::OK);
+                }
+                Ok(true) => {
+                    said.push(format!(
+                        "{stop}: the arm stood only after the Halt's time (its motion may have \
+                         ended by itself)"
+                    ));
+                    break;
+                }
+                Ok(false) => said.push(format!("{stop}: the arm still moved")),
+                Err(f) => said.push(format!("{stop}: {}", f.text())),
+            }
+        }
+        let text = format!("{}; use the emergency stop", said.join("; "));
+        self.say(&format!("Halt: the arm was not seen standing: {text}"));
+        Err(BackendError::NotStopped(text))
+    }
+
+    /// Whether the unit shows the arm standing within [`STOP_WITHIN`] (or `until`, if
+    /// sooner): the moving bit clear, and two `COORDAP?` reads [`STILL_GAP`] apart within
+    /// [`STILL_DEG`] of each other on every axis.
+    fn seen_standing(&mut self, until: Instant) -> Result<bool, Fail> {
+        let until = until.min(Instant::now() + STOP_WITHIN);
+        let tol: [f64; 6] =
+            std::array::from_fn(|j| (STILL_DEG * self.profile.irc_per_deg(j)).abs().max(2.0));
+        let mut last: Option<[f64; 6]> = None;
+        loop {
+            let s = self.status()?;
+            last = if s & st::MOVING != 0 {
+                None
+            } else {
+                let c = self.counters()?;
+                if let Some(q) = last {
+                    if (0..6).all(|j| (q[j] - c[j]).abs() <= tol[j]) {
+                        return Ok(true);
+                    }
+                }
+                Some(c)
+            };
+            if Instant::now() + STILL_GAP > until {
+                return Ok(false);
+            }
+            std::thread::sleep(STILL_GAP);
+        }
+    }
+
     /// Forget what was under way (after a fault or Halt) and take the arm as where it is.
     fn abandon(&mut self) {
         self.pending.clear();
@@ -802,7 +894,8 @@ impl Backend for MarsBackend {
     }
     fn reply_time(&self) -> Duration {
         // The unit's silence is found out after REPLY_LIMIT; the rest of a call is line time.
-        REPLY_LIMIT + Duration::from_millis(500)
+        // A Halt that tries both stops takes as long.
+        (REPLY_LIMIT + Duration::from_millis(500)).max(HALT_WITHIN + Duration::from_millis(400))
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let t = self.target(target)?;
@@ -860,17 +953,13 @@ impl Backend for MarsBackend {
     }
     fn halt(&mut self) -> BiosResult {
         self.pending.clear();
-        let sent = self.send(&line::command("STOP:"));
         let homing = self.homing.take();
         if let Some(h) = homing {
             for a in h.axes {
                 self.homed[a] = false;
             }
         }
-        sent.map_err(|e| BackendError::Unsure(e.to_string()))?;
-        self.sync().map_err(|f| f.unsure())?;
-        self.abandon();
-        Ok(code::OK)
+        self.stop_and_see()
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         self.take_unasked()?;

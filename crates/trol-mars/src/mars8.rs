@@ -51,6 +51,10 @@ pub struct Switches {
     /// The moving bit is up while the gripper axis moves too (the public sources do not say
     /// whether `ST?`'s moving bit covers it).
     pub gripper_moving: bool,
+    /// `STOP:` stops the axes (else it is taken and the motion runs on).
+    pub stop_stops: bool,
+    /// `PURGE:` stops the axes.
+    pub purge_stops: bool,
 }
 
 impl Default for Switches {
@@ -64,6 +68,8 @@ impl Default for Switches {
             lf_only: false,
             r_blocks: false,
             gripper_moving: false,
+            stop_stops: true,
+            purge_stops: true,
         }
     }
 }
@@ -94,6 +100,15 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "gripper-moving",
         "the moving bit is up while the gripper moves too",
+    ),
+    (
+        "stop-ignored",
+        "STOP: is taken but does not stop a motion (PURGE: does)",
+    ),
+    (
+        "unstoppable",
+        "neither STOP: nor PURGE: stops a motion: a fault, for the rule that Halt never says \
+         done unseen",
     ),
 ];
 
@@ -127,6 +142,15 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "gripper-moving" => Switches {
             gripper_moving: true,
+            ..d
+        },
+        "stop-ignored" => Switches {
+            stop_stops: false,
+            ..d
+        },
+        "unstoppable" => Switches {
+            stop_stops: false,
+            purge_stops: false,
             ..d
         },
         _ => return None,
@@ -518,15 +542,17 @@ impl Mars8 {
             "STAMP" if ints.len() == 1 => self.reply(&format!("STAMP={}", ints[0] as i64)),
             "PURGE" | "RELEASE" if ints.is_empty() => {
                 self.error = false;
-                if word == "PURGE" {
+                if word == "PURGE" && self.sw.purge_stops {
                     self.stop_all(t);
                 }
             }
             "STOP" if ints.is_empty() => {
-                if self.sw.stop_latches && self.axes_moving(t) {
-                    self.error = true;
+                if self.sw.stop_stops {
+                    if self.sw.stop_latches && self.axes_moving(t) {
+                        self.error = true;
+                    }
+                    self.stop_all(t);
                 }
-                self.stop_all(t);
             }
             "R" if ints.is_empty() => self.waiters.push_back(String::new()),
             "IDLEREL" | "SPDTB" | "COORDISCONT" => {}

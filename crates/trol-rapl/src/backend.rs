@@ -334,6 +334,39 @@ pub const CTRL_C_ENDS_FINISH_WITHIN: Duration = Duration::from_millis(500);
 /// How many motions may wait behind the one under way (the simulated arm's queue).
 pub const QUEUE: usize = trol_a465::arm::MOTION_QUEUE;
 
+/// How long a stop may take to show on the arm: the A465's longest braking (a straight line
+/// at 1000 mm/s and 2540 mm/s^2, 0.4 s; a joint at full speed, 0.25 s) and a margin for the
+/// reads.
+pub const STOP_WITHIN: Duration = Duration::from_millis(1000);
+
+/// The gap between two W2 reads that show the arm standing.
+pub const STILL_GAP: Duration = Duration::from_millis(250);
+
+/// How far a joint may move between two reads of a standing arm, degrees (the servo's
+/// dither; a motion at the slowest speed moves about 1 degree in [`STILL_GAP`]).
+pub const STILL_DEG: f64 = 0.02;
+
+/// The longest a Halt takes, all its stops included: within the reply time the host waits.
+pub const HALT_WITHIN: Duration = Duration::from_millis(3300);
+
+/// One of the C500's stops (docs/c500.md, "Halt").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stop {
+    Halt,
+    Abort,
+    CtrlC,
+}
+
+impl Stop {
+    fn word(self) -> &'static str {
+        match self {
+            Stop::Halt => "HALT",
+            Stop::Abort => "ABORT",
+            Stop::CtrlC => "Ctrl-C",
+        }
+    }
+}
+
 /// The RAPL-II backend over a port.
 pub struct RaplBackend {
     port: Box<dyn Port>,
@@ -1810,6 +1843,128 @@ impl RaplBackend {
         })
     }
 
+    /// The stops to try, in order: Ctrl-C first where the interpreter is busy with a line
+    /// (a motion answered at its end) or where the profile says it is the halt, then the
+    /// profile's halt, then the others in the order HALT, ABORT, Ctrl-C.
+    fn stop_order(&self) -> Vec<Stop> {
+        let mut order = Vec::new();
+        if self.awaiting.is_some() || self.profile.halt == Halt::CtrlC {
+            order.push(Stop::CtrlC);
+        }
+        order.push(match self.profile.halt {
+            Halt::Halt => Stop::Halt,
+            Halt::Abort => Stop::Abort,
+            Halt::CtrlC => Stop::CtrlC,
+        });
+        for s in [Stop::Halt, Stop::Abort, Stop::CtrlC] {
+            if !order.contains(&s) {
+                order.push(s);
+            }
+        }
+        order
+    }
+
+    /// Halt as the arm shows it (issue 37): each stop of [`RaplBackend::stop_order`] in
+    /// turn, until W2 shows the arm standing; success only then. Where none is seen to work
+    /// within [`HALT_WITHIN`] of the call, TROL_ERR_NOT_STOPPED with what each stop got. No
+    /// profile key makes a stop count that was not seen.
+    fn stop_and_see(&mut self) -> BiosResult {
+        let until = std::time::Instant::now() + HALT_WITHIN;
+        let mut said = Vec::new();
+        for stop in self.stop_order() {
+            if std::time::Instant::now() >= until {
+                break;
+            }
+            let sent = match stop {
+                Stop::CtrlC => {
+                    self.awaiting = None;
+                    self.interrupt().map(|_| "prompt back".to_string())
+                }
+                Stop::Halt | Stop::Abort => match self.command_as(stop.word(), true) {
+                    Ok(0) => Ok("acknowledged".to_string()),
+                    Ok(c) => Ok(format!("refused, {c}")),
+                    Err(e) => Err(e),
+                },
+            };
+            let sent = match sent {
+                Ok(s) => s,
+                Err(e) => {
+                    said.push(format!("{}: {e}", stop.word()));
+                    continue;
+                }
+            };
+            match self.seen_standing(until) {
+                // Standing only after the Halt's time: the motion ran to its end, no stop
+                // was seen to work.
+                Ok(Ok(())) if std::time::Instant::now() > until + STILL_GAP => {
+                    said.push(format!(
+                        "{}: {sent}, and the arm stood only {:.1} s after the Halt (its \
+                         motion may have ended by itself)",
+                        stop.word(),
+                        (std::time::Instant::now() + HALT_WITHIN - until).as_secs_f64()
+                    ));
+                    break;
+                }
+                Ok(Ok(())) => {
+                    self.outstanding = None;
+                    self.awaiting = None;
+                    if !said.is_empty() {
+                        self.note(format!(
+                            "Halt: the arm stands after {} ({}), where {} did not stop it",
+                            stop.word(),
+                            sent,
+                            said.join("; ")
+                        ));
+                    }
+                    return Ok(0);
+                }
+                Ok(Err(why)) => said.push(format!("{}: {sent}, but {why}", stop.word())),
+                Err(e) => said.push(format!("{}: {sent}, then W2: {e}", stop.word())),
+            }
+        }
+        let text = format!(
+            "{}; use the emergency stop",
+            if said.is_empty() {
+                "no stop could be sent".to_string()
+            } else {
+                said.join("; ")
+            }
+        );
+        self.note(format!("Halt: the arm was not seen standing: {text}"));
+        Err(BackendError::NotStopped(text))
+    }
+
+    /// Whether W2 shows the arm standing: two reads [`STILL_GAP`] apart whose JOINTS rows
+    /// agree within [`STILL_DEG`], within [`STOP_WITHIN`] (or `until`, if sooner).
+    fn seen_standing(
+        &mut self,
+        until: std::time::Instant,
+    ) -> Result<Result<(), String>, BackendError> {
+        let until = until.min(std::time::Instant::now() + STOP_WITHIN);
+        let mut last: Option<[f64; 6]> = None;
+        loop {
+            let p = self.read_position(PosMode::Actual)?;
+            if let Some(q) = last {
+                let moved = q
+                    .iter()
+                    .zip(&p.joints)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                if moved <= STILL_DEG {
+                    return Ok(Ok(()));
+                }
+                if std::time::Instant::now() + STILL_GAP > until {
+                    return Ok(Err(format!(
+                        "the arm still moved ({moved:.3} deg in {} ms)",
+                        STILL_GAP.as_millis()
+                    )));
+                }
+            }
+            last = Some(p.joints);
+            std::thread::sleep(STILL_GAP);
+        }
+    }
+
     fn kin(&self) -> Kinematics {
         Kinematics::new(self.tool)
     }
@@ -1992,8 +2147,10 @@ impl Backend for RaplBackend {
     }
     fn reply_time(&self) -> Duration {
         // One command the C500 does not answer (the profile's reply timeout), after a
-        // FINISH that waits was ended with Ctrl-C and listened for once.
-        self.reply_timeout() + CTRL_C_ENDS_FINISH_WITHIN + FINISH_LISTEN
+        // FINISH that waits was ended with Ctrl-C and listened for once; or a Halt that
+        // tries every stop.
+        (self.reply_timeout() + CTRL_C_ENDS_FINISH_WITHIN + FINISH_LISTEN)
+            .max(HALT_WITHIN + Duration::from_millis(400))
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let target = target.clone();
@@ -2073,18 +2230,7 @@ impl Backend for RaplBackend {
             self.queue.clear();
             self.note(format!("Halt: {n} queued motion(s) dropped, not sent"));
         }
-        let r = match self.profile.halt {
-            Halt::Halt => self.command_as("HALT", true),
-            Halt::Abort => self.command_as("ABORT", true),
-            Halt::CtrlC => {
-                self.awaiting = None;
-                self.interrupt().map(|_| 0)
-            }
-        };
-        if matches!(r, Ok(0)) {
-            self.outstanding = None;
-        }
-        r
+        self.stop_and_see()
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         if axis != 0 {

@@ -134,6 +134,19 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "as finish, but FINISH is refused in immediate mode (program mode only, as R2JSON lists it)",
     ),
     (
+        "halt-ignored",
+        "HALT is acknowledged but does not stop a motion (ABORT does)",
+    ),
+    (
+        "ctrl-c-cancels-line",
+        "as ack-at-end, but Ctrl-C only cancels the line (RobWork's reading); HALT stops",
+    ),
+    (
+        "unstoppable",
+        "no stop stops a motion (HALT and ABORT acknowledged, Ctrl-C cancels the line): a \
+         fault, for the rule that Halt never says done unseen",
+    ),
+    (
         "finish-deaf",
         "as finish, but Ctrl-C is ignored while FINISH waits (the profile's \
          ctrl_c_ends_finish is wrong)",
@@ -232,6 +245,31 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
         "no-echo" => Profile {
             twin: crate::profile::Twin {
                 echo: false,
+                ..twin
+            },
+            ..base
+        },
+        "halt-ignored" => Profile {
+            twin: crate::profile::Twin {
+                halt_stops: false,
+                ..twin
+            },
+            ..base
+        },
+        "ctrl-c-cancels-line" => Profile {
+            motion_ack: crate::profile::MotionAck::End,
+            halt: Halt::CtrlC,
+            twin: crate::profile::Twin {
+                ctrl_c_stops: Some(false),
+                ..twin
+            },
+            ..base
+        },
+        "unstoppable" => Profile {
+            twin: crate::profile::Twin {
+                halt_stops: false,
+                abort_stops: false,
+                ctrl_c_stops: Some(false),
                 ..twin
             },
             ..base
@@ -428,7 +466,12 @@ impl C500 {
                     // A waiting command is cancelled; the motion stops only where Ctrl-C is
                     // how this controller halts.
                     self.waiting = None;
-                    if self.profile.halt == Halt::CtrlC && self.arm.is_moving(now) {
+                    let stops = self
+                        .profile
+                        .twin
+                        .ctrl_c_stops
+                        .unwrap_or(self.profile.halt == Halt::CtrlC);
+                    if stops && self.arm.is_moving(now) {
                         self.stopped_short = true;
                         self.arm.halt(now);
                     }
@@ -783,10 +826,17 @@ impl C500 {
                 self.motion_answer(c, now)
             }
             ("HALT" | "ABORT", _) => {
-                if self.arm.is_moving(now) {
-                    self.stopped_short = true;
+                let stops = if word == "HALT" {
+                    self.profile.twin.halt_stops
+                } else {
+                    self.profile.twin.abort_stops
+                };
+                if stops {
+                    if self.arm.is_moving(now) {
+                        self.stopped_short = true;
+                    }
+                    self.arm.halt(now);
                 }
-                self.arm.halt(now);
                 self.ok("")
             }
             ("FINISH", _) => match self.profile.twin.finish {

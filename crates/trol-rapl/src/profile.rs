@@ -356,6 +356,13 @@ pub struct Twin {
     /// emergency stop: 037), whether FINISH waited for it or came after; 0: ACK, as for an
     /// arrival.
     pub finish_stopped: u16,
+    /// Whether HALT stops a motion (else it is acknowledged and the motion runs on).
+    pub halt_stops: bool,
+    /// Whether ABORT stops a motion.
+    pub abort_stops: bool,
+    /// Whether Ctrl-C stops a motion, besides cancelling the line; unset: exactly when the
+    /// profile's `halt` is "ctrl-c".
+    pub ctrl_c_stops: Option<bool>,
 }
 
 /// How the simulated C500 takes FINISH typed in immediate mode.
@@ -382,6 +389,9 @@ impl Default for Twin {
             finish: TwinFinish::Waits,
             finish_ctrl_c: true,
             finish_stopped: 0,
+            halt_stops: true,
+            abort_stops: true,
+            ctrl_c_stops: None,
         }
     }
 }

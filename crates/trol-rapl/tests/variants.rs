@@ -14,10 +14,10 @@ mod common;
 
 use std::time::Duration;
 
-use common::{Sim, TEST_001, start_with};
+use common::{Sim, TEST_001, start_scaled};
 use trol::{Location, PosMode, Robot, Tag};
 use trol_a465::kinematics::{Kinematics, Pose};
-use trol_proto::application::code::TROL_ERR_ROBOT_UNSURE;
+use trol_proto::application::code::{TROL_ERR_NOT_STOPPED, TROL_ERR_ROBOT_UNSURE};
 use trol_rapl::backend::ARM_POWER;
 use trol_rapl::{C500, Profile, RAPL_CODES, RaplBackend};
 
@@ -48,6 +48,8 @@ struct Run<'a> {
     works: bool,
     /// Halt must reach the arm while a motion runs.
     halt_must_work: bool,
+    /// No stop stops this controller's arm: Halt must say TROL_ERR_NOT_STOPPED.
+    halt_cannot: bool,
     false_success: Vec<String>,
     unasked: Vec<String>,
     missed: Vec<String>,
@@ -55,6 +57,21 @@ struct Run<'a> {
     /// Motion calls: succeeded (call and Finish), refused or not run, UNSURE, accepted but
     /// ended in a named code at Finish.
     tally: [usize; 4],
+}
+
+impl Run<'_> {
+    /// Whether the twin's arm is seen standing within a few of its turns (its flag lags the
+    /// line by one turn).
+    fn standing_soon(&self) -> bool {
+        let until = std::time::Instant::now() + Duration::from_millis(300);
+        while self.sim.moving() {
+            if std::time::Instant::now() > until {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        true
+    }
 }
 
 fn pose_of(q: &[f64; 6]) -> Pose {
@@ -331,6 +348,24 @@ impl Run<'_> {
         let under_way = r.is_ok() && self.accepted(&before) && self.sim.moving();
         if under_way {
             let h = self.robot.halt();
+            if h.is_ok() && !self.standing_soon() {
+                self.false_success.push(format!(
+                    "{}: Halt said done while the arm still moved",
+                    self.label
+                ));
+            }
+            if self.halt_cannot && !h.as_ref().is_err_and(|e| e.code() == TROL_ERR_NOT_STOPPED) {
+                self.missed.push(format!(
+                    "{}: Halt on an arm no stop stops: {h:?}",
+                    self.label
+                ));
+            }
+            if let Err(e) = &h {
+                if e.code() != TROL_ERR_NOT_STOPPED && e.code() != TROL_ERR_ROBOT_UNSURE {
+                    self.false_success
+                        .push(format!("{}: Halt failed with {e}", self.label));
+                }
+            }
             let f = self.robot.finish();
             let turned = (self.sim.planned_end()[0] - before[0]).abs();
             self.outcomes.push(format!(
@@ -437,6 +472,17 @@ impl Run<'_> {
 /// typed to.
 const FAIL_SAFE: &[&str] = &["warning-then-ack", "no-echo", "finish-deaf"];
 
+/// Variants where the first stop does not stop the arm: Halt tries the next.
+const ESCALATED: &[&str] = &[
+    "halt-ignored",
+    "ctrl-c-cancels-line",
+    "unstoppable",
+    "finish-deaf",
+];
+
+/// Variants no stop stops: Halt must say so (TROL_ERR_NOT_STOPPED), never done.
+const UNSTOPPABLE: &[&str] = &["unstoppable"];
+
 fn run_variant(name: &str) {
     let (twin, homed) = trol_rapl::c500::variant(name).expect("a variant");
     let twin = Profile { baud: BAUD, ..twin };
@@ -454,7 +500,10 @@ fn run_variant(name: &str) {
     let mut bad = Vec::new();
     for (which, gateway) in [("matching profile", alike), ("safe default", safe)] {
         let label = format!("{name} with the {which}");
-        let (port, sim) = start_with(twin.clone(), homed, None);
+        // Where a stop must be escalated, the twin's arm runs slower, so that its motion
+        // outlasts the Halt's real-time windows, as a real arm's does.
+        let scale = if ESCALATED.contains(&name) { 4.0 } else { 20.0 };
+        let (port, sim) = start_scaled(twin.clone(), homed, None, scale);
         let backend = match RaplBackend::connect(port, gateway) {
             Ok(b) => b,
             Err(e) => {
@@ -480,7 +529,10 @@ fn run_variant(name: &str) {
             robot,
             pulses: trol_rapl::frames::Frames::of(&twin),
             works: which == "matching profile" && !FAIL_SAFE.contains(&name),
-            halt_must_work: which == "matching profile" && !FAIL_SAFE.contains(&name),
+            halt_must_work: which == "matching profile"
+                && !FAIL_SAFE.contains(&name)
+                && !UNSTOPPABLE.contains(&name),
+            halt_cannot: UNSTOPPABLE.contains(&name),
             false_success: Vec::new(),
             unasked: Vec::new(),
             missed: Vec::new(),
@@ -557,6 +609,9 @@ variants! {
     nul_after_digit => "nul-after-digit",
     no_echo => "no-echo",
     not_homed => "not-homed",
+    halt_ignored => "halt-ignored",
+    ctrl_c_cancels_line => "ctrl-c-cancels-line",
+    unstoppable => "unstoppable",
     finish => "finish",
     finish_trusted => "finish-trusted",
     finish_at_once => "finish-at-once",

@@ -263,9 +263,8 @@ fn a_halt_from_the_pendant_ends_the_hosts_finish_as_halted_once() {
     use trol_proto::application::code::TROL_ERR_HALTED;
     let halt = record::encode(&table::HALT, &[]).unwrap();
     let wait = record::encode(&table::FINISH, &[Value::Int(FINISH_WAIT)]).unwrap();
-    let status = |pcp: &mut Pcp<Recorder>| {
-        reply(pcp, &table::FINISH, &[Value::Int(table::FINISH_STATUS)])
-    };
+    let status =
+        |pcp: &mut Pcp<Recorder>| reply(pcp, &table::FINISH, &[Value::Int(table::FINISH_STATUS)]);
     let joint = |pcp: &mut Pcp<Recorder>| {
         let r = reply(pcp, &table::JOINT, &[Value::Int(1), Value::Real(0.1)]);
         assert_eq!(r, Reply::Code(Code(0)));
@@ -280,7 +279,9 @@ fn a_halt_from_the_pendant_ends_the_hosts_finish_as_halted_once() {
     assert_eq!(pcp.handle_aside(&halt), [0, 0]);
     assert_eq!(pcp.poll(), Some(TROL_ERR_HALTED.0.to_le_bytes().to_vec()));
     match reply(&mut pcp, &table::GET_STATUS, &[]) {
-        Reply::Status { last, bios_called, .. } => {
+        Reply::Status {
+            last, bios_called, ..
+        } => {
             assert_eq!(last, TROL_ERR_HALTED);
             assert!(bios_called);
         }

@@ -706,6 +706,26 @@ fn halt_from_another_thread_stops_the_arm_while_one_waits() {
     assert!(j1 > 0.0 && j1 < 1.0, "{j1}");
 }
 
+/// Halt answers only once the arm stands (issue 37): right after it nothing moves, and the
+/// arm stands short of its target. (At half real time the A465 brakes from full speed for
+/// 0.5 s, so an answer at the start of the braking would find the arm moving.)
+#[test]
+fn halt_answers_only_with_the_arm_standing() {
+    let mut sim = settings();
+    sim.time_scale = 0.5;
+    sim.arm.homed = true;
+    let mut r = Robot::embedded(sim);
+    r.speed(100).unwrap();
+    r.joint(1, 3.0).unwrap(); // 2.4 s at half real time
+    std::thread::sleep(Duration::from_millis(300));
+    r.halt().unwrap();
+    assert!(!r.is_moving().unwrap(), "Halt answered while the arm moved");
+    let j1 = joints(&mut r)[0];
+    assert!(j1 > 0.0 && j1 < 2.9, "halted on the way: joint 1 at {j1}");
+    // Its own Halt is no news to the program: Finish succeeds.
+    r.finish().unwrap();
+}
+
 /// Settings that cannot work are refused with TROL_ERR_ARG_RANGE and change nothing; the
 /// inter-character delay lengthens the link's timeouts.
 #[test]
@@ -908,6 +928,10 @@ fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
         state["moving"], false,
         "the view shows the arm moving: {state}"
     );
+    // The program learns of it at its next Finish: TROL_ERR_HALTED, once; then the arm
+    // stands as usual.
+    let e = robot.is_moving().unwrap_err();
+    assert_eq!(e.code(), trol::code::TROL_ERR_HALTED, "{e}");
     assert!(!robot.is_moving().unwrap(), "the arm still moves");
     let j1 = joints(&mut robot)[0];
     assert!(j1 > 0.31 && j1 < 1.25, "halted on the way: joint 1 at {j1}");

@@ -99,9 +99,11 @@ pub struct SimArgs {
     /// run across all of them). With --rapl (docs/c500.md, "What TROL assumes"): default,
     /// colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
     /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
-    /// nul-after-digit, no-echo, not-homed. With --mars (docs/mars.md): default, echo,
-    /// noise, moving-lag, refusal-line, refusal-error-bit, stop-latches, lf-only, r-blocks,
-    /// gripper-moving.
+    /// nul-after-digit, no-echo, not-homed, finish, finish-trusted, finish-at-once,
+    /// finish-refused, finish-deaf, halt-ignored, ctrl-c-cancels-line, unstoppable. With
+    /// --mars (docs/mars.md): default, echo, noise, moving-lag, refusal-line,
+    /// refusal-error-bit, stop-latches, lf-only, r-blocks, gripper-moving, stop-ignored,
+    /// unstoppable.
     #[arg(long, value_name = "NAME")]
     variant: Option<String>,
     /// With --rapl or --mars: print the profile that describes this simulated controller

@@ -92,6 +92,8 @@ pick_on_variants! {
     pick_lf_only => "lf-only",
     pick_r_blocks => "r-blocks",
     pick_gripper_moving => "gripper-moving",
+    pick_stop_ignored => "stop-ignored",
+    pick_unstoppable => "unstoppable",
 }
 
 #[test]

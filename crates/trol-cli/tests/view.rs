@@ -12,6 +12,8 @@ use std::time::Duration;
 
 use trol::{PosMode, Robot, Tag};
 
+#[path = "../../trol-c/tests/common/cbuild.rs"]
+mod cbuild;
 mod common;
 use common::{Background, scratch, text, trol};
 
@@ -454,4 +456,64 @@ fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
     let refused = json(page.wait_for("refused ", 60), "refused ");
     assert_eq!(refused["hidden"], true, "{refused}");
     assert_eq!(refused["wrong_status"], 403, "{refused}");
+}
+
+/// A Halt from the pendant is seen everywhere and never waits behind viewers (issue 37,
+/// items 4 and 5): with more `/events` streams open than the view serves, the pendant's Halt
+/// still stops a long move of a C program's, whose TROLFinish(FINISH_WAIT) then answers
+/// TROL_ERR_HALTED (once), and GetStatus says so.
+#[test]
+fn a_pendant_halt_gets_past_every_viewer_and_ends_the_programs_finish() {
+    use std::io::{BufRead, BufReader};
+    let dir = scratch("pendant-halt-program");
+    let (sim, addr, token) = sim_with_view(&dir, &["--control"]);
+    let token = token.unwrap();
+    // More streams than the view serves: the last ones are turned away, the pendant not.
+    let mut streams = Vec::new();
+    let mut turned_away = 0;
+    for _ in 0..trol_view::MAX_STREAMS + 8 {
+        let mut s = TcpStream::connect(&addr).unwrap();
+        write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        let mut first = [0u8; 12];
+        s.read_exact(&mut first).unwrap();
+        if &first == b"HTTP/1.1 503" {
+            turned_away += 1;
+        }
+        streams.push(s);
+    }
+    assert_eq!(turned_away, 8, "the view serves MAX_STREAMS streams");
+    let exe = cbuild::compile(
+        &cbuild::root().join("crates/trol-cli/tests/c/pendant_halt.c"),
+        "pendant_halt",
+        cbuild::Link::Static,
+    );
+    let mut child = cbuild::program(&exe)
+        .current_dir(&dir)
+        .arg(&sim.name)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    assert_eq!(line, "moving\n", "{line}");
+    // Joint 1 by 2 rad at 10 %: over 6 s. Halt it on the way.
+    std::thread::sleep(Duration::from_millis(500));
+    let (status, body) = send(&addr, "POST", &format!("/control/halt?token={token}"));
+    assert!(status.contains("200"), "{status} {body}");
+    assert_eq!(body["ok"], true, "{body}");
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut out, &mut rest).unwrap();
+    assert!(child.wait().unwrap().success(), "{rest}");
+    assert!(
+        rest.contains("finish -32056: TROL_ERR_HALTED"),
+        "the program's Finish did not hear of the pendant's Halt: {rest}"
+    );
+    assert!(rest.contains("status -32056"), "{rest}");
+    assert!(rest.contains("again 0"), "{rest}");
+    let (_, state) = get(&addr, "/state");
+    let j1 = six(&serde_json::from_str::<serde_json::Value>(&state).unwrap())[0];
+    assert!(j1 > 0.0 && j1 < 1.9, "halted on the way: joint 1 at {j1}");
+    drop(streams);
 }

@@ -186,6 +186,12 @@ pub const DITHER_COUNTS: i32 = 2;
 pub const HOME_TIME: f64 = 2.0;
 /// The speed setting homing runs at, percent (assumption).
 pub const HOME_SPEED: f64 = 20.0;
+
+/// The order Home(0) homes the axes in, group by group (joint indices from 0): joint 2, then
+/// joints 1 and 3, then 4, 5 and 6: the order of CTU's hard home of an A465 (B, AC, DEF;
+/// shared/reference/a465.md, "CTU home/index sensing", and mars8.md). A group's axes count
+/// as homed when its motion ends; a Halt leaves the rest unhomed.
+pub const HOME_GROUPS: &[&[usize]] = &[&[1], &[0, 2], &[3, 4, 5]];
 /// The tool's maximum speed on a straight line at 100 %, mm/s (assumption: no public figure
 /// for the A465; an F3 on a C500C shows 1016 mm/s).
 pub const MAX_LINEAR_SPEED: f64 = 1000.0;
@@ -641,37 +647,40 @@ impl Arm {
         code::OK
     }
 
-    /// Home one axis (1..6) or all (0): the arm drives the axes to their zero (the home
-    /// switches) at the homing speed, at least HOME_TIME per axis. The axes count as homed
-    /// when homing ends; a Halt before then leaves them unhomed.
+    /// Home one axis (1..6) or all (0, in the groups of [`HOME_GROUPS`], one after the
+    /// other): the arm drives the axes to their zero (the home switches) at the homing speed,
+    /// at least HOME_TIME per axis. A group's axes count as homed when its motion ends; a
+    /// Halt before then leaves them unhomed.
     pub fn home(&mut self, axis: u8, now: f64) -> i16 {
         if axis > 6 {
             return code::BAD_ARGUMENT;
         }
         self.retire(now);
-        if let Err(c) = self.need_room() {
-            return c;
-        }
-        let from = self.planned_end();
-        let mut to = from;
-        let axes: Vec<usize> = if axis == 0 {
-            (0..6).collect()
+        let groups: Vec<Vec<usize>> = if axis == 0 {
+            HOME_GROUPS.iter().map(|g| g.to_vec()).collect()
         } else {
-            vec![axis as usize - 1]
+            vec![vec![axis as usize - 1]]
         };
-        for &a in &axes {
-            to[a] = 0.0;
+        if self.motions.len() + groups.len() > MOTION_QUEUE {
+            return code::QUEUE_FULL;
         }
-        let path = Path::Joint { from, to };
-        let (speeds, accels) = joint_limits(HOME_SPEED);
-        let (v, a) = path.bounds().limits(&speeds, &accels);
-        let start = self.planned_start_time(now);
-        let profile = Profile::trapezoid(start, v, a, HOME_TIME * axes.len() as f64);
-        self.motions.push_back(Motion {
-            profile,
-            path,
-            homes: Some(axes),
-        });
+        for axes in groups {
+            let from = self.planned_end();
+            let mut to = from;
+            for &a in &axes {
+                to[a] = 0.0;
+            }
+            let path = Path::Joint { from, to };
+            let (speeds, accels) = joint_limits(HOME_SPEED);
+            let (v, a) = path.bounds().limits(&speeds, &accels);
+            let start = self.planned_start_time(now);
+            let profile = Profile::trapezoid(start, v, a, HOME_TIME * axes.len() as f64);
+            self.motions.push_back(Motion {
+                profile,
+                path,
+                homes: Some(axes),
+            });
+        }
         code::OK
     }
 

@@ -46,6 +46,32 @@ fn a_halt_during_homing_leaves_the_axes_unhomed() {
     assert_eq!(arm.joint(1, 0.1, stopped + 1.0), code::NOT_HOMED);
 }
 
+/// Home(0) homes in CTU's groups, one after the other (issue 37, item 6): joint 2, then
+/// joints 1 and 3, then 4, 5 and 6, each group's axes homed when its motion ends; halted
+/// in the second group, joint 2 stays homed and the rest do not.
+#[test]
+fn home_all_goes_group_by_group() {
+    use trol_a465::arm::HOME_GROUPS;
+    assert_eq!(HOME_GROUPS, &[&[1][..], &[0, 2], &[3, 4, 5]]);
+    let mut arm = Arm::new(ArmSettings::default());
+    assert_eq!(arm.home(0, 0.0), code::OK);
+    // Each group takes at least 2 s per axis: 2 s, then 4 s, then 6 s.
+    let _ = arm.finish_status(2.05);
+    assert_eq!(arm.homed(), [false, true, false, false, false, false]);
+    let _ = arm.finish_status(6.05);
+    assert_eq!(arm.homed(), [true, true, true, false, false, false]);
+    let _ = arm.finish_status(12.05);
+    assert_eq!(arm.homed(), [true; 6]);
+
+    let mut arm = Arm::new(ArmSettings::default());
+    arm.home(0, 0.0);
+    assert_eq!(arm.halt(3.0), code::OK);
+    let stopped = arm.done_at(3.0);
+    assert_eq!(arm.finish_status(stopped + 1e-9), code::OK);
+    assert_eq!(arm.homed(), [false, true, false, false, false, false]);
+    assert_eq!(arm.joint(2, 0.1, stopped + 1.0), code::NOT_HOMED);
+}
+
 #[test]
 fn a_joint_move_ends_together_and_the_slowest_joint_sets_the_time() {
     let mut arm = homed_arm();

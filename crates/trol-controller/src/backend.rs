@@ -130,6 +130,12 @@ pub trait Backend: Send {
     fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult;
     /// Whether the arm or the gripper still moves, or homes (Finish(FINISH_STATUS)).
     fn moving(&mut self) -> Result<bool, BackendError>;
+    /// Whether the arm stands, for the answer to a Halt: without deciding how any motion
+    /// ended (that is [`Backend::moving`]'s, at the next Finish). A backend whose
+    /// [`Backend::halt`] has seen the arm standing answers true.
+    fn stands(&mut self) -> Result<bool, BackendError> {
+        self.moving().map(|m| !m)
+    }
     /// Set the finger distance, mm.
     fn grip(&mut self, dist: u8) -> BiosResult;
     /// Stop all motion, and return success only once the arm is seen standing (issue 37): a

@@ -376,9 +376,11 @@ impl<B: Backend> Pcp<B> {
             return reply;
         }
         if code == table::FINISH.code {
-            if reply == Code(0) {
+            // Anything but "still moving" ends the wait: a failure was told as it is.
+            if reply != Code(1) {
                 self.open_motion = false;
-                if std::mem::take(&mut self.halted_aside) {
+                let halted = std::mem::take(&mut self.halted_aside);
+                if halted && reply == Code(0) {
                     self.status.transaction = self.status.current;
                     self.status.bios_called = true;
                     self.status.last_error_code = TROL_ERR_HALTED;
@@ -447,6 +449,7 @@ impl<B: Backend> Pcp<B> {
                 }
                 Err(code) => {
                     self.status.record_refusal(code);
+                    let code = self.follow_motions(def.code, code);
                     Handled::Reply(Reply::Code(code).encode())
                 }
             },
@@ -471,12 +474,17 @@ impl<B: Backend> Pcp<B> {
     /// The pending reply, once the backend is idle (or its link failed: TROL_ERR_ROBOT).
     pub fn poll(&mut self) -> Option<Vec<u8>> {
         let pending = self.pending?;
-        let value = match self.backend.moving() {
+        let idle = if pending.code == table::HALT.code {
+            self.backend.stands()
+        } else {
+            self.backend.moving().map(|m| !m)
+        };
+        let value = match idle.map(|i| !i) {
             Ok(true) => return None,
             Ok(false) => self.follow_motions(pending.code, pending.value),
             Err(e) => {
                 self.status.record_refusal(e.code());
-                e.code()
+                self.follow_motions(pending.code, e.code())
             }
         };
         self.pending = None;

@@ -94,6 +94,9 @@ pub static MARS_CODES: &CodeTable = &{
 
 /// How long a reply may take (a command at 19200 baud takes a few ms).
 pub const REPLY_LIMIT: Duration = Duration::from_secs(2);
+/// The longest one homing group may take to be seen at its home mark (assumption: CTU's
+/// whole hard home of an A465 takes about 17 s).
+pub const HOMING_GROUP_LIMIT: Duration = Duration::from_secs(30);
 /// How long a stop may take to show on the unit: the A465's longest braking (0.4 s) and a
 /// margin for the reads.
 pub const STOP_WITHIN: Duration = Duration::from_millis(900);
@@ -165,8 +168,11 @@ struct Outstanding {
 #[derive(Clone, Debug)]
 struct Homing {
     groups: VecDeque<String>,
+    /// The group under way (its axis letters) and when it was sent.
+    group: String,
     since: f64,
-    seen_moving: bool,
+    /// The last `COORDAP?` that put the group's axes at their home mark.
+    at_mark: Option<[f64; 6]>,
     axes: Vec<usize>,
     then_pose: bool,
 }
@@ -209,6 +215,8 @@ pub struct MarsBackend {
     stamp: u16,
     set_up: bool,
     homed: [bool; 6],
+    /// A Home was halted on the way: the next Finish fails with BIOS_NOT_HOMED.
+    homing_halted: bool,
     unasked: Vec<String>,
     pending: VecDeque<String>,
     motion: Option<Outstanding>,
@@ -256,6 +264,7 @@ impl MarsBackend {
             stamp: (std::process::id() & 0x3fff) as u16,
             set_up: false,
             homed,
+            homing_halted: false,
             unasked: Vec::new(),
             pending: VecDeque::new(),
             motion: None,
@@ -722,6 +731,12 @@ impl MarsBackend {
         }
     }
 
+    /// One look at a hard home: a group has homed only when the moving bit is clear and
+    /// two `COORDAP?` reads in a row put each of its axes at its home mark (0 IRC of the homed
+    /// frame, within `arrive_irc`), never on the moving bit alone (issue 37, item 6: a unit
+    /// that does not raise the bit while homing had its next group sent while the first
+    /// still homed). Then the next group goes; a group not seen home within
+    /// [`HOMING_GROUP_LIMIT`] is a failure: `STOP:`, and nothing else is sent.
     fn homing_step(&mut self) -> Result<bool, BackendError> {
         let s = self.status().map_err(|f| f.not_run())?;
         if let Some(c) = Self::fault(s) {
@@ -729,20 +744,47 @@ impl MarsBackend {
             return Err(BackendError::Refused(c));
         }
         let now = self.now();
-        let settle = self.profile.settle_ms as f64 / 1000.0;
+        let c = if s & st::MOVING == 0 {
+            Some(self.counters().map_err(|f| f.not_run())?)
+        } else {
+            None
+        };
+        let tol = self.profile.arrive_irc;
+        let letters = self.profile.axes.clone();
         let h = self.homing.as_mut().expect("homing");
-        if s & st::MOVING != 0 {
-            h.seen_moving = true;
-            return Ok(true);
-        }
-        if !h.seen_moving && now - h.since < settle {
-            return Ok(true);
-        }
-        if let Some(g) = h.groups.pop_front() {
-            h.since = now;
-            h.seen_moving = false;
-            self.send_hh(&g).map_err(|f| f.unsure())?;
-            return Ok(true);
+        let group: Vec<usize> = h.group.chars().filter_map(|a| letters.find(a)).collect();
+        let home = c.filter(|c| group.iter().all(|&j| c[j].abs() <= tol));
+        match (home, h.at_mark) {
+            (Some(c), Some(before)) if group.iter().all(|&j| (c[j] - before[j]).abs() <= tol) => {
+                // The group is home and stands.
+                h.at_mark = None;
+                if let Some(g) = h.groups.pop_front() {
+                    h.since = now;
+                    h.group = g.clone();
+                    self.send_hh(&g).map_err(|f| f.unsure())?;
+                    return Ok(true);
+                }
+            }
+            (home, _) => {
+                h.at_mark = home;
+                if now - h.since <= HOMING_GROUP_LIMIT.as_secs_f64() {
+                    return Ok(true);
+                }
+                let g = h.group.clone();
+                let _ = self.send(&line::command("STOP:"));
+                self.abandon();
+                let text = format!(
+                    "homing group {g} was not seen at its home mark within {} s (COORDAP? {}): \
+                     STOP: sent, nothing else; the arm is not homed",
+                    HOMING_GROUP_LIMIT.as_secs(),
+                    match c {
+                        Some(c) => format!("{c:?}"),
+                        None => "not read: the unit still showed the moving bit".into(),
+                    }
+                );
+                self.say(&text);
+                return Err(BackendError::Unsure(text));
+            }
         }
         let h = self.homing.take().expect("homing");
         for a in &h.axes {
@@ -908,6 +950,9 @@ impl Backend for MarsBackend {
         self.motion(|a, now| a.depart(disp, straight, now))
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
+        if std::mem::take(&mut self.homing_halted) {
+            return Err(BackendError::Refused(code::NOT_HOMED));
+        }
         self.take_unasked()?;
         self.pump().map_err(|f| f.unsure())?;
         if self.homing.is_some() {
@@ -954,12 +999,21 @@ impl Backend for MarsBackend {
     fn halt(&mut self) -> BiosResult {
         self.pending.clear();
         let homing = self.homing.take();
+        let halted_home = homing.is_some();
         if let Some(h) = homing {
             for a in h.axes {
                 self.homed[a] = false;
             }
+            self.planner.set_homed(self.homed);
         }
-        self.stop_and_see()
+        let r = self.stop_and_see();
+        // A Home halted on the way: the Finish after it fails, once.
+        self.homing_halted = halted_home;
+        r
+    }
+    fn stands(&mut self) -> Result<bool, BackendError> {
+        // halt() answers success only once it has seen the arm standing.
+        Ok(true)
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         self.take_unasked()?;
@@ -1003,8 +1057,9 @@ impl Backend for MarsBackend {
         self.take_unasked()?;
         self.homing = Some(Homing {
             groups,
+            group: first,
             since: self.now(),
-            seen_moving: false,
+            at_mark: None,
             axes,
             then_pose: axis == 0,
         });

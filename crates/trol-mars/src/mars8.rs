@@ -55,6 +55,8 @@ pub struct Switches {
     pub stop_stops: bool,
     /// `PURGE:` stops the axes.
     pub purge_stops: bool,
+    /// The moving bit is up while an axis hard-homes (HH).
+    pub homing_moving: bool,
 }
 
 impl Default for Switches {
@@ -70,6 +72,7 @@ impl Default for Switches {
             gripper_moving: false,
             stop_stops: true,
             purge_stops: true,
+            homing_moving: true,
         }
     }
 }
@@ -104,6 +107,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "stop-ignored",
         "STOP: is taken but does not stop a motion (PURGE: does)",
+    ),
+    (
+        "homing-silent",
+        "the moving bit stays down while an axis hard-homes",
     ),
     (
         "unstoppable",
@@ -146,6 +153,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "stop-ignored" => Switches {
             stop_stops: false,
+            ..d
+        },
+        "homing-silent" => Switches {
+            homing_moving: false,
             ..d
         },
         "unstoppable" => Switches {
@@ -197,6 +208,8 @@ pub struct Mars8 {
     moves: [Option<Move>; 6],
     /// Counter = position - offset (an axis not homed counts from its power-up pose).
     offset: [f64; 6],
+    /// The axes whose move under way is a hard home (HH).
+    homing: [bool; 6],
     queue: VecDeque<([f64; 6], f64)>,
     coord_group: bool,
     regms: [f64; 6],
@@ -232,6 +245,7 @@ impl Mars8 {
             pos,
             moves: [None; 6],
             offset,
+            homing: [false; 6],
             queue: VecDeque::new(),
             coord_group: false,
             last_motion_cmd: f64::NEG_INFINITY,
@@ -382,6 +396,7 @@ impl Mars8 {
                 dur = dur.max((to - self.pos[j]).abs() / v);
             }
             for (j, to) in to.into_iter().enumerate() {
+                self.homing[j] = false;
                 self.moves[j] = Some(Move {
                     from: self.pos[j],
                     to,
@@ -417,7 +432,12 @@ impl Mars8 {
         }
         let lagging = (t - self.last_motion_cmd) * 1000.0 / self.scale.max(1e-9)
             < self.sw.moving_lag_ms as f64;
-        if self.axes_moving(t) && !lagging {
+        let shown = (0..6).any(|j| {
+            self.moves[j]
+                .as_ref()
+                .is_some_and(|m| !m.done(t) && (self.sw.homing_moving || !self.homing[j]))
+        }) || !self.queue.is_empty();
+        if shown && !lagging {
             s |= st::MOVING;
         }
         if self.sw.gripper_moving && !self.gripper.done(t) {
@@ -581,6 +601,7 @@ impl Mars8 {
                     let from = self.axis_pos(j, t);
                     let v = (self.regms[j] / 256.0 * 1000.0).max(1.0);
                     self.offset[j] = 0.0;
+                    self.homing[j] = true;
                     self.moves[j] = Some(Move {
                         from,
                         to: 0.0,

@@ -72,10 +72,12 @@ pub const NO_PULSES: i16 = -14;
 pub const NO_JOG_FRAME: i16 = -15;
 /// A motion computed from where the arm is, while another motion has not ended.
 pub const BUSY: i16 = -16;
+/// The controller says a motion is done, and the arm stands short of its end.
+pub const NOT_AT_TARGET: i16 = -22;
 
 /// The BIOS codes of the RAPL-II backend: the simulator's, and those of a real controller.
 pub static RAPL_CODES: &CodeTable = &{
-    const EXTRA: [CodeInfo; 9] = [
+    const EXTRA: [CodeInfo; 10] = [
         CodeInfo {
             value: ARM_POWER,
             name: "BIOS_ARM_POWER",
@@ -130,6 +132,12 @@ pub static RAPL_CODES: &CodeTable = &{
             name: "BIOS_BUSY",
             meaning: "a tool change while a motion has not ended (it would change what a \
                       queued motion's target means): call TROLFinish(FINISH_WAIT) first",
+        },
+        CodeInfo {
+            value: NOT_AT_TARGET,
+            name: "BIOS_NOT_AT_TARGET",
+            meaning: "the controller says the motion is done, but the arm stands short of its \
+                      end (a servo fault, a stop at the controller): check the arm",
         },
     ];
     let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
@@ -288,18 +296,28 @@ struct Outstanding {
     since: std::time::Instant,
     seen_moving: bool,
     still: Option<(std::time::Instant, [f64; 6])>,
+    /// Since when W2 has read the arm within [`STILL_DEG`] of one place, and that place.
+    standing: Option<(std::time::Instant, [f64; 6])>,
+    /// W2 has read the arm in two places since the motion was sent.
+    w2_moved: bool,
+    /// Where W2 last saw the arm at rest before the motion was sent (the end of the one
+    /// before), if it did.
+    from: Option<[f64; 6]>,
     /// FINISH was answered for it without settling its end (`completion = "finish"`): its
     /// end is looked for by STATUS.
     finish_tried: bool,
 }
 
 impl Outstanding {
-    fn new(motion: Motion, seen_moving: bool) -> Outstanding {
+    fn new(motion: Motion, seen_moving: bool, from: Option<[f64; 6]>) -> Outstanding {
         Outstanding {
             motion,
             since: std::time::Instant::now(),
             seen_moving,
             still: None,
+            standing: None,
+            w2_moved: false,
+            from,
             finish_tried: false,
         }
     }
@@ -380,6 +398,8 @@ pub struct RaplBackend {
     tool: [f64; 6],
     last_poll: Option<(std::time::Instant, bool)>,
     outstanding: Option<Outstanding>,
+    /// Where W2 last saw the arm at rest (a motion's confirmed end, a Halt's stop).
+    rest: Option<[f64; 6]>,
     queue: VecDeque<Queued>,
     deferred: Option<BackendError>,
     /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
@@ -428,6 +448,7 @@ impl RaplBackend {
             tool: [0.0; 6],
             last_poll: None,
             outstanding: None,
+            rest: None,
             queue: VecDeque::new(),
             deferred: None,
             awaiting: None,
@@ -1042,7 +1063,7 @@ impl RaplBackend {
         }
         match self.command(&m.line) {
             Ok(0) => {
-                self.outstanding = Some(Outstanding::new(m, false));
+                self.outstanding = Some(Outstanding::new(m, false, self.rest));
                 Ok(0)
             }
             other => {
@@ -1078,7 +1099,7 @@ impl RaplBackend {
                         Ok(self.code_of_refusal(n))
                     }
                     Answer::Done(_) => {
-                        self.outstanding = Some(Outstanding::new(m, true));
+                        self.outstanding = Some(Outstanding::new(m, true, self.rest));
                         Ok(0)
                     }
                 }
@@ -1099,7 +1120,7 @@ impl RaplBackend {
                     m.line
                 ));
                 self.awaiting = Some(m.line.clone());
-                self.outstanding = Some(Outstanding::new(m, true));
+                self.outstanding = Some(Outstanding::new(m, true, self.rest));
                 Ok(0)
             }
             Err(e) => Err(BackendError::Unsure(format!("`{}`: {e}", m.line))),
@@ -1239,6 +1260,34 @@ impl RaplBackend {
             return self.next_in_queue();
         }
         let o = self.outstanding.as_ref().expect("a motion under way");
+        // The motion ran (STATUS said not done, W2 moved, or W2 left where the arm last
+        // rested), the controller says done, and the arm has stood still short of the end
+        // for `settle_ms`: it stopped short (a servo fault, a stop at the controller) without
+        // a word. Known within the motion's own time and settle_ms, not after
+        // motion_timeout_s (issue 37, item 7). A motion that never left its start and
+        // never showed as running still waits for motion_timeout_s: the DONE row may lag.
+        let settle = Duration::from_millis(self.profile.settle_ms);
+        let left_rest = match (o.from, o.standing) {
+            (Some(a), Some((_, b))) => a.iter().zip(&b).any(|(x, y)| (x - y).abs() > STILL_DEG),
+            _ => false,
+        };
+        if (o.seen_moving || o.w2_moved || left_rest)
+            && o.standing.is_some_and(|(t, _)| t.elapsed() >= settle)
+        {
+            let line = o.motion.line.clone();
+            let expect = o.motion.expect.clone();
+            let at = o.standing.map(|(_, q)| q).unwrap_or_default();
+            self.outstanding = None;
+            self.queue.clear();
+            self.note(format!(
+                "`{line}`: the C500 says done, and the arm (W2 joints {}) has stood still for \
+                 {} ms short of the motion's end ({expect:?}): it stopped short; the queue was \
+                 dropped",
+                join(&at),
+                settle.as_millis()
+            ));
+            return Err(BackendError::Refused(NOT_AT_TARGET));
+        }
         if o.since.elapsed() > self.motion_timeout() {
             let line = o.motion.line.clone();
             let expect = o.motion.expect.clone();
@@ -1457,8 +1506,21 @@ impl RaplBackend {
             None => return Ok(true),
         };
         let p = self.read_position(PosMode::Actual)?;
+        if let Some(o) = self.outstanding.as_mut() {
+            match o.standing {
+                Some((_, q))
+                    if q.iter()
+                        .zip(&p.joints)
+                        .all(|(a, b)| (a - b).abs() <= STILL_DEG) => {}
+                Some(_) => {
+                    o.w2_moved = true;
+                    o.standing = Some((std::time::Instant::now(), p.joints));
+                }
+                None => o.standing = Some((std::time::Instant::now(), p.joints)),
+            }
+        }
         let tol = self.profile.arrive_deg;
-        Ok(match expect {
+        let arrived = match expect {
             Expect::Joints(q) => p.joints.iter().zip(&q).all(|(a, b)| (a - b).abs() <= tol),
             Expect::Pulses(c) => {
                 let scale = self
@@ -1498,7 +1560,11 @@ impl RaplBackend {
                     }
                 }
             }
-        })
+        };
+        if arrived {
+            self.rest = Some(p.joints);
+        }
+        Ok(arrived)
     }
 
     /// Whether two WORLD rows are the same pose within the profile's tolerance (the angles
@@ -1896,7 +1962,7 @@ impl RaplBackend {
             match self.seen_standing(until) {
                 // Standing only after the Halt's time: the motion ran to its end, no stop
                 // was seen to work.
-                Ok(Ok(())) if std::time::Instant::now() > until + STILL_GAP => {
+                Ok(Ok(_)) if std::time::Instant::now() > until + STILL_GAP => {
                     said.push(format!(
                         "{}: {sent}, and the arm stood only {:.1} s after the Halt (its \
                          motion may have ended by itself)",
@@ -1905,7 +1971,8 @@ impl RaplBackend {
                     ));
                     break;
                 }
-                Ok(Ok(())) => {
+                Ok(Ok(q)) => {
+                    self.rest = Some(q);
                     self.outstanding = None;
                     self.awaiting = None;
                     if !said.is_empty() {
@@ -1939,7 +2006,7 @@ impl RaplBackend {
     fn seen_standing(
         &mut self,
         until: std::time::Instant,
-    ) -> Result<Result<(), String>, BackendError> {
+    ) -> Result<Result<[f64; 6], String>, BackendError> {
         let until = until.min(std::time::Instant::now() + STOP_WITHIN);
         let mut last: Option<[f64; 6]> = None;
         loop {
@@ -1951,7 +2018,7 @@ impl RaplBackend {
                     .map(|(a, b)| (a - b).abs())
                     .fold(0.0, f64::max);
                 if moved <= STILL_DEG {
-                    return Ok(Ok(()));
+                    return Ok(Ok(p.joints));
                 }
                 if std::time::Instant::now() + STILL_GAP > until {
                     return Ok(Err(format!(
@@ -2212,6 +2279,10 @@ impl Backend for RaplBackend {
         self.last_poll = Some((std::time::Instant::now(), m));
         Ok(m)
     }
+    fn stands(&mut self) -> Result<bool, BackendError> {
+        // halt() answers success only once it has seen the arm standing.
+        Ok(true)
+    }
     fn grip(&mut self, dist: u8) -> BiosResult {
         self.report_unasked()?;
         let d = match self.frames.length_to_rapl(f64::from(dist)) {
@@ -2223,6 +2294,12 @@ impl Backend for RaplBackend {
         Ok(r)
     }
     fn halt(&mut self) -> BiosResult {
+        // A Home halted on the way leaves the arm not homed: the Finish after it says so.
+        let homing = self
+            .outstanding
+            .as_ref()
+            .is_some_and(|o| o.motion.expect == Expect::Homed)
+            || self.queue.iter().any(|q| q.line() == "HOME");
         // Nothing queued goes out after a Halt, whatever happens to the Halt itself.
         self.last_poll = None;
         if !self.queue.is_empty() {
@@ -2230,7 +2307,12 @@ impl Backend for RaplBackend {
             self.queue.clear();
             self.note(format!("Halt: {n} queued motion(s) dropped, not sent"));
         }
-        self.stop_and_see()
+        let r = self.stop_and_see();
+        if homing && r.is_ok() {
+            self.deferred = Some(BackendError::Refused(sim_code::NOT_HOMED));
+            self.note("Halt during HOME: the arm is not homed (the next Finish says so)".into());
+        }
+        r
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         if axis != 0 {

@@ -1033,6 +1033,15 @@ impl C500 {
         self.arm.is_moving(now)
     }
 
+    /// Stop the arm where it is now without a word (a fault: a servo that gives up, a stop at
+    /// the controller's panel): the DONE row says done, nothing is printed, power stays on.
+    pub fn stall(&mut self, now: f64) {
+        if self.arm.is_moving(now) {
+            self.stopped_short = true;
+        }
+        self.arm.halt(now);
+    }
+
     /// Cut the arm's power now (a fault: an e-stop), as LIMP does; a controller with an
     /// `estop_line` prints it unasked.
     pub fn power_off(&mut self, now: f64) {

@@ -18,7 +18,7 @@ use common::{Sim, TEST_001, start_scaled};
 use trol::{Location, PosMode, Robot, Tag};
 use trol_a465::kinematics::{Kinematics, Pose};
 use trol_proto::application::code::{TROL_ERR_NOT_STOPPED, TROL_ERR_ROBOT_UNSURE};
-use trol_rapl::backend::ARM_POWER;
+use trol_rapl::backend::{ARM_POWER, NOT_AT_TARGET};
 use trol_rapl::{C500, Profile, RAPL_CODES, RaplBackend};
 
 /// The line's speed in these tests (the paced in-memory line and the twin).
@@ -429,6 +429,48 @@ impl Run<'_> {
         } else if self.halt_must_work {
             self.missed.push(format!(
                 "{}: joint 1 for the halt while finish waits: {r:?}",
+                self.label
+            ));
+        }
+
+        // A silent stop mid-motion (a servo fault: DONE, no LIMP, nothing printed): Finish
+        // fails with BIOS_NOT_AT_TARGET within the motion's time and settle_ms, not after
+        // the 120 s motion timeout.
+        // At 1 %, so that the motion outlasts a controller's reply window (ack-at-end).
+        self.plain("speed 1", |r| r.speed(1));
+        let before = self.sim.planned_end();
+        let r = self.robot.joint(1, 1.0);
+        if r.is_ok() && self.accepted(&before) && self.sim.moving() {
+            // A few degrees into the motion (at the twin's time scale).
+            std::thread::sleep(Duration::from_millis(100));
+            self.sim.stall();
+            let t = std::time::Instant::now();
+            let f = self.robot.finish();
+            let took = t.elapsed();
+            self.outcomes
+                .push(format!("silent stop: finish {f:?} after {took:?}"));
+            match &f {
+                Ok(()) => self.false_success.push(format!(
+                    "{}: Finish succeeded after a silent stop mid-motion",
+                    self.label
+                )),
+                // BIOS_NOT_AT_TARGET, or the controller's own word for it (FINISH's error
+                // where the profile trusts it).
+                Err(e) if self.works && e.code().0 != NOT_AT_TARGET && e.code().is_trol() => self
+                    .missed
+                    .push(format!("{}: silent stop gave {e}", self.label)),
+                Err(_) => {}
+            }
+            // settle_ms (1 s) and the polls; far below motion_timeout_s (120 s).
+            if self.works && took > Duration::from_secs(30) {
+                self.missed.push(format!(
+                    "{}: a silent stop was noticed after {took:?}",
+                    self.label
+                ));
+            }
+        } else if self.works {
+            self.missed.push(format!(
+                "{}: joint 1 for the silent stop: {r:?}",
                 self.label
             ));
         }

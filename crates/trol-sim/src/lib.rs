@@ -64,6 +64,8 @@ pub struct SimBackend {
     scale: f64,
     view: Option<SharedArm>,
     locations_file: Option<std::path::PathBuf>,
+    /// The axes of the last Home accepted, until a Finish has seen it end.
+    homing: Option<Vec<usize>>,
 }
 
 /// A copy of the simulated arm for a view (a browser page): the arm's motions are planned,
@@ -102,6 +104,7 @@ impl SimBackend {
             scale: settings.time_scale.max(1e-3),
             view: None,
             locations_file: settings.locations_file,
+            homing: None,
         }
     }
 
@@ -168,7 +171,22 @@ impl Backend for SimBackend {
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
         let now = self.now();
-        Ok(self.arm.finish_status(now) == code::MOVING)
+        let moving = self.arm.finish_status(now) == code::MOVING;
+        // A Home that ended with its axes not homed (halted on the way) fails the Finish
+        // after it, once (issue 37: a halted Home is a failure, not a success).
+        if !moving {
+            if let Some(axes) = self.homing.take() {
+                let homed = self.arm.homed();
+                if !axes.iter().all(|&a| homed[a]) {
+                    return Err(BackendError::Refused(code::NOT_HOMED));
+                }
+            }
+        }
+        Ok(moving)
+    }
+    fn stands(&mut self) -> Result<bool, BackendError> {
+        let now = self.now();
+        Ok(self.arm.finish_status(now) != code::MOVING)
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
         let now = self.now();
@@ -180,7 +198,15 @@ impl Backend for SimBackend {
     }
     fn home(&mut self, axis: u8) -> BiosResult {
         let now = self.now();
-        Ok(self.arm.home(axis, now))
+        let c = self.arm.home(axis, now);
+        if c == code::OK {
+            self.homing = Some(if axis == 0 {
+                (0..6).collect()
+            } else {
+                vec![axis as usize - 1]
+            });
+        }
+        Ok(c)
     }
     fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult {
         let now = self.now();

@@ -1143,10 +1143,32 @@ fn a_halt_reaches_the_arm_while_it_homes() {
             std::thread::sleep(Duration::from_millis(300));
             robot.lock().unwrap().halt().unwrap();
         });
-        trol::wait_idle(&robot).unwrap();
+        // A halted Home is a failure (issue 37): the wait for it ends in BIOS_NOT_HOMED.
+        let e = trol::wait_idle(&robot).unwrap_err();
+        assert_eq!(e.code(), Code(-1), "{e}");
     });
     let e = robot.lock().unwrap().joint(1, 0.1).unwrap_err();
     assert_eq!(e.code(), Code(-1), "{e}");
+    // Home from the API, halted from another thread: Home fails.
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(Duration::from_millis(300));
+            // The Home call holds the lock only per poll.
+            robot.lock().unwrap().halt().unwrap();
+        });
+        let r = {
+            let mut g = robot.lock().unwrap();
+            g.call(&trol::table::HOME, &[trol::Value::Int(0)]).unwrap();
+            drop(g);
+            trol::wait_idle(&robot)
+        };
+        assert_eq!(r.unwrap_err().code(), Code(-1));
+    });
+    // Homed in full, the same wait succeeds.
+    let mut r = robot.into_inner().unwrap();
+    r.call(&trol::table::HOME, &[trol::Value::Int(0)]).unwrap();
+    r.finish().unwrap();
+    r.joint(1, 0.1).unwrap();
 }
 
 /// Repeats follow the version handshake (docs/protocol.md, "A peer of 1998"): none before

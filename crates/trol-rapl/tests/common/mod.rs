@@ -23,6 +23,7 @@ pub struct Sim {
     lines: Arc<Mutex<Vec<String>>>,
     end: Arc<Mutex<[f64; 6]>>,
     estop: Arc<AtomicBool>,
+    stall: Arc<AtomicBool>,
     moving: Arc<AtomicBool>,
     power: Arc<AtomicBool>,
 }
@@ -61,6 +62,15 @@ impl Sim {
     pub fn emergency_stop(&self) {
         self.estop.store(true, Ordering::SeqCst);
     }
+
+    /// Stop the arm silently at the controller's next turn (a servo fault), and wait until it
+    /// has.
+    pub fn stall(&self) {
+        self.stall.store(true, Ordering::SeqCst);
+        while self.stall.load(Ordering::SeqCst) {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    }
 }
 
 /// A simulated C500 as `profile` says, its arm homed or not, at time scale 20.
@@ -84,10 +94,11 @@ pub fn start_scaled(
     let lines = Arc::new(Mutex::new(Vec::new()));
     let end = Arc::new(Mutex::new([0.0; 6]));
     let estop = Arc::new(AtomicBool::new(false));
+    let stall = Arc::new(AtomicBool::new(false));
     let moving = Arc::new(AtomicBool::new(false));
     let power = Arc::new(AtomicBool::new(true));
     let (flag, keep, ends, cut) = (stop.clone(), lines.clone(), end.clone(), estop.clone());
-    let (moves, powered) = (moving.clone(), power.clone());
+    let (moves, powered, stalls) = (moving.clone(), power.clone(), stall.clone());
     let thread = std::thread::spawn(move || {
         let arm = Arm::new(ArmSettings {
             homed,
@@ -109,6 +120,10 @@ pub fn start_scaled(
                 if cut.swap(false, Ordering::SeqCst) {
                     c.power_off(now);
                 }
+                if stalls.load(Ordering::SeqCst) {
+                    c.stall(now);
+                    stalls.store(false, Ordering::SeqCst);
+                }
                 *ends.lock().unwrap() = c.planned_end();
                 moves.store(c.arm_moving(now), Ordering::SeqCst);
                 powered.store(c.has_power(), Ordering::SeqCst);
@@ -123,6 +138,7 @@ pub fn start_scaled(
             lines,
             end,
             estop,
+            stall,
             moving,
             power,
         },

@@ -210,6 +210,9 @@ pub struct Mars8 {
     offset: [f64; 6],
     /// The axes whose move under way is a hard home (HH).
     homing: [bool; 6],
+    /// Each HH that came while an axis of an earlier batch still homed (CTU's client waits
+    /// for each group with R:; a host that does not may start a group too early).
+    overlaps: Vec<String>,
     queue: VecDeque<([f64; 6], f64)>,
     coord_group: bool,
     regms: [f64; 6],
@@ -246,6 +249,7 @@ impl Mars8 {
             moves: [None; 6],
             offset,
             homing: [false; 6],
+            overlaps: Vec::new(),
             queue: VecDeque::new(),
             coord_group: false,
             last_motion_cmd: f64::NEG_INFINITY,
@@ -275,6 +279,11 @@ impl Mars8 {
     /// The unit's time, s.
     pub fn now(&self) -> f64 {
         self.epoch.elapsed().as_secs_f64() * self.scale
+    }
+
+    /// Each hard home that came while an axis of an earlier batch still homed.
+    pub fn overlaps(&self) -> &[String] {
+        &self.overlaps
     }
 
     /// Every command line received, in order.
@@ -597,6 +606,22 @@ impl Mars8 {
             }
             w if w.starts_with("HH") => match self.axis_index(&w[2..]) {
                 Some(j) if ints.is_empty() && self.can_move() => {
+                    let still: Vec<char> = (0..6)
+                        .filter(|&k| {
+                            k != j
+                                && self.homing[k]
+                                && self.moves[k]
+                                    .as_ref()
+                                    .is_some_and(|m| !m.done(t) && t - m.start > 0.1)
+                        })
+                        .map(|k| self.profile.axis(k))
+                        .collect();
+                    if !still.is_empty() {
+                        self.overlaps.push(format!(
+                            "{w} while {} still homed",
+                            still.iter().collect::<String>()
+                        ));
+                    }
                     // To the home switch (the homed frame's 0) at the axis's REGMS.
                     let from = self.axis_pos(j, t);
                     let v = (self.regms[j] / 256.0 * 1000.0).max(1.0);

@@ -140,6 +140,20 @@ fn the_variant(name: &str) {
         ["HHB:", "HHA:", "HHC:", "HHD:", "HHE:", "HHF:"],
         "{name}"
     );
+    // Each group went only once the one before was home (issue 37: on a unit that does
+    // not raise its moving bit while homing, the next group went after 1 s).
+    let overlaps = twin.with(|u| u.overlaps().to_vec());
+    assert!(overlaps.is_empty(), "{name}: {overlaps:?}");
+
+    // A Home halted on the way fails (BIOS_NOT_HOMED at the Finish after it); nothing moves
+    // before a Home that ends.
+    r.call(&trol::table::HOME, &[trol::Value::Int(0)]).unwrap();
+    twin.wait_moving();
+    std::thread::sleep(Duration::from_millis(50));
+    assert_eq!(code(r.halt()), 0, "{name}");
+    assert_eq!(code(r.finish()), -1, "{name}: Finish after a halted Home");
+    assert_eq!(code(r.ma(&[0.0, 0.0, 0.5, 0.0, 0.5, 0.0])), -1, "{name}");
+    assert_eq!(code(r.home(0)), 0, "{name}");
 
     // A joint move, then the actual position.
     let q1 = [0.3, 0.2, 0.9, -0.4, 0.6, 0.5];

@@ -1689,6 +1689,9 @@ impl RaplBackend {
             }
             _ => {}
         }
+        if self.profile.simulated {
+            self.check_simulator()?;
+        }
         self.note(format!(
             "session open: {}; units {}",
             status.version,
@@ -1711,6 +1714,35 @@ impl RaplBackend {
             );
         }
         Ok(())
+    }
+
+    /// A profile written for the simulated C500 (`simulated = true`) drives only the
+    /// simulator: the probe's unknown word must come back refused with the simulator's name
+    /// (a real C500 refuses it in its own words, or answers in a form the simulator's profile
+    /// does not know). Nothing that moves was sent.
+    fn check_simulator(&mut self) -> Result<(), RaplError> {
+        let word = crate::probe::PROBE_WORD;
+        let said = match self.exchange(word, self.reply_timeout()) {
+            Ok(r) => {
+                let text = lines(&r.text).join(" / ");
+                match self.answer(word, r, false) {
+                    Ok(Answer::Refused(_, t)) if t.contains(crate::c500::SIMULATOR_SAYS) => {
+                        return Ok(());
+                    }
+                    _ => text,
+                }
+            }
+            Err(e) => e.to_string(),
+        };
+        Err(RaplError::Status(format!(
+            "this profile was written for TROL's simulated C500 (`simulated = true`, by `trol \
+             sim --rapl --print-profile`), and the controller on {} is not it (it answered \
+             `{word}` with `{said}`): its readings would move a real arm wrongly. Write this \
+             controller's own profile with `trol rapl probe` (docs/c500.md, \"The first hour \
+             with a real arm\"), or delete the line `simulated = true` to use the file anyway; \
+             nothing was moved",
+            self.port.name()
+        )))
     }
 
     fn aci_steps(&mut self) -> io::Result<Result<(), AciError>> {

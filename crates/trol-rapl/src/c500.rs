@@ -298,6 +298,10 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
     Some((p, name != "not-homed"))
 }
 
+/// The text of the simulated C500's refusal of the probe's word, which tells it from a real
+/// controller.
+pub const SIMULATOR_SAYS: &str = "COMMAND ERROR (TROL SIMULATED C500)";
+
 /// The simulated C500.
 pub struct C500 {
     profile: Profile,
@@ -404,6 +408,7 @@ impl C500 {
     /// the units and conventions it uses filled in.
     pub fn describe(&self) -> Profile {
         let mut p = self.profile.clone();
+        p.simulated = true;
         if p.angles().is_none() {
             p.angles = "yaw pitch roll".into();
         }
@@ -1013,6 +1018,15 @@ impl C500 {
                 self.ok("")
             }
             ("DELAY", Some([_])) => self.ok(""),
+            // The probe's unknown word: refused as any, with the simulator's name in the text,
+            // so that a session with a simulator's profile knows it talks to the simulator.
+            (crate::probe::PROBE_WORD, _) if self.profile.twin.names_itself => {
+                let line = self.refusal.write(12, SIMULATOR_SAYS);
+                self.out.extend(b"\n");
+                self.out.extend(line.bytes());
+                self.last_error = line;
+                self.prompt();
+            }
             _ => self.refuse(12),
         }
     }

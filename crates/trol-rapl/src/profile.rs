@@ -322,6 +322,12 @@ pub struct Profile {
     /// Error numbers (three digits) and the code each means (one of [`ERROR_TARGETS`]);
     /// numbers not listed give BIOS_RAPL_ERROR, and their text is logged.
     pub errors: BTreeMap<String, String>,
+    /// This profile describes TROL's simulated C500 (`trol sim --rapl --print-profile` writes
+    /// it): a session refuses it unless the controller answers as the simulator does, so a
+    /// simulator's readings never drive a real arm (issue 37). Delete the line to use the
+    /// file on a real controller anyway.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub simulated: bool,
     /// How the simulated C500 plays the points the public sources leave open (read only by
     /// `trol sim --rapl`; a real controller's profile needs none of it).
     #[serde(skip_serializing_if = "Twin::is_default")]
@@ -363,6 +369,9 @@ pub struct Twin {
     /// Whether Ctrl-C stops a motion, besides cancelling the line; unset: exactly when the
     /// profile's `halt` is "ctrl-c".
     pub ctrl_c_stops: Option<bool>,
+    /// Whether it names itself in its refusal of the probe's word (false: it plays a real
+    /// C500, for the test that a simulator's profile is refused there).
+    pub names_itself: bool,
 }
 
 /// How the simulated C500 takes FINISH typed in immediate mode.
@@ -392,6 +401,7 @@ impl Default for Twin {
             halt_stops: true,
             abort_stops: true,
             ctrl_c_stops: None,
+            names_itself: true,
         }
     }
 }
@@ -537,6 +547,7 @@ impl Default for Profile {
                 .iter()
                 .map(|(n, _, to)| (format!("{n:03}"), to.to_string()))
                 .collect(),
+            simulated: false,
             twin: Twin::default(),
         }
     }
@@ -771,6 +782,13 @@ impl Profile {
              # Keys left out keep their defaults; angles = \"\" refuses cartesian commands,\n\
              # joint_units = \"\" refuses MA and MI.\n",
         );
+        if self.simulated {
+            out.push_str(
+                "# Written for TROL's SIMULATED C500 (`simulated = true`): a real C500's session\n\
+                 # refuses it. Write your controller's own with `trol rapl probe` (docs/c500.md,\n\
+                 # \"The first hour with a real arm\").\n",
+            );
+        }
         out.push_str(&body);
         out
     }

@@ -183,6 +183,62 @@ fn mismatched_profiles_fail_clearly_and_move_nothing() {
     assert!(e.contains("STATUS says METRIC UNITS"), "{e}");
 }
 
+/// A profile written by `trol sim --rapl --print-profile` says so (`simulated = true`), and
+/// drives only the simulator: a controller that is not it refuses the session at the opening,
+/// with what to do, before anything that moves (issue 37, item 8: a simulator's profile
+/// turned a real J6 by 164 degrees).
+#[test]
+fn a_simulators_profile_drives_only_the_simulator() {
+    let describes = |p: &Profile| {
+        trol_rapl::C500::new(
+            p.clone(),
+            trol_a465::arm::Arm::new(Default::default()),
+            Vec::new(),
+        )
+        .describe()
+    };
+    let printed = describes(&Profile::simulator());
+    assert!(printed.simulated);
+    let text = printed.to_toml();
+    assert!(text.contains("simulated = true"), "{text}");
+    assert!(text.contains("SIMULATED C500"), "{text}");
+    assert_eq!(Profile::parse(&text).unwrap(), printed);
+    // Against the simulator: it opens.
+    let (port, _sim) = start(Profile::simulator(), None);
+    RaplBackend::connect(port, printed.clone()).unwrap();
+    // Against a controller that does not name itself (a real C500): refused, nothing moved.
+    let real = Profile {
+        twin: trol_rapl::profile::Twin {
+            names_itself: false,
+            ..Default::default()
+        },
+        ..Profile::simulator()
+    };
+    let (port, sim) = start(real.clone(), None);
+    let e = RaplBackend::connect(port, printed.clone())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("simulated = true"), "{e}");
+    assert!(e.contains("trol rapl probe"), "{e}");
+    assert!(
+        sim.ran()
+            .iter()
+            .all(|l| ["STATUS", "NOH", "NOHELP", "QZXTROL"]
+                .iter()
+                .any(|w| l.starts_with(w))),
+        "{:?}",
+        sim.ran()
+    );
+    // The same file without the line: the user's decision, it opens.
+    let (port, _sim) = start(real, None);
+    let confirmed = Profile {
+        simulated: false,
+        ..printed
+    };
+    RaplBackend::connect(port, confirmed).unwrap();
+}
+
 #[test]
 fn the_safe_default_refuses_what_a_wrong_guess_would_turn_into_a_wrong_motion() {
     let (port, sim) = start(Profile::simulator(), None);

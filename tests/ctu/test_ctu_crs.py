@@ -23,7 +23,7 @@ from ctu_crs import CRS93  # noqa: E402
 TROL = os.environ.get("TROL_BIN", "target/debug/trol")
 VARIANTS = ["default", "echo", "noise", "moving-lag", "refusal-line",
             "refusal-error-bit", "stop-latches", "lf-only", "r-blocks", "gripper-moving",
-            "stop-ignored", "unstoppable"]
+            "stop-ignored", "homing-silent", "unstoppable"]
 
 
 @pytest.fixture

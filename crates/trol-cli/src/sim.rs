@@ -103,7 +103,7 @@ pub struct SimArgs {
     /// finish-refused, finish-deaf, halt-ignored, ctrl-c-cancels-line, unstoppable. With
     /// --mars (docs/mars.md): default, echo, noise, moving-lag, refusal-line,
     /// refusal-error-bit, stop-latches, lf-only, r-blocks, gripper-moving, stop-ignored,
-    /// unstoppable.
+    /// homing-silent, unstoppable.
     #[arg(long, value_name = "NAME")]
     variant: Option<String>,
     /// With --rapl or --mars: print the profile that describes this simulated controller

@@ -93,6 +93,7 @@ pick_on_variants! {
     pick_r_blocks => "r-blocks",
     pick_gripper_moving => "gripper-moving",
     pick_stop_ignored => "stop-ignored",
+    pick_homing_silent => "homing-silent",
     pick_unstoppable => "unstoppable",
 }
 

@@ -300,7 +300,7 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
 
 /// The text of the simulated C500's refusal of the probe's word, which tells it from a real
 /// controller.
-pub const SIMULATOR_SAYS: &str = "COMMAND ERROR (TROL SIMULATED C500)";
+pub const SIMULATOR_SAYS: &str = "COMMAND ERROR, TROL SIMULATED C500";
 
 /// The simulated C500.
 pub struct C500 {

@@ -100,8 +100,8 @@ pub struct SimArgs {
     /// colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
     /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
     /// nul-after-digit, no-echo, not-homed, finish, finish-trusted, finish-at-once,
-    /// finish-refused, finish-deaf, halt-ignored, ctrl-c-cancels-line, unstoppable. With
-    /// --mars (docs/mars.md): default, echo, noise, moving-lag, refusal-line,
+    /// finish-refused, finish-deaf, jog-tool, halt-ignored, ctrl-c-cancels-line, unstoppable.
+    /// With --mars (docs/mars.md): default, echo, noise, moving-lag, refusal-line,
     /// refusal-error-bit, stop-latches, lf-only, r-blocks, gripper-moving, stop-ignored,
     /// homing-silent, unstoppable.
     #[arg(long, value_name = "NAME")]

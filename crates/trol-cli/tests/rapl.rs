@@ -133,6 +133,7 @@ c_examples_on_variants! {
     c_examples_nul_after_digit => "nul-after-digit",
     c_examples_no_echo => "no-echo",
     c_examples_not_homed => "not-homed",
+    c_examples_jog_tool => "jog-tool",
     c_examples_halt_ignored => "halt-ignored",
     c_examples_ctrl_c_cancels_line => "ctrl-c-cancels-line",
     c_examples_unstoppable => "unstoppable",
@@ -469,9 +470,11 @@ fn probe_measure_moves_only_after_yes_and_settles_what_no_reading_tells() {
         ],
         "serving on ",
     );
-    // The operator puts the arm in free space first.
-    sim.type_line("10 20 40 30 50 -20");
+    // The operator puts the arm in free space first, the tool not pointing up.
+    sim.type_line("10 20 40 30 -50 -20");
     sim.wait_for("pendant: at", 60);
+    // The profile the poses of step 4 fitted (the simulator's angles).
+    std::fs::write(dir.join("poses.toml"), "angles = \"yaw pitch roll\"\n").unwrap();
     let probe = |answer: &str, out: &str| {
         trol(
             &dir,
@@ -480,6 +483,8 @@ fn probe_measure_moves_only_after_yes_and_settles_what_no_reading_tells() {
                 "probe",
                 "--controller",
                 &sim.name,
+                "--profile",
+                "poses.toml",
                 "--out",
                 "steps.txt",
                 "--measure",

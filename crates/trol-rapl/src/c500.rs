@@ -134,6 +134,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "as finish, but FINISH is refused in immediate mode (program mode only, as R2JSON lists it)",
     ),
     (
+        "jog-tool",
+        "JOG moves along the tool's axes, not the world's (jog_frame = \"tool\")",
+    ),
+    (
         "halt-ignored",
         "HALT is acknowledged but does not stop a motion (ABORT does)",
     ),
@@ -245,6 +249,14 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
         "no-echo" => Profile {
             twin: crate::profile::Twin {
                 echo: false,
+                ..twin
+            },
+            ..base
+        },
+        "jog-tool" => Profile {
+            jog_frame: "tool".into(),
+            twin: crate::profile::Twin {
+                jog_tool: true,
                 ..twin
             },
             ..base
@@ -827,7 +839,19 @@ impl C500 {
                 self.motion_answer(c, now)
             }
             ("JOG", Some([x, y, z])) => {
-                let c = self.arm.jog([x * mm, y * mm, z * mm], true, now);
+                let mut d = [x * mm, y * mm, z * mm];
+                if self.profile.twin.jog_tool {
+                    // Along the tool's axes where the arm will be: the controller's tool
+                    // frame is TROL's turned by the profile's tool_rotation.
+                    let q = self.arm.planned_end();
+                    let p = self.arm.kinematics().fk(&q);
+                    let [ty, tp, tr] = self.profile.tool_rotation.map(f64::to_radians);
+                    let off = trol_a465::kinematics::Pose::from_xyzypr([0.0, 0.0, 0.0, ty, tp, tr]);
+                    let r = p.rot * off.rot;
+                    let v = r.x_axis * d[0] + r.y_axis * d[1] + r.z_axis * d[2];
+                    d = [v.x, v.y, v.z];
+                }
+                let c = self.arm.jog(d, true, now);
                 self.motion_answer(c, now)
             }
             ("HALT" | "ABORT", _) => {

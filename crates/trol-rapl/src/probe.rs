@@ -435,7 +435,12 @@ impl Measured {
         let end = self.motion_ack == crate::profile::MotionAck::End;
         Profile {
             joint_units: self.joint_units.clone(),
-            jog_frame: self.jog_frame.clone(),
+            // Not measured (a pose where it cannot be told): the profile's, if it has one.
+            jog_frame: if self.jog_frame.is_empty() {
+                profile.jog_frame.clone()
+            } else {
+                self.jog_frame.clone()
+            },
             motion_ack: self.motion_ack,
             halt: if end {
                 crate::profile::Halt::CtrlC
@@ -445,6 +450,21 @@ impl Measured {
             ..profile.clone()
         }
     }
+}
+
+/// The least angle between the tool's z axis and the world's +z at which JOG's frame is
+/// measured, degrees (JOG 0,0,1 then moves at least 0.34 units apart in the two frames).
+pub const MIN_JOG_TILT_DEG: f64 = 20.0;
+
+/// The controller's tool z axis in the world, from a reading's JOINTS row through the A465's
+/// kinematics and the profile's `tool_rotation`.
+fn tool_z_axis(p: &Position, profile: &Profile) -> [f64; 3] {
+    let q: [f64; 6] = p.joints.map(f64::to_radians);
+    let flange = Kinematics::default().fk(&q);
+    let [y, pi, r] = profile.tool_rotation.map(f64::to_radians);
+    let off = Pose::from_xyzypr([0.0, 0.0, 0.0, y, pi, r]);
+    let z = (flange.rot * off.rot).z_axis;
+    [z.x, z.y, z.z]
 }
 
 /// The lines the supervised steps send, in order (each motion undone by the next).
@@ -529,16 +549,45 @@ pub fn measure(b: &mut RaplBackend, log: &mut dyn FnMut(&str)) -> Result<Measure
         ));
     };
 
-    log("JOG 0,0,1");
-    step(b, "JOG 0,0,1", long)?;
-    let jogged = still(b)?;
-    step(b, "JOG 0,0,-1", long)?;
-    still(b)?;
-    let d: Vec<f64> = (0..3).map(|i| jogged.world[i] - after.world[i]).collect();
-    let jog_frame = if (d[2] - 1.0).abs() < 0.2 && d[0].abs() < 0.2 && d[1].abs() < 0.2 {
-        "world"
+    // JOG's frame can be told only where the tool's z axis is not the world's: at all
+    // joints zero (the homed pose) both point up, and a JOG in either frame moves the same
+    // (issue 37: the probe wrote "world" there for a flange-frame JOG).
+    let tool_z = tool_z_axis(&after, b.profile());
+    // Pointing down (-z) tells as well as sideways: only the world's +z cannot.
+    let tilt = tool_z[2].clamp(-1.0, 1.0).acos().to_degrees();
+    let jog_frame = if b.profile().angles().is_none() {
+        log(
+            "JOG's frame is measured once the poses have fitted `angles` and `tool_rotation` \
+             (--poses, docs/c500.md step 4; give that profile with --profile): jog_frame stays \
+             unset (a straight Jog is refused)",
+        );
+        ""
+    } else if tilt < MIN_JOG_TILT_DEG {
+        log(&format!(
+            "JOG's frame cannot be told at this pose: the tool's z axis is {tilt:.0} degrees \
+             from the world's +z (at least {MIN_JOG_TILT_DEG:.0} needed). Turn joint 5 by 45 \
+             degrees by pendant, so that the tool does not point up, and run --measure again; \
+             jog_frame stays unset (a straight Jog is refused)"
+        ));
+        ""
     } else {
-        "tool"
+        log("JOG 0,0,1");
+        step(b, "JOG 0,0,1", long)?;
+        let jogged = still(b)?;
+        step(b, "JOG 0,0,-1", long)?;
+        still(b)?;
+        let d: [f64; 3] = std::array::from_fn(|i| jogged.world[i] - after.world[i]);
+        let near = |v: [f64; 3]| (0..3).all(|i| (d[i] - v[i]).abs() < 0.2);
+        if near([0.0, 0.0, 1.0]) {
+            "world"
+        } else if near(tool_z) {
+            "tool"
+        } else {
+            return Err(format!(
+                "JOG 0,0,1 moved the tool by {d:?} (WORLD row): neither along the world's z \
+                 nor along the tool's {tool_z:?}; jog_frame stays unset"
+            ));
+        }
     };
 
     // Typed with the long timeout: a controller that answers at the end answers then. The

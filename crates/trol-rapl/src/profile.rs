@@ -369,6 +369,9 @@ pub struct Twin {
     /// Whether Ctrl-C stops a motion, besides cancelling the line; unset: exactly when the
     /// profile's `halt` is "ctrl-c".
     pub ctrl_c_stops: Option<bool>,
+    /// Whether JOG moves along the tool's axes (the flange frame, as TOOL sets it) instead
+    /// of the world's.
+    pub jog_tool: bool,
     /// Whether it names itself in its refusal of the probe's word (false: it plays a real
     /// C500, for the test that a simulator's profile is refused there).
     pub names_itself: bool,
@@ -402,6 +405,7 @@ impl Default for Twin {
             abort_stops: true,
             ctrl_c_stops: None,
             names_itself: true,
+            jog_tool: false,
         }
     }
 }

@@ -215,13 +215,22 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
             trol_rapl::profile::MotionAck::Start,
         ),
         ("ack-at-end", "degrees", trol_rapl::profile::MotionAck::End),
+        ("jog-tool", "degrees", trol_rapl::profile::MotionAck::Start),
     ] {
         let (controller, _) = trol_rapl::c500::variant(variant).unwrap();
         // Real time: the answer to JOINT 6,20 must come while the joint turns (2.3 s).
         let (port, sim) = start_at(controller, 1.0);
-        let mut b = RaplBackend::connect(port, Profile::default()).unwrap();
-        // The operator puts the arm in free space first (all joints zero is full stretch).
-        sim.pendant.send(POSES_DEG[0].map(f64::to_radians)).unwrap();
+        // The poses of step 4 fitted the angles (the twin's: TROL's own).
+        let fitted = Profile {
+            angles: "yaw pitch roll".into(),
+            ..Profile::default()
+        };
+        let mut b = RaplBackend::connect(port, fitted).unwrap();
+        // The operator puts the arm in free space first (all joints zero is full stretch),
+        // the tool not pointing up (where JOG's frame could not be told).
+        sim.pendant
+            .send([10.0f64, 20.0, 40.0, 30.0, -50.0, -20.0].map(f64::to_radians))
+            .unwrap();
         let code = sim
             .arrived
             .recv_timeout(std::time::Duration::from_secs(60))
@@ -231,9 +240,15 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
             let r = b.read_only("W2").unwrap();
             trol_rapl::text::read_position(&r.text).unwrap()
         };
-        let m = probe::measure(&mut b, &mut |_| {}).unwrap_or_else(|e| panic!("{variant}: {e}"));
+        let m = probe::measure(&mut b, &mut |l| eprintln!("probe: {l}"))
+            .unwrap_or_else(|e| panic!("{variant}: {e}"));
         assert_eq!(m.joint_units, units, "{variant}");
-        assert_eq!(m.jog_frame, "world", "{variant}");
+        let frame = if variant == "jog-tool" {
+            "tool"
+        } else {
+            "world"
+        };
+        assert_eq!(m.jog_frame, frame, "{variant}");
         assert_eq!(m.motion_ack, ack, "{variant}");
         // Every step undone: the arm is back where it was.
         let after = {
@@ -259,4 +274,45 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
         }
         b.close();
     }
+}
+
+/// At the homed pose (all joints zero) the tool's z axis is the world's, and a JOG in either
+/// frame moves the same: the probe sends no JOG there, leaves jog_frame unset and says which
+/// pose to set (issue 37: it wrote "world" for a flange-frame JOG).
+#[test]
+fn the_jog_frame_is_not_measured_where_it_cannot_be_told() {
+    // The public convention: the tool frame is the world's at all joints zero (TROL's
+    // model's is pitched -90 degrees: tool_rotation says so), and JOG along the tool's axes.
+    let (offset, _) = trol_rapl::c500::variant("world-offset").unwrap();
+    let controller = Profile {
+        twin: trol_rapl::profile::Twin {
+            jog_tool: true,
+            ..offset.twin.clone()
+        },
+        ..offset.clone()
+    };
+    let (port, sim) = start_at(controller, 1.0);
+    let fitted = Profile {
+        angles: "yaw pitch roll".into(),
+        tool_rotation: offset.tool_rotation,
+        ..Profile::default()
+    };
+    let mut b = RaplBackend::connect(port, fitted).unwrap();
+    let mut said = Vec::new();
+    let m = probe::measure(&mut b, &mut |l| said.push(l.to_string())).unwrap();
+    assert_eq!(m.jog_frame, "");
+    assert!(
+        said.iter()
+            .any(|l| l.contains("Turn joint 5 by 45 degrees")),
+        "{said:?}"
+    );
+    let ran = sim.lines.lock().unwrap().clone();
+    assert!(!ran.iter().any(|l| l.starts_with("JOG")), "{ran:?}");
+    // A profile that knew it keeps it.
+    let known = Profile {
+        jog_frame: "tool".into(),
+        ..Profile::default()
+    };
+    assert_eq!(m.apply(&known).jog_frame, "tool");
+    b.close();
 }

@@ -50,6 +50,8 @@ struct Run<'a> {
     halt_must_work: bool,
     /// No stop stops this controller's arm: Halt must say TROL_ERR_NOT_STOPPED.
     halt_cannot: bool,
+    /// This controller's JOG moves along the tool's axes.
+    jog_tool: bool,
     false_success: Vec<String>,
     unasked: Vec<String>,
     missed: Vec<String>,
@@ -239,7 +241,14 @@ impl Run<'_> {
         });
         let mut p = pose_of(&self.sim.planned_end()).to_xyzypr();
         p[2] += 20.0;
-        self.motion("jog z+20 straight", Want::Pose(p), |r| {
+        // A controller whose JOG moves along the tool's axes: TROL's straight Jog (world
+        // axes) is refused before anything is sent.
+        let want = if self.jog_tool {
+            Want::Refused
+        } else {
+            Want::Pose(p)
+        };
+        self.motion("jog z+20 straight", want, |r| {
             r.jog(&[0.0, 0.0, 20.0], true)
         });
         // The manual's check: a move below the table is refused and the arm stays (no
@@ -575,6 +584,7 @@ fn run_variant(name: &str) {
                 && !FAIL_SAFE.contains(&name)
                 && !UNSTOPPABLE.contains(&name),
             halt_cannot: UNSTOPPABLE.contains(&name),
+            jog_tool: twin.twin.jog_tool,
             false_success: Vec::new(),
             unasked: Vec::new(),
             missed: Vec::new(),
@@ -651,6 +661,7 @@ variants! {
     nul_after_digit => "nul-after-digit",
     no_echo => "no-echo",
     not_homed => "not-homed",
+    jog_tool => "jog-tool",
     halt_ignored => "halt-ignored",
     ctrl_c_cancels_line => "ctrl-c-cancels-line",
     unstoppable => "unstoppable",

@@ -57,8 +57,9 @@ pub struct ProbeArgs {
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=20))]
     poses: u16,
     /// After first contact (and the poses), settle by supervised motions what no reading
-    /// tells: MA/MI's units (MI of 0.05 on joint 6), JOG's frame (JOG 0,0,1) and when a
-    /// motion's ACK comes (JOINT 6,20), each undone at once, at SPEED 5. The arm must be
+    /// tells: MA/MI's units (MI of 0.05 on joint 6), JOG's frame (JOG 0,0,1, where the tool
+    /// does not point up), when a motion's ACK comes (JOINT 6,20) and which stop (HALT,
+    /// ABORT, Ctrl-C) stops a running motion, each undone at once, at SPEED 5. The arm must be
     /// homed, in free space, and someone's hand on the emergency stop: the probe asks for
     /// `yes` first and moves nothing without it.
     #[arg(long)]
@@ -160,12 +161,19 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
             let m = trol_rapl::probe::measure(&mut b, &mut |l| say!("  {l}"));
             match &m {
                 Ok(m) => say!(
-                    "measured: joint_units = \"{}\", jog_frame = \"{}\", motion_ack = \"{}\"",
+                    "measured: joint_units = \"{}\", jog_frame = \"{}\", motion_ack = \"{}\", \
+                     halt = \"{}\"",
                     m.joint_units,
                     m.jog_frame,
                     match m.motion_ack {
                         trol_rapl::profile::MotionAck::Start => "start",
                         trol_rapl::profile::MotionAck::End => "end",
+                    },
+                    match m.halt {
+                        Some(trol_rapl::profile::Halt::Halt) => "halt",
+                        Some(trol_rapl::profile::Halt::Abort) => "abort",
+                        Some(trol_rapl::profile::Halt::CtrlC) => "ctrl-c",
+                        None => "ctrl-c (a motion holds the line)",
                     }
                 ),
                 Err(e) => say!("the supervised steps stopped: {e}"),

@@ -1941,6 +1941,34 @@ impl RaplBackend {
         })
     }
 
+    /// One stop (`HALT`, `ABORT` or `Ctrl-C`) on its own, and whether W2 then shows the arm
+    /// standing within [`STOP_WITHIN`] (its joints), or why not: for the probe's supervised
+    /// step that finds which stop stops a motion. Halt itself tries them all.
+    pub fn stop_with(&mut self, stop: &str) -> Result<Result<[f64; 6], String>, BackendError> {
+        let stop = match stop {
+            "HALT" => Stop::Halt,
+            "ABORT" => Stop::Abort,
+            "Ctrl-C" => Stop::CtrlC,
+            other => {
+                return Err(BackendError::Link(format!(
+                    "{other} is not one of the C500's stops"
+                )));
+            }
+        };
+        match stop {
+            Stop::CtrlC => {
+                self.awaiting = None;
+                self.interrupt()?;
+            }
+            Stop::Halt | Stop::Abort => match self.command_as(stop.word(), true)? {
+                0 => {}
+                c => return Ok(Err(format!("{} was refused ({c})", stop.word()))),
+            },
+        }
+        let until = std::time::Instant::now() + STOP_WITHIN;
+        self.seen_standing(until)
+    }
+
     /// The stops to try, in order: Ctrl-C first where the interpreter is busy with a line
     /// (a motion answered at its end) or where the profile says it is the halt, then the
     /// profile's halt, then the others in the order HALT, ABORT, Ctrl-C.

@@ -426,6 +426,9 @@ pub struct Measured {
     pub jog_frame: String,
     /// When a motion's ACK comes.
     pub motion_ack: crate::profile::MotionAck,
+    /// The first stop seen to stop a running motion (HALT, ABORT, Ctrl-C in that order);
+    /// `None` where a motion holds the line (only Ctrl-C gets through then).
+    pub halt: Option<crate::profile::Halt>,
 }
 
 impl Measured {
@@ -445,7 +448,7 @@ impl Measured {
             halt: if end {
                 crate::profile::Halt::CtrlC
             } else {
-                profile.halt
+                self.halt.unwrap_or(profile.halt)
             },
             ..profile.clone()
         }
@@ -476,6 +479,8 @@ pub const MEASURE: &[&str] = &[
     "JOG 0,0,-1",
     "JOINT 6,20",
     "JOINT 6,-20",
+    "HALT",
+    "ABORT",
 ];
 
 /// Settle by supervised motions what no reading tells (c500-rapl.md §1.6; docs/c500.md step
@@ -599,6 +604,51 @@ pub fn measure(b: &mut RaplBackend, log: &mut dyn FnMut(&str)) -> Result<Measure
     still(b)?;
     step(b, "JOINT 6,-20", long)?;
     still(b)?;
+
+    // Which stop stops a running motion: each tried on a JOINT 6,20 of its own (2.3 s at
+    // SPEED 5), 0.3 s into it, and counted only when W2 shows the arm standing within a
+    // second; the joint is turned back by what it turned. A controller that answers a motion
+    // at its end takes nothing but Ctrl-C while it runs: Halt then checks Ctrl-C on the arm
+    // each time, and the next stops after it (docs/c500.md, "Halt").
+    let halt = if moving {
+        let mut found = None;
+        for stop in ["HALT", "ABORT", "Ctrl-C"] {
+            let before = still(b)?;
+            log(&format!("JOINT 6,20, and {stop} 0.3 s into it"));
+            step(b, "JOINT 6,20", long)?;
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            let stood = b.stop_with(stop).map_err(|e| format!("{stop}: {e}"))?;
+            let rest = still(b)?;
+            let turned = rest.joints[5] - before.joints[5];
+            step(b, &format!("JOINT 6,{}", crate::text::num(-turned)), long)?;
+            still(b)?;
+            match stood {
+                Ok(_) if turned.abs() < 19.5 => {
+                    log(&format!(
+                        "{stop} stopped the joint after {turned:.2} degrees"
+                    ));
+                    found = Some(stop);
+                    break;
+                }
+                Ok(_) => log(&format!("{stop}: the joint ran on to its end")),
+                Err(why) => log(&format!("{stop} did not stop it: {why}")),
+            }
+        }
+        match found {
+            Some("HALT") => Some(crate::profile::Halt::Halt),
+            Some("ABORT") => Some(crate::profile::Halt::Abort),
+            Some(_) => Some(crate::profile::Halt::CtrlC),
+            None => {
+                return Err(
+                    "no stop (HALT, ABORT, Ctrl-C) stopped a running motion: TROL cannot halt \
+                     this arm; do not drive it through TROL, and check the controller"
+                        .into(),
+                );
+            }
+        }
+    } else {
+        None
+    };
     Ok(Measured {
         joint_units: joint_units.into(),
         jog_frame: jog_frame.into(),
@@ -607,6 +657,7 @@ pub fn measure(b: &mut RaplBackend, log: &mut dyn FnMut(&str)) -> Result<Measure
         } else {
             crate::profile::MotionAck::End
         },
+        halt,
     })
 }
 

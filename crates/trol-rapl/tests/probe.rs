@@ -216,6 +216,11 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
         ),
         ("ack-at-end", "degrees", trol_rapl::profile::MotionAck::End),
         ("jog-tool", "degrees", trol_rapl::profile::MotionAck::Start),
+        (
+            "halt-ignored",
+            "degrees",
+            trol_rapl::profile::MotionAck::Start,
+        ),
     ] {
         let (controller, _) = trol_rapl::c500::variant(variant).unwrap();
         // Real time: the answer to JOINT 6,20 must come while the joint turns (2.3 s).
@@ -250,6 +255,15 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
         };
         assert_eq!(m.jog_frame, frame, "{variant}");
         assert_eq!(m.motion_ack, ack, "{variant}");
+        // The stop it saw stop a running motion: ABORT where HALT is only acknowledged; none
+        // measured where a motion holds the line (Ctrl-C is then the only way in).
+        use trol_rapl::profile::Halt;
+        let halt = match variant {
+            "halt-ignored" => Some(Halt::Abort),
+            "ack-at-end" => None,
+            _ => Some(Halt::Halt),
+        };
+        assert_eq!(m.halt, halt, "{variant}");
         // Every step undone: the arm is back where it was.
         let after = {
             let r = b.read_only("W2").unwrap();
@@ -268,7 +282,9 @@ fn the_supervised_steps_measure_what_no_reading_tells() {
             assert!(
                 READ_ONLY.contains(&word)
                     || ["NOH", "NOHELP", "HELP"].contains(&word)
-                    || probe::MEASURE.contains(&line.as_str()),
+                    || probe::MEASURE.contains(&line.as_str())
+                    // The stop steps turn joint 6 back by what it turned.
+                    || line.starts_with("JOINT 6,"),
                 "{variant}: {line}"
             );
         }

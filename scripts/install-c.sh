@@ -26,7 +26,8 @@ done
 libs="${TROL_LIB_DIR:-}"
 if [ -z "$libs" ]; then
   cargo build --release -p trol-c
-  libs=target/release
+  # Where cargo put them: CARGO_TARGET_DIR when it is set (relative to this folder).
+  libs="${CARGO_TARGET_DIR:-target}/release"
 fi
 for f in libtrol.so libtrol.a; do
   [ -f "$libs/$f" ] || { echo "install-c.sh: $libs/$f is missing" >&2; exit 1; }

@@ -670,23 +670,3 @@ fn c_connections_keep_their_own_codes_and_errors() {
     assert!(text.contains("the shared handler saw: b"), "{text}");
     assert!(text.ends_with("done\n"), "{text}");
 }
-
-/// `trol sim --help` names every variant of both simulated controllers (it named 16 of the
-/// C500's 21).
-#[test]
-fn sim_help_names_every_variant() {
-    let dir = scratch("sim-help-variants");
-    let out = trol(&dir, &["sim", "--help"], "");
-    let (help, _) = text(&out);
-    // The help wraps its lines: compare the words.
-    let words: String = help.split_whitespace().collect::<Vec<_>>().join(" ");
-    for (name, _) in trol_rapl::c500::VARIANTS
-        .iter()
-        .chain(trol_mars::mars8::VARIANTS)
-    {
-        assert!(
-            words.contains(&format!(" {name},")) || words.contains(&format!(" {name}.")),
-            "`trol sim --help` does not name the variant {name}:\n{help}"
-        );
-    }
-}

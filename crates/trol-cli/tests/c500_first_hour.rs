@@ -7,10 +7,9 @@
 
 mod common;
 
-use std::io::{BufRead, Write};
 use std::path::Path;
 
-use common::{Background, TROL, scratch, text, trol};
+use common::{Background, probe_with_poses, scratch, text, trol};
 
 /// The backticked `trol ...` commands of the page's first hour that name the controller,
 /// whitespace made single.
@@ -30,45 +29,6 @@ fn first_hour_commands() -> Vec<String> {
         .map(|s| s.split_whitespace().collect::<Vec<_>>().join(" "))
         .filter(|s| s.starts_with("trol ") && s.contains("DEVICE"))
         .collect()
-}
-
-/// Run one of the page's probe commands, answering each pose prompt by moving the simulated
-/// arm through its pendant, then Enter.
-fn probe_with_poses(dir: &Path, args: &[String], sim: &mut Background, poses: &[&str]) -> String {
-    let mut probe = std::process::Command::new(TROL)
-        .args(args)
-        .current_dir(dir)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut answer = probe.stdin.take().unwrap();
-    let mut said = std::io::BufReader::new(probe.stdout.take().unwrap()).lines();
-    let mut out = Vec::new();
-    for (k, pose) in poses.iter().enumerate() {
-        let ask = format!("pose {} of {}", k + 1, poses.len());
-        loop {
-            let line = said
-                .next()
-                .unwrap_or_else(|| panic!("the probe ended early: {out:?}"))
-                .unwrap();
-            let hit = line.starts_with(&ask);
-            out.push(line);
-            if hit {
-                break;
-            }
-        }
-        sim.type_line(pose);
-        sim.wait_for("pendant: at", 60);
-        writeln!(answer).unwrap();
-    }
-    drop(answer);
-    out.extend(said.map_while(Result::ok));
-    let status = probe.wait().unwrap();
-    let out = out.join("\n");
-    assert!(status.success(), "{args:?}:\n{out}");
-    out
 }
 
 #[test]

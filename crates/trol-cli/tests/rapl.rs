@@ -255,7 +255,6 @@ fn other_controller(dir: &Path) -> std::path::PathBuf {
 
 #[test]
 fn probe_records_first_contact_and_fits_the_conventions_of_pendant_poses() {
-    use std::io::{BufRead, Write};
     let dir = scratch("rapl-probe");
     let controller = other_controller(&dir);
     let mut sim = Background::start(
@@ -272,47 +271,26 @@ fn probe_records_first_contact_and_fits_the_conventions_of_pendant_poses() {
         ],
         "serving on ",
     );
-    let mut probe = std::process::Command::new(common::TROL)
-        .args([
-            "rapl",
-            "probe",
-            "--controller",
-            &sim.name,
-            "--out",
-            "first.txt",
-            "--poses",
-            "2",
-            "--profile-out",
-            "fitted.toml",
-        ])
-        .current_dir(&dir)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut answer = probe.stdin.take().unwrap();
-    let mut said = std::io::BufReader::new(probe.stdout.take().unwrap()).lines();
-    let mut out = Vec::new();
-    for (k, pose) in ["10 20 40 30 50 -20", "-35 5 70 -60 30 45"]
-        .iter()
-        .enumerate()
-    {
-        let ask = format!("pose {} of 2", k + 1);
-        loop {
-            let line = said.next().expect("the probe ended early").unwrap();
-            let hit = line.starts_with(&ask);
-            out.push(line);
-            if hit {
-                break;
-            }
-        }
-        sim.type_line(pose);
-        sim.wait_for("pendant: at", 20);
-        writeln!(answer,).unwrap();
-    }
-    out.extend(said.map_while(Result::ok));
-    assert!(probe.wait().unwrap().success(), "{out:?}");
-    let out = out.join("\n");
+    let args: Vec<String> = [
+        "rapl",
+        "probe",
+        "--controller",
+        &sim.name,
+        "--out",
+        "first.txt",
+        "--poses",
+        "2",
+        "--profile-out",
+        "fitted.toml",
+    ]
+    .map(String::from)
+    .to_vec();
+    let out = common::probe_with_poses(
+        &dir,
+        &args,
+        &mut sim,
+        &["10 20 40 30 50 -20", "-35 5 70 -60 30 45"],
+    );
     assert!(out.contains("ENGLISH UNITS."), "{out}");
     assert!(
         out.contains("units = \"inch\", angles = \"roll -pitch yaw\""),

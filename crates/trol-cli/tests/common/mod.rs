@@ -243,3 +243,48 @@ pub fn view_state_at(url: &str, want: [f64; 6]) -> serde_json::Value {
         std::thread::sleep(Duration::from_millis(100));
     }
 }
+
+/// Run `trol` with `args` (a `rapl probe --poses N`), answering each pose prompt by moving
+/// the simulated C500's arm through its pendant (`sim`, started with --pendant), then Enter;
+/// its output. Panics when it fails.
+pub fn probe_with_poses(
+    dir: &Path,
+    args: &[String],
+    sim: &mut Background,
+    poses: &[&str],
+) -> String {
+    let mut probe = std::process::Command::new(TROL)
+        .args(args)
+        .current_dir(dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut answer = probe.stdin.take().unwrap();
+    let mut said = std::io::BufReader::new(probe.stdout.take().unwrap()).lines();
+    let mut out = Vec::new();
+    for (k, pose) in poses.iter().enumerate() {
+        let ask = format!("pose {} of {}", k + 1, poses.len());
+        loop {
+            let line = said
+                .next()
+                .unwrap_or_else(|| panic!("the probe ended early: {out:?}"))
+                .unwrap();
+            let hit = line.starts_with(&ask);
+            out.push(line);
+            if hit {
+                break;
+            }
+        }
+        sim.type_line(pose);
+        sim.wait_for("pendant: at", 60);
+        writeln!(answer).unwrap();
+    }
+    drop(answer);
+    out.extend(said.map_while(Result::ok));
+    let status = probe.wait().unwrap();
+    let out = out.join("\n");
+    assert!(status.success(), "{args:?}:\n{out}");
+    out
+}

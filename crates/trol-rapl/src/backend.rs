@@ -1222,7 +1222,7 @@ impl RaplBackend {
             let dropped = std::mem::take(&mut self.queue);
             if ours.is_some() || !dropped.is_empty() {
                 self.note(format!(
-                    "the arm lost power (STATUS: LIMP){}{}",
+                    "the arm lost power (STATUS's LIMP row says Y){}{}",
                     ours.map(|o| format!(" during `{}`", o.motion.line))
                         .unwrap_or_default(),
                     if dropped.is_empty() {
@@ -1247,7 +1247,7 @@ impl RaplBackend {
             self.outstanding = None;
             self.queue.clear();
             self.note(format!(
-                "the arm lost its homing during `{line}` (STATUS: HOMED); queue dropped"
+                "the arm lost its homing during `{line}` (STATUS's HOMED row says N); queue dropped"
             ));
             return Err(BackendError::Refused(sim_code::NOT_HOMED));
         }
@@ -1703,13 +1703,15 @@ impl RaplBackend {
         ));
         if status.limp.iter().any(|l| *l) {
             self.note(
-                "the arm has no power (STATUS: LIMP): motions are refused until it has".into(),
+                "the arm has no power (STATUS's LIMP row says Y): motions are refused until it \
+                 has"
+                .into(),
             );
         }
         if !status.homed.iter().all(|h| *h) {
             self.note(
-                "the arm is not homed (STATUS: HOMED): call TROLHome(0) with the arm near its \
-                 home position; other motions are refused until then"
+                "the arm is not homed (STATUS's HOMED row says N): call TROLHome(0) with the arm \
+                 near its home position; other motions are refused until then"
                     .into(),
             );
         }

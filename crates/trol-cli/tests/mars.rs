@@ -187,6 +187,54 @@ fn the_position_example_runs_through_trol_gateway_with_init_and_cleanup() {
     assert!(cleanup.status.success(), "{o}{e}");
 }
 
+/// A MARS 8's homed state across programs (issue 37, item 6): the unit does not say whether
+/// it is homed, so the state is kept by whoever holds the unit. Through `trol gateway`, a
+/// program after one that homed moves at once; in-process (`mars:` in trol.cfg) each program
+/// holds the unit anew, and its motions are refused BIOS_NOT_HOMED until it homes.
+#[test]
+fn the_gateway_keeps_the_homed_state_across_programs() {
+    let dir = scratch("mars-homed-across");
+    let sim = mars_sim(&dir, "default");
+    let ma = "ma j(0.2, 0.1, 0.8, 0, 0.6, 0)\nfinish\n";
+    let o = trol(&dir, &["interp"], "home 0\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let o = trol(&dir, &["interp"], ma);
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}\n{err}");
+    assert!(out.contains("BIOS_NOT_HOMED"), "{out}\n{err}");
+
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &format!("mars:{}", sim.name),
+            "--profile",
+            "arm.toml",
+        ],
+        "serving on ",
+    );
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
+    )
+    .unwrap();
+    for script in ["home 0\n", ma] {
+        // Each program ends the server (CleanupTROL); init serves the next.
+        let init = trol(&dir, &["init", "--port", &gw.name], "");
+        let (o, e) = text(&init);
+        assert!(init.status.success(), "{o}{e}");
+        let run = trol(&dir, &["interp"], script);
+        let (out, err) = text(&run);
+        assert!(
+            run.status.success(),
+            "{script}: {out}\n{err}\ngateway:\n{}",
+            gw.output().join("\n")
+        );
+    }
+}
+
 #[test]
 fn the_probe_only_reads_and_records_every_byte() {
     let dir = scratch("mars-probe");

@@ -318,8 +318,22 @@ fn the_gateway_s_view_shows_the_arm_the_mars8_reports() {
         .expect("the view's address")
         .trim()
         .to_string();
-    // Before Home the unit's counters mean nothing: no arm to show yet.
-    assert_eq!(http_get(&url, "/state").trim(), "no arm yet", "{url}");
+    // Before Home the unit's counters mean nothing: the view says no axis is homed (the page
+    // shows "not homed" for each), reported about ten times a second.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    let before = loop {
+        let body = http_get(&url, "/state");
+        if let Ok(s) = serde_json::from_str::<serde_json::Value>(&body) {
+            break s;
+        }
+        assert!(std::time::Instant::now() < deadline, "no report: {body}");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    assert_eq!(
+        before["homed"],
+        serde_json::json!([false, false, false, false, false, false]),
+        "{before}"
+    );
     std::fs::write(
         dir.join("trol.cfg"),
         format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
@@ -336,4 +350,9 @@ fn the_gateway_s_view_shows_the_arm_the_mars8_reports() {
     let s = view_state_at(&url, [0.2, 0.1, 0.8, 0.0, 0.6, 0.0]);
     assert_eq!(s["reported"], true, "{s}");
     assert_eq!(s["gripper_mm"], 50.0, "{s}");
+    assert_eq!(
+        s["homed"],
+        serde_json::json!([true, true, true, true, true, true]),
+        "{s}"
+    );
 }

@@ -53,6 +53,9 @@ pub struct ArmReport {
     pub gripper_mm: Option<f64>,
     /// The tool transform in force.
     pub tool: [f64; 6],
+    /// Which axes are homed, where the backend knows it: a view shows an axis that is not
+    /// as "not homed" rather than a value its counters cannot give yet.
+    pub homed: Option<[bool; 6]>,
 }
 
 /// The latest report and when it was taken, shared with a view.

@@ -1155,10 +1155,6 @@ impl Backend for MarsBackend {
         }
     }
     fn report(&mut self) -> Option<ArmReport> {
-        // The counters mean nothing before the arm is homed: nothing to show.
-        if !self.homed.iter().all(|h| *h) {
-            return None;
-        }
         // Read-only: ST?, COORDAP? and the gripper's AP<g>?. A line the unit printed unasked
         // stays kept for the next call.
         let s = self.status().ok()?;
@@ -1176,6 +1172,9 @@ impl Backend for MarsBackend {
                 .map(|m| self.profile.irc_to_joints(&m.target)),
             gripper_mm,
             tool: self.tool,
+            // The counters of an axis not homed mean nothing yet: the view says so (issue
+            // 38: it showed their values, and the last report while the arm homed again).
+            homed: Some(self.homed),
         })
     }
 }

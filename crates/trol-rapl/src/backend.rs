@@ -2678,6 +2678,7 @@ impl Backend for RaplBackend {
             target: None,
             gripper_mm: None,
             tool: self.tool,
+            homed: self.status.as_ref().map(|s| s.homed),
         })
     }
     fn idle(&mut self) {

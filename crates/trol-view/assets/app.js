@@ -204,8 +204,15 @@ function update(s) {
   document.body.dataset.frames = String(frames);
   if (!jointRows.length) buildPanel(s.limits);
   s.joints.forEach((q, i) => {
-    if (joints[i]) joints[i].rotor.quaternion.setFromAxisAngle(joints[i].axis, q);
     const cell = document.getElementById(`j${i + 1}`);
+    // A real controller's axis that is not homed: its counters mean nothing yet.
+    if (s.homed && !s.homed[i]) {
+      cell.textContent = 'not homed';
+      delete cell.dataset.rad;
+      jointRows[i].classList.remove('near');
+      return;
+    }
+    if (joints[i]) joints[i].rotor.quaternion.setFromAxisAngle(joints[i].axis, q);
     cell.textContent = (q * 180 / Math.PI).toFixed(2);
     cell.dataset.rad = q.toFixed(6);
     const limit = s.limits[i];

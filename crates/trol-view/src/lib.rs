@@ -147,6 +147,7 @@ pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
         "limits": LIMITS_RAD,
         "table_z": 0.0,
         "tool": r.tool,
+        "homed": r.homed,
         "reported": true,
     }))
 }

@@ -999,16 +999,22 @@ impl Backend for MarsBackend {
     fn halt(&mut self) -> BiosResult {
         self.pending.clear();
         let homing = self.homing.take();
-        let halted_home = homing.is_some();
-        if let Some(h) = homing {
-            for a in h.axes {
-                self.homed[a] = false;
-            }
-            self.planner.set_homed(self.homed);
-        }
         let r = self.stop_and_see();
-        // A Home halted on the way: the Finish after it fails, once.
-        self.homing_halted = halted_home;
+        if let Some(h) = homing {
+            if r.is_ok() {
+                // A Home halted on the way: its axes are not homed, and the Finish after it
+                // fails, once.
+                for a in h.axes {
+                    self.homed[a] = false;
+                }
+                self.planner.set_homed(self.homed);
+                self.homing_halted = true;
+            } else {
+                // Not seen to stop: as far as TROL knows the unit still homes, and Finish
+                // goes on following it.
+                self.homing = Some(h);
+            }
+        }
         r
     }
     fn stands(&mut self) -> Result<bool, BackendError> {

@@ -163,6 +163,8 @@ pub type LogFn = Box<dyn FnMut(&str) + Send>;
 struct Outstanding {
     target: [f64; 6],
     end: f64,
+    /// The unit's moving bit was seen up since the motion was sent.
+    seen_moving: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -706,6 +708,7 @@ impl MarsBackend {
         self.motion = Some(Outstanding {
             target: last,
             end: t1,
+            seen_moving: false,
         });
         let confirmed = self
             .pump()
@@ -971,11 +974,20 @@ impl Backend for MarsBackend {
             return Ok(grip);
         };
         if !self.pending.is_empty() || s & st::MOVING != 0 {
+            if let Some(o) = self.motion.as_mut() {
+                o.seen_moving |= s & st::MOVING != 0;
+            }
             return Ok(true);
         }
         let c = self.counters().map_err(|f| f.not_run())?;
         let tol = self.profile.arrive_irc;
-        if (0..6).all(|j| (c[j] - m.target[j]).abs() <= tol) {
+        // At the end within arrive_irc, once the moving bit was seen up and down again, or
+        // (a motion too short to show it) not before the planned end: counters within the
+        // tolerance before either are an arm still slowing down, and a unit whose moving bit
+        // lags then showed it moving at the next call, which was refused BIOS_BUSY.
+        if (m.seen_moving || self.now() >= m.end)
+            && (0..6).all(|j| (c[j] - m.target[j]).abs() <= tol)
+        {
             self.motion = None;
             let q = self.profile.irc_to_joints(&c);
             self.planner.place(q);

@@ -421,6 +421,9 @@ impl C500 {
     pub fn describe(&self) -> Profile {
         let mut p = self.profile.clone();
         p.simulated = true;
+        // The simulator is a process on a PC that may be busy: each echo gets the reply
+        // timeout's 3 s, not a C500's 0.5 s (an opening failed so under two busy loops).
+        p.echo_timeout_ms = p.echo_timeout_ms.max(3000);
         if p.angles().is_none() {
             p.angles = "yaw pitch roll".into();
         }

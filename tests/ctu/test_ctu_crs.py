@@ -12,6 +12,7 @@ Only the camera import is stubbed (tests/ctu/stub/pypylon): there is no camera h
 import os
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
@@ -26,29 +27,17 @@ VARIANTS = ["default", "echo", "noise", "moving-lag", "refusal-line",
             "stop-ignored", "homing-silent", "unstoppable"]
 
 
-def _answer_promptly():
-    """Run the simulated unit ahead of other processes where this user may (root may).
-
-    A MARS 8 is a microcontroller of its own that answers within a few milliseconds, and the
-    client relies on it: it reads each reply with a 10 ms timeout, asks again when none came,
-    and then takes the two replies that arrive together for one (`AP<g>?` in its gripper
-    wait), which fails. On a loaded machine the simulator, an ordinary process, can be later
-    than 10 ms; a higher priority keeps it as prompt as the unit it stands for.
-    """
-    try:
-        os.nice(-10)
-    except OSError:
-        pass
-
-
 @pytest.fixture
 def unit(request):
     proc = subprocess.Popen(
         [TROL, "sim", "--mars", "--time-scale", "20", "--variant", request.param],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        preexec_fn=_answer_promptly)
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     first = proc.stdout.readline()
     assert first.startswith("trol sim: serving on "), first
+    # Keep reading its log: a full pipe would stop the simulated unit mid-answer, and CTU's
+    # client, which asks again every 10 ms when no answer came, then parses the answers that
+    # arrive together as one (its gripper wait failed so on a loaded machine).
+    threading.Thread(target=proc.stdout.read, daemon=True).start()
     yield first.split()[-1]
     proc.kill()
     proc.wait()

@@ -36,6 +36,21 @@ fn mars_sim_with(dir: &Path, variant: &str, extra: &[&str]) -> Background {
     sim
 }
 
+/// `trol gateway` in front of the simulated unit `sim`, with its profile (arm.toml in `dir`).
+fn mars_gateway(dir: &Path, sim: &Background) -> Background {
+    Background::start(
+        dir,
+        &[
+            "gateway",
+            "--controller",
+            &format!("mars:{}", sim.name),
+            "--profile",
+            "arm.toml",
+        ],
+        "serving on ",
+    )
+}
+
 fn try_example(name: &str, dir: &Path) -> (bool, String, String) {
     let exe = cbuild::compile(
         &cbuild::root().join("examples").join(format!("{name}.c")),
@@ -144,17 +159,7 @@ fn without_a_profile_mars_is_refused_with_what_to_do() {
 fn the_position_example_runs_through_trol_gateway_with_init_and_cleanup() {
     let dir = scratch("mars-gateway");
     let sim = mars_sim(&dir, "default");
-    let gw = Background::start(
-        &dir,
-        &[
-            "gateway",
-            "--controller",
-            &format!("mars:{}", sim.name),
-            "--profile",
-            "arm.toml",
-        ],
-        "serving on ",
-    );
+    let gw = mars_gateway(&dir, &sim);
     let init = trol(&dir, &["init", "--port", &gw.name], "");
     let (o, e) = text(&init);
     assert!(init.status.success(), "{o}{e}");
@@ -204,17 +209,7 @@ fn the_gateway_keeps_the_homed_state_across_programs() {
     assert!(!o.status.success(), "{out}\n{err}");
     assert!(out.contains("BIOS_NOT_HOMED"), "{out}\n{err}");
 
-    let gw = Background::start(
-        &dir,
-        &[
-            "gateway",
-            "--controller",
-            &format!("mars:{}", sim.name),
-            "--profile",
-            "arm.toml",
-        ],
-        "serving on ",
-    );
+    let gw = mars_gateway(&dir, &sim);
     std::fs::write(
         dir.join("trol.cfg"),
         format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),

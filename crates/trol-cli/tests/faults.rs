@@ -96,3 +96,82 @@ fn robot_open_checks_the_controller() {
     trol::check_server(&mut robot).unwrap();
     assert_eq!(robot.repeats(), 2);
 }
+
+/// A gateway in front of a C500 takes up to 3.7 s to answer (a Halt that tries every stop),
+/// yet a gateway that freezes is noticed within seconds (issue 38, item 3): it says "still
+/// working" (SYN) while it executes, and the host gives a reply up after 1.5 s of silence,
+/// not after the longest answer. Both halves: a Halt of an arm no stop stops runs its full
+/// 3.3 s and is answered TROL_ERR_NOT_STOPPED, not cut off as a dead line; then the gateway
+/// is frozen in the middle of the next Halt, and the call fails with TROL_ERR_COMM 2.5 s
+/// later, not after the 4.2 s reply time and an ENQ.
+#[test]
+fn a_gateway_that_works_long_is_waited_for_and_one_that_froze_is_not() {
+    let dir = scratch("keepalive-gateway");
+    let out = common::trol(
+        &dir,
+        &[
+            "sim",
+            "--rapl",
+            "--variant",
+            "unstoppable",
+            "--print-profile",
+        ],
+        "",
+    );
+    assert!(out.status.success(), "{}", common::text(&out).1);
+    std::fs::write(dir.join("c500.toml"), &out.stdout).unwrap();
+    let sim = Background::start(
+        &dir,
+        &["sim", "--rapl", "--variant", "unstoppable", "--homed"],
+        "serving on ",
+    );
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &sim.name,
+            "--profile",
+            "c500.toml",
+            "--server",
+        ],
+        "serving on ",
+    );
+    let mut robot = Robot::connect(&gw.name, 9600).expect("connect");
+    let silence = robot
+        .keepalive_silence()
+        .expect("the gateway keeps the line alive");
+    // Slow, so that the motion outlasts every stop the Halt tries (3.3 s).
+    robot.speed(10).unwrap();
+    robot.joint(1, 2.0).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let t = Instant::now();
+    let halt = robot.halt();
+    let took = t.elapsed();
+    eprintln!("Halt of an unstoppable arm through the gateway: {halt:?} after {took:?}");
+    let e = halt.expect_err("no stop stops this arm");
+    assert_eq!(e.code(), trol::code::TROL_ERR_NOT_STOPPED, "{e}");
+    assert!(
+        took > silence,
+        "the Halt took {took:?}: not longer than the silence a dead line is given ({silence:?})"
+    );
+    // Frozen while it executes the next Halt, the request complete.
+    robot.joint(1, -2.0).unwrap();
+    let pid = gw.pid();
+    let (frozen_at, e) = std::thread::scope(|s| {
+        let freezer = s.spawn(move || {
+            std::thread::sleep(Duration::from_millis(600));
+            signal(pid, "-STOP");
+            Instant::now()
+        });
+        let e = robot.halt().unwrap_err();
+        (freezer.join().unwrap(), e)
+    });
+    let took = frozen_at.elapsed();
+    eprintln!("a gateway frozen mid-Halt: the call failed {took:?} after the freeze: {e}");
+    assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{e}");
+    // 1.5 s of silence and one unanswered ENQ: 2.5 s; without the keep-alive, the reply
+    // time's 4.2 s less the 0.6 s before the freeze, and the ENQ: 4.6 s.
+    assert!(took < Duration::from_millis(3600), "{took:?}");
+    signal(pid, "-CONT");
+}

@@ -41,11 +41,11 @@ impl<'a, P: Port> LineChannel<'a, P> {
     /// The services over `driver`'s port; ReceiveData waits up to `wait` for a message to
     /// start.
     pub fn new(driver: &'a mut Driver<P>, cfg: LinkConfig, wait: Duration) -> Self {
-        LineChannel {
-            driver,
-            link: Link::new(cfg),
-            wait,
-        }
+        let mut link = Link::new(cfg);
+        // An application's handler that receives the reply itself meets the controller's
+        // "still working" as TransSR does (docs/protocol.md, "Keep-alive").
+        link.set_keepalive(true);
+        LineChannel { driver, link, wait }
     }
 }
 

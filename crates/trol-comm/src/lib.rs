@@ -15,6 +15,7 @@
 mod channel;
 mod driver;
 mod handlers;
+mod keepalive;
 mod server;
 mod transactor;
 
@@ -24,6 +25,7 @@ pub use handlers::{
     AppTimeoutContext, DefaultHandlers, ErrorHandlers, ExtraWait, FailureContext, Recovery,
     TimeoutAction, TimeoutPolicy, prompt_policy, timeout_policy,
 };
+pub use keepalive::{KEEPALIVE_INTERVAL, Keepalive};
 pub use server::{Server, ServerEvent};
 pub use transactor::{DEFAULT_REPEATS, TransError, Transactor};
 pub use trol_proto::Machine;

@@ -11,6 +11,7 @@ use trol_proto::transaction::{Decision, Failure, Responder, ResponderEvent};
 
 use crate::driver::Driver;
 use crate::handlers::{DefaultHandlers, ErrorHandlers, FailureContext, Recovery};
+use crate::keepalive::Keepalive;
 
 /// What executes a request for [`Server::serve_deferrable`]: its bytes and PCI in, its
 /// reply out (or `None`: later, with [`Server::respond`]).
@@ -57,6 +58,7 @@ pub struct Server<P> {
     driver: Driver<P>,
     responder: Responder,
     handlers: Box<dyn ErrorHandlers>,
+    keepalive: Option<Keepalive>,
 }
 
 impl<P: Port> Server<P> {
@@ -69,6 +71,49 @@ impl<P: Port> Server<P> {
             driver,
             responder,
             handlers: Box::new(DefaultHandlers::default()),
+            keepalive: None,
+        }
+    }
+
+    /// Say "still working" (SYN every `interval`) while a request executes, to a host that
+    /// takes it ([`Responder::host_takes_keepalive`]), where the port offers a second way
+    /// onto the line ([`Port::beacon`]); `None` turns it off. docs/protocol.md, "Keep-alive".
+    pub fn set_keepalive(&mut self, interval: Option<Duration>) -> io::Result<()> {
+        self.keepalive = match interval {
+            Some(i) if !i.is_zero() => Some(Keepalive::new(i)?),
+            _ => None,
+        };
+        Ok(())
+    }
+
+    /// The keep-alive interval this host gets while its requests execute, if it gets one
+    /// (what TROLGetReplyTime tells it).
+    pub fn keepalive_for_host(&self) -> Option<Duration> {
+        let k = self.keepalive.as_ref()?;
+        (self.driver.port().offers_beacon() && self.responder.host_takes_keepalive())
+            .then(|| k.interval())
+    }
+
+    /// SYNs sent while requests executed.
+    pub fn keepalives_sent(&self) -> u64 {
+        self.keepalive.as_ref().map_or(0, Keepalive::sent)
+    }
+
+    fn start_keepalive(&mut self) {
+        let Some(k) = &self.keepalive else {
+            return;
+        };
+        if !self.responder.host_takes_keepalive() {
+            return;
+        }
+        if let Some(beacon) = self.driver.port_mut().beacon() {
+            k.start(beacon);
+        }
+    }
+
+    fn stop_keepalive(&self) {
+        if let Some(k) = &self.keepalive {
+            k.stop();
         }
     }
 
@@ -104,6 +149,7 @@ impl<P: Port> Server<P> {
 
     /// Send the reply of a request whose execution was deferred.
     pub fn respond(&mut self, reply: &[u8]) {
+        self.stop_keepalive();
         let now = self.driver.clock().now();
         self.responder.respond(reply, now);
     }
@@ -171,9 +217,11 @@ impl<P: Port> Server<P> {
                 }
                 Some(ResponderEvent::Request) => {
                     let pci = self.responder.request_pci();
+                    self.start_keepalive();
                     let Some(reply) = execute(self.responder.request(), pci) else {
                         return Ok(ServerEvent::Pending);
                     };
+                    self.stop_keepalive();
                     // Executing may take long (Finish waits for the arm): time the reply
                     // from when it is ready, not from when the request arrived.
                     let ready = self.driver.clock().now();

@@ -99,6 +99,9 @@ pub struct LogEntry<'a> {
     pub from_pendant: bool,
     /// The backend's word on its world (a simulator's objects), if it has one.
     pub world: Option<String>,
+    /// Why the request was refused, in words, where the reply's code alone cannot say it
+    /// (a locations file that could not be written: which, and what the system said).
+    pub note: Option<String>,
 }
 
 /// A log hook: called after each transaction.
@@ -158,6 +161,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
             pendant: None,
         };
         c.check_requests();
+        // "Still working" while a request executes, to a host that takes it: without a
+        // thread the keep-alive is not offered, and the host waits the reply time alone.
+        let _ = c.server.set_keepalive(Some(trol_comm::KEEPALIVE_INTERVAL));
         c
     }
 
@@ -200,6 +206,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
             self.pcp.backend_mut().after_request();
             if let Some(log) = self.log.as_mut() {
                 let world = self.pcp.backend_mut().world();
+                let note = self.pcp.take_note();
                 log(&LogEntry {
                     catalog: self.pcp.catalog(),
                     request: &request,
@@ -208,6 +215,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     executed: true,
                     from_pendant: true,
                     world,
+                    note,
                 });
             }
             let _ = back.try_send(reply);
@@ -277,6 +285,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.terminal = Terminal::manual_only();
         self.pcp.set_manual_only(true);
         self.server.responder_mut().set_manual(Some(pci));
+        // The 1998 server said nothing while it worked.
+        let _ = self.server.set_keepalive(None);
         // The 1998 server checked nothing beyond the sum.
         self.server.responder_mut().set_request_check(None);
     }
@@ -407,6 +417,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
             self.server.respond(&reply);
             self.last.1 = reply;
         }
+        self.pcp.set_keepalive(self.server.keepalive_for_host());
         let pcp = &mut self.pcp;
         let last = &mut self.last;
         let ran = &mut self.ran;
@@ -432,6 +443,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
         let executed = std::mem::take(&mut self.ran);
         if let Some(log) = self.log.as_mut() {
             let world = self.pcp.backend_mut().world();
+            let note = self.pcp.take_note();
             log(&LogEntry {
                 catalog: self.pcp.catalog(),
                 request: &self.last.0,
@@ -440,6 +452,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 executed,
                 from_pendant: false,
                 world,
+                note,
             });
         }
     }

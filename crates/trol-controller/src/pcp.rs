@@ -86,6 +86,12 @@ pub struct Context<'a, B> {
     /// The watchdog's limit: the arm is halted when no transaction arrives for this long
     /// (SetWatchdog; `None`: off).
     pub watchdog: &'a mut Option<std::time::Duration>,
+    /// How often the server says "still working" while this host's requests execute, if it
+    /// does (TROLGetReplyTime tells the host; docs/protocol.md, "Keep-alive").
+    pub keepalive: Option<std::time::Duration>,
+    /// Why the request was refused, in words, for the controller's log (a file that could
+    /// not be written: which, and what the system said).
+    pub note: &'a mut Option<String>,
 }
 
 /// A handler of CAT2..CAT4: gets the decoded arguments and builds its reply itself.
@@ -170,6 +176,10 @@ pub struct Pcp<B> {
     /// That motion was halted by someone else (the pendant, the watchdog): the host's next
     /// Finish that finds the arm standing answers TROL_ERR_HALTED, once.
     halted_aside: bool,
+    /// The keep-alive the server gives the host on the line ([`Pcp::set_keepalive`]).
+    keepalive: Option<std::time::Duration>,
+    /// Why the last request was refused, in words, not yet taken ([`Pcp::take_note`]).
+    note: Option<String>,
 }
 
 /// What [`Pcp::handle`] did with a request.
@@ -198,6 +208,8 @@ impl<B: Backend> Pcp<B> {
             handled: 0,
             aside: false,
             open_motion: false,
+            keepalive: None,
+            note: None,
             halted_aside: false,
         };
         for def in table::BUILTIN {
@@ -282,6 +294,17 @@ impl<B: Backend> Pcp<B> {
     /// GetStatus's record.
     pub fn set_transaction(&mut self, number: u8) {
         self.status.current = number;
+    }
+
+    /// Why the last request was refused, in words, once (for the controller's log).
+    pub fn take_note(&mut self) -> Option<String> {
+        self.note.take().or_else(|| self.backend.take_note())
+    }
+
+    /// Say how often the server says "still working" while the host's requests execute
+    /// (`None`: it does not), for TROLGetReplyTime's answer.
+    pub fn set_keepalive(&mut self, keepalive: Option<std::time::Duration>) {
+        self.keepalive = keepalive;
     }
 
     /// Whether the host speaks only the manual's protocol (it activated with the bare `PCP
@@ -465,6 +488,8 @@ impl<B: Backend> Pcp<B> {
                         self.epoch
                     },
                     watchdog: &mut self.watchdog,
+                    keepalive: self.keepalive,
+                    note: &mut self.note,
                 };
                 Handled::Reply(h(&mut ctx, &call).encode())
             }
@@ -571,9 +596,9 @@ fn precision_name_matches(name: LocName, tag: Tag) -> Result<(), Code> {
 
 /// Here, Define, DeleteLocation and SaveLocations (CAT3, docs/teach.md): the backend's
 /// value, or the code that kept the call from being made.
-fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<i16, Code> {
+fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<crate::BiosResult, Code> {
     use table::*;
-    let r = match c.def.code {
+    Ok(match c.def.code {
         TROL_HERE => {
             let (name, tag) = (
                 c.name(0)?,
@@ -592,8 +617,7 @@ fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<i16, Code> {
         }
         TROL_DELETE_LOCATION => b.delete_location(c.name(0)?),
         _ => b.save_locations(),
-    };
-    r.map_err(Code::from)
+    })
 }
 
 /// The handler of every built-in CAT1 command: one BIOS call each, arguments as the table
@@ -674,7 +698,13 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
         },
         TROL_HERE | TROL_DEFINE | TROL_DELETE_LOCATION | TROL_SAVE_LOCATIONS => {
             match teach(ctx.backend, c) {
-                Ok(v) => Reply::Code(Code(v)),
+                Ok(Ok(v)) => Reply::Code(Code(v)),
+                Ok(Err(e)) => {
+                    if let crate::BackendError::Explained(_, why) = &e {
+                        *ctx.note = Some(why.clone());
+                    }
+                    Reply::Code(e.code())
+                }
                 Err(code) => Reply::Code(code),
             }
         }
@@ -697,9 +727,14 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
                 .map(Into::into)
                 .collect(),
         ),
+        // The longest answer, and how often the server says "still working" meanwhile
+        // (0: it does not); a host that knows only the first value reads only it.
         TROL_GET_REPLY_TIME => Reply::Reals {
             value: Code(0),
-            values: vec![ctx.backend.reply_time().as_secs_f64()],
+            values: vec![
+                ctx.backend.reply_time().as_secs_f64(),
+                ctx.keepalive.map_or(0.0, |k| k.as_secs_f64()),
+            ],
         },
         TROL_SET_WATCHDOG => match c.int(0) {
             Ok(0) => {

@@ -44,7 +44,24 @@ pub trait Port: Send {
 
     /// A name for messages and traces.
     fn name(&self) -> String;
+
+    /// A second way to put bytes on this line, for another thread, while this end's owner
+    /// is busy elsewhere and sends nothing: the controller's keep-alive while it executes a
+    /// request (docs/protocol.md, "Keep-alive"). `None` (the default) where the line has no
+    /// such way (the keep-alive is then not offered).
+    fn beacon(&mut self) -> Option<Beacon> {
+        None
+    }
+
+    /// Whether this kind of line has a [`Port::beacon`] (a listening TCP line has one once a
+    /// client is connected).
+    fn offers_beacon(&self) -> bool {
+        false
+    }
 }
+
+/// Puts bytes on a line from another thread ([`Port::beacon`]).
+pub type Beacon = Box<dyn FnMut(&[u8]) -> io::Result<()> + Send>;
 
 impl<P: Port + ?Sized> Port for Box<P> {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
@@ -61,6 +78,12 @@ impl<P: Port + ?Sized> Port for Box<P> {
     }
     fn name(&self) -> String {
         (**self).name()
+    }
+    fn beacon(&mut self) -> Option<Beacon> {
+        (**self).beacon()
+    }
+    fn offers_beacon(&self) -> bool {
+        (**self).offers_beacon()
     }
 }
 

@@ -109,17 +109,7 @@ impl Drop for MemoryLine {
 
 impl Port for MemoryLine {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
-        let now = Instant::now();
-        let mut dir = lock(&self.shared.dirs[self.tx]);
-        let mut t = dir.line_free_at.map_or(now, |f| f.max(now));
-        for &b in bytes {
-            t += self.shared.char_time;
-            dir.queue.push_back((t, b));
-        }
-        dir.line_free_at = Some(t);
-        dir.carried += bytes.len() as u64;
-        drop(dir);
-        self.shared.ready[self.tx].notify_all();
+        put(&self.shared, self.tx, bytes);
         Ok(())
     }
 
@@ -175,4 +165,32 @@ impl Port for MemoryLine {
     fn name(&self) -> String {
         self.name.to_string()
     }
+
+    fn offers_beacon(&self) -> bool {
+        true
+    }
+
+    fn beacon(&mut self) -> Option<crate::Beacon> {
+        let shared = self.shared.clone();
+        let tx = self.tx;
+        Some(Box::new(move |bytes: &[u8]| {
+            put(&shared, tx, bytes);
+            Ok(())
+        }))
+    }
+}
+
+/// Queue `bytes` in direction `tx`, each readable once its line time has passed.
+fn put(shared: &Shared, tx: usize, bytes: &[u8]) {
+    let now = Instant::now();
+    let mut dir = lock(&shared.dirs[tx]);
+    let mut t = dir.line_free_at.map_or(now, |f| f.max(now));
+    for &b in bytes {
+        t += shared.char_time;
+        dir.queue.push_back((t, b));
+    }
+    dir.line_free_at = Some(t);
+    dir.carried += bytes.len() as u64;
+    drop(dir);
+    shared.ready[tx].notify_all();
 }

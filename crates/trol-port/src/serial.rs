@@ -187,6 +187,23 @@ impl Port for SerialLine {
     fn name(&self) -> String {
         self.name.clone()
     }
+
+    fn offers_beacon(&self) -> bool {
+        true
+    }
+
+    fn beacon(&mut self) -> Option<crate::Beacon> {
+        let mut device = self.port.try_clone().ok()?;
+        Some(Box::new(move |bytes: &[u8]| {
+            match device.write(bytes) {
+                Ok(_) => Ok(()),
+                // A full buffer (a pty nobody reads): this keep-alive is not needed either.
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(()),
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => Ok(()),
+                Err(e) => Err(e),
+            }
+        }))
+    }
 }
 
 /// Serial ports of this machine, as `(name, description)`.

@@ -267,4 +267,13 @@ impl Port for TcpLine {
     fn name(&self) -> String {
         self.name.clone()
     }
+
+    fn offers_beacon(&self) -> bool {
+        true
+    }
+
+    fn beacon(&mut self) -> Option<crate::Beacon> {
+        let mut stream = self.stream.as_ref()?.try_clone().ok()?;
+        Some(Box::new(move |bytes: &[u8]| stream.write_all(bytes)))
+    }
 }

@@ -586,3 +586,153 @@ fn with_the_lrc_an_implausible_request_is_asked_for_again() {
     assert_eq!(ev, Some(ResponderEvent::Request));
     assert_eq!(r.request(), [4, 7]);
 }
+
+// ---------------------------------------------------------------- keep-alive
+
+/// The controller while it executes: its responder, and SYN every `every` until `until`.
+struct Working<'a> {
+    r: &'a mut Responder,
+    next: Option<Instant>,
+    every: Duration,
+    until: Instant,
+    out: Vec<u8>,
+}
+
+impl common::End for Working<'_> {
+    fn feed(&mut self, bytes: &[u8], now: Instant) {
+        self.r.feed(bytes, now);
+    }
+    fn tick(&mut self, now: Instant) {
+        self.r.tick(now);
+        if let Some(t) = self.next
+            && now >= t
+        {
+            self.out.push(trol_proto::link::control::SYN);
+            self.next = Some(t + self.every).filter(|n| *n <= self.until);
+        }
+    }
+    fn next_deadline(&self) -> Option<Instant> {
+        [self.r.next_deadline(), self.next]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+    fn transmit(&mut self, out: &mut Vec<u8>) {
+        self.r.transmit(out);
+        out.append(&mut self.out);
+    }
+    fn wants_flush(&mut self) -> bool {
+        self.r.wants_flush()
+    }
+}
+
+/// Start `request` and run until the controller has it; returns when it did.
+fn deliver(w: &mut Wire, i: &mut Initiator, r: &mut Responder, request: &[u8]) -> Instant {
+    i.start(request, w.now).unwrap();
+    let mut got = false;
+    w.run(i, r, Duration::from_secs(10), |_, r| {
+        got |= r.poll_event() == Some(ResponderEvent::Request);
+        got
+    });
+    assert!(got, "the request did not arrive");
+    w.now
+}
+
+#[test]
+fn a_controller_that_says_still_working_is_waited_for_past_the_silence() {
+    let (mut w, mut i, mut r) = pair();
+    i.set_reply_timeout(Duration::from_secs(10));
+    i.set_silence(Some(Duration::from_millis(1500)));
+    let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
+    // 5 s of work, SYN every 250 ms, then the reply.
+    let mut working = Working {
+        r: &mut r,
+        next: Some(t0 + Duration::from_millis(250)),
+        every: Duration::from_millis(250),
+        until: t0 + Duration::from_secs(5),
+        out: Vec::new(),
+    };
+    let mut ev = None;
+    w.run_t(&mut i, &mut working, Duration::from_secs(5), |i, _, now| {
+        ev = i.poll_event();
+        ev.is_some() || now >= t0 + Duration::from_secs(5)
+    });
+    assert_eq!(ev, None, "gave up while the controller said it works");
+    r.respond(&[0, 0], w.now);
+    assert_eq!(
+        next_event(&mut w, &mut i, &mut r),
+        Some(InitiatorEvent::Reply)
+    );
+    assert_eq!(i.take_reply(), Some(vec![0, 0]));
+}
+
+#[test]
+fn a_controller_that_falls_silent_is_given_up_after_the_silence() {
+    let (mut w, mut i, mut r) = pair();
+    i.set_reply_timeout(Duration::from_secs(10));
+    i.set_silence(Some(Duration::from_millis(1500)));
+    let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
+    // It says "still working" for 2 s, then dies.
+    let mut working = Working {
+        r: &mut r,
+        next: Some(t0 + Duration::from_millis(250)),
+        every: Duration::from_millis(250),
+        until: t0 + Duration::from_secs(2),
+        out: Vec::new(),
+    };
+    let ev = next_event(&mut w, &mut i, &mut working);
+    assert!(
+        matches!(
+            ev,
+            Some(InitiatorEvent::NeedDecision(Failure::Timeout { .. }))
+        ),
+        "{ev:?}"
+    );
+    // The last SYN came 2 s after the request; 1.5 s of silence later the wait ends.
+    assert_eq!(w.now.saturating_since(t0), Duration::from_millis(3500));
+}
+
+#[test]
+fn without_a_silence_set_syn_is_taken_and_the_reply_timeout_alone_counts() {
+    let (mut w, mut i, mut r) = pair();
+    i.set_reply_timeout(Duration::from_secs(4));
+    let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
+    let mut working = Working {
+        r: &mut r,
+        next: Some(t0 + Duration::from_millis(250)),
+        every: Duration::from_millis(250),
+        until: t0 + Duration::from_millis(500),
+        out: Vec::new(),
+    };
+    let ev = next_event(&mut w, &mut i, &mut working);
+    let Some(InitiatorEvent::NeedDecision(Failure::Timeout { waited })) = ev else {
+        panic!("{ev:?}")
+    };
+    assert_eq!(waited, Duration::from_secs(4));
+}
+
+#[test]
+fn only_a_host_of_this_protocol_is_sent_syn() {
+    use trol_proto::link::{BlockCheck, LinkConfig};
+    let crc = LinkConfig {
+        check: BlockCheck::Crc16,
+        ..LinkConfig::default()
+    };
+    let lrc = LinkConfig {
+        check: BlockCheck::Lrc,
+        ..LinkConfig::default()
+    };
+    // CRC-16: no 1998 host can have agreed on it.
+    assert!(Responder::new(crc).host_takes_keepalive());
+    // The LRC from a host not known yet: a 1998 host's layer 2 fails on any byte but ENQ.
+    let mut r = Responder::new(lrc);
+    assert!(!r.host_takes_keepalive());
+    r.set_numbered_host(true);
+    assert!(r.host_takes_keepalive());
+    r.set_numbered_host(false);
+    assert!(!r.host_takes_keepalive());
+    // The manual's layer 3 (a 1998 controller, simulated) never sends it.
+    let mut r = Responder::new(crc);
+    r.set_manual(Some(trol_proto::transaction::ManualLayer3::EchoPci));
+    assert!(!r.host_takes_keepalive());
+}

@@ -192,6 +192,44 @@ pub const REPLY_MARGIN: Duration = Duration::from_millis(500);
 #[cfg(feature = "sim")]
 const SIM_REPLY_TIME: Duration = Duration::from_millis(500);
 
+/// The longest silence taken from a controller that says "still working" every `interval`
+/// while it executes ([`Robot::set_keepalive`]): six of its intervals, at least 1.5 s (a
+/// loaded machine may hold its keep-alive thread back), so that with one unanswered ENQ of
+/// the repeat after it a dead controller is noticed within 2.5 s.
+pub fn keepalive_silence(interval: Duration) -> Duration {
+    (interval * 6).max(KEEPALIVE_SILENCE)
+}
+
+/// The shortest silence [`keepalive_silence`] takes.
+pub const KEEPALIVE_SILENCE: Duration = Duration::from_millis(1500);
+
+/// What an in-process line (the embedded controller's, port `sim`, `rapl:`, `mars:`) waits
+/// beyond the timeouts of a line to another process: its controller cannot die apart from
+/// the program, only be held back by a busy machine, and must not time out for that (issue
+/// 42: one TROL_ERR_COMM in 1,100 Defines under heavy load).
+#[cfg(any(feature = "sim", feature = "rapl", feature = "mars"))]
+pub const IN_PROCESS_SLACK: Duration = Duration::from_secs(5);
+
+/// The link settings of an in-process line: `cfg`'s block check, every timeout at least
+/// [`IN_PROCESS_SLACK`].
+#[cfg(any(feature = "sim", feature = "rapl", feature = "mars"))]
+fn in_process(cfg: LinkConfig) -> LinkConfig {
+    let t = cfg.timeouts;
+    let at_least = |d: Duration| d.max(IN_PROCESS_SLACK);
+    LinkConfig {
+        timeouts: trol_proto::link::Timeouts {
+            enq: at_least(t.enq),
+            ack: at_least(t.ack),
+            nak_code: at_least(t.nak_code),
+            start: at_least(t.start),
+            termc: at_least(t.termc),
+            eot: at_least(t.eot),
+            reset: t.reset,
+        },
+        ..cfg
+    }
+}
+
 /// The shortest reply timeout a controller's reply time gives a call.
 pub const MIN_PROMPT_REPLY_TIMEOUT: Duration = Duration::from_millis(1500);
 
@@ -519,10 +557,11 @@ impl Robot {
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
         let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time);
+        robot.set_reply_time(reply_time + IN_PROCESS_SLACK);
         robot.codes = trol_rapl::RAPL_CODES;
         Ok(robot)
     }
@@ -562,10 +601,11 @@ impl Robot {
         let mut backend = backend;
         backend.set_locations_file(file);
         let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time);
+        robot.set_reply_time(reply_time + IN_PROCESS_SLACK);
         robot.codes = trol_mars::MARS_CODES;
         Ok(robot)
     }
@@ -585,10 +625,11 @@ impl Robot {
         let shared = backend.share();
         let view = trol_view::serve(addr, shared)
             .map_err(|e| SetupError::Config(format!("cannot serve the view at {addr}: {e}")))?;
+        let cfg = in_process(cfg);
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
-        robot.set_reply_time(SIM_REPLY_TIME);
+        robot.set_reply_time(SIM_REPLY_TIME + IN_PROCESS_SLACK);
         robot.view = Some(view);
         Ok(robot)
     }
@@ -612,9 +653,10 @@ impl Robot {
 
     #[cfg(feature = "sim")]
     fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
+        let cfg = in_process(cfg);
         let (line, handle) = trol_sim::embedded(settings, cfg);
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
-        robot.set_reply_time(SIM_REPLY_TIME);
+        robot.set_reply_time(SIM_REPLY_TIME + IN_PROCESS_SLACK);
         robot
     }
 
@@ -724,6 +766,7 @@ impl Robot {
         if !self.manual_peer {
             self.manual_peer = true;
             self.prompt = None;
+            self.set_keepalive(None);
             self.default_handlers();
             self.epoch = None;
             if !self.repeats_set {
@@ -920,6 +963,8 @@ impl Robot {
         }
         self.transactor.set_reply_timeout_tenths(tenths);
         self.reply_timeout_set = true;
+        // The application's reply timeout is the bound of every wait, as the manual's.
+        self.transactor.initiator_mut().set_silence(None);
         Ok(())
     }
 
@@ -1509,13 +1554,20 @@ impl Robot {
                 "the controller's BIOS codes (TROLGetCodes): {e}; its codes are named by number"
             ),
         }
-        // How long it takes to answer: each call waits that and a margin for its reply.
-        match self.reply_time() {
-            Ok(t) => self.set_reply_time(t),
+        // How long it takes to answer: each call waits that and a margin for its reply; and
+        // whether it says "still working" meanwhile: then a silence ends the wait sooner.
+        match self.reply_times() {
+            Ok((t, keepalive)) => {
+                self.set_reply_time(t);
+                self.set_keepalive(keepalive);
+            }
             Err(e @ Error::Link { .. }) => return Err(e),
-            other => tracing::debug!(
-                "TROLGetReplyTime: {other:?}; calls wait the manual's reply timeout"
-            ),
+            other => {
+                self.set_keepalive(None);
+                tracing::debug!(
+                    "TROLGetReplyTime: {other:?}; calls wait the manual's reply timeout"
+                )
+            }
         }
         Ok(v)
     }
@@ -1523,15 +1575,45 @@ impl Robot {
     /// TROLGetReplyTime: the longest the controller takes to answer a request (the version
     /// check asks it, and each call then waits that and a margin for its reply).
     pub fn reply_time(&mut self) -> Result<Duration> {
+        self.reply_times().map(|(t, _)| t)
+    }
+
+    /// TROLGetReplyTime in full: the longest answer, and how often the controller says
+    /// "still working" while it executes (`None`: it does not, or is older than that).
+    fn reply_times(&mut self) -> Result<(Duration, Option<Duration>)> {
+        let secs = |v: f64| Duration::from_secs_f64(v.min(600.0));
         match self.call(&table::GET_REPLY_TIME, &[])? {
-            Reply::Reals { values, .. } if values.first().is_some_and(|t| *t >= 0.0) => {
-                Ok(Duration::from_secs_f64(values[0].min(600.0)))
+            Reply::Reals { values, .. }
+                if values.iter().all(|t| t.is_finite() && *t >= 0.0) && !values.is_empty() =>
+            {
+                let keepalive = values.get(1).filter(|k| **k > 0.0).map(|k| secs(*k));
+                Ok((secs(values[0]), keepalive))
             }
             _ => Err(Error::BadReply {
                 command: table::GET_REPLY_TIME.name,
                 len: 0,
             }),
         }
+    }
+
+    /// The controller says "still working" every `interval` while it executes a request
+    /// (docs/protocol.md, "Keep-alive"): a reply is then given up once the line has been
+    /// silent for [`keepalive_silence`], however long the controller may take, so a
+    /// controller that died is noticed within seconds even where a call may take long (a
+    /// C500 behind the gateway stopping its arm). `None`: the reply timeout alone.
+    /// A reply timeout the application set (SetL3_TO_Intervall) stays its own: no silence
+    /// shortens it.
+    pub fn set_keepalive(&mut self, interval: Option<Duration>) {
+        let silence = interval
+            .filter(|_| !self.reply_timeout_set)
+            .map(keepalive_silence);
+        self.transactor.initiator_mut().set_silence(silence);
+    }
+
+    /// The longest silence a reply is waited through, where the controller keeps the line
+    /// alive ([`Robot::set_keepalive`]; the version check learns it).
+    pub fn keepalive_silence(&self) -> Option<Duration> {
+        self.transactor.initiator().silence()
     }
 
     /// TROLSetWatchdog: the controller halts the arm when no call arrives for `limit` (in

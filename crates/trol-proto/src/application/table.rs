@@ -329,8 +329,9 @@ commands! {
     TROL_GET_REPLY_TIME = 197 => GET_REPLY_TIME {
         name: "TROLGetReplyTime",
         args: &[],
-        reply: ReplyKind::Reals { min: 1, max: 1 }, success: &[], wait: Wait::Reply,
-        help: "the longest the controller takes to answer a request, seconds",
+        reply: ReplyKind::Reals { min: 1, max: 2 }, success: &[], wait: Wait::Reply,
+        help: "the longest the controller takes to answer a request, and how often it says \
+               \"still working\" meanwhile (0: it does not), seconds",
     }
 }
 
@@ -358,11 +359,12 @@ pub const ALIASES: &[(&str, u8)] = &[
     ("point", TROL_DEFINE),
 ];
 
-/// The version of TROL's protocol this library speaks: 3 is this successor's (the manual's
+/// The version of TROL's protocol this library speaks: 4 is this successor's (the manual's
 /// layers with the CRC-16 agreement, transaction numbers with repeats, GetStatus with its
-/// transaction and epoch, GetVersion and SetWatchdog). Host and controller must speak the
-/// same.
-pub const PROTOCOL_VERSION: u16 = 3;
+/// transaction and epoch, GetVersion and SetWatchdog; 4 added the controller's keep-alive,
+/// SYN while it executes, which a host of 3 would take for a broken line). Host and
+/// controller must speak the same.
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// The longest tool the server accepts: the offset of the tool centre point from the flange,
 /// mm (assumption: twice the A465's reach of about 711 mm would put the tool centre point

@@ -2,7 +2,7 @@
 //!
 //! The manual asks that the codes differ pairwise in at least 3 bits, so that a received byte
 //! that differs in at most 1 bit from the code expected at that point can be accepted as that
-//! code. It does not print the values (they lived in `protoc.h`). We chose eight codewords of
+//! code. It does not print the values (they lived in `protoc.h`). We chose codewords of
 //! the extended (8,4) Hamming code: every pair differs in exactly 4 bits, and each is 4 bits
 //! away from 0x00 and 0xFF, the bytes a floating or broken line tends to produce. The ASCII
 //! values of these names (SOH=0x01, ETX=0x03, ...) differ in a single bit and could not be used.
@@ -23,9 +23,14 @@ pub const ENQ: u8 = 0x99;
 pub const ACK: u8 = 0xB4;
 /// Negative acknowledgement; the next byte is a NAK code.
 pub const NAK: u8 = 0xD2;
+/// Synchronous idle (Decision, not in the manual): the controller's "still working", sent
+/// while it executes a request, to a host of this protocol only, so that the host tells a
+/// controller that works long from one that died (docs/protocol.md, "Keep-alive"). A ninth
+/// codeword of the same code, 4 bits from each of the others.
+pub const SYN: u8 = 0x66;
 
 /// All control codes with their names, for documentation, tests and traces.
-pub const ALL: [(&str, u8); 8] = [
+pub const ALL: [(&str, u8); 9] = [
     ("SOH", SOH),
     ("STX", STX),
     ("ETX", ETX),
@@ -34,6 +39,7 @@ pub const ALL: [(&str, u8); 8] = [
     ("ENQ", ENQ),
     ("ACK", ACK),
     ("NAK", NAK),
+    ("SYN", SYN),
 ];
 
 /// Number of bits in which `a` and `b` differ.

@@ -130,6 +130,20 @@ impl Link {
         self.receiver.set_config(cfg);
     }
 
+    /// Take SYN while a message's ENQ is awaited as the peer's "still working"
+    /// ([`Receiver::set_keepalive`]): a host's end.
+    pub fn set_keepalive(&mut self, on: bool) {
+        self.receiver.set_keepalive(on);
+    }
+
+    /// While ENQ is awaited: when the peer's last SYN came, if one did since the wait began.
+    pub fn alive_at(&self) -> Option<Instant> {
+        match self.role {
+            Role::Receiving => self.receiver.alive_at(),
+            _ => None,
+        }
+    }
+
     /// With the manual's LRC: check each whole message received before its last block is
     /// acknowledged ([`Plausible`]); `None`, the block check alone. No effect with CRC-16.
     pub fn set_plausible(&mut self, plausible: Option<Plausible>) {

@@ -6,7 +6,7 @@
 //! damaged byte as what it is within one bit of, as a receiver does.
 
 use super::BlockCheck;
-use super::control::{ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, accepts};
+use super::control::{ACK, ENQ, EOT, ETB, ETX, NAK, SOH, STX, SYN, accepts};
 use super::frame::{self, FRAME_SIZE, HEADER_LEN, frame_count};
 
 /// What a frame ends with.
@@ -48,7 +48,7 @@ pub enum Message {
 pub enum Seen {
     /// A line of terminal text (bytes outside the protocol, up to CR or LF or a block).
     Text(Vec<u8>),
-    /// ENQ, ACK or EOT (the byte as it is defined).
+    /// ENQ, ACK, EOT or the controller's keep-alive SYN (the byte as it is defined).
     Control(u8),
     /// A NAK and its code byte.
     Nak(u8),
@@ -231,7 +231,7 @@ impl Monitor {
             seen.push(Seen::Nak(block[1]));
             return;
         }
-        let control = [ENQ, ACK, EOT].into_iter().find(|c| accepts(b, *c));
+        let control = [ENQ, ACK, EOT, SYN].into_iter().find(|c| accepts(b, *c));
         let Some(control) = control else {
             seen.push(Seen::Stray(b));
             return;

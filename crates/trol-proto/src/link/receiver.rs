@@ -76,6 +76,10 @@ pub struct Receiver {
     /// The last message refused as implausible (PCI, bytes): the same bytes again are
     /// taken, since noise does not repeat itself (a peer that means them gets its answer).
     doubted: Option<(u16, Vec<u8>)>,
+    /// Whether a SYN while ENQ is awaited is the peer's "still working" ([`control::SYN`]).
+    keepalive: bool,
+    /// When the last SYN came (since the last [`Receiver::start`]).
+    alive_at: Option<Instant>,
 }
 
 /// With the manual's LRC, which lets damage through that a CRC finds, a check of a whole
@@ -126,7 +130,21 @@ impl Receiver {
             out: Vec::new(),
             plausible: None,
             doubted: None,
+            keepalive: false,
+            alive_at: None,
         }
+    }
+
+    /// Take SYN while ENQ is awaited as the peer's "still working" (a host of this protocol
+    /// waiting for its reply, docs/protocol.md "Keep-alive"); off, SYN there fails the
+    /// transfer as any byte but ENQ (the manual's).
+    pub fn set_keepalive(&mut self, on: bool) {
+        self.keepalive = on;
+    }
+
+    /// When the last SYN arrived since the wait for ENQ began, if one did.
+    pub fn alive_at(&self) -> Option<Instant> {
+        self.alive_at
     }
 
     /// Check each message with the LRC ([`Plausible`]); `None`: the block check alone.
@@ -171,6 +189,7 @@ impl Receiver {
     pub fn start(&mut self) {
         self.state = State::AwaitEnq;
         self.deadline = None;
+        self.alive_at = None;
         self.naks = 0;
         self.message.clear();
         self.out.clear();
@@ -305,6 +324,8 @@ impl Receiver {
                 if control::accepts(byte, ENQ) {
                     self.out.push(ACK);
                     self.expect_start(Block::Header, now, 1);
+                } else if self.keepalive && control::accepts(byte, control::SYN) {
+                    self.alive_at = Some(now);
                 } else {
                     self.fail(ReceiveError::BadEnq);
                 }

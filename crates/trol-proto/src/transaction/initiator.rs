@@ -39,6 +39,11 @@ pub struct Initiator {
     reply_timeout: Duration,
     sent_at: Instant,
     reply_deadline: Option<Instant>,
+    /// When the current wait for the reply began.
+    awaiting_since: Instant,
+    /// With a controller that keeps the line alive while it works: the longest silence
+    /// taken before the reply is given up ([`Initiator::set_silence`]).
+    silence: Option<Duration>,
     event: Option<InitiatorEvent>,
     stale_replies: u64,
 }
@@ -46,8 +51,11 @@ pub struct Initiator {
 impl Initiator {
     /// An idle initiator with the default reply timeout of 15 s.
     pub fn new(cfg: LinkConfig) -> Self {
+        let mut link = Link::new(cfg);
+        // A controller of this protocol says "still working" with SYN while it executes.
+        link.set_keepalive(true);
         Initiator {
-            link: Link::new(cfg),
+            link,
             state: State::Idle,
             number: 0,
             request: Vec::new(),
@@ -56,9 +64,39 @@ impl Initiator {
             reply_timeout: reply_timeout_from_tenths(super::DEFAULT_REPLY_TIMEOUT_TENTHS),
             sent_at: Instant::ZERO,
             reply_deadline: None,
+            awaiting_since: Instant::ZERO,
+            silence: None,
             event: None,
             stale_replies: 0,
         }
+    }
+
+    /// For a controller that sends SYN while it executes a request (it said so in
+    /// TROLGetReplyTime, docs/protocol.md "Keep-alive"): give the reply up once the line has
+    /// been silent for `silence` (no SYN, no reply), however long the reply timeout. So a
+    /// controller that died is told from one that works long. `None`: the reply timeout alone.
+    pub fn set_silence(&mut self, silence: Option<Duration>) {
+        self.silence = silence;
+    }
+
+    /// The longest silence taken while a reply is awaited ([`Initiator::set_silence`]).
+    pub fn silence(&self) -> Option<Duration> {
+        self.silence
+    }
+
+    /// When the wait for the reply ends: its deadline, or earlier, a silence too long.
+    fn reply_ends(&self) -> Option<Instant> {
+        let deadline = self.reply_deadline?;
+        Some(match self.silence {
+            Some(s) => {
+                let heard = self
+                    .link
+                    .alive_at()
+                    .map_or(self.awaiting_since, |a| a.max(self.awaiting_since));
+                deadline.min(heard + s)
+            }
+            None => deadline,
+        })
     }
 
     /// The link underneath (settings, counters, last error).
@@ -203,16 +241,19 @@ impl Initiator {
                     self.event = Some(InitiatorEvent::Failed(TransCode::ErrSend));
                 }
             }
-            (Failure::Receive(_), Decision::WaitMore(extra)) => self.await_reply(now + extra),
-            (Failure::Receive(_), _) => self.await_reply(now + self.reply_timeout),
-            (Failure::Timeout { .. }, Decision::WaitMore(extra)) => self.await_reply(now + extra),
-            (Failure::Timeout { .. }, _) => self.await_reply(now + self.reply_timeout),
+            (Failure::Receive(_), Decision::WaitMore(extra)) => self.await_reply(now, now + extra),
+            (Failure::Receive(_), _) => self.await_reply(now, now + self.reply_timeout),
+            (Failure::Timeout { .. }, Decision::WaitMore(extra)) => {
+                self.await_reply(now, now + extra)
+            }
+            (Failure::Timeout { .. }, _) => self.await_reply(now, now + self.reply_timeout),
         }
     }
 
-    fn await_reply(&mut self, deadline: Instant) {
+    fn await_reply(&mut self, now: Instant, deadline: Instant) {
         self.state = State::AwaitReply;
         self.reply_deadline = Some(deadline);
+        self.awaiting_since = now;
         if !self.link.is_busy() {
             // Cannot be busy: the link is idle whenever a decision is asked for.
             let _ = self.link.receive(deadline);
@@ -223,7 +264,7 @@ impl Initiator {
     pub fn poll_timeout(&self) -> Option<Instant> {
         let link = self.link.poll_timeout();
         let reply = match self.state {
-            State::AwaitReply if !self.link.receive_in_progress() => self.reply_deadline,
+            State::AwaitReply if !self.link.receive_in_progress() => self.reply_ends(),
             _ => None,
         };
         match (link, reply) {
@@ -266,7 +307,7 @@ impl Initiator {
         self.settle(now);
         if self.state == State::AwaitReply
             && !self.link.receive_in_progress()
-            && self.reply_deadline.is_some_and(|d| now >= d)
+            && self.reply_ends().is_some_and(|d| now >= d)
             && self.link.cancel_receive()
         {
             self.reply_deadline = None;
@@ -288,7 +329,7 @@ impl Initiator {
         match (self.state, outcome) {
             (State::Sending, Outcome::Sent) => {
                 self.sent_at = now;
-                self.await_reply(now + self.reply_timeout);
+                self.await_reply(now, now + self.reply_timeout);
             }
             (State::Sending, Outcome::Failed(LinkError::Send(e))) => self.ask(Failure::Send(e)),
             (State::AwaitReply, Outcome::Received) => {
@@ -305,6 +346,7 @@ impl Initiator {
                 } else {
                     // A late reply to a transaction the PC gave up on.
                     self.stale_replies += 1;
+                    self.awaiting_since = self.awaiting_since.max(now);
                     let _ = self.link.receive(now);
                 }
             }

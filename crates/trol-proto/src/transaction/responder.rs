@@ -48,6 +48,9 @@ pub struct Responder {
     /// The numbers of the last requests run, newest first: a host whose numbers are seen
     /// to change numbers its requests; one of 1998 leaves the PCI alone.
     recent_numbers: [Option<u8>; 3],
+    /// The host was seen to number its requests since it activated (for the keep-alive:
+    /// a repeat, which carries the number again, does not make it a 1998 host).
+    seen_numbering: bool,
     /// What the link's LRC check ([`Responder::set_request_check`]) knows of the host's
     /// numbering: bit 8 set when the host numbers its requests, bits 0..7 the number of the
     /// last request run.
@@ -99,6 +102,7 @@ impl Responder {
             manual: None,
             numbered_host: false,
             recent_numbers: [None; 3],
+            seen_numbering: false,
             numbering: Default::default(),
         }
     }
@@ -150,12 +154,26 @@ impl Responder {
         }
     }
 
+    /// Whether the host is one of this protocol, which takes SYN while it waits for a reply
+    /// (docs/protocol.md, "Keep-alive"): one that agreed on CRC-16 (no 1998 host can), that
+    /// activated with TROL's worded line, or that was seen to number its requests. Never a
+    /// host written from the manual alone, whose layer 2 would fail on the byte; never with
+    /// the manual's layer 3 ([`Responder::set_manual`]).
+    pub fn host_takes_keepalive(&self) -> bool {
+        self.manual.is_none()
+            && (self.link.config().check == crate::link::BlockCheck::Crc16
+                || self.numbered_host
+                || self.seen_numbering
+                || self.host_numbers_requests())
+    }
+
     /// Say whether the host numbers its requests (`true` after TROL's worded activation
     /// line; `false` after the manual's bare one, or for a new host). Forgets the numbers
     /// seen so far.
     pub fn set_numbered_host(&mut self, numbered: bool) {
         self.numbered_host = numbered;
         self.recent_numbers = [None; 3];
+        self.seen_numbering = false;
         self.share_numbering();
     }
 
@@ -286,6 +304,7 @@ impl Responder {
                 self.recent_numbers[1],
             ];
             self.share_numbering();
+            self.seen_numbering |= self.host_numbers_requests();
         }
         self.reply.clear();
         self.reply.extend_from_slice(reply);

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use trol_a465::arm::{ArmSettings, parse_locations, parse_objects};
+use trol_a465::arm::{ArmSettings, parse_objects};
 use trol_comm::ServerEvent;
 use trol_controller::{Controller, Mode, Pcp};
 use trol_proto::link::{BlockCheck, LinkConfig};
@@ -214,21 +214,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     // A locations file that does not exist yet (its folder does) starts an empty table,
     // which TROLSaveLocations writes there (docs/teach.md).
-    let mut new_file = false;
+    let new_file = a.locations.as_ref().is_some_and(|p| !p.exists());
     let locations = match &a.locations {
-        Some(p)
-            if !p.exists()
-                && p.parent()
-                    .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir()) =>
-        {
-            new_file = true;
-            Vec::new()
-        }
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| format!("cannot read {}: {e}", p.display()))?;
-            parse_locations(&text).map_err(|e| format!("{}: {e}", p.display()))?
-        }
+        Some(p) => trol_controller::table::load(p)?,
         None => Vec::new(),
     };
     let n_locations = locations.len();
@@ -395,6 +383,9 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
                  whether it ran before cannot be told, so it was not run)"
             ),
             ServerEvent::Idle | ServerEvent::Pending => {}
+        }
+        if let Some(why) = &e.note {
+            say!("  {why}");
         }
         // Where the world's objects are, whenever that changed.
         if e.world.is_some() && e.world != last_world {

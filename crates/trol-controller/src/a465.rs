@@ -51,6 +51,28 @@ pub const A465_CODES: &CodeTable = &[
         meaning: "the motion queue is full: wait with TROLFinish, then send the motion again",
     },
     CodeInfo {
+        value: code::FILE_DENIED,
+        name: "BIOS_FILE_DENIED",
+        meaning: "the locations file may not be written (permission denied, or read-only): \
+                  it was left as it is",
+    },
+    CodeInfo {
+        value: code::DISK_FULL,
+        name: "BIOS_DISK_FULL",
+        meaning: "no room on the disk for the locations file: it was left as it was",
+    },
+    CodeInfo {
+        value: code::NO_FOLDER,
+        name: "BIOS_NO_FOLDER",
+        meaning: "the folder of the locations file does not exist",
+    },
+    CodeInfo {
+        value: code::SAVE_FAILED,
+        name: "BIOS_SAVE_FAILED",
+        meaning: "the locations file could not be written (the controller's log says why): \
+                  it was left as it was",
+    },
+    CodeInfo {
         value: code::TABLE_FULL,
         name: "BIOS_TABLE_FULL",
         meaning: "the location table is full (1000 locations): delete one first",
@@ -155,16 +177,101 @@ pub mod table {
         all
     }
 
-    /// Save: write the table to `file` (through a temporary file beside it, so that a crash
-    /// never leaves half a file); NO_FILE where there is none.
+    /// The locations of the file at `path` for a backend's table (docs/teach.md): a file
+    /// that does not exist yet, in a folder that does, is an empty table that Save creates;
+    /// a missing folder, a file too large for the table, a bad line or a reserved name
+    /// ([`LocName::reserved`]) is refused with what to do.
+    pub fn load(path: &std::path::Path) -> Result<Vec<(String, Stored)>, String> {
+        let folder = path.parent().filter(|d| !d.as_os_str().is_empty());
+        if !path.exists() {
+            return match folder {
+                Some(d) if !d.is_dir() => Err(format!(
+                    "{}: the folder {} does not exist: create it, or name a locations file \
+                     in a folder that does",
+                    path.display(),
+                    d.display()
+                )),
+                _ => Ok(Vec::new()),
+            };
+        }
+        let all = arm::read_locations(path)?;
+        for (name, _) in &all {
+            if let Ok(n) = LocName::new(name)
+                && n.reserved()
+            {
+                return Err(format!(
+                    "{}: {}",
+                    path.display(),
+                    trol_proto::application::location::reserved_message(&n)
+                ));
+            }
+        }
+        Ok(all)
+    }
+
+    /// Save: write the table to `file` (docs/teach.md, "Saving"): a temporary file beside
+    /// it, written and synced, then renamed over it and the folder synced, so that neither
+    /// a crash nor a full disk leaves half a file; a read-only file is not replaced. NO_FILE
+    /// where there is none; each failure has its code (FILE_DENIED, DISK_FULL, NO_FOLDER,
+    /// SAVE_FAILED) and its cause in the error's text.
     pub fn save(arm: &Arm, file: Option<&std::path::Path>) -> BiosResult {
         let Some(file) = file else {
             return Ok(code::NO_FILE);
         };
-        let tmp = file.with_extension("trol-tmp");
-        std::fs::write(&tmp, arm.locations_text())
-            .and_then(|()| std::fs::rename(&tmp, file))
-            .map_err(|e| BackendError::Link(format!("cannot write {}: {e}", file.display())))?;
+        write_safely(file, arm.locations_text().as_bytes())
+            .map_err(|(code, why)| BackendError::Explained(code, why))?;
         Ok(code::OK)
+    }
+
+    fn write_safely(file: &std::path::Path, text: &[u8]) -> Result<(), (i16, String)> {
+        use std::io::Write;
+        let fail = |e: std::io::Error, what: &str| {
+            let code = match e.kind() {
+                std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::ReadOnlyFilesystem => {
+                    code::FILE_DENIED
+                }
+                std::io::ErrorKind::StorageFull | std::io::ErrorKind::QuotaExceeded => {
+                    code::DISK_FULL
+                }
+                std::io::ErrorKind::NotFound => code::NO_FOLDER,
+                _ => code::SAVE_FAILED,
+            };
+            (code, format!("cannot {what} {}: {e}", file.display()))
+        };
+        let old = std::fs::metadata(file).ok();
+        if old.as_ref().is_some_and(|m| m.permissions().readonly()) {
+            return Err((
+                code::FILE_DENIED,
+                format!(
+                    "{} is read-only: it was left as it is (make it writable to save)",
+                    file.display()
+                ),
+            ));
+        }
+        let tmp = file.with_extension("trol-tmp");
+        let written = (|| {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(text)?;
+            if let Some(m) = &old {
+                f.set_permissions(m.permissions())?;
+            }
+            f.sync_all()
+        })();
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(fail(e, "write"));
+        }
+        if let Err(e) = std::fs::rename(&tmp, file) {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(fail(e, "replace"));
+        }
+        // The rename itself outlives a crash once the folder is synced (where a folder can
+        // be opened to sync, as on Unix).
+        if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty())
+            && let Ok(d) = std::fs::File::open(dir)
+        {
+            let _ = d.sync_all();
+        }
+        Ok(())
     }
 }

@@ -79,6 +79,10 @@ pub enum BackendError {
     /// not a code, such as GetPosition).
     #[error("refused with BIOS code {0}")]
     Refused(i16),
+    /// Refused with one of its BIOS codes, and the cause in words for the log (a locations
+    /// file that could not be written: which file, and what the system said).
+    #[error("refused with BIOS code {0}: {1}")]
+    Explained(i16, String),
     /// The controller cannot answer this command at all (TROL_ERR_UNKNOWN): a gripper it
     /// cannot read, for example.
     #[error("this controller cannot {0}")]
@@ -96,7 +100,7 @@ impl BackendError {
             BackendError::UnknownLocation(_) => TROL_ERR_LOCATION,
             BackendError::Link(_) => TROL_ERR_ROBOT,
             BackendError::Unsure(_) => TROL_ERR_ROBOT_UNSURE,
-            BackendError::Refused(v) => Code(*v),
+            BackendError::Refused(v) | BackendError::Explained(v, _) => Code(*v),
             BackendError::Unsupported(_) => trol_proto::application::code::TROL_ERR_UNKNOWN,
             BackendError::NotStopped(_) => trol_proto::application::code::TROL_ERR_NOT_STOPPED,
         }
@@ -208,6 +212,12 @@ pub trait Backend: Send {
     /// Called after each request the controller served and after its watchdog halted the
     /// arm: a moment to share the arm's state (the simulator renews its live view's copy).
     fn after_request(&mut self) {}
+    /// Why the last request was refused, in words, where its code alone cannot say it (a
+    /// straight line: which singular pose, where on the line, what to do), once: for the
+    /// controller's log.
+    fn take_note(&mut self) -> Option<String> {
+        None
+    }
     /// The arm as the controller reports it now, for a view (`None`: nothing to report, or
     /// not now). Called between requests and during long waits, at most as often as the
     /// controller was told ([`crate::Controller::share_reports`]); it may ask the controller,

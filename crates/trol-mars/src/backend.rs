@@ -1134,6 +1134,9 @@ impl Backend for MarsBackend {
     fn save_locations(&mut self) -> BiosResult {
         trol_controller::table::save(&self.planner, self.locations_file.as_deref())
     }
+    fn take_note(&mut self) -> Option<String> {
+        self.planner.take_refusal()
+    }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let q = match mode {
             PosMode::Commanded => {

@@ -241,6 +241,9 @@ fn out_of_range_fields_are_arg_range_on_both_sides() {
         ),
         (&FINISH, vec![Int(2)]),
         (&GET_POSITION, vec![Int(3), Int(0)]),
+        // A reserved name (docs/teach.md, "Names"), in any case.
+        (&MOVE, vec![name("T1"), Flag(false)]),
+        (&APPRO, vec![name("#t18"), cart(&[-90.0]), Flag(false)]),
         // Wrong kinds and counts.
         (&HOME, vec![Flag(true)]),
         (&HOME, vec![]),
@@ -259,6 +262,8 @@ fn out_of_range_fields_are_arg_range_on_both_sides() {
         vec![TROL_MOVE, 2, b'p', b'1', b' ', b' ', b' ', b' ', b' ', b' '],
         vec![TROL_MOVE, 0, b'1', b'p', b' ', b' ', b' ', b' ', b' ', b' '],
         vec![TROL_MOVE, 0, b'p', b'1', 0, b' ', b' ', b' ', b' ', b' '],
+        // A reserved name, sent by a host that does not check it.
+        vec![TROL_MOVE, 0, b't', b'7', b' ', b' ', b' ', b' ', b' ', b' '],
         // MA with the cartesian tag.
         vec![TROL_MA, 0x14, 0, 0, 0, 0],
         // MA with the straight bit.
@@ -363,7 +368,10 @@ fn arb_target() -> impl Strategy<Value = Location> {
 
 fn arb_request() -> impl Strategy<Value = (&'static CommandDef, Vec<Value>)> {
     use Value::*;
-    let name = "[a-zA-Z#][a-zA-Z0-9_]{0,7}".prop_map(|s| Name(LocName::new(&s).unwrap()));
+    let name = "[a-zA-Z#][a-zA-Z0-9_]{0,7}"
+        .prop_map(|s| LocName::new(&s).unwrap())
+        .prop_filter("a reserved name is refused", |n| !n.reserved())
+        .prop_map(Name);
     let c = |v: Vec<f64>| Loc(Location::Cart(v));
     let j = |v: Vec<f64>| Loc(Location::Joint(v));
     prop_oneof![

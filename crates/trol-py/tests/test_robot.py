@@ -88,6 +88,17 @@ def test_poses_and_joints_are_immutable_sequences_numpy_reads(sim_robot: trol.Ro
         pose.x = 1.0  # type: ignore[misc]
 
 
+def test_poses_and_joints_print_to_the_arms_precision() -> None:
+    """Issue 44: a pose reads as a person reads it (0.001 mm, 1e-6 rad, no exponent, no
+    -0); its fields keep the full value."""
+    pose = trol.Pose(400.0, 3.040798136292461e-14, 240.0, 1.6407142272685713e-24, 1.570796251296997, -0.0)
+    assert repr(pose) == "Pose(x=400, y=0, z=240, yaw=0, pitch=1.570796, roll=0)"
+    assert str(pose) == repr(pose)
+    assert pose.y == 3.040798136292461e-14
+    joints = trol.Joints(-1e-12, 0.5, -0.25, 0.0, 1.2345678, -3.0)
+    assert repr(joints) == "Joints(j1=0, j2=0.5, j3=-0.25, j4=0, j5=1.234568, j6=-3)"
+
+
 @pytest.mark.parametrize(
     "joints",
     [
@@ -415,7 +426,7 @@ def test_repeats_can_be_turned_off(sim_robot: trol.Robot) -> None:
 
 def test_version_and_watchdog(sim_robot: trol.Robot) -> None:
     protocol, kind = sim_robot.version()
-    assert protocol == 3
+    assert protocol == 4  # docs/protocol.md, "Version and kind"
     assert kind == "simulated A465"
     with pytest.raises(trol.ArgumentError):
         sim_robot.set_watchdog(30.0)

@@ -98,9 +98,8 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: UNSUPPORTED,
             name: "BIOS_UNSUPPORTED",
-            meaning: "RAPL-II has no form for this call (homing one axis: use TROLHome(0); a \
-                      joint location: use a precision point, #NAME; saving locations: the \
-                      C500 keeps them itself)",
+            meaning: "RAPL-II has no form for this: homing one axis (use TROLHome(0)), a joint \
+                      location (use a precision point, #NAME), or Save (the C500 keeps them)",
         },
         CodeInfo {
             value: NO_JOINT_UNITS,
@@ -117,9 +116,9 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: NO_PULSES,
             name: "BIOS_NO_PULSES",
-            meaning: "precision points and joint targets need the controller's pulse scale, sign \
-                      and zero: set `pulse_scale` and `pulse_zero` in the RAPL-II profile \
-                      (`trol rapl probe --poses 4` fits them), or `joint_units` for joint targets",
+            meaning: "precision points need the pulse scale and zero: set pulse_scale and \
+                      pulse_zero in the profile (trol rapl probe --poses 4 fits them), or \
+                      joint_units",
         },
         CodeInfo {
             value: NO_JOG_FRAME,
@@ -351,6 +350,12 @@ pub const CTRL_C_ENDS_FINISH_WITHIN: Duration = Duration::from_millis(500);
 
 /// How many motions may wait behind the one under way (the simulated arm's queue).
 pub const QUEUE: usize = trol_a465::arm::MOTION_QUEUE;
+// The scratch names (T1 to T{QUEUE + 2}) are the ones every backend refuses a program
+// (`LocName::reserved`), so that a program behaves alike on each.
+const _: () = assert!(
+    QUEUE + 2 == trol_proto::application::location::RESERVED_SCRATCH as usize,
+    "the scratch names must be the reserved ones"
+);
 
 /// How long a stop may take to show on the arm: the A465's longest braking (a straight line
 /// at 1000 mm/s and 2540 mm/s^2, 0.4 s; a joint at full speed, 0.25 s) and a margin for the

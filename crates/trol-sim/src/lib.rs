@@ -262,6 +262,9 @@ impl Backend for SimBackend {
     fn after_request(&mut self) {
         self.publish();
     }
+    fn take_note(&mut self) -> Option<String> {
+        self.arm.take_refusal()
+    }
     fn world(&mut self) -> Option<String> {
         let now = self.now();
         let held = self.arm.held().map(str::to_string);

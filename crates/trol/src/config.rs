@@ -232,6 +232,14 @@ impl Config {
             if file.is_file() {
                 continue;
             }
+            // A locations file that does not exist yet, in a folder that does, is an empty
+            // table that TROLSaveLocations creates (docs/teach.md).
+            let folder_there = file
+                .parent()
+                .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
+            if key == "locations" && !file.exists() && folder_there {
+                continue;
+            }
             let line = text
                 .lines()
                 .position(|l| {
@@ -242,10 +250,18 @@ impl Config {
             return Err(ConfigError {
                 file: path.to_path_buf(),
                 line,
-                message: format!(
-                    "{key}: {} is not there (a relative path counts from trol.cfg's folder)",
-                    file.display()
-                ),
+                message: if key == "locations" && !folder_there {
+                    format!(
+                        "{key}: the folder of {} is not there (a relative path counts from \
+                         trol.cfg's folder): create it, or name a file in a folder that is",
+                        file.display()
+                    )
+                } else {
+                    format!(
+                        "{key}: {} is not there (a relative path counts from trol.cfg's folder)",
+                        file.display()
+                    )
+                },
             });
         }
         Ok(cfg)

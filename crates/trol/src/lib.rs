@@ -58,8 +58,6 @@ use trol_proto::link::BlockCheck;
 #[cfg(feature = "sim")]
 pub use trol_sim::SimSettings;
 
-#[cfg(any(feature = "sim", feature = "mars"))]
-use trol_a465::arm::parse_locations;
 #[cfg(feature = "sim")]
 use trol_a465::arm::{ArmSettings, parse_objects};
 
@@ -71,20 +69,12 @@ fn read_config_file(path: &std::path::Path) -> Result<String> {
 
 /// The locations trol.cfg's `locations =` file holds (none without one). A file that does
 /// not exist yet, in a folder that does, starts an empty table: TROLSaveLocations creates it
-/// (docs/teach.md).
+/// (docs/teach.md); a missing folder, a file beyond the table's 1000 locations or a
+/// reserved name is refused here, before anything is sent.
 #[cfg(any(feature = "sim", feature = "mars"))]
 pub fn config_locations(cfg: &Config) -> Result<Vec<(String, trol_a465::arm::Stored)>> {
     match &cfg.locations {
-        Some(path)
-            if !path.exists()
-                && path
-                    .parent()
-                    .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir()) =>
-        {
-            Ok(Vec::new())
-        }
-        Some(path) => parse_locations(&read_config_file(path)?)
-            .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into()),
+        Some(path) => trol_controller::table::load(path).map_err(|e| SetupError::Config(e).into()),
         None => Ok(Vec::new()),
     }
 }

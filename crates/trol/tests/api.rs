@@ -864,7 +864,7 @@ fn the_host_checks_the_controllers_version_and_kind() {
         matches!(
             &e,
             Error::Setup(trol::SetupError::Incompatible {
-                ours: 3,
+                ours: trol::table::PROTOCOL_VERSION,
                 theirs: Some(2),
                 ..
             })
@@ -1517,106 +1517,6 @@ fn the_log_holds_every_execution_even_when_the_line_fails_under_the_reply() {
         (target[0] - before[0] - 0.1).abs() < 1e-6,
         "{before:?} -> {target:?}"
     );
-}
-
-/// Teaching (issue 28, docs/teach.md) on the embedded simulator: store where the arm is in
-/// each form, define a location, list, delete, move back to a taught location, save, and
-/// find the table again after a restart. Wrong names and forms are refused before anything
-/// is sent.
-#[test]
-fn taught_locations_are_stored_listed_deleted_moved_to_and_survive_a_restart() {
-    let dir = std::env::temp_dir().join(format!("trol-teach-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("taught.txt");
-    std::fs::write(&file, "; nothing taught yet\n").unwrap();
-    std::fs::write(
-        dir.join("trol.cfg"),
-        "38400\nsim\n0 0 0 0 0 0\ntime_scale = 50\nlocations = taught.txt\nhomed = yes\n",
-    )
-    .unwrap();
-    let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
-    let mut r = Robot::from_config(&cfg).unwrap();
-    assert!(r.locations().unwrap().is_empty());
-    // Somewhere off READY, then teach it three ways.
-    let pose = [420.0, -50.0, 330.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
-    r.move_ii(&Location::Cart(pose.to_vec()), false).unwrap();
-    r.finish().unwrap();
-    let at = r.position(Tag::Joint, PosMode::Commanded).unwrap();
-    r.here("p1", Tag::Cart).unwrap();
-    r.here("pj", Tag::Joint).unwrap();
-    r.here("#pp", Tag::Prec).unwrap();
-    r.define(
-        "up",
-        &Location::Cart(vec![300.0, 0.0, 500.0, 0.0, 1.5, 0.0]),
-    )
-    .unwrap();
-    let all = r.locations().unwrap();
-    let names: Vec<&str> = all.iter().map(|(n, _)| n.as_str()).collect();
-    assert_eq!(names, ["#pp", "p1", "pj", "up"]);
-    let p1 = all[1].1.to_array6();
-    for i in 0..3 {
-        assert!((p1[i] - pose[i]).abs() < 1e-2, "{p1:?}");
-    }
-    assert_eq!(all[2].1.tag(), Tag::Joint);
-    // Away and back, by each taught form.
-    for name in ["p1", "pj", "#pp"] {
-        r.ready().unwrap();
-        r.finish().unwrap();
-        r.move_to(name, false).unwrap();
-        r.finish().unwrap();
-        let back = r.position(Tag::Joint, PosMode::Commanded).unwrap();
-        for (a, b) in back.to_array6().iter().zip(at.to_array6()) {
-            assert!((a - b).abs() < 1e-3, "{name}: {back:?} vs {at:?}");
-        }
-    }
-    // Refused before anything is sent: a precision point without '#', a '#' name for
-    // cartesian values, a name too long.
-    for e in [
-        r.here("pp", Tag::Prec).unwrap_err(),
-        r.define("#c", &Location::Cart(vec![0.0; 6])).unwrap_err(),
-        r.here("much_too_long", Tag::Cart).unwrap_err(),
-    ] {
-        assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
-    }
-    // Delete: gone; deleting it again is TROL_ERR_LOCATION, as moving to it is.
-    r.delete_location("up").unwrap();
-    assert_eq!(
-        r.delete_location("up").unwrap_err().code(),
-        TROL_ERR_LOCATION
-    );
-    assert_eq!(
-        r.move_to("up", false).unwrap_err().code(),
-        TROL_ERR_LOCATION
-    );
-    // Saved, then a new controller (a restart) reads them back.
-    r.save_locations().unwrap();
-    drop(r);
-    let mut again = Robot::from_config(&cfg).unwrap();
-    let names: Vec<String> = again
-        .locations()
-        .unwrap()
-        .into_iter()
-        .map(|(n, _)| n)
-        .collect();
-    assert_eq!(names, ["#pp", "p1", "pj"]);
-    again.move_to("pj", false).unwrap();
-    again.finish().unwrap();
-    let back = again.position(Tag::Joint, PosMode::Commanded).unwrap();
-    for (a, b) in back.to_array6().iter().zip(at.to_array6()) {
-        assert!((a - b).abs() < 1e-3, "after the restart: {back:?}");
-    }
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// Without a locations file the simulator cannot save: BIOS_NO_FILE, which says what to do;
-/// the table itself works.
-#[test]
-fn saving_without_a_locations_file_says_how_to_get_one() {
-    let mut r = Robot::embedded(settings());
-    r.here("p9", Tag::Cart).unwrap();
-    let e = r.save_locations().unwrap_err();
-    assert_eq!(e.code().0, trol_a465::arm::code::NO_FILE, "{e}");
-    assert!(e.to_string().contains("--locations FILE"), "{e}");
 }
 
 /// Where a controller dies in [`dead_controller`].

@@ -30,6 +30,30 @@ pub struct CodeInfo {
 /// A list of codes with their names, as a backend publishes it.
 pub type CodeTable = [CodeInfo];
 
+/// The entries of `table` that TROLGetCodes could not carry whole (a name longer than
+/// [`super::reply::MAX_CODE_NAME`] bytes, a meaning longer than
+/// [`super::reply::MAX_CODE_MEANING`]), each as `NAME: what is too long`: a host would read
+/// them cut off mid-word. Every backend's test asks for none.
+pub fn too_long_for_the_wire(table: &CodeTable) -> Vec<String> {
+    use super::reply::{MAX_CODE_MEANING, MAX_CODE_NAME};
+    table
+        .iter()
+        .flat_map(|c| {
+            let name = (c.name.len() > MAX_CODE_NAME)
+                .then(|| format!("{}: name of {} bytes", c.name, c.name.len()));
+            let meaning = (c.meaning.len() > MAX_CODE_MEANING).then(|| {
+                format!(
+                    "{}: meaning of {} bytes (at most {MAX_CODE_MEANING}): {:?}",
+                    c.name,
+                    c.meaning.len(),
+                    c.meaning
+                )
+            });
+            name.into_iter().chain(meaning)
+        })
+        .collect()
+}
+
 /// 0: success.
 pub const SUCCESS: Code = Code(0);
 /// A communication error that the layer-3 error handler could not mend (host).

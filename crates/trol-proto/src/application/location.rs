@@ -133,8 +133,12 @@ impl Location {
 
 /// A location name (TLocName): 8 bytes, blank-padded, not NUL-terminated.
 ///
-/// Up to 8 characters; the first a letter or `#`, the rest letters, digits or `_`. A name
-/// starting with `#` holds a precision point, any other a cartesian location.
+/// Up to 8 characters; the first a letter or `#`, the rest letters, digits or `_` (the
+/// manual, "Location-Namen"). A name starting with `#` holds a precision point, any other a
+/// cartesian location. One rule on every backend, the strictest real controller's
+/// (docs/teach.md, "Names"): case does not tell two names apart (RAPL-II upper-cases what it
+/// is typed: `up` and `UP` are one location, [`LocName::same`]), and `T1` to `T18` (and
+/// `#T1` to `#T18`) are the controller's own ([`LocName::reserved`]).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct LocName([u8; 8]);
 
@@ -210,6 +214,35 @@ impl LocName {
     pub fn is_precision(&self) -> bool {
         self.0[0] == b'#'
     }
+
+    /// Whether it names the same location as `other`: case does not count.
+    pub fn same(&self, other: &LocName) -> bool {
+        self.0.eq_ignore_ascii_case(&other.0)
+    }
+
+    /// Whether it is one of the names a controller keeps for itself: `T1` to
+    /// [`RESERVED_SCRATCH`] (any case, with or without `#`), the scratch locations a C500
+    /// backend defines for MoveII and Appro. A program's location of such a name would be
+    /// overwritten there; every backend refuses it, so a program behaves the same on each.
+    pub fn reserved(&self) -> bool {
+        let name = self.as_str();
+        let name = name.strip_prefix('#').unwrap_or(name);
+        name.strip_prefix(['T', 't'])
+            .filter(|n| !n.starts_with('0'))
+            .and_then(|n| n.parse::<u8>().ok())
+            .is_some_and(|n| (1..=RESERVED_SCRATCH).contains(&n))
+    }
+}
+
+/// The highest scratch name a controller keeps for itself (`T18`, [`LocName::reserved`]).
+pub const RESERVED_SCRATCH: u8 = 18;
+
+/// Why a reserved name is refused, with what to do.
+pub fn reserved_message(name: &LocName) -> String {
+    format!(
+        "{name} is reserved: T1 to T{RESERVED_SCRATCH} (and #T1 to #T{RESERVED_SCRATCH}) are \
+         the controller's scratch locations on a C500; choose another name"
+    )
 }
 
 impl std::fmt::Debug for LocName {
@@ -246,5 +279,22 @@ mod tests {
         }
         assert!(LocName::from_bytes(b"ab  c   ").is_err());
         assert!(LocName::new("ab\0cd").is_err());
+    }
+
+    #[test]
+    fn one_rule_for_case_and_reserved_names() {
+        let n = |s: &str| LocName::new(s).unwrap();
+        assert!(n("up").same(&n("UP")));
+        assert!(n("Test_001").same(&n("test_001")));
+        assert!(!n("up").same(&n("up2")));
+        for r in ["T1", "t1", "T18", "#T1", "#t18", "T9"] {
+            assert!(n(r).reserved(), "{r}");
+        }
+        for ok in [
+            "T0", "T19", "T01", "TL", "T", "T1A", "TOOL", "#T", "#T19", "p1",
+        ] {
+            assert!(!n(ok).reserved(), "{ok}");
+        }
+        assert!(reserved_message(&n("t3")).contains("t3 is reserved"));
     }
 }

@@ -223,6 +223,9 @@ fn check(def: &CommandDef, arg: &Arg, value: &Value) -> Result<(), RequestError>
                 ))
             }
         }
+        (ArgKind::Name, Value::Name(n)) if n.reserved() => {
+            Err(range(def, arg, super::location::reserved_message(n)))
+        }
         (ArgKind::Straight, Value::Flag(_)) | (ArgKind::Name, Value::Name(_)) => Ok(()),
         (ArgKind::Real, Value::Real(x)) => {
             if (*x as f32).is_finite() {
@@ -462,11 +465,51 @@ pub fn literal_prefix(tag: Tag) -> &'static str {
     }
 }
 
-/// A location as the interpreter reads it: `c(400, 0, 150, 0, 1.5708, 0)`.
+/// Decimals a length in millimetres is printed with: the arm's 0.001 mm.
+pub const MM_DECIMALS: usize = 3;
+/// Decimals an angle in radians is printed with: 1e-6 rad (0.0002 mm at a 200 mm tool).
+pub const RAD_DECIMALS: usize = 6;
+
+/// `x` to `decimals` places, as a person reads it: trailing zeros and a lone point dropped,
+/// no exponent, no `-0` (what rounds to zero is `0`). Where a person reads a location: the
+/// interpreter, the pendant, the logs, the locations file (issues 42 and 44); a program
+/// gets the full value (`--json`, the API's floats).
+pub fn format_fixed(x: f64, decimals: usize) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let text = format!("{x:.decimals$}");
+    let text = if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        &text
+    };
+    if text == "-0" {
+        "0".to_string()
+    } else {
+        text.to_string()
+    }
+}
+
+/// The six values of a location of `tag` as a person reads them ([`format_fixed`]):
+/// millimetres to [`MM_DECIMALS`], radians to [`RAD_DECIMALS`], counts whole.
+pub fn format_values(tag: Tag, v: &[f64]) -> Vec<String> {
+    v.iter()
+        .enumerate()
+        .map(|(i, x)| match tag {
+            Tag::Cart if i < 3 => format_fixed(*x, MM_DECIMALS),
+            Tag::Cart | Tag::Joint => format_fixed(*x, RAD_DECIMALS),
+            Tag::Prec => format_fixed(*x, 0),
+        })
+        .collect()
+}
+
+/// A location as the interpreter reads it: `c(400, 0, 150, 0, 1.570796, 0)`, to the
+/// precision the arm has ([`format_values`]).
 pub fn format_location(loc: &Location) -> String {
     let values: Vec<String> = match loc {
         Location::Prec(c) => c.iter().map(|v| v.to_string()).collect(),
-        Location::Cart(v) | Location::Joint(v) => v.iter().map(|x| format_number(*x)).collect(),
+        Location::Cart(v) | Location::Joint(v) => format_values(loc.tag(), v),
     };
     format!("{}({})", literal_prefix(loc.tag()), values.join(", "))
 }

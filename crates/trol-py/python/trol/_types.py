@@ -4,9 +4,24 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+MM_DECIMALS = 3
+"""Decimals a length in mm is shown with: the arm's 0.001 mm."""
+RAD_DECIMALS = 6
+"""Decimals an angle in radians is shown with: 1e-6 rad."""
+
+
+def fixed(x: float, decimals: int) -> str:
+    """``x`` to ``decimals`` places as a person reads it: no trailing zeros, no exponent, no
+    ``-0`` (TROL prints locations so on every surface; the fields keep the full value)."""
+    text = f"{x:.{decimals}f}"
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
+
 
 class Pose(NamedTuple):
-    """A cartesian location (POS_CART): mm and radians."""
+    """A cartesian location (POS_CART): mm and radians. Shown to the arm's precision
+    (0.001 mm, 1e-6 rad); the fields are the full floats."""
 
     x: float
     y: float
@@ -15,9 +30,18 @@ class Pose(NamedTuple):
     pitch: float
     roll: float
 
+    def __repr__(self) -> str:
+        return "Pose({})".format(
+            ", ".join(
+                f"{name}={fixed(v, MM_DECIMALS if i < 3 else RAD_DECIMALS)}"
+                for i, (name, v) in enumerate(zip(self._fields, self))
+            )
+        )
+
 
 class Joints(NamedTuple):
-    """A joint location (POS_JOINT): radians, joint 1 first."""
+    """A joint location (POS_JOINT): radians, joint 1 first. Shown to 1e-6 rad; the
+    fields are the full floats."""
 
     j1: float
     j2: float
@@ -25,6 +49,11 @@ class Joints(NamedTuple):
     j4: float
     j5: float
     j6: float
+
+    def __repr__(self) -> str:
+        return "Joints({})".format(
+            ", ".join(f"{n}={fixed(v, RAD_DECIMALS)}" for n, v in zip(self._fields, self))
+        )
 
 
 class Precision(NamedTuple):

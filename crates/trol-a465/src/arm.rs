@@ -54,7 +54,24 @@ pub mod code {
     pub const TABLE_FULL: i16 = -18;
     /// Save without a locations file to write (the simulator started without one).
     pub const NO_FILE: i16 = -19;
+    /// Save refused by the system: the locations file (or its folder) may not be written,
+    /// or the file is read-only (it is then left as it is).
+    pub const FILE_DENIED: i16 = -23;
+    /// Save found no room on the disk; the file is left as it was.
+    pub const DISK_FULL: i16 = -24;
+    /// Save found no folder where the locations file should be.
+    pub const NO_FOLDER: i16 = -25;
+    /// Save failed for another reason (the controller's log says which); the file is left
+    /// as it was.
+    pub const SAVE_FAILED: i16 = -26;
 }
+
+/// The largest locations file read (bytes): a full table of [`MAX_TABLE`] lines with
+/// comments fits many times over; a larger file is refused, not read whole.
+pub const MAX_LOCATIONS_FILE: u64 = 4 << 20;
+
+/// How many locations the table holds (the wire's limit, TROLListLocations).
+pub const MAX_TABLE: usize = 1000;
 
 /// How many accepted motions (the one under way included) the controller holds before it
 /// refuses the next with `QUEUE_FULL` (assumption: the C500's own depth is not public).
@@ -109,20 +126,10 @@ pub enum HereForm {
     Prec,
 }
 
-/// Six values as a locations file writes them: the shortest text that reads back the same
-/// (a value that came as the wire's 32-bit float, as the f32 it was).
-fn join_values(v: &[f64; 6]) -> String {
-    v.iter()
-        .map(|x| {
-            let narrow = *x as f32;
-            if f64::from(narrow) == *x {
-                format!("{narrow}")
-            } else {
-                format!("{x}")
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
+/// Six values as a locations file writes them, to the precision the arm has (0.001 mm,
+/// 1e-6 rad: `420` where a person wrote 420, not `420.00000000000006`).
+fn join_values(tag: trol_proto::application::Tag, v: &[f64; 6]) -> String {
+    trol_proto::application::record::format_values(tag, v).join(" ")
 }
 
 /// A target of an absolute motion.
@@ -214,6 +221,11 @@ const LINE_TOLERANCE_RAD: f64 = 1e-4;
 const LINE_MAX_SAMPLES: usize = 200_000;
 /// Stretches of the time grid per segment of a straight line's spline ([`Profile::along`]).
 const LINE_PIECES: usize = 4;
+/// What to do about a straight line the arm cannot follow.
+const LINE_ADVICE: &str = "go through a point off the line first (a joint move to it), or move there in joints \
+     (straight 0)";
+/// Points of a refused straight line checked for a configuration within the limits.
+const LINE_CHECKS: usize = 200;
 /// Beyond this many segments, one stretch each.
 const LINE_MANY_SEGMENTS: usize = 5_000;
 /// The longest a straight line may take, as a multiple of the least time it needs (its
@@ -222,6 +234,17 @@ const LINE_MANY_SEGMENTS: usize = 5_000;
 /// where the wrist would have to turn far faster than the tool moves, and is refused with
 /// SINGULAR_PATH before anything moves (docs/a465.md, "Straight lines").
 pub const LINE_MAX_FACTOR: f64 = 20.0;
+/// A line from where the arm is that takes at most this multiple of its least time is taken
+/// as it is; a slower one is compared with the lines that first turn the free joints of a
+/// singular pose (J5 = 0, READY).
+const LINE_GOOD_FACTOR: f64 = 3.0;
+/// Where along a line its leaving direction is read (s; a turn of the free joints at a
+/// singular pose aims there): near enough that the free joints are as at the start, far
+/// enough that the wrist is clear of J5 = 0 by more than the inverse kinematics' band.
+const LINE_PROBE: f64 = 1e-5;
+/// The same in the eased parameter σ of a line from the stretched elbow ([`Ease`]), where
+/// the joints go as σ.
+const LINE_PROBE_EASED: f64 = 1e-4;
 /// And a line is refused for its time only when it would take this much longer still, s: a
 /// line whose ends are (nearly) the same pose needs no time, and its few stretches a little.
 pub const LINE_SLACK: f64 = 0.1;
@@ -251,6 +274,67 @@ fn line_pose(from: &Pose, to: &Pose, q_from: &DQuat, q_to: &DQuat, s: f64) -> Po
         rot: glam::DMat3::from_quat(q_from.slerp(*q_to, s)),
     }
 }
+
+/// How a straight line's path parameter maps to the distance along it: s(σ). Where the
+/// line starts or ends with the elbow stretched (J3 = 0: READY), the elbow and shoulder
+/// joints go as the square root of the distance (the law of cosines at its edge), which no
+/// spline in the distance follows; in σ with s = σ² (or its mirror at the end) they go as σ,
+/// smoothly, and the time profile keeps the tool's linear limits through ds/dσ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Ease {
+    /// s = σ.
+    None,
+    /// s = σ²: the elbow stretched at the start.
+    In,
+    /// s = 2σ - σ²: the elbow stretched at the end.
+    Out,
+    /// s = 3σ² - 2σ³: at both ends.
+    Both,
+}
+
+impl Ease {
+    /// The easing for a line whose elbow starts at `j3_start` and ends at `j3_end` (radians
+    /// from stretched).
+    fn for_elbow(j3_start: f64, j3_end: f64) -> Ease {
+        match (
+            j3_start.abs() < STRETCHED_ELBOW,
+            j3_end.abs() < STRETCHED_ELBOW,
+        ) {
+            (false, false) => Ease::None,
+            (true, false) => Ease::In,
+            (false, true) => Ease::Out,
+            (true, true) => Ease::Both,
+        }
+    }
+
+    /// s(σ), ds/dσ, d²s/dσ².
+    fn at(self, x: f64) -> (f64, f64, f64) {
+        match self {
+            Ease::None => (x, 1.0, 0.0),
+            Ease::In => (x * x, 2.0 * x, 2.0),
+            Ease::Out => (2.0 * x - x * x, 2.0 - 2.0 * x, -2.0),
+            Ease::Both => (
+                3.0 * x * x - 2.0 * x * x * x,
+                6.0 * x - 6.0 * x * x,
+                6.0 - 12.0 * x,
+            ),
+        }
+    }
+
+    /// The largest |ds/dσ| and |d²s/dσ²| on [a, b].
+    fn bounds(self, a: f64, b: f64) -> (f64, f64) {
+        let d1 = |x: f64| self.at(x).1.abs();
+        let d2 = |x: f64| self.at(x).2.abs();
+        let mut m1 = d1(a).max(d1(b));
+        if self == Ease::Both && a < 0.5 && b > 0.5 {
+            m1 = m1.max(d1(0.5));
+        }
+        (m1, d2(a).max(d2(b)))
+    }
+}
+
+/// Below this |J3| (rad) a line's end counts as on the stretched elbow ([`Ease`]).
+const STRETCHED_ELBOW: f64 = 0.05;
 
 /// The straight line of the tool from one pose to another.
 struct Line {
@@ -336,6 +420,17 @@ pub struct Arm {
     locations: HashMap<String, Stored>,
     objects: Vec<WorldObject>,
     held: Option<Held>,
+    /// Why the last straight line was refused, in words, not yet taken.
+    refusal: Option<String>,
+}
+
+/// Where planning a straight line failed: its code, how far along the line (0..1), and the
+/// joints there.
+#[derive(Clone, Copy, Debug)]
+struct LineFail {
+    code: i16,
+    at: f64,
+    q: Joints,
 }
 
 impl Arm {
@@ -357,6 +452,7 @@ impl Arm {
             locations: HashMap::new(),
             objects: Vec::new(),
             held: None,
+            refusal: None,
         };
         for o in arm.settings.objects.clone() {
             arm.objects.push(o);
@@ -397,19 +493,38 @@ impl Arm {
         &self.locations
     }
 
-    /// Store a location under a name (the RAPL `POINT` / `HERE`).
+    /// The table's key of `name` as stored: case does not tell two names apart (RAPL-II
+    /// upper-cases what it is typed, docs/teach.md "Names").
+    fn stored_name(&self, name: &str) -> Option<String> {
+        if self.locations.contains_key(name) {
+            return Some(name.to_string());
+        }
+        self.locations
+            .keys()
+            .find(|k| k.eq_ignore_ascii_case(name))
+            .cloned()
+    }
+
+    /// Store a location under a name (the RAPL `POINT` / `HERE`); one of the same name in
+    /// another case is replaced, and the name keeps the spelling it had.
     pub fn set_location(&mut self, name: &str, loc: Stored) {
-        self.locations.insert(name.to_string(), loc);
+        let key = self.stored_name(name).unwrap_or_else(|| name.to_string());
+        self.locations.insert(key, loc);
     }
 
-    /// A stored location.
+    /// A stored location (any case of its name).
     pub fn location(&self, name: &str) -> Option<Stored> {
-        self.locations.get(name).copied()
+        let key = self.stored_name(name)?;
+        self.locations.get(&key).copied()
     }
 
-    /// Forget a location (the RAPL `DLOCN`). Whether there was one of that name.
+    /// Forget a location (the RAPL `DLOCN`; any case of its name). Whether there was one
+    /// of that name.
     pub fn delete_location(&mut self, name: &str) -> bool {
-        self.locations.remove(name).is_some()
+        match self.stored_name(name) {
+            Some(key) => self.locations.remove(&key).is_some(),
+            None => false,
+        }
     }
 
     /// Where the arm is commanded to be at `now`, in the form of `like` (HERE): cartesian
@@ -434,8 +549,14 @@ impl Arm {
         );
         for name in names {
             let line = match self.locations[name] {
-                Stored::Cart(v) => format!("{name} {}", join_values(&v)),
-                Stored::Joints(v) => format!("{name} joint {}", join_values(&v)),
+                Stored::Cart(v) => format!(
+                    "{name} {}",
+                    join_values(trol_proto::application::Tag::Cart, &v)
+                ),
+                Stored::Joints(v) => format!(
+                    "{name} joint {}",
+                    join_values(trol_proto::application::Tag::Joint, &v)
+                ),
                 Stored::Prec(c) => format!(
                     "{name} {}",
                     c.iter()
@@ -877,9 +998,9 @@ impl Arm {
 
     /// A straight line's path of `length` mm timed along it ([`Profile::along`]) from
     /// `start`, within the joint limits at the speed setting and the tool's linear limits.
-    fn line_profile(&self, path: &Path, length: f64, start: f64) -> Profile {
+    fn line_profile(&self, path: &Path, length: f64, start: f64, ease: Ease) -> Profile {
         let (speeds, accels) = joint_limits(self.speed);
-        let linear = Some((length, self.linear_limits()));
+        let lin = self.linear_limits();
         // A line with very many samples (near a singular pose) gets one stretch per segment:
         // its grid is fine already, and the memory stays bounded.
         let per = if path.segments() > LINE_MANY_SEGMENTS {
@@ -890,7 +1011,11 @@ impl Arm {
         let stretches = path
             .pieces(per)
             .iter()
-            .map(|(s0, s1, b)| Stretch::new(*s0, *s1, b, &speeds, &accels, linear))
+            .map(|(s0, s1, b)| {
+                let (e1, e2) = ease.bounds(*s0, *s1);
+                let linear = Some((length * e1, length * e2, lin));
+                Stretch::new(*s0, *s1, b, &speeds, &accels, linear)
+            })
             .collect();
         Profile::along(start, stretches)
     }
@@ -912,7 +1037,11 @@ impl Arm {
     }
 
     /// Accept a straight-line motion of the tool centre point to `to`, orientation
-    /// interpolated, after checking the whole path (docs/a465.md, "Straight lines").
+    /// interpolated, after checking the whole path (docs/a465.md, "Straight lines"). From a
+    /// singular pose (J5 = 0; READY, the wrist centre on the base axis) the joints the pose
+    /// leaves free may first turn, the tool standing still, to where the line leaves it
+    /// ([`Arm::line_starts`]); the turn is a motion of its own before the line, and its time
+    /// counts in the line's.
     fn move_line(&mut self, to: Pose, now: f64) -> i16 {
         if let Err(c) = self.need_homed(now) {
             return c;
@@ -929,23 +1058,276 @@ impl Arm {
             return code::BELOW_TABLE;
         }
         let line = Line::new(from, to);
-        let path = match self.plan_line(&line, q0) {
-            Ok(p) => p,
-            Err(c) => return c,
-        };
-        let (lo, hi) = path.range();
-        if first_outside_limits(&lo).is_some() || first_outside_limits(&hi).is_some() {
-            return code::JOINT_LIMIT;
-        }
         let length = (to.pos - from.pos).length();
         let start = self.planned_start_time(now);
-        let profile = self.line_profile(&path, length, start);
-        let least = self.line_least_time(q0, path.at(1.0), length);
-        if profile.end() - start > LINE_MAX_FACTOR * least + LINE_SLACK {
+        let (speeds, accels) = joint_limits(self.speed);
+        // The line from where the arm is; if it is slow or refused, from each place the free
+        // joints can turn to first: the fastest wins.
+        let mut best: Option<(f64, Option<Path>, Path, Profile)> = None;
+        let mut farthest: Option<LineFail> = None;
+        let mut least = f64::INFINITY;
+        // |J3| at the target: the same in every configuration (the wrist centre's distance
+        // from the shoulder fixes it).
+        let j3_end = self
+            .kin
+            .ik_all(&to, &q0)
+            .as_slice()
+            .first()
+            .map_or(1.0, |s| s.q[2].abs());
+        let starts = self.line_starts(&line, q0, Ease::for_elbow(q0[2], j3_end));
+        for (k, q_start) in starts.iter().enumerate() {
+            // Before trying the turns: a line with a point no configuration reaches is
+            // refused at once (from READY most lines to the table are such).
+            if k == 1 && best.is_none() {
+                if let Some((code, why)) = self.unreachable_point(&line) {
+                    self.refusal = Some(why);
+                    return code;
+                }
+            }
+            let turn = (k > 0).then_some(Path::Joint {
+                from: q0,
+                to: *q_start,
+            });
+            let turn_time = match &turn {
+                Some(p) => {
+                    let (v, a) = p.bounds().limits(&speeds, &accels);
+                    Profile::trapezoid(0.0, v, a, 0.0).end()
+                }
+                None => 0.0,
+            };
+            let ease = Ease::for_elbow(q_start[2], j3_end);
+            let path = match self.plan_line(&line, *q_start, ease) {
+                Ok(p) => p,
+                Err(f) => {
+                    // The start that got farthest says best where the line cannot go on.
+                    if farthest.is_none_or(|g| f.at > g.at) {
+                        farthest = Some(f);
+                    }
+                    continue;
+                }
+            };
+            let (lo, hi) = path.range();
+            if first_outside_limits(&lo).is_some() || first_outside_limits(&hi).is_some() {
+                continue;
+            }
+            let profile = self.line_profile(&path, length, start + turn_time, ease);
+            let total = profile.end() - start;
+            least = least.min(self.line_least_time(q0, path.at(1.0), length));
+            if best.as_ref().is_none_or(|b| total < b.0) {
+                best = Some((total, turn, path, profile));
+            }
+            // At the pace of the line's own ends: no other start can do much better.
+            if total <= LINE_GOOD_FACTOR * least + LINE_SLACK {
+                break;
+            }
+        }
+        let Some((total, turn, path, profile)) = best else {
+            let (code, why) = self.why_no_line(&line, farthest);
+            self.refusal = Some(why);
+            return code;
+        };
+        if total > LINE_MAX_FACTOR * least + LINE_SLACK {
+            self.refusal = Some(format!(
+                "the straight line passes so near a singular pose that it would take {total:.1} \
+                 s, more than {LINE_MAX_FACTOR} times the {least:.1} s it needs: go through a \
+                 point off the line first, or move there in joints (straight 0)"
+            ));
             return code::SINGULAR_PATH;
+        }
+        if let Some(turn) = turn {
+            if self.motions.len() + 2 > MOTION_QUEUE {
+                return code::QUEUE_FULL;
+            }
+            self.push(turn, now);
         }
         self.push_timed(path, profile);
         code::OK
+    }
+
+    /// Why the last straight line was refused (which pose, where on the line, what to do),
+    /// once: for the controller's log, beside the code.
+    pub fn take_refusal(&mut self) -> Option<String> {
+        self.refusal.take()
+    }
+
+    /// The code and the words for a straight line no start could follow: a point of it that
+    /// no configuration reaches within the limits (JOINT_LIMIT, or OUT_OF_REACH), or else
+    /// the singular pose where the line from where the arm is had to jump (`fail`).
+    fn why_no_line(&self, line: &Line, fail: Option<LineFail>) -> (i16, String) {
+        if let Some(why) = self.unreachable_point(line) {
+            return why;
+        }
+        let do_this = LINE_ADVICE;
+        let Some(f) = fail else {
+            return (
+                code::SINGULAR_PATH,
+                format!("the straight line cannot be followed smoothly: {do_this}"),
+            );
+        };
+        if f.code != code::SINGULAR_PATH {
+            return (
+                f.code,
+                format!(
+                    "the straight line passes a joint limit at {:.0} % of its length in the \
+                     arm's configuration: {do_this}",
+                    100.0 * f.at
+                ),
+            );
+        }
+        let flange = crate::kinematics::flange_dh(&f.q);
+        let wrist = flange.pos - flange.rot.z_axis * crate::model::D6;
+        let kind = if (wrist.x * wrist.x + wrist.y * wrist.y).sqrt() < 1.0 {
+            "the shoulder's singular pose (the wrist centre on the base axis, where J1 is free)"
+        } else if f.q[4].abs() < 0.02 {
+            "the wrist's singular pose (J5 = 0, where J4 and J6 turn about one axis)"
+        } else if f.q[2].abs() < 0.02 {
+            "the elbow's singular pose (stretched, J3 = 0)"
+        } else {
+            "a change of the arm's configuration (its elbow or wrist would have to flip)"
+        };
+        let p = line.at(f.at).pos;
+        (
+            code::SINGULAR_PATH,
+            format!(
+                "the straight line meets {kind} at {:.0} % of its length ({:.1}, {:.1}, {:.1}), \
+                 where the joints would have to jump: {do_this}",
+                100.0 * f.at,
+                p.x,
+                p.y,
+                p.z
+            ),
+        )
+    }
+
+    /// The first point of `line` that no configuration reaches within the joint limits (or
+    /// at all), with its code and the words: no arm follows such a line.
+    fn unreachable_point(&self, line: &Line) -> Option<(i16, String)> {
+        let lim = crate::model::limits();
+        const NAMES: [&str; 6] = [
+            "the waist (J1)",
+            "the shoulder (J2)",
+            "the elbow (J3)",
+            "the forearm's roll (J4)",
+            "the wrist (J5)",
+            "the flange (J6)",
+        ];
+        let do_this = LINE_ADVICE;
+        for i in 0..=LINE_CHECKS {
+            let s = i as f64 / LINE_CHECKS as f64;
+            let pose = line.at(s);
+            let all = self.kin.ik_all_exact(&pose, &self.planned_end());
+            let p = pose.pos;
+            if all.is_empty() {
+                return Some((
+                    code::OUT_OF_REACH,
+                    format!(
+                        "the straight line leaves the arm's reach at {:.0} % of its length \
+                         ({:.1}, {:.1}, {:.1}): {do_this}",
+                        100.0 * s,
+                        p.x,
+                        p.y,
+                        p.z
+                    ),
+                ));
+            }
+            if all.as_slice().iter().any(|x| x.within_limits) {
+                continue;
+            }
+            // The joint the solutions least beyond their limits still pass.
+            let worst = all
+                .as_slice()
+                .iter()
+                .map(|x| {
+                    (0..6)
+                        .filter(|&j| x.q[j].abs() > lim[j] + 1e-9)
+                        .map(|j| (x.q[j].abs() - lim[j], j))
+                        .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a })
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map_or(2, |w| w.1);
+            return Some((
+                code::JOINT_LIMIT,
+                format!(
+                    "no configuration of the arm reaches the point at {:.0} % of the straight \
+                     line ({:.1}, {:.1}, {:.1}) within its limits ({} would pass its ±{:.0} \
+                     deg): {do_this}",
+                    100.0 * s,
+                    p.x,
+                    p.y,
+                    p.z,
+                    NAMES[worst],
+                    lim[worst].to_degrees()
+                ),
+            ));
+        }
+        None
+    }
+
+    /// Where a straight line from `q0` may start: `q0` itself first, then each place the
+    /// joints can turn to without moving the tool, toward the way the line leaves. At J5 = 0
+    /// only J4 + J6 fixes the tool, and on READY's vertical line J1 turns about the same
+    /// axis too; the inverse kinematics keeps the current J4 (and J1) there, which is
+    /// seldom the one the line needs: the arm would have to jump. So the line's pose a
+    /// little way along is solved in each configuration, and the start pose solved again
+    /// from each solution: the free joints as the line needs them, J2, J3 and J5 as they are.
+    /// A start is taken only where the whole turn is in the null space (the tool pose the
+    /// same at both ends, and J2, J3, J5 unchanged) and within the limits.
+    fn line_starts(&self, line: &Line, q0: Joints, ease: Ease) -> Vec<Joints> {
+        let mut starts = vec![q0];
+        // Where the free joints must be as the line leaves: its pose a very little way
+        // along (in the eased parameter, where the joints go linearly).
+        let probe_s = match ease {
+            Ease::None | Ease::Out => LINE_PROBE,
+            Ease::In | Ease::Both => ease.at(LINE_PROBE_EASED).0,
+        };
+        let probe = self.kin.ik_all_exact(&line.at(probe_s), &q0);
+        let mut found: Vec<(f64, Joints)> = Vec::new();
+        for sol in probe.as_slice() {
+            let qp: Joints = std::array::from_fn(|i| q0[i] + wrap(sol.q[i] - q0[i]));
+            let again = self.kin.ik_all(&line.from, &qp);
+            let Some(at) = again
+                .as_slice()
+                .iter()
+                .min_by(|a, b| max_step(&a.q, &qp).total_cmp(&max_step(&b.q, &qp)))
+            else {
+                continue;
+            };
+            let mut q: Joints = std::array::from_fn(|i| qp[i] + wrap(at.q[i] - qp[i]));
+            // A free joint continued past its limit may be within it a turn the other way.
+            let lim = crate::model::limits();
+            for i in [0, 3, 5] {
+                for turn in [std::f64::consts::TAU, -std::f64::consts::TAU] {
+                    if q[i].abs() > lim[i] && (q[i] + turn).abs() <= lim[i] {
+                        q[i] += turn;
+                    }
+                }
+            }
+            // At J5 = 0 the wrist may leave the same way turned half round (J5 the other
+            // sign): J4 and J6 each a half turn on.
+            let mut half = q;
+            let pi = std::f64::consts::PI;
+            half[3] += if half[3] > 0.0 { -pi } else { pi };
+            half[5] += if half[5] > 0.0 { -pi } else { pi };
+            for q in [q, half] {
+                let still = [1, 2, 4].iter().all(|&i| (q[i] - q0[i]).abs() < 1e-6);
+                let (dp, da) = pose_error(&self.kin.fk(&q), &line.from);
+                let moved = max_step(&q, &q0);
+                if !still
+                    || dp > 1e-6
+                    || da > 1e-6
+                    || moved < 1e-9
+                    || first_outside_limits(&q).is_some()
+                {
+                    continue;
+                }
+                if found.iter().all(|(_, f)| max_step(f, &q) > 1e-6) {
+                    found.push((moved, q));
+                }
+            }
+        }
+        found.sort_by(|a, b| a.0.total_cmp(&b.0));
+        starts.extend(found.into_iter().map(|(_, q)| q));
+        starts
     }
 
     /// The joints along `line` from `q0`: samples of the inverse kinematics, each the
@@ -954,14 +1336,20 @@ impl Arm {
     /// them stays within LINE_TOLERANCE of the line between samples. A step that stays large
     /// however close the samples is a jump: SINGULAR_PATH. A point out of reach:
     /// OUT_OF_REACH.
-    fn plan_line(&self, line: &Line, q0: Joints) -> Result<Path, i16> {
-        let solve = |s: f64, near: &Joints| -> Result<Joints, i16> {
-            let all = self.kin.ik_all(&line.at(s), near);
+    fn plan_line(&self, line: &Line, q0: Joints, ease: Ease) -> Result<Path, LineFail> {
+        let on_line = |s: f64| line.at(ease.at(s).0);
+        let fail = |code: i16, s: f64, q: Joints| LineFail {
+            code,
+            at: ease.at(s).0,
+            q,
+        };
+        let solve = |s: f64, near: &Joints| -> Result<Joints, LineFail> {
+            let all = self.kin.ik_all_exact(&on_line(s), near);
             let best = all
                 .as_slice()
                 .iter()
                 .min_by(|a, b| max_step(&a.q, near).total_cmp(&max_step(&b.q, near)))
-                .ok_or(code::OUT_OF_REACH)?;
+                .ok_or(fail(code::OUT_OF_REACH, s, *near))?;
             // Continue each joint from the previous one, without a wrap.
             Ok(std::array::from_fn(|i| near[i] + wrap(best.q[i] - near[i])))
         };
@@ -974,19 +1362,19 @@ impl Arm {
             let s1 = (s0 + h).min(1.0);
             let q1 = solve(s1, &q_prev)?;
             if max_step(&q1, &q_prev) <= LINE_STEP && first_outside_limits(&q1).is_some() {
-                return Err(code::JOINT_LIMIT);
+                return Err(fail(code::JOINT_LIMIT, s1, q1));
             }
             if max_step(&q1, &q_prev) > LINE_STEP {
                 h /= 2.0;
                 if h < LINE_MIN_H {
-                    return Err(code::SINGULAR_PATH);
+                    return Err(fail(code::SINGULAR_PATH, s0, q_prev));
                 }
                 continue;
             }
             s.push(s1);
             q.push(q1);
             if s.len() > LINE_MAX_SAMPLES {
-                return Err(code::SINGULAR_PATH);
+                return Err(fail(code::SINGULAR_PATH, s1, q1));
             }
             h = (h * 2.0).min(1.0 / 32.0);
         }
@@ -996,7 +1384,7 @@ impl Arm {
             let mut split = Vec::new();
             for k in 0..s.len() - 1 {
                 let mid = 0.5 * (s[k] + s[k + 1]);
-                let (dp, da) = pose_error(&self.kin.fk(&path.at(mid)), &line.at(mid));
+                let (dp, da) = pose_error(&self.kin.fk(&path.at(mid)), &on_line(mid));
                 if dp > LINE_TOLERANCE_MM || da > LINE_TOLERANCE_RAD {
                     split.push(k);
                 }
@@ -1007,17 +1395,17 @@ impl Arm {
             for &k in split.iter().rev() {
                 let mid = 0.5 * (s[k] + s[k + 1]);
                 if s[k + 1] - s[k] < LINE_MIN_H {
-                    return Err(code::SINGULAR_PATH);
+                    return Err(fail(code::SINGULAR_PATH, mid, q[k]));
                 }
                 let qm = solve(mid, &q[k])?;
                 if max_step(&qm, &q[k]) > LINE_STEP || max_step(&qm, &q[k + 1]) > LINE_STEP {
-                    return Err(code::SINGULAR_PATH);
+                    return Err(fail(code::SINGULAR_PATH, mid, q[k]));
                 }
                 s.insert(k + 1, mid);
                 q.insert(k + 1, qm);
             }
             if s.len() > LINE_MAX_SAMPLES {
-                return Err(code::SINGULAR_PATH);
+                return Err(fail(code::SINGULAR_PATH, 0.5, q0));
             }
         }
     }
@@ -1143,17 +1531,45 @@ fn dither(slot: i64, joint: usize) -> i32 {
     (sign * magnitude).clamp(-DITHER_COUNTS, DITHER_COUNTS)
 }
 
+/// Read the locations file at `path` ([`parse_locations`]); a file larger than
+/// [`MAX_LOCATIONS_FILE`] is refused unread.
+pub fn read_locations(path: &std::path::Path) -> Result<Vec<(String, Stored)>, String> {
+    use std::io::Read;
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut text = String::new();
+    file.take(MAX_LOCATIONS_FILE + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    if text.len() as u64 > MAX_LOCATIONS_FILE {
+        return Err(format!(
+            "{}: larger than {} MiB; the table holds {MAX_TABLE} locations, which fit in far \
+             less: is it a locations file?",
+            path.display(),
+            MAX_LOCATIONS_FILE >> 20
+        ));
+    }
+    parse_locations(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 /// Read a location file: one location per line, `NAME v1 v2 v3 v4 v5 v6` (blanks or commas
 /// between). A name starting with `#` is a precision point (six encoder counts); any other
 /// is cartesian (x y z in mm, yaw pitch roll in radians), or joint angles in radians with
 /// the word `joint` before the values (`NAME joint q1 .. q6`). Blank lines and lines
 /// starting with `;` are ignored.
 pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
-    let mut out = Vec::new();
+    let mut out: Vec<(String, Stored)> = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with(';') {
             continue;
+        }
+        if out.len() == MAX_TABLE {
+            return Err(format!(
+                "line {}: more than {MAX_TABLE} locations; the table holds {MAX_TABLE}: split \
+                 the file, or delete locations no program uses",
+                n + 1
+            ));
         }
         let mut parts = line
             .split(|c: char| c.is_whitespace() || c == ',')

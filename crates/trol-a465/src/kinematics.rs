@@ -250,6 +250,11 @@ impl std::fmt::Display for IkError {
 
 impl std::error::Error for IkError {}
 
+/// How far outside the arm's reach (or inside its inner limit) a wrist centre may lie and
+/// still count as on the edge: 0.001 mm, the precision TROL prints (a pose read over the
+/// line as f32 carries about 2.5e-5 mm of rounding at the full reach).
+pub const REACH_TOLERANCE_MM: f64 = 1e-3;
+
 /// Below this the wrist centre counts as on the base axis (a singular case).
 const SINGULAR: f64 = 1e-9;
 
@@ -257,6 +262,45 @@ const SINGULAR: f64 = 1e-9;
 /// that crossed the line as f32 (TROL's wire format) carries about 1e-7 of rounding, which
 /// must not pick an arbitrary J4; 1e-6 rad of wrist is 0.0002 mm at a 200 mm tool.
 const WRIST_SINGULAR: f64 = 1e-6;
+
+/// Solve the 5x5 system in `a` (each row its five coefficients and the right-hand side) by
+/// elimination with partial pivoting; `None` when it is singular.
+fn solve5(mut a: [[f64; 6]; 5]) -> Option<[f64; 5]> {
+    for col in 0..5 {
+        let pivot = (col..5).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[pivot][col].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(col, pivot);
+        let pivot_row = a[col];
+        for row in a.iter_mut().skip(col + 1) {
+            let f = row[col] / pivot_row[col];
+            for (x, p) in row.iter_mut().zip(pivot_row).skip(col) {
+                *x -= f * p;
+            }
+        }
+    }
+    let mut x = [0.0; 5];
+    for row in (0..5).rev() {
+        let sum: f64 = (row + 1..5).map(|k| a[row][k] * x[k]).sum();
+        x[row] = (a[row][5] - sum) / a[row][row];
+    }
+    Some(x)
+}
+
+/// How far J5 may be from 0 and still count as 0, where J4 keeps its value ([`wrist_band`]):
+/// the rounding of a pose sent as f32 (TROL's wire), about 1e-7 of it, which near a
+/// stretched elbow becomes a wrist angle of up to this much.
+const WRIST_BAND_MAX: f64 = 2e-3;
+
+/// How much J5 the f32 rounding of a pose can cause at an elbow whose |sin J3| is
+/// `s3_abs`: about 3e-7 / |sin J3| (the law of cosines turns a length's error into an
+/// angle's divided by sin J3), at least [`WRIST_SINGULAR`] and at most [`WRIST_BAND_MAX`].
+/// Within it J4 keeps its value (issue 42: near the stretched elbow it took whatever the
+/// rounding said in 94 % of 400 cases).
+fn wrist_band(s3_abs: f64) -> f64 {
+    (3e-7 / s3_abs.max(1e-12)).clamp(WRIST_SINGULAR, WRIST_BAND_MAX)
+}
 
 /// The arm's kinematics with a tool transform.
 #[derive(Clone, Copy, Debug)]
@@ -326,6 +370,17 @@ impl Kinematics {
     /// - reaching backward mirrors the arm: (J1 + 180°, -J2, -J3) has R03·Rz(180°), so its
     ///   wrist is (J4 + 180°, J5, J6) of the forward one with the same elbow.
     pub fn ik_all(&self, tcp: &Pose, current: &Joints) -> Solutions {
+        self.ik_all_with(tcp, current, true)
+    }
+
+    /// [`Kinematics::ik_all`] without the rounding band: J5 counts as 0 only within
+    /// [`WRIST_SINGULAR`]. For the samples of a path, whose J4 must follow the pose
+    /// continuously rather than stay put near J5 = 0.
+    pub fn ik_all_exact(&self, tcp: &Pose, current: &Joints) -> Solutions {
+        self.ik_all_with(tcp, current, false)
+    }
+
+    fn ik_all_with(&self, tcp: &Pose, current: &Joints, rounding_band: bool) -> Solutions {
         let flange_pos = tcp.pos + tcp.rot * self.tool_inv.pos;
         let r06 = tcp.rot * self.tool_inv_dh6;
         let w = flange_pos - r06.z_axis * D6;
@@ -334,7 +389,11 @@ impl Kinematics {
         let s = w.z - D1;
         let l2 = rxy * rxy + s * s;
         let c3 = (l2 - A2 * A2 - D4 * D4) / (2.0 * A2 * D4);
-        if !(-1.0 - 1e-12..=1.0 + 1e-12).contains(&c3) {
+        // A pose at the edge of the reach that came over the line as f32 (READY read with
+        // GetPosition and sent back) lies a few hundredths of a micrometre outside it: within
+        // REACH_TOLERANCE_MM of the edge counts as on it.
+        let tol = l2.sqrt() * REACH_TOLERANCE_MM / (A2 * D4) + 1e-12;
+        if !(-1.0 - tol..=1.0 + tol).contains(&c3) {
             return out;
         }
         let c3 = c3.clamp(-1.0, 1.0);
@@ -396,21 +455,36 @@ impl Kinematics {
             atan2x4(wrist_y[1], wrist_x[1]),
         ];
         let mut elbows: [Option<(f64, f64, Wrist, Wrist)>; 2] = [None, None];
+        // Elbows whose J5 was taken as 0 within the rounding band: refined below.
+        let mut banded = [false; 2];
         for e in 0..2 {
             let [q4, q5_neg, q6, sum] = angles[e];
             let (q2, q3) = q23[e];
+            // Within the band the rounding of a pose can put J5 in at this elbow angle, J5
+            // counts as 0 (see wrist_band).
+            let band = if rounding_band {
+                wrist_band(s3_abs)
+            } else {
+                WRIST_SINGULAR
+            };
+            banded[e] = sws[e] > WRIST_SINGULAR && sws[e] <= band;
             // (J4, J5, J6) forward and backward.
-            elbows[e] = if sws[e] > WRIST_SINGULAR {
+            elbows[e] = if sws[e] > band {
                 let q5 = -q5_neg;
                 Some((q2, q3, (q4, q5, q6), (wrap_once(q4 + PI), q5, q6)))
             } else if e22s[e] > 0.0 {
-                // J5 = 0: only J4 + J6 is fixed; keep J4.
+                // J5 = 0: only J4 + J6 is fixed; keep J4, and take what J5 the pose has in
+                // its plane (0 at the singular pose itself).
                 let q4 = wrap(current[3]);
+                let (s4, c4) = q4.sin_cos();
+                let q5 = -(wrist_x[e][0] * c4 + wrist_y[e][0] * s4)
+                    .clamp(-1.0, 1.0)
+                    .asin();
                 Some((
                     q2,
                     q3,
-                    (q4, 0.0, wrap_once(sum - q4)),
-                    (q4, 0.0, wrap(sum + PI - q4)),
+                    (q4, q5, wrap_once(sum - q4)),
+                    (q4, q5, wrap(sum + PI - q4)),
                 ))
             } else {
                 // J5 = ±180°: beyond its ±105° limit, so no usable solution.
@@ -430,11 +504,14 @@ impl Kinematics {
                     ([q1, q2, q3], fwd)
                 };
                 for flip in [false, true] {
-                    let q = if flip {
+                    let mut q = if flip {
                         [a1, a2, a3, wrap_once(q4 + PI), -q5, wrap_once(q6 + PI)]
                     } else {
                         [a1, a2, a3, q4, q5, q6]
                     };
+                    if banded[e] {
+                        q = self.refine_keeping_j4(tcp, q);
+                    }
                     out.items[out.len] = Solution {
                         q,
                         config: Config {
@@ -449,6 +526,64 @@ impl Kinematics {
             }
         }
         out
+    }
+
+    /// `q` moved so that its pose is `tcp` as nearly as the other five joints allow, J4 kept
+    /// (Gauss-Newton with a little damping, a few steps): where J5 was taken as 0 within the
+    /// rounding band, the closed form's split between the elbow and the wrist is off by that
+    /// rounding, magnified near the stretched elbow; this puts the pose back to what the
+    /// rounding allows.
+    fn refine_keeping_j4(&self, tcp: &Pose, mut q: Joints) -> Joints {
+        // Orientation counts as the distance it moves a point 100 mm away.
+        const R: f64 = 100.0;
+        const FREE: [usize; 5] = [0, 1, 2, 4, 5];
+        let error = |q: &Joints| -> [f64; 6] {
+            let p = self.fk(q);
+            let d = tcp.pos - p.pos;
+            let rot = glam::DQuat::from_mat3(&(tcp.rot * p.rot.transpose())).to_scaled_axis();
+            [d.x, d.y, d.z, rot.x * R, rot.y * R, rot.z * R]
+        };
+        let norm = |e: &[f64; 6]| e.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut e = error(&q);
+        for _ in 0..8 {
+            if norm(&e) < 1e-9 {
+                break;
+            }
+            let h = 1e-7;
+            let mut jac = [[0.0; 5]; 6];
+            for (c, &j) in FREE.iter().enumerate() {
+                let mut qh = q;
+                qh[j] += h;
+                let eh = error(&qh);
+                for r in 0..6 {
+                    // d(pose)/dq = -d(error)/dq
+                    jac[r][c] = (e[r] - eh[r]) / h;
+                }
+            }
+            // (JᵀJ + λI) dq = Jᵀe
+            let mut a = [[0.0; 6]; 5];
+            for i in 0..5 {
+                for k in 0..5 {
+                    a[i][k] = (0..6).map(|r| jac[r][i] * jac[r][k]).sum::<f64>();
+                }
+                a[i][i] += 1e-9;
+                a[i][5] = (0..6).map(|r| jac[r][i] * e[r]).sum::<f64>();
+            }
+            let Some(dq) = solve5(a) else {
+                break;
+            };
+            let mut next = q;
+            for (c, &j) in FREE.iter().enumerate() {
+                next[j] += dq[c];
+            }
+            let e_next = error(&next);
+            if norm(&e_next) >= norm(&e) {
+                break;
+            }
+            q = next;
+            e = e_next;
+        }
+        q
     }
 
     /// The solution within the limits nearest to `current` (the one a motion takes).

@@ -81,14 +81,16 @@ pub struct Stretch {
 
 impl Stretch {
     /// A stretch with its derivative bounds `b`, under joint `speeds` and `accels`, and a
-    /// linear limit (`length` mm of line at `linear` = (mm/s, mm/s^2)) if it is a line.
+    /// linear limit if it is a line: `linear` = (d1, d2, (mm/s, mm/s^2)), with d1 and d2 the
+    /// largest |dx/ds| and |d2x/ds2| of the tool's distance x along the line on the stretch
+    /// (its length and 0 where x is linear in s).
     pub fn new(
         s0: f64,
         s1: f64,
         b: &Bounds,
         speeds: &[f64; 6],
         accels: &[f64; 6],
-        linear: Option<(f64, (f64, f64))>,
+        linear: Option<(f64, f64, (f64, f64))>,
     ) -> Stretch {
         let mut limits = [Limit::default(); 7];
         let mut x_max = f64::INFINITY;
@@ -105,13 +107,14 @@ impl Stretch {
                 x_max = x_max.min(accels[i] / b.d2[i]);
             }
         }
-        if let Some((length, (v, a))) = linear.filter(|(l, _)| *l > 0.0) {
-            limits[6] = Limit {
-                a,
-                d1: length,
-                d2: 0.0,
-            };
-            x_max = x_max.min((v / length).powi(2));
+        if let Some((d1, d2, (v, a))) = linear.filter(|(d1, d2, _)| *d1 > 0.0 || *d2 > 0.0) {
+            limits[6] = Limit { a, d1, d2 };
+            if d1 > 0.0 {
+                x_max = x_max.min((v / d1).powi(2));
+            }
+            if d2 > 0.0 {
+                x_max = x_max.min(a / d2);
+            }
         }
         Stretch {
             s0,

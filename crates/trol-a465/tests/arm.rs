@@ -304,20 +304,116 @@ fn a_line_past_a_joint_limit_is_refused_although_both_ends_are_within_limits() {
     assert_eq!(snapshot(&mut arm, t), before);
 }
 
+/// Distance of `p` from the segment a-b, mm.
+fn off_segment(p: glam::DVec3, a: glam::DVec3, b: glam::DVec3) -> f64 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+    (p - (a + ab * t)).length()
+}
+
+/// From READY (stretched, the wrist centre on the base axis, J5 = 0: singular three ways),
+/// a straight line leaves (issue 42; it was refused with SINGULAR_PATH): the joints the pose
+/// leaves free (J1, J4, J6) first turn, the tool standing still, to where the line leaves,
+/// then the tool follows the line, the elbow and shoulder easing out of the stretch.
 #[test]
-fn a_line_from_the_stretched_ready_pose_is_a_singular_path_and_changes_nothing() {
+fn a_line_leaves_ready_the_free_joints_turning_first_with_the_tool_still() {
     let mut arm = homed_arm();
-    // At READY the arm is stretched and its wrist at J5 = 0: leaving it on a straight line
-    // needs infinite joint speeds at the start (where the old planner jumped 28° at t = 0+).
-    let before = snapshot(&mut arm, 0.0);
+    let kin = *arm.kinematics();
+    let from = kin.fk(&[0.0; 6]).pos;
     let to = [560.0, 100.0, 450.0, 0.0, DOWN, 0.0];
-    assert_eq!(
-        arm.move_to(Target::Cart(to), true, 0.0),
-        code::SINGULAR_PATH
+    assert_eq!(arm.move_to(Target::Cart(to), true, 0.0), code::OK);
+    let end = arm.done_at(0.0);
+    let (line_start, line_end, _) = arm.last_motion().unwrap();
+    assert!(line_start > 0.0, "a turn of the free joints comes first");
+    // The turn: the tool stands still while J1, J4 and J6 turn.
+    let q_turned = arm.commanded(line_start);
+    assert!(
+        q_turned[0].abs() > 0.1,
+        "J1 turned toward the target: {q_turned:?}"
     );
+    let n = 200;
+    for i in 0..=n {
+        let t = line_start * i as f64 / n as f64;
+        let p = kin.fk(&arm.commanded(t)).pos;
+        assert!(
+            (p - from).length() < 1e-6,
+            "the tool moved during the turn at {t}: {p}"
+        );
+    }
+    // The line: on it throughout, within the limits.
+    let target = trol_a465::Pose::from_xyzypr(to).pos;
+    let lim = trol_a465::model::limits();
+    for i in 0..=n {
+        let t = line_start + (line_end - line_start) * i as f64 / n as f64;
+        let q = arm.commanded(t);
+        assert!(q.iter().zip(lim).all(|(v, l)| v.abs() <= l + 1e-9), "{q:?}");
+        let off = off_segment(kin.fk(&q).pos, from, target);
+        assert!(off < 0.02, "{off} mm off the line at {t}");
+    }
+    assert!((kin.fk(&arm.commanded(end)).pos - target).length() < 1e-3);
+}
+
+/// At J5 = 0 with the elbow bent (issue 42's own case): a 50 mm sideways straight jog from
+/// MA(0, 30 deg, 60 deg, 0, 0, 0) was refused; J4 now turns first, J6 against it.
+#[test]
+fn a_sideways_jog_at_j5_zero_turns_j4_first_and_goes() {
+    let mut arm = homed_arm();
+    let q = [0.0, 30f64.to_radians(), 60f64.to_radians(), 0.0, 0.0, 0.0];
+    assert_eq!(arm.ma(q, 0.0), code::OK);
+    let t = arm.done_at(0.0);
+    assert_eq!(arm.jog([0.0, 50.0, 0.0], true, t), code::OK);
+    let end = arm.done_at(t);
+    let (start, _, _) = arm.last_motion().unwrap();
+    let turned = arm.commanded(start);
+    assert!((turned[3] - q[3]).abs() > 0.5, "J4 turned: {turned:?}");
+    assert!(
+        ((turned[3] + turned[5]) - (q[3] + q[5])).abs() < 1e-9,
+        "J6 turned against it"
+    );
+    let kin = *arm.kinematics();
+    let moved = kin.fk(&arm.commanded(end)).pos - kin.fk(&q).pos;
+    assert!(
+        (moved - glam::DVec3::new(0.0, 50.0, 0.0)).length() < 1e-3,
+        "{moved}"
+    );
+}
+
+/// A line no configuration can follow is refused with the joint that stops it, where on
+/// the line, and what to do (for the controller's log); nothing moves. From READY straight
+/// down to the table near the base the line passes so near the shoulder that the elbow
+/// would fold past its 110 deg.
+#[test]
+fn a_line_no_arm_can_follow_is_refused_with_where_and_what_to_do() {
+    let mut arm = homed_arm();
+    let before = snapshot(&mut arm, 0.0);
+    let to = [300.0, -200.0, 60.0, 0.5, DOWN, 0.0];
+    assert_eq!(arm.move_to(Target::Cart(to), true, 0.0), code::JOINT_LIMIT);
+    let why = arm.take_refusal().expect("a reason");
+    assert!(
+        why.contains("the elbow (J3) would pass its ±110 deg"),
+        "{why}"
+    );
+    assert!(why.contains("% of the straight line"), "{why}");
+    assert!(why.contains("move there in joints"), "{why}");
+    assert_eq!(arm.take_refusal(), None, "said once");
     assert_eq!(snapshot(&mut arm, 0.0), before);
     // Joint-interpolated, it goes.
     assert_eq!(arm.move_to(Target::Cart(to), false, 0.0), code::OK);
+}
+
+/// The survey behind docs/a465.md's figures (`trol bench lines`): of the everyday lines an
+/// arm can follow at all, from READY and from J5 = 0, nearly all are taken, none leaves
+/// the limits or the line.
+#[test]
+fn the_line_survey_takes_the_lines_an_arm_can_follow() {
+    let sets = trol_a465::survey::survey(120, 7, false);
+    for s in &sets {
+        assert!(s.tried - s.impossible >= 20, "{s:?}");
+        assert!(s.accepted_percent >= 85.0, "{s:?}");
+        assert_eq!(s.limit_excursions, 0, "{s:?}");
+        assert!(s.max_off_line_mm < 0.02, "{s:?}");
+        assert!(s.ratio_max < 4.0, "{s:?}");
+    }
 }
 
 #[test]

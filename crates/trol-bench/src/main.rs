@@ -7,6 +7,7 @@
 extern crate trol_cli;
 
 mod faults;
+mod lines;
 mod pty;
 mod view;
 
@@ -165,6 +166,13 @@ enum Bench {
     ///
     /// Example: trol bench moves --speed 100 --json
     Moves(MovesArgs),
+    /// Straight lines of the simulated A465 (in its own time, no clock) from READY and from
+    /// poses with J5 = 0 to everyday targets (the table's working volume, the tool down or
+    /// level, reachable by a joint move): the share accepted, each line's duration against
+    /// its least time, joint limits along it, and its largest distance from the line.
+    ///
+    /// Example: trol bench lines --count 300 --json
+    Lines(lines::LinesArgs),
     /// The whole stack over a damaged line (noise: bit errors both ways; cut: the line dead
     /// at a random byte of each relative move; soak: mixed moves at time scale 1 for a
     /// while), counting corrupted requests executed, corrupted replies accepted, lost and
@@ -756,6 +764,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Ik(a) => ik(a),
         Bench::Transact(a) => transact(a),
         Bench::Moves(a) => moves(a),
+        Bench::Lines(a) => lines::run(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
         Bench::Pty(a) => pty::pty(a),

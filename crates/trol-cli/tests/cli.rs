@@ -1617,6 +1617,16 @@ fn a_line_that_is_not_text_is_its_lines_error() {
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("speed 60  ->  0 (success)"), "{out}");
     assert!(err.contains("1 command(s) failed"), "{err}");
+    // A comment is never a command, whatever bytes it holds (a Latin-1 note, issue 44).
+    std::fs::write(
+        dir.join("note.trol"),
+        b"; caf\xe9 au lait\n  ; \xff\nspeed 50\n",
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp", "note.trol", "--port", "sim"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}{err}");
+    assert!(out.contains("speed 50  ->  0 (success)"), "{out}");
 }
 
 /// `trol sim` and `trol ports` read trol.cfg as every subcommand does: the simulator's

@@ -455,6 +455,20 @@ impl Robot {
     /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
     /// `rapl-profile`).
     pub fn from_config(cfg: &Config) -> Result<Robot> {
+        let mut robot = Robot::from_config_as_is(cfg)?;
+        // A locations file that is not there yet is an empty table (docs/teach.md): said
+        // once, so that a misspelt name is not a silent empty table.
+        if let Some(file) = cfg.locations.as_ref().filter(|f| !f.exists()) {
+            robot.add_notice(&format!(
+                "{} does not exist yet: the location table starts empty, and \
+                 TROLSaveLocations creates the file",
+                file.display()
+            ));
+        }
+        Ok(robot)
+    }
+
+    fn from_config_as_is(cfg: &Config) -> Result<Robot> {
         #[cfg(not(feature = "mars"))]
         if cfg.port.starts_with(MARS_PREFIX) {
             return Err(not_built(&cfg.port, "mars", "the MARS 8 backend"));

@@ -236,6 +236,13 @@ fn a_locations_file_is_checked_when_the_program_starts() {
     );
 
     let mut r = from_config(&dir, "new.txt").unwrap();
+    // Said once, so that a misspelt name is not a silent empty table.
+    let notice = r.take_notice().expect("a notice");
+    assert!(notice.contains("new.txt does not exist yet"), "{notice}");
+    assert!(
+        notice.contains("TROLSaveLocations creates the file"),
+        "{notice}"
+    );
     assert!(r.locations().unwrap().is_empty());
     r.here("p1", Tag::Cart).unwrap();
     r.save_locations().unwrap();

@@ -566,6 +566,10 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
             bytes.pop();
         }
         let origin = format!("{name}:{}:", n + 1);
+        // A comment is never a command, whatever bytes it holds.
+        if bytes.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b';') {
+            continue;
+        }
         // A line that is not text is that line's error, with where it is; -k goes on.
         let outcome = match String::from_utf8(bytes) {
             Ok(line) => session.line(&line, &origin, true),

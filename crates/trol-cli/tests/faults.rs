@@ -125,18 +125,7 @@ fn a_gateway_that_works_long_is_waited_for_and_one_that_froze_is_not() {
         &["sim", "--rapl", "--variant", "unstoppable", "--homed"],
         "serving on ",
     );
-    let gw = Background::start(
-        &dir,
-        &[
-            "gateway",
-            "--controller",
-            &sim.name,
-            "--profile",
-            "c500.toml",
-            "--server",
-        ],
-        "serving on ",
-    );
+    let gw = common::c500_gateway(&dir, &sim.name, &["--server"]);
     let mut robot = Robot::connect(&gw.name, 9600).expect("connect");
     let silence = robot
         .keepalive_silence()

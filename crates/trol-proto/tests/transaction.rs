@@ -626,6 +626,17 @@ impl common::End for Working<'_> {
     }
 }
 
+/// The controller `r` working from `t0`, saying "still working" every 250 ms until `until`.
+fn working(r: &mut Responder, t0: Instant, until: Duration) -> Working<'_> {
+    Working {
+        r,
+        next: Some(t0 + Duration::from_millis(250)),
+        every: Duration::from_millis(250),
+        until: t0 + until,
+        out: Vec::new(),
+    }
+}
+
 /// Start `request` and run until the controller has it; returns when it did.
 fn deliver(w: &mut Wire, i: &mut Initiator, r: &mut Responder, request: &[u8]) -> Instant {
     i.start(request, w.now).unwrap();
@@ -645,13 +656,7 @@ fn a_controller_that_says_still_working_is_waited_for_past_the_silence() {
     i.set_silence(Some(Duration::from_millis(1500)));
     let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
     // 5 s of work, SYN every 250 ms, then the reply.
-    let mut working = Working {
-        r: &mut r,
-        next: Some(t0 + Duration::from_millis(250)),
-        every: Duration::from_millis(250),
-        until: t0 + Duration::from_secs(5),
-        out: Vec::new(),
-    };
+    let mut working = working(&mut r, t0, Duration::from_secs(5));
     let mut ev = None;
     w.run_t(&mut i, &mut working, Duration::from_secs(5), |i, _, now| {
         ev = i.poll_event();
@@ -673,13 +678,7 @@ fn a_controller_that_falls_silent_is_given_up_after_the_silence() {
     i.set_silence(Some(Duration::from_millis(1500)));
     let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
     // It says "still working" for 2 s, then dies.
-    let mut working = Working {
-        r: &mut r,
-        next: Some(t0 + Duration::from_millis(250)),
-        every: Duration::from_millis(250),
-        until: t0 + Duration::from_secs(2),
-        out: Vec::new(),
-    };
+    let mut working = working(&mut r, t0, Duration::from_secs(2));
     let ev = next_event(&mut w, &mut i, &mut working);
     assert!(
         matches!(
@@ -697,13 +696,7 @@ fn without_a_silence_set_syn_is_taken_and_the_reply_timeout_alone_counts() {
     let (mut w, mut i, mut r) = pair();
     i.set_reply_timeout(Duration::from_secs(4));
     let t0 = deliver(&mut w, &mut i, &mut r, &[42]);
-    let mut working = Working {
-        r: &mut r,
-        next: Some(t0 + Duration::from_millis(250)),
-        every: Duration::from_millis(250),
-        until: t0 + Duration::from_millis(500),
-        out: Vec::new(),
-    };
+    let mut working = working(&mut r, t0, Duration::from_millis(500));
     let ev = next_event(&mut w, &mut i, &mut working);
     let Some(InitiatorEvent::NeedDecision(Failure::Timeout { waited })) = ev else {
         panic!("{ev:?}")

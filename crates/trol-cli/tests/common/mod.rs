@@ -58,6 +58,21 @@ pub struct Background {
     input: Option<std::process::ChildStdin>,
 }
 
+/// `trol gateway` in front of the simulated C500 on `controller`, with the profile in
+/// `dir`/c500.toml and `extra` flags (`--server`, `--view`, ...).
+#[allow(dead_code)]
+pub fn c500_gateway(dir: &Path, controller: &str, extra: &[&str]) -> Background {
+    let mut args = vec![
+        "gateway",
+        "--controller",
+        controller,
+        "--profile",
+        "c500.toml",
+    ];
+    args.extend_from_slice(extra);
+    Background::start(dir, &args, "serving on ")
+}
+
 impl Background {
     pub fn start(dir: &Path, args: &[&str], marker: &str) -> Background {
         Background::start_program(TROL, dir, args, marker)

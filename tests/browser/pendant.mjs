@@ -4,8 +4,11 @@
 //
 // Opens the page `trol sim --view --control` printed (with #token=...) in headless Chromium
 // through Playwright and drives the arm with the page's own buttons, as a user would:
+//   0. at READY a jog along x is refused, and the page says what goes instead;
 //   1. joints 3 and 5 by +90 degrees (the tool down in front of the arm), then jog +x 10 mm;
-//   2. store the place as p1, jog away, "move to" p1;
+//   2. store the place as p1 (its six values listed), jog away, "move to" p1; a jog in the
+//      tool's frame, a turn about the world's z, the Halt button on screen at the panel's
+//      end; the gripper closed, gripped to 20 mm and opened;
 //   3. a long joint move at 5 %, Halt during it;
 //   4. the same page without the token shows no pendant, and a request with a wrong token
 //      is refused.
@@ -61,6 +64,13 @@ try {
   await page.waitForFunction(() => document.body.dataset.control === 'true', null, { timeout: 30_000 });
   console.log('pendant shown');
 
+  // 0. At READY (homed, stretched upright) a jog along x is out of reach: the page says
+  //    what goes instead.
+  await page.fill('#jog-step', '10');
+  const atReady = await click(page, '[data-jog="x,1"]');
+  const hint = await page.evaluate(() => document.getElementById('hint').textContent);
+  console.log(`ready ${JSON.stringify({ answer: atReady, hint })}`);
+
   // 1. To a pose in front of the arm with the joint buttons, then +x 10 mm.
   await page.fill('#speed', '100');
   await click(page, '#speed-set');
@@ -87,6 +97,45 @@ try {
   const back = await click(page, 'button[data-move="p1"]');
   const there = await still();
   console.log(`store ${JSON.stringify({ stored, back, p1: after.tcp, away: away.tcp, there: there.tcp })}`);
+  const row = await page.evaluate(() =>
+    document.querySelector('#locations tr[data-name="p1"] td.values').textContent);
+
+  // 2b. In the tool's frame: +x is along the tool (down, here); a turn about the world's z
+  //     through the tip; the Halt button on screen with the panel scrolled to its end.
+  await page.selectOption('#jog-frame', 'tool');
+  await page.fill('#jog-step', '10');
+  const toolBefore = await still();
+  const toolJog = await click(page, '[data-jog="x,1"]');
+  const toolAfter = await still();
+  await page.selectOption('#jog-frame', 'world');
+  await page.fill('#turn-step', '10');
+  const turn = await click(page, '[data-turn="yaw,1"]');
+  const turned = await still();
+  const haltOnScreen = await page.evaluate(() => {
+    const panel = document.getElementById('panel');
+    panel.scrollTop = panel.scrollHeight;
+    const r = document.getElementById('halt').getBoundingClientRect();
+    return r.top >= 0 && r.bottom <= window.innerHeight && r.height > 0;
+  });
+  console.log(`frames ${JSON.stringify({ row, toolJog, toolBefore: toolBefore.tcp, toolAfter: toolAfter.tcp, turn, turned: turned.tcp, haltOnScreen })}`);
+
+  // 2c. The gripper: close (nothing between the fingers), grip to 20 mm, open.
+  async function fingers(answer) {
+    const until = Date.now() + 30_000;
+    let last = -1;
+    for (;;) {
+      await new Promise(r => setTimeout(r, 200));
+      const g = (await state()).gripper_mm;
+      if (g === last) return { answer, mm: g };
+      if (Date.now() > until) throw new Error('the fingers did not stop');
+      last = g;
+    }
+  }
+  const closed = await fingers(await click(page, '#grip-close'));
+  await page.fill('#grip-mm', '20');
+  const gripped = await fingers(await click(page, '#grip-to'));
+  const opened = await fingers(await click(page, '#grip-open'));
+  console.log(`gripper ${JSON.stringify({ closed, gripped, opened })}`);
 
   // 3. A long move at 5 %, halted.
   await page.fill('#speed', '5');

@@ -392,8 +392,11 @@ fn the_pendant_is_off_unless_asked_and_takes_only_its_token() {
     assert_eq!(body["locations"][0]["name"], "top", "{body}");
 }
 
-/// The pendant in headless Chromium (tests/browser/pendant.mjs), with the page's own buttons:
-/// jog +x 10 mm moves the tool 10 mm along x; a place stored as p1 is found again after a
+/// The pendant in headless Chromium (tests/browser/pendant.mjs), with the page's own buttons
+/// (issue 42 item 6: the whole job a teach pendant does): at READY a jog along x is refused
+/// with what goes instead; jog +x 10 mm moves the tool 10 mm along x; in the tool's frame +x
+/// goes along the tool; a turn about the world's z keeps the tip and turns the yaw; the
+/// gripper closes, grips and opens; the Halt button stays on screen; a place stored as p1 is found again after a
 /// jog away; Halt during a long move stops it short; the page without the token shows no
 /// pendant, and a wrong token is refused.
 #[test]
@@ -424,6 +427,16 @@ fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
             .unwrap_or_else(|| panic!("{lines:?}"));
         serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {line}"))
     };
+    let ready = json(page.wait_for("ready ", 120), "ready ");
+    assert_eq!(ready["answer"]["ok"], false, "{ready}");
+    assert_eq!(ready["answer"]["value"], -2, "{ready}");
+    assert!(
+        ready["hint"]
+            .as_str()
+            .unwrap()
+            .contains("jog down (-z) first"),
+        "{ready}"
+    );
     let jog = json(page.wait_for("jog ", 120), "jog ");
     let xyz =
         |v: &serde_json::Value| -> [f64; 3] { std::array::from_fn(|i| v[i].as_f64().unwrap()) };
@@ -443,6 +456,40 @@ fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
     for i in 0..3 {
         assert!((there[i] - p1[i]).abs() < 0.2, "{store}");
     }
+
+    let frames = json(page.wait_for("frames ", 120), "frames ");
+    // The stored place with all six values (mm and degrees to 0.1).
+    let row = frames["row"].as_str().unwrap();
+    assert_eq!(row.split(' ').count(), 6, "{frames}");
+    assert!(!row.contains('e'), "{frames}");
+    // +x in the tool's frame is along the tool, which points down here.
+    assert_eq!(frames["toolJog"]["ok"], true, "{frames}");
+    let (a, b) = (xyz(&frames["toolBefore"]), xyz(&frames["toolAfter"]));
+    assert!((b[2] - a[2] + 10.0).abs() < 0.3, "{frames}");
+    assert!(
+        (b[0] - a[0]).abs() < 0.3 && (b[1] - a[1]).abs() < 0.3,
+        "{frames}"
+    );
+    // A turn about the world's z through the tip: the tip stays, the yaw turns 10 deg.
+    assert_eq!(frames["turn"]["ok"], true, "{frames}");
+    let turned = xyz(&frames["turned"]);
+    for i in 0..3 {
+        assert!((turned[i] - b[i]).abs() < 0.3, "{frames}");
+    }
+    let yaw = |v: &serde_json::Value| v[3].as_f64().unwrap();
+    let dyaw = (yaw(&frames["turned"]) - yaw(&frames["toolAfter"])).to_degrees();
+    let dyaw = (dyaw + 540.0) % 360.0 - 180.0;
+    assert!((dyaw - 10.0).abs() < 0.5, "{dyaw} deg: {frames}");
+    assert_eq!(frames["haltOnScreen"], true, "{frames}");
+
+    let gripper = json(page.wait_for("gripper ", 120), "gripper ");
+    let mm = |k: &str| gripper[k]["mm"].as_f64().unwrap();
+    for k in ["closed", "gripped", "opened"] {
+        assert_eq!(gripper[k]["answer"]["ok"], true, "{gripper}");
+    }
+    assert!(mm("closed") < 0.5, "{gripper}");
+    assert!((mm("gripped") - 20.0).abs() < 0.5, "{gripper}");
+    assert!((mm("opened") - 50.0).abs() < 0.5, "{gripper}");
 
     let halt = json(page.wait_for("halt ", 120), "halt ");
     assert_eq!(halt["long"]["ok"], true, "{halt}");

@@ -328,7 +328,10 @@ function render() {
 await loadArm().catch(e => { status.textContent = `cannot load the arm: ${e}`; });
 const first = await fetch('/state').then(r => r.ok ? r.json() : null).catch(() => null);
 if (first) update(first);
-new EventSource('/events').onmessage = e => update(JSON.parse(e.data));
+new EventSource('/events').onmessage = e => {
+  lastState = JSON.parse(e.data);
+  update(lastState);
+};
 render();
 
 // --- the pendant (only with --control, and the token from the printed address) ---
@@ -336,6 +339,8 @@ const token = new URLSearchParams(location.hash.slice(1)).get('token');
 const pendant = document.getElementById('pendant');
 const result = document.getElementById('result');
 let pendantCalls = 0;
+// The arm as the last update showed it (for the hint after a refused jog).
+let lastState = null;
 
 async function control(path, params = {}, method = 'POST') {
   const query = new URLSearchParams({ ...params, token: token || '' });
@@ -349,6 +354,13 @@ async function control(path, params = {}, method = 'POST') {
   const words = answer.error || `${answer.command}: ${answer.text}`;
   result.textContent = words;
   result.className = answer.ok ? '' : 'refused';
+  // After Home the arm stands stretched upright at the edge of its reach: say what goes.
+  const atReady = lastState && lastState.joints.every(q => Math.abs(q) < 1e-3);
+  const outOfReach = !answer.ok && answer.value === -2;
+  document.getElementById('hint').textContent = outOfReach && atReady
+    ? 'The arm stands stretched upright (READY), at the edge of its reach: jog down (-z) first, ' +
+      'or turn a joint (joint 3 by 30 degrees) to leave it.'
+    : '';
   document.body.dataset.pendantResult = JSON.stringify(answer);
   pendantCalls += 1;
   document.body.dataset.pendantCalls = String(pendantCalls);
@@ -361,6 +373,12 @@ function cell(row, text) {
   return td;
 }
 
+// `x` to `places` decimals, without a minus before 0.
+function fixed(x, places) {
+  const t = x.toFixed(places);
+  return Number(t) === 0 ? (0).toFixed(places) : t;
+}
+
 async function refreshLocations() {
   const answer = await control('locations', {}, 'GET');
   const list = document.getElementById('locations');
@@ -370,8 +388,14 @@ async function refreshLocations() {
     row.dataset.name = loc.name;
     cell(row, loc.name);
     cell(row, loc.form);
-    const v = loc.values.map(x => (loc.form === 'cart' && Math.abs(x) > 10 ? x.toFixed(1) : x.toFixed(3)));
-    cell(row, v.slice(0, 3).join(' '));
+    // All six values as a person reads them: mm to 0.1 and degrees to 0.1 (cart), degrees
+    // (joint), counts (prec).
+    const deg = x => fixed(x * 180 / Math.PI, 1);
+    const v = loc.form === 'prec' ? loc.values.map(x => String(Math.round(x)))
+      : loc.form === 'joint' ? loc.values.map(deg)
+      : loc.values.map((x, i) => (i < 3 ? fixed(x, 1) : deg(x)));
+    const values = cell(row, v.join(' '));
+    values.className = 'values';
     const go = document.createElement('button');
     go.textContent = 'move to';
     go.dataset.move = loc.name;
@@ -395,15 +419,34 @@ async function startPendant() {
   document.body.dataset.control = String(on && !!token);
   if (!on || !token) return;
   pendant.hidden = false;
-  document.getElementById('halt').onclick = () => control('halt');
+  const halt = document.getElementById('halt');
+  halt.hidden = false;
+  halt.onclick = () => control('halt');
+  const frame = () => document.getElementById('jog-frame').value;
+  const straight = () => (document.getElementById('jog-straight').checked ? 1 : 0);
   for (const b of pendant.querySelectorAll('[data-jog]')) {
     b.onclick = () => {
       const [axis, sign] = b.dataset.jog.split(',');
       const step = Number(document.getElementById('jog-step').value) * Number(sign);
-      const straight = document.getElementById('jog-straight').checked ? 1 : 0;
-      control('jog', { [`d${axis}`]: step, straight });
+      // World: TROLJog; the tool's frame: TROLDepart.
+      control(frame() === 'tool' ? 'depart' : 'jog', { [`d${axis}`]: step, straight: straight() });
     };
   }
+  const worldAxis = { yaw: 'z', pitch: 'y', roll: 'x' };
+  for (const b of pendant.querySelectorAll('[data-turn]')) {
+    b.onclick = () => {
+      const [angle, sign] = b.dataset.turn.split(',');
+      const deg = Number(document.getElementById('turn-step').value) * Number(sign);
+      // World: about the world's axis through the tool tip; the tool's frame: TROLDepart.
+      if (frame() === 'tool') control('depart', { [`d${angle}`]: deg * Math.PI / 180, straight: straight() });
+      else control('turn', { axis: worldAxis[angle], degrees: deg, straight: straight() });
+    };
+  }
+  const force = () => document.getElementById('grip-force').value;
+  document.getElementById('grip-open').onclick = () => control('open', { force: force() });
+  document.getElementById('grip-close').onclick = () => control('close', { force: force() });
+  document.getElementById('grip-to').onclick = () =>
+    control('grip', { mm: document.getElementById('grip-mm').value });
   for (const b of pendant.querySelectorAll('[data-joint]')) {
     b.onclick = () => {
       const deg = Number(document.getElementById('joint-step').value) * Number(b.dataset.joint);

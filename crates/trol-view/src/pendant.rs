@@ -13,6 +13,11 @@
 //! | `GET /control` | whether the pendant is on (`{"control": true}`); no token needed |
 //! | `GET /control/locations` | TROLListLocations |
 //! | `POST /control/jog?dx=&dy=&dz=&straight=0\|1` | TROLJog (mm, world frame) |
+//! | `POST /control/turn?axis=x\|y\|z&degrees=&straight=0\|1` | the tool turned about a world axis through its tip: TROLGetPosition, then TROLMoveII |
+//! | `POST /control/depart?dx=&dy=&dz=&dyaw=&dpitch=&droll=&straight=0\|1` | TROLDepart (mm and rad, the tool's frame) |
+//! | `POST /control/open?force=1..100` | TROLOpen |
+//! | `POST /control/close?force=1..100` | TROLClose |
+//! | `POST /control/grip?mm=0..50` | TROLGrip |
 //! | `POST /control/joint?joint=1..6&radians=` | TROLJoint |
 //! | `POST /control/speed?percent=1..150` | TROLSpeed |
 //! | `POST /control/home` | TROLHome(0) |
@@ -128,11 +133,15 @@ pub fn answer(
             if wants_post { "POST only" } else { "GET only" },
         );
     }
-    let call = match request(path, &args) {
-        Ok(call) => call,
-        Err(e) => return refusal("400 Bad Request", e),
+    let call = match path {
+        "/control/turn" => turned(&args, control),
+        _ => request(path, &args),
     };
-    let (def, values) = call;
+    let (def, values) = match call {
+        Ok(call) => call,
+        Err(Refused::Bad(e)) => return refusal("400 Bad Request", e),
+        Err(Refused::Answer(a)) => return a,
+    };
     let bytes = match record::encode(def, &values) {
         Ok(b) => b,
         Err(e) => return refusal("400 Bad Request", e.to_string()),
@@ -141,7 +150,91 @@ pub fn answer(
         Ok(r) => r,
         Err(e) => return refusal("503 Service Unavailable", e.to_string()),
     };
-    match Reply::decode(def, &reply) {
+    answered(def, &reply, control)
+}
+
+/// Why a pendant request was not sent: a bad request, or an answer already.
+enum Refused {
+    Bad(String),
+    Answer(Answer),
+}
+
+impl From<String> for Refused {
+    fn from(e: String) -> Refused {
+        Refused::Bad(e)
+    }
+}
+
+impl From<&str> for Refused {
+    fn from(e: &str) -> Refused {
+        Refused::Bad(e.to_string())
+    }
+}
+
+/// Send `def` with `values` through the controller's pendant and answer as the page reads it.
+fn call(def: &'static CommandDef, values: &[Value], control: &Control) -> Answer {
+    let bytes = match record::encode(def, values) {
+        Ok(b) => b,
+        Err(e) => return refusal("400 Bad Request", e.to_string()),
+    };
+    match control.pendant.call(bytes, CALL_LIMIT) {
+        Ok(r) => answered(def, &r, control),
+        Err(e) => refusal("503 Service Unavailable", e.to_string()),
+    }
+}
+
+/// A turn of the tool about a world axis through its tip (`axis` x, y or z, `degrees`): where
+/// the tool is (TROLGetPosition, commanded), turned, as a TROLMoveII.
+fn turned(
+    args: &HashMap<String, String>,
+    control: &Control,
+) -> Result<(&'static CommandDef, Vec<Value>), Refused> {
+    let axis = match args.get("axis").map(String::as_str) {
+        Some("x") => glam::DVec3::X,
+        Some("y") => glam::DVec3::Y,
+        Some("z") => glam::DVec3::Z,
+        Some(v) => return Err(format!("`axis`: {v:?} is not x, y or z").into()),
+        None => return Err("`axis` is missing".into()),
+    };
+    let degrees = args
+        .get("degrees")
+        .ok_or("`degrees` is missing")?
+        .parse::<f64>()
+        .ok()
+        .filter(|d| d.is_finite() && d.abs() <= 90.0)
+        .ok_or("`degrees`: a number of at most 90 either way")?;
+    let straight = matches!(args.get("straight").map(String::as_str), Some("1" | "true"));
+    let at = call(
+        &table::GET_POSITION,
+        &[
+            Value::Int(Tag::Cart as u8),
+            Value::Int(trol_proto::application::table::POS_COMMANDED),
+        ],
+        control,
+    );
+    let Some(values) = at.1["position"].as_array().filter(|v| v.len() == 6) else {
+        return Err(Refused::Answer(at));
+    };
+    let v: [f64; 6] = std::array::from_fn(|i| values[i].as_f64().unwrap_or(f64::NAN));
+    let pose = trol_a465::Pose::from_xyzypr(v);
+    let turn = glam::DMat3::from_axis_angle(axis, degrees.to_radians());
+    let new = trol_a465::Pose {
+        rot: turn * pose.rot,
+        pos: pose.pos,
+    }
+    .to_xyzypr();
+    Ok((
+        &table::MOVE_II,
+        vec![
+            Value::Loc(Location::Cart(new.to_vec())),
+            Value::Flag(straight),
+        ],
+    ))
+}
+
+/// The controller's reply to `def` as the page reads it.
+fn answered(def: &'static CommandDef, reply: &[u8], control: &Control) -> Answer {
+    match Reply::decode(def, reply) {
         Ok(r) => {
             let value = r.value();
             let mut body = json!({
@@ -152,6 +245,9 @@ pub fn answer(
             });
             if let (Reply::Locations(all), Some(o)) = (&r, body.as_object_mut()) {
                 o.insert("locations".into(), locations_json(all));
+            }
+            if let (Reply::Position(loc), Some(o)) = (&r, body.as_object_mut()) {
+                o.insert("position".into(), json!(loc.to_array6()));
             }
             ("200 OK", body)
         }
@@ -179,7 +275,7 @@ fn locations_json(all: &[(LocName, Location)]) -> serde_json::Value {
 fn request(
     path: &str,
     args: &HashMap<String, String>,
-) -> Result<(&'static CommandDef, Vec<Value>), String> {
+) -> Result<(&'static CommandDef, Vec<Value>), Refused> {
     let real = |key: &str, default: Option<f64>| -> Result<f64, String> {
         match args.get(key) {
             Some(v) => v
@@ -194,6 +290,12 @@ fn request(
         let v = args.get(key).ok_or_else(|| format!("`{key}` is missing"))?;
         v.parse::<u8>()
             .map_err(|_| format!("`{key}`: {v:?} is not a whole number 0..255"))
+    };
+    let small_or = |key: &str, default: u8| -> Result<u8, String> {
+        match args.get(key) {
+            Some(_) => small(key),
+            None => Ok(default),
+        }
     };
     let flag = |key: &str| -> Result<bool, String> {
         match args.get(key).map(String::as_str) {
@@ -236,7 +338,7 @@ fn request(
                 None | Some("cart") => Tag::Cart,
                 Some("joint") => Tag::Joint,
                 Some("prec") => Tag::Prec,
-                Some(v) => return Err(format!("`form`: {v:?} is not cart, joint or prec")),
+                Some(v) => return Err(format!("`form`: {v:?} is not cart, joint or prec").into()),
             };
             let n = name()?;
             if let Value::Name(l) = &n {
@@ -250,10 +352,30 @@ fn request(
             (&table::HERE, vec![n, Value::Int(form as u8)])
         }
         "/control/move" => (&table::MOVE, vec![name()?, Value::Flag(flag("straight")?)]),
+        "/control/depart" => {
+            let d = [
+                real("dx", Some(0.0))?,
+                real("dy", Some(0.0))?,
+                real("dz", Some(0.0))?,
+                real("dyaw", Some(0.0))?,
+                real("dpitch", Some(0.0))?,
+                real("droll", Some(0.0))?,
+            ];
+            (
+                &table::DEPART,
+                vec![
+                    Value::Loc(Location::Cart(d.to_vec())),
+                    Value::Flag(flag("straight")?),
+                ],
+            )
+        }
+        "/control/open" => (&table::OPEN, vec![Value::Int(small_or("force", 50)?)]),
+        "/control/close" => (&table::CLOSE, vec![Value::Int(small_or("force", 50)?)]),
+        "/control/grip" => (&table::GRIP, vec![Value::Int(small("mm")?)]),
         "/control/delete" => (&table::DELETE_LOCATION, vec![name()?]),
         "/control/save" => (&table::SAVE_LOCATIONS, vec![]),
         "/control/halt" => (&table::HALT, vec![]),
-        other => return Err(format!("{other}: no such pendant request")),
+        other => return Err(format!("{other}: no such pendant request").into()),
     })
 }
 

@@ -84,10 +84,10 @@ stage "CTU's ctu-crs against trol sim --mars" ctu
 # `trol urdf` in another simulator: MuJoCo (from the package registry) loads it, and its
 # kinematics are TROL's (tests/urdf).
 mujoco_urdf() {
-  "$PY" -m pip install --quiet mujoco &&
+  "$PY" -m pip install --quiet mujoco pybullet &&
     TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/urdf
 }
-stage "the URDF in MuJoCo" mujoco_urdf
+stage "the URDF in MuJoCo and pybullet" mujoco_urdf
 
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).

@@ -29,6 +29,10 @@ pub const EFFORT_NM: [f64; 6] = [60.0, 60.0, 60.0, 20.0, 20.0, 20.0];
 /// cylinder (or sphere), solid, of this mass.
 pub const MASS_KG: [f64; 8] = [10.0, 7.0, 6.0, 4.0, 2.0, 1.0, 0.5, 0.5];
 
+/// The flange frame's mass, kg: next to nothing, but given, since a simulator gives a link
+/// without one a mass of its own (pybullet: 1 kg and 1 kg m²).
+pub const FLANGE_KG: f64 = 0.001;
+
 /// One DH step's fixed part (after the joint's rotation): Tz(d)·Tx(a)·Rx(α).
 fn dh_fixed(d: f64, a: f64, alpha: f64) -> Pose {
     Pose {
@@ -103,9 +107,36 @@ fn origin_attrs(p: &Pose) -> String {
     )
 }
 
-/// A cylinder from this link's origin to `to` (mm, in the link's frame): its visual, the
-/// same shape as its collision, and its inertia as a solid of `mass` kg.
-fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64) {
+/// How much of each link's length its collision cylinder leaves out at its start and its
+/// end, mm (`base_link`, `link_1` .. `link_6`): so that the shapes of links joined by a joint
+/// never touch at any pose within the limits (a simulator with contacts on then moves the arm
+/// as with them off), with 10 mm to spare at least. The column starts 10 mm above the foot
+/// plate and ends 100 mm below the shoulder, where the upper arm starts 80 mm out; the upper
+/// arm and the forearm keep 100 mm from the elbow (at J3 = ±110° their ends are
+/// 115 mm apart, their radii 95 mm), the forearm 70 mm from the wrist (at J5 = ±105° the
+/// tool's box starts 89 mm from it, the radii 76 mm). The joints' own links (at the elbow, the
+/// wrist and the flange, of no length) have no collision shape. Checked over 20,000 random
+/// poses by `adjacent_collision_shapes_never_touch` (crates/trol-a465/tests/urdf.rs).
+pub const COLLISION_TRIM_MM: [(f64, f64); 7] = [
+    (0.0, 0.0),
+    (40.0, 100.0),
+    (80.0, 100.0),
+    (0.0, 0.0),
+    (100.0, 70.0),
+    (0.0, 0.0),
+    // The flange stub lies within the tool's reach of the forearm: the tool's box stands
+    // for it.
+    (100.0, 0.0),
+];
+
+/// The links' radii, mm (`base_link`, `link_1` .. `link_6`): the foot plate's, the column's and
+/// the upper arm's 55, the forearm's 40 (the drawing's; the casting is not modelled).
+pub const RADIUS_MM: [f64; 7] = [100.0, 55.0, 55.0, 55.0, 40.0, 35.0, 35.0];
+
+/// A cylinder from this link's origin to `to` (mm, in the link's frame): its visual, and its
+/// inertia as a solid of `mass` kg; its collision the same cylinder less `trim` (mm at its
+/// start and its end), none for a link of no length or where the trim leaves nothing.
+fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64, trim: (f64, f64)) {
     let len = to.length();
     if len < 1e-6 {
         let r = radius_mm * 1.2 / 1000.0;
@@ -114,7 +145,6 @@ fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64)
         let _ = writeln!(
             out,
             "    <visual>{shape}<material name=\"{colour}\"/></visual>\n    \
-             <collision>{shape}</collision>\n    \
              <inertial><mass value=\"{mass}\"/><inertia ixx=\"{i:.6}\" ixy=\"0\" \
              ixz=\"0\" iyy=\"{i:.6}\" iyz=\"0\" izz=\"{i:.6}\"/></inertial>"
         );
@@ -137,10 +167,23 @@ fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64)
     let _ = writeln!(
         out,
         "    <visual><origin {origin}/>{shape}<material name=\"{colour}\"/></visual>\n    \
-         <collision><origin {origin}/>{shape}</collision>\n    \
          <inertial><origin {origin}/><mass value=\"{mass}\"/><inertia ixx=\"{across:.6}\" \
          ixy=\"0\" ixz=\"0\" iyy=\"{across:.6}\" iyz=\"0\" izz=\"{along:.6}\"/></inertial>"
     );
+    let kept = len - trim.0 - trim.1;
+    if kept > 1.0 {
+        let centre = Pose {
+            rot: pose.rot,
+            pos: z * (trim.0 + kept / 2.0),
+        };
+        let _ = writeln!(
+            out,
+            "    <collision><origin {}/><geometry><cylinder radius=\"{r:.4}\" \
+             length=\"{:.4}\"/></geometry></collision>",
+            origin_attrs(&centre),
+            kept / 1000.0
+        );
+    }
 }
 
 /// The URDF of the A465, as `trol urdf` prints it.
@@ -162,9 +205,10 @@ pub fn urdf() -> String {
     segment(
         &mut s,
         DVec3::new(0.0, 0.0, 30.0),
-        100.0,
+        RADIUS_MM[0],
         "joint",
         MASS_KG[0],
+        COLLISION_TRIM_MM[0],
     );
     s.push_str("  </link>\n");
     let names = [
@@ -184,13 +228,13 @@ pub fn urdf() -> String {
             flange.pos
         };
         let _ = writeln!(s, "  <link name=\"{}\">", names[i + 1]);
-        let radius = if i < 3 { 55.0 } else { 35.0 };
         segment(
             &mut s,
             next,
-            radius,
+            RADIUS_MM[i + 1],
             if i % 2 == 0 { "body" } else { "joint" },
             MASS_KG[i + 1],
+            COLLISION_TRIM_MM[i + 1],
         );
         s.push_str("  </link>\n");
         let _ = writeln!(
@@ -211,7 +255,9 @@ pub fn urdf() -> String {
     }
     let _ = writeln!(
         s,
-        "  <link name=\"flange\"/>\n  <joint name=\"flange_joint\" type=\"fixed\">\n    \
+        "  <link name=\"flange\">\n    <inertial><mass value=\"{FLANGE_KG}\"/><inertia \
+         ixx=\"1e-7\" ixy=\"0\" ixz=\"0\" iyy=\"1e-7\" iyz=\"0\" izz=\"1e-7\"/>\
+         </inertial>\n  </link>\n  <joint name=\"flange_joint\" type=\"fixed\">\n    \
          <parent link=\"link_6\"/>\n    <child link=\"flange\"/>\n    <origin {}/>\n  </joint>",
         origin_attrs(&flange)
     );
@@ -240,6 +286,44 @@ pub fn urdf() -> String {
     s
 }
 
+/// The pairs of links MoveIt need not check (`trol urdf --srdf`): each link and the one it
+/// hangs from (none of them touch, `COLLISION_TRIM_MM`, but a planner checks what may touch
+/// and these cannot without a joint between them breaking).
+pub fn srdf() -> String {
+    let pairs = [
+        ("base_link", "link_1"),
+        ("link_1", "link_2"),
+        ("link_2", "link_3"),
+        ("link_3", "link_4"),
+        ("link_4", "link_5"),
+        ("link_5", "link_6"),
+        ("link_6", "flange"),
+        ("flange", "tool0"),
+        ("link_6", "tool0"),
+    ];
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n\
+         <!-- The CRS A465's semantic description for MoveIt, generated by `trol urdf --srdf`\n     \
+         beside `trol urdf` (docs/ros2.md). -->\n\
+         <robot name=\"crs_a465\">\n  \
+         <group name=\"arm\">\n    <chain base_link=\"base_link\" tip_link=\"tool0\"/>\n  \
+         </group>\n  \
+         <group_state name=\"ready\" group=\"arm\">\n",
+    );
+    for i in 1..=6 {
+        let _ = writeln!(s, "    <joint name=\"joint_{i}\" value=\"0\"/>");
+    }
+    s.push_str("  </group_state>\n");
+    for (a, b) in pairs {
+        let _ = writeln!(
+            s,
+            "  <disable_collisions link1=\"{a}\" link2=\"{b}\" reason=\"Adjacent\"/>"
+        );
+    }
+    s.push_str("</robot>\n");
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,9 +338,12 @@ mod tests {
     #[test]
     fn every_link_has_a_collision_shape_and_a_mass() {
         let u = urdf();
-        // base_link, link_1 .. link_6, tool0 (the flange is a frame only).
-        assert_eq!(u.matches("<collision>").count(), 8, "{u}");
-        assert_eq!(u.matches("<inertial>").count(), 8, "{u}");
+        // base_link, link_1, link_2, link_4 (the column, the upper arm, the forearm) and
+        // tool0: the joints' own links of no length (link_3, link_5) and the flange stub
+        // (link_6, inside the tool's reach) have none.
+        assert_eq!(u.matches("<collision>").count(), 5, "{u}");
+        // Every link has a mass, the flange frame too.
+        assert_eq!(u.matches("<inertial>").count(), 9, "{u}");
         assert!(!u.contains("<mass value=\"0\""), "{u}");
     }
 

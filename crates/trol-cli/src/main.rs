@@ -112,9 +112,14 @@ enum Command {
     /// Print the A465's URDF (links base_link, link_1..link_6, flange, tool0; joints
     /// joint_1..joint_6 with TROL's zero and directions), generated from the arm's model.
     #[command(
-        after_help = "Example:\n  trol urdf > crs_a465.urdf      # for RViz, a description package, docs/ros2.md"
+        after_help = "Examples:\n  trol urdf > crs_a465.urdf      # for RViz, a description package, docs/ros2.md\n  trol urdf --srdf > crs_a465.srdf  # the pairs MoveIt need not check, beside it"
     )]
-    Urdf,
+    Urdf {
+        /// Print the SRDF for MoveIt instead (the arm's group, READY, and the pairs of
+        /// links joined by a joint, which it need not check).
+        #[arg(long)]
+        srdf: bool,
+    },
     /// Print the completion script for a shell (bash, zsh, fish, elvish, powershell).
     #[command(after_help = "\
 Examples:
@@ -206,8 +211,13 @@ fn main() -> ExitCode {
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
         Command::Bench { args } => bench::run(&args),
         Command::Demo(a) => demo::run(a),
-        Command::Urdf => {
-            say!("{}", trol_a465::urdf::urdf().trim_end());
+        Command::Urdf { srdf } => {
+            let text = if srdf {
+                trol_a465::urdf::srdf()
+            } else {
+                trol_a465::urdf::urdf()
+            };
+            say!("{}", text.trim_end());
             Ok(ExitCode::SUCCESS)
         }
         Command::Completions { shell } => completions(shell).map(|()| ExitCode::SUCCESS),

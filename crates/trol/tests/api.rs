@@ -873,7 +873,9 @@ fn the_host_checks_the_controllers_version_and_kind() {
     );
     let text = e.to_string();
     assert!(
-        text.contains("version 2") && text.contains("version 3") && text.contains("same TROL"),
+        text.contains("version 2")
+            && text.contains(&format!("version {}", trol::table::PROTOCOL_VERSION))
+            && text.contains("same TROL"),
         "{text}"
     );
     assert!(

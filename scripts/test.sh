@@ -53,7 +53,7 @@ modbus_setup() {
 }
 stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 
-stage "cargo test --workspace" cargo test --workspace
+stage "cargo test --workspace" cargo test --workspace --no-fail-fast
 # The client with its live view (a feature the utilities and libtrol leave out).
 stage "cargo test -p trol --features view" cargo test -p trol --features view --test api
 

@@ -225,7 +225,7 @@ def test_open_checks_the_servers_protocol_version(scripted: tuple[str, list[byte
     with pytest.raises(trol.IncompatibleError) as e:
         trol.Robot.open(port)
     assert isinstance(e.value, trol.SetupError)
-    assert (e.value.ours, e.value.theirs) == (3, 2)
+    assert (e.value.ours, e.value.theirs) == (4, 2)  # docs/protocol.md, "Version and kind"
     text = str(e.value)
     assert "version 2" in text and "same TROL release" in text, text
 

@@ -188,7 +188,7 @@ TUINT TROLLastTransaction(void);
  * bytes, NUL-terminated, cut if longer), what drives its arm; InitTROL checks it.
  * TROLSetWatchdog: the controller halts the arm when no call arrives for tenths/10 s
  * (1..250; 0 turns it off). */
-#define TROL_PROTOCOL_VERSION 3
+#define TROL_PROTOCOL_VERSION 4
 TINT TROLGetVersion(TUINT *protocol, char *kind, TUINT kindSize);
 TINT TROLSetWatchdog(TUINT tenths);
 /* Added (docs/protocol.md "Codes"). TROLGetCodes: the controller's BIOS codes: up to max of

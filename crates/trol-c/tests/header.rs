@@ -41,6 +41,10 @@ fn the_header_agrees_with_the_table() {
         ("POS_PREC".into(), trol_client::Tag::Prec as i64),
         ("POS_JOINT".into(), trol_client::Tag::Joint as i64),
         ("POS_CART".into(), trol_client::Tag::Cart as i64),
+        (
+            "TROL_PROTOCOL_VERSION".into(),
+            table::PROTOCOL_VERSION.into(),
+        ),
     ]);
     for c in TROL_CODES {
         expected.push((c.name.into(), c.value.into()));

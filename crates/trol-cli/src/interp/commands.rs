@@ -600,7 +600,7 @@ mod tests {
             "TROLApproII p(1000, -2000, 3000, 0, 5, -6) c(-50, 0, 10)",
             "TROLJoint 1 0.5",
             "TROLGetPosition prec commanded",
-            "TROLMoveII c(400.12344, 0, 300, 0, 1.5, 0) straight",
+            "TROLMoveII c(400.123, 0, 300, 0, 1.5, 0) straight",
         ] {
             let Action::Call(def, values) = p(line).unwrap() else {
                 panic!("{line}")

@@ -25,7 +25,7 @@ done
 
 libs="${TROL_LIB_DIR:-}"
 if [ -z "$libs" ]; then
-  cargo build --release -p trol-c
+  cargo build --release --locked -p trol-c
   # Where cargo put them: CARGO_TARGET_DIR when it is set (relative to this folder).
   libs="${CARGO_TARGET_DIR:-target}/release"
 fi
@@ -38,8 +38,9 @@ install -d "$prefix/lib/pkgconfig" "$prefix/include"
 install -m 644 "$libs/libtrol.a" "$prefix/lib/libtrol.a"
 install -m 755 "$libs/libtrol.so" "$prefix/lib/libtrol.so"
 install -m 644 include/trol.h "$prefix/include/trol.h"
+# The prefix is where trol.pc lies, so that the folder can be moved (a release's tarball).
 cat > "$prefix/lib/pkgconfig/trol.pc" <<EOF
-prefix=$prefix
+prefix=\${pcfiledir}/../..
 libdir=\${prefix}/lib
 includedir=\${prefix}/include
 

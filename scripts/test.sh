@@ -57,19 +57,44 @@ stage "cargo test --workspace" cargo test --workspace --no-fail-fast
 # The client with its live view (a feature the utilities and libtrol leave out).
 stage "cargo test -p trol --features view" cargo test -p trol --features view --test api
 
-# TROL for Python (crates/trol-py, outside the cargo workspace): build and install the
-# package, run its tests against the embedded simulator and `trol sim` over a pty, and check
-# its type stubs against the module.
+# TROL for Python (crates/trol-py, outside the cargo workspace): scripts/wheel.sh builds it
+# as a binary wheel (maturin, into target/wheels); the wheel goes into a fresh virtual
+# environment with no Rust toolchain on PATH, where the package's tests (against the embedded
+# simulator and `trol sim` over a pty), the examples and the stub check run.
 PY="$PWD/target/py/bin/python"
-python_setup() {
-  python3 -m venv target/py &&
-    "$PY" -m pip install --quiet --upgrade pip &&
-    "$PY" -m pip install --quiet maturin pytest pytest-timeout numpy mypy &&
-    echo "   building TROL for Python (the Rust extension: a minute or two)" &&
-    "$PY" -m pip install --quiet ./crates/trol-py
+# Runs a command with every folder that holds cargo or rustc taken off PATH (and rustup's
+# and cargo's homes unset), so that nothing in it can build Rust.
+no_rust() {
+  local dir kept=() joined
+  local IFS=:
+  for dir in $PATH; do
+    [ -n "$dir" ] && [ ! -x "$dir/cargo" ] && [ ! -x "$dir/rustc" ] && kept+=("$dir")
+  done
+  joined="${kept[*]}"
+  env -u CARGO_HOME -u RUSTUP_HOME -u CARGO_TARGET_DIR PATH="$joined" "$@"
 }
-stage "Python: virtual environment and TROL for Python" python_setup
-stage "Python: pytest" bash -c "cd crates/trol-py && TROL_BIN='$PWD/target/debug/trol' '$PY' -m pytest -q"
+python_setup() {
+  CARGO_TARGET_DIR="$PWD/target" bash scripts/wheel.sh &&
+    rm -rf target/py &&
+    python3 -m venv target/py &&
+    no_rust bash -c '! command -v cargo && ! command -v rustc' >/dev/null &&
+    no_rust "$PY" -m pip install --quiet --disable-pip-version-check \
+      target/wheels/trol-*.whl pytest pytest-timeout numpy mypy matplotlib &&
+    # The module is the wheel's, not the source tree's.
+    no_rust "$PY" -c 'import trol, sys; assert "/target/py/" in trol.__file__, trol.__file__; print("   trol for Python from", trol.__file__)'
+}
+stage "Python: the wheel, in a virtual environment without Rust" python_setup
+python_tests() {
+  (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" no_rust "$PY" -m pytest -q)
+}
+stage "Python: pytest" python_tests
+python_examples() {
+  local root=$PWD plots
+  plots=$(mktemp -d)
+  (cd examples && no_rust "$PY" pick.py) &&
+    (cd "$plots" && no_rust "$PY" "$root/examples/plot_motion.py" && test -s motion.png)
+}
+stage "Python: the examples (pick.py, plot_motion.py)" python_examples
 stage "Python: stubs (mypy.stubtest)" bash -c "cd /tmp && '$PY' -m mypy.stubtest trol"
 
 # CTU Prague's own MARS 8 client (ctu-crs, from the package registry; its camera import

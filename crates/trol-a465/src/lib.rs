@@ -8,10 +8,23 @@
 //! - [`survey`]: a survey of straight lines (`trol bench lines`);
 //! - [`urdf`]: the arm as a URDF with TROL's joints (`trol urdf`, docs/ros2.md).
 //!
-//! Conventions and which figures are assumptions: docs/a465.md, included below (its
-//! example runs as a doctest).
+//! Conventions, and which figures are published and which are assumptions: docs/a465.md in
+//! TROL's repository.
 //!
-#![doc = include_str!("../../../docs/a465.md")]
+//! The kinematics on the PC:
+//!
+//! ```rust
+//! use trol_a465::{Kinematics, Pose};
+//!
+//! let kin = Kinematics::new([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]); // no tool transform
+//! // Tool straight down, 400 mm in front of the robot, 150 mm above the table.
+//! let tcp = Pose::from_xyzypr([400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]);
+//! for s in kin.ik_all(&tcp, &[0.0; 6]).as_slice() {
+//!     println!("{} {:?} within limits: {}", s.config, s.q, s.within_limits);
+//! }
+//! let q = kin.ik_nearest(&tcp, &[0.0; 6]).expect("reachable");
+//! assert!((kin.fk(&q).pos - tcp.pos).length() < 1e-6);
+//! ```
 #![forbid(unsafe_code)]
 #![warn(missing_docs, missing_debug_implementations)]
 

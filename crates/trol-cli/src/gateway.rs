@@ -20,7 +20,7 @@ Examples:
   trol gateway --controller /dev/ttyUSB0 --port listen://127.0.0.1:7000
   trol sim --rapl &                                                      # a simulated C500 ...
   trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
-  trol gateway --controller mars:/dev/ttyUSB0 --profile docs/mars/crs93.toml  # a MARS 8
+  trol gateway --controller mars:/dev/ttyUSB0 --profile crates/trol-mars/profiles/crs93.toml  # a MARS 8
 
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]
@@ -100,7 +100,7 @@ fn run_mars(a: &GatewayArgs, device: &str) -> Result<(), String> {
         None => {
             return Err(format!(
                 "--controller {}: an A465 on a MARS 8 needs its arm profile: --profile FILE \
-                 (docs/mars/crs93.toml is CTU's CRS93; docs/mars.md)",
+                 (crates/trol-mars/profiles/crs93.toml is CTU's CRS93; docs/mars.md)",
                 a.controller
             ));
         }

@@ -92,7 +92,7 @@ pub struct SimArgs {
     /// With --rapl: how the simulated C500 behaves on each open point (a RAPL-II profile,
     /// docs/c500.md); default: the simulator's (mm, angles yaw pitch roll, MA/MI in degrees).
     /// With --mars: the arm profile (docs/mars.md); default: CTU's CRS93
-    /// (docs/mars/crs93.toml).
+    /// (crates/trol-mars/profiles/crs93.toml).
     #[arg(long, value_name = "FILE")]
     profile: Option<PathBuf>,
     /// Play one of the controllers the public sources allow, by name (the backend's tests

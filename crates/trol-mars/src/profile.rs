@@ -1,5 +1,5 @@
 //! The arm profile: what a MARS 8 needs to know about the A465 on its axes (docs/mars.md), one
-//! TOML file per arm. CTU Prague's two arms are examples (docs/mars/crs93.toml and
+//! TOML file per arm. CTU Prague's two arms are examples (crates/trol-mars/profiles/crs93.toml and
 //! crs97.toml, every value taken from the public package ctu-crs).
 //!
 //! There is no safe default: without the IRC count at joint zero a coordinated move goes
@@ -124,14 +124,14 @@ pub struct ProfileError {
 const MAX_FILE: u64 = 64 * 1024;
 
 impl Profile {
-    /// CTU Prague's CRS93 (docs/mars/crs93.toml).
+    /// CTU Prague's CRS93 (crates/trol-mars/profiles/crs93.toml).
     pub fn crs93() -> Profile {
-        Profile::parse(include_str!("../../../docs/mars/crs93.toml")).expect("crs93.toml")
+        Profile::parse(include_str!("../profiles/crs93.toml")).expect("crs93.toml")
     }
 
-    /// CTU Prague's CRS97 (docs/mars/crs97.toml).
+    /// CTU Prague's CRS97 (crates/trol-mars/profiles/crs97.toml).
     pub fn crs97() -> Profile {
-        Profile::parse(include_str!("../../../docs/mars/crs97.toml")).expect("crs97.toml")
+        Profile::parse(include_str!("../profiles/crs97.toml")).expect("crs97.toml")
     }
 
     /// Read a profile file.
@@ -147,7 +147,7 @@ impl Profile {
             .and_then(|f| f.take(MAX_FILE + 1).read_to_string(&mut text))
             .map_err(|e| {
                 err(format!(
-                    "cannot read it ({e}); docs/mars/crs93.toml is one to start from, \
+                    "cannot read it ({e}); crates/trol-mars/profiles/crs93.toml is one to start from, \
                      `trol sim --mars --print-profile` prints the simulated arm's"
                 ))
             })?;
@@ -330,7 +330,7 @@ mod tests {
 
     #[test]
     fn a_profile_that_would_move_the_arm_wrongly_is_refused_with_its_key() {
-        let text = include_str!("../../../docs/mars/crs93.toml");
+        let text = include_str!("../profiles/crs93.toml");
         for (from, to, key) in [
             ("direction = [1, -1", "direction = [2, -1", "direction"),
             ("axes = \"ABCDEF\"", "axes = \"ABCDE\"", "axes"),

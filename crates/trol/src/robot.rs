@@ -435,7 +435,7 @@ impl Robot {
         if port.starts_with(MARS_PREFIX) {
             return Err(SetupError::Config(format!(
                 "{port}: an A465 on a MARS 8 needs its arm profile: name it in trol.cfg \
-                 (`mars-profile = FILE`; docs/mars/crs93.toml is CTU's CRS93) or call \
+                 (`mars-profile = FILE`; crates/trol-mars/profiles/crs93.toml is CTU's CRS93) or call \
                  Robot::mars"
             ))
             .into());
@@ -481,7 +481,7 @@ impl Robot {
                 None => {
                     return Err(SetupError::Config(format!(
                         "port {}: an A465 on a MARS 8 needs its arm profile: add \
-                         `mars-profile = FILE` to trol.cfg (docs/mars/crs93.toml is CTU's \
+                         `mars-profile = FILE` to trol.cfg (crates/trol-mars/profiles/crs93.toml is CTU's \
                          CRS93; docs/mars.md)",
                         cfg.port
                     ))

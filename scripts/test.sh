@@ -11,17 +11,29 @@ cd "$(dirname "$0")/.."
 # Every stage runs, even after one failed; the failures are listed at the end (and the
 # script exits 1), so one flaky stage never hides the others.
 FAILED=()
+# A stage that runs longer than 30 s says so every 30 s (a test program or a build may
+# print nothing for minutes), so the script is never silent for long.
 stage() {
   local name=$1
   shift
-  local started=$SECONDS
+  local started=$SECONDS ticker
   echo "== scripts/test.sh: $name"
+  (
+    t=0
+    while sleep 30 </dev/null >/dev/null 2>&1; do
+      t=$((t + 30))
+      echo "== scripts/test.sh: $name: still running (${t} s)"
+    done
+  ) &
+  ticker=$!
   if "$@"; then
     echo "== scripts/test.sh: $name: passed ($((SECONDS - started)) s)"
   else
     echo "== scripts/test.sh: $name: FAILED ($((SECONDS - started)) s)"
     FAILED+=("$name")
   fi
+  kill "$ticker" 2>/dev/null || true
+  wait "$ticker" 2>/dev/null || true
 }
 
 # The live view's browser test (crates/trol-cli/tests/view.rs): headless Chromium driven by

@@ -35,8 +35,8 @@ use trol_cli::common;
 
 use clap::{Parser, Subcommand};
 
-/// TROL, the TU Vienna Robot Control Library: utilities for driving a CRS A465 through its
-/// C500 controller. Every command reads trol.cfg (or $TROL_CONFIG) like any TROL program;
+/// TROL, the TU Vienna Robot Control Library: utilities for driving a CRS A465 on a C500 in
+/// RAPL-II, on a PiKRON MARS 8, or simulated. Every command reads trol.cfg (or $TROL_CONFIG) like any TROL program;
 /// --port, --baud and --config override it. Without trol.cfg the port is `sim`, the
 /// embedded simulator.
 #[derive(Parser)]
@@ -142,8 +142,7 @@ Example:
 }
 
 fn completions(shell: clap_complete::Shell) -> Result<(), String> {
-    use clap::CommandFactory;
-    let mut cmd = Cli::command();
+    let mut cmd = cli_command();
     let mut out = Vec::new();
     clap_complete::generate(shell, &mut cmd, "trol", &mut out);
     say!("{}", String::from_utf8_lossy(&out).trim_end());
@@ -151,9 +150,8 @@ fn completions(shell: clap_complete::Shell) -> Result<(), String> {
 }
 
 fn man(out: &std::path::Path) -> Result<(), String> {
-    use clap::CommandFactory;
     std::fs::create_dir_all(out).map_err(|e| format!("cannot make {}: {e}", out.display()))?;
-    clap_mangen::generate_to(Cli::command(), out)
+    clap_mangen::generate_to(cli_command(), out)
         .map_err(|e| format!("cannot write the man pages into {}: {e}", out.display()))?;
     say!(
         "man pages written to {} (read one with: man -l {}/trol.1)",
@@ -194,8 +192,24 @@ fn ports(config: Option<std::path::PathBuf>) -> Result<(), String> {
     Ok(())
 }
 
+/// The command line's definition, as every surface (parsing, completions, man pages) sees
+/// it: a value may be a negative number everywhere (`--linger -1` is then refused by the
+/// value's own check, which says what it takes, rather than read as an unknown flag).
+fn cli_command() -> clap::Command {
+    fn negative_numbers(cmd: clap::Command) -> clap::Command {
+        cmd.allow_negative_numbers(true)
+            .mut_subcommands(negative_numbers)
+    }
+    use clap::CommandFactory;
+    negative_numbers(Cli::command())
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    use clap::FromArgMatches;
+    let cli = match Cli::from_arg_matches(&cli_command().get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     common::init_logging(cli.verbose);
     let result = match cli.command {
         Command::Interp(a) => interp::run(a),

@@ -55,3 +55,51 @@ fn help_wraps_to_the_terminal() {
         }
     }
 }
+
+/// The help's first line names every controller TROL drives, not only the C500 (issue 44).
+#[test]
+fn the_help_names_every_controller() {
+    let dir = scratch("help-controllers");
+    let out = trol(&dir, &["--help"], "");
+    let (help, _) = text(&out);
+    let first: String = help
+        .split("\n\n")
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    for name in ["C500", "RAPL-II", "MARS 8", "simulated"] {
+        assert!(
+            first.contains(name),
+            "the help's top does not name {name}: {first}"
+        );
+    }
+}
+
+/// A negative number is a value wherever a value is expected: the value's own check answers
+/// (it says what it takes), not clap's "unexpected argument '-1'" (issue 44, item 3).
+#[test]
+fn a_negative_number_is_a_value() {
+    let dir = scratch("negative-values");
+    for (args, says) in [
+        (
+            &["demo", "--linger", "-1"][..],
+            "give 0 to 3600 seconds, not -1",
+        ),
+        (
+            &["demo", "--time-scale", "-1"],
+            "not a number greater than 0",
+        ),
+        (
+            &["sim", "--time-scale", "-2.5"],
+            "not a number greater than 0",
+        ),
+    ] {
+        let out = trol(&dir, args, "");
+        let (_, err) = text(&out);
+        assert!(!out.status.success(), "{args:?} was taken");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
+    }
+}

@@ -49,7 +49,13 @@ try {
   await page.evaluate(() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r))));
   await page.screenshot({ path: shot, timeout: 30_000 });
   const body = await page.evaluate(() => ({ ...document.body.dataset }));
+  // What a person reads: the tool's pose and each joint in degrees.
+  const texts = await page.evaluate(() => ({
+    tcp: document.getElementById('tcp').textContent,
+    joints: [1, 2, 3, 4, 5, 6].map(i => document.getElementById(`j${i}`).textContent),
+  }));
   console.log(`shown ${JSON.stringify({ webgl: body.webgl, joints: await joints(page), frames: Number(body.frames) })}`);
+  console.log(`texts ${JSON.stringify(texts)}`);
 
   for await (const line of createInterface({ input: process.stdin })) {
     if (line.trim() === 'warnings') {

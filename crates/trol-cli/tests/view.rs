@@ -139,6 +139,29 @@ fn the_page_draws_the_arm_and_follows_it() {
         .to_array6();
     close("page against /state", six(&shown), six(&state));
     close("page against GetPosition", six(&shown), by_api);
+    // The numbers as a person reads them (issue 44, item 2): mm and degrees to 0.001, no
+    // exponent, no -0; each joint's degrees are the radians the page holds.
+    let texts = page.wait_for("texts ", 30).pop().unwrap();
+    let texts: serde_json::Value =
+        serde_json::from_str(texts.split("texts ").nth(1).unwrap()).unwrap();
+    let tcp = texts["tcp"].as_str().unwrap();
+    let numbers: Vec<&str> = tcp
+        .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+        .filter(|w| w.chars().any(|c| c.is_ascii_digit()))
+        .collect();
+    assert_eq!(numbers.len(), 6, "{tcp}");
+    for (i, text) in texts["joints"].as_array().unwrap().iter().enumerate() {
+        let text = text.as_str().unwrap();
+        numbers_read_well(text);
+        let deg: f64 = text.parse().unwrap();
+        let rad = six(&shown)[i];
+        assert!(
+            (deg - rad.to_degrees()).abs() < 0.0011,
+            "joint {}: {text} for {rad} rad",
+            i + 1
+        );
+    }
+    numbers.iter().for_each(|n| numbers_read_well(n));
 
     // The page drew something: the 3D canvas (the left part; the panel is 330 px wide on the
     // right) has the arm, the table and the sky in many colours, not one.
@@ -458,10 +481,10 @@ fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
     }
 
     let frames = json(page.wait_for("frames ", 120), "frames ");
-    // The stored place with all six values (mm and degrees to 0.1).
+    // The stored place with all six values (mm and degrees to 0.001).
     let row = frames["row"].as_str().unwrap();
     assert_eq!(row.split(' ').count(), 6, "{frames}");
-    assert!(!row.contains('e'), "{frames}");
+    row.split(' ').for_each(numbers_read_well);
     // +x in the tool's frame is along the tool, which points down here.
     assert_eq!(frames["toolJog"]["ok"], true, "{frames}");
     let (a, b) = (xyz(&frames["toolBefore"]), xyz(&frames["toolAfter"]));
@@ -563,4 +586,22 @@ fn a_pendant_halt_gets_past_every_viewer_and_ends_the_programs_finish() {
     let j1 = six(&serde_json::from_str::<serde_json::Value>(&state).unwrap())[0];
     assert!(j1 > 0.0 && j1 < 1.9, "halted on the way: joint 1 at {j1}");
     drop(streams);
+}
+
+/// A number as every surface prints it: three decimals, no exponent, no -0.
+fn numbers_read_well(text: &str) {
+    let (whole, decimals) = text.split_once('.').unwrap_or((text, ""));
+    assert_eq!(decimals.len(), 3, "{text:?} has not three decimals");
+    assert!(
+        decimals.chars().all(|c| c.is_ascii_digit())
+            && whole
+                .trim_start_matches('-')
+                .chars()
+                .all(|c| c.is_ascii_digit()),
+        "{text:?} is not a plain number"
+    );
+    assert!(
+        !text.starts_with('-') || text.trim_start_matches(['-', '0', '.']) != "",
+        "{text:?} is -0"
+    );
 }

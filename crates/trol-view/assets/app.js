@@ -213,7 +213,7 @@ function update(s) {
       return;
     }
     if (joints[i]) joints[i].rotor.quaternion.setFromAxisAngle(joints[i].axis, q);
-    cell.textContent = (q * 180 / Math.PI).toFixed(2);
+    cell.textContent = fixed(q * 180 / Math.PI, 3);
     cell.dataset.rad = q.toFixed(6);
     const limit = s.limits[i];
     jointRows[i].querySelector('.bar span').style.left = `${((q + limit) / (2 * limit)) * 100}%`;
@@ -221,12 +221,12 @@ function update(s) {
   });
   const [x, y, z, yaw, pitch, roll] = s.tcp;
   document.getElementById('tcp').textContent =
-    `x ${x.toFixed(1)}, y ${y.toFixed(1)}, z ${z.toFixed(1)} mm; yaw ${(yaw * 180 / Math.PI).toFixed(1)}, ` +
-    `pitch ${(pitch * 180 / Math.PI).toFixed(1)}, roll ${(roll * 180 / Math.PI).toFixed(1)}°`;
+    `x ${fixed(x, 3)}, y ${fixed(y, 3)}, z ${fixed(z, 3)} mm; yaw ${degrees(yaw)}, ` +
+    `pitch ${degrees(pitch)}, roll ${degrees(roll)}°`;
   // A real controller may not report the fingers (null).
   const g = s.gripper_mm;
   document.getElementById('gripper').textContent =
-    g == null ? 'fingers: not reported' : `fingers ${g.toFixed(1)} mm apart`;
+    g == null ? 'fingers: not reported' : `fingers ${fixed(g, 3)} mm apart`;
   if (g != null) for (const f of fingers) f.position.y = f.userData.side * (g / 2000 + 0.004);
   if (gripper && s.tool) {
     const [tx, ty, tz, tyaw, tpitch, troll] = s.tool;
@@ -373,10 +373,14 @@ function cell(row, text) {
   return td;
 }
 
-// `x` to `places` decimals, without a minus before 0.
+// How every surface prints a pose (issue 44): `x` to `places` decimals (mm to 0.001,
+// degrees to 0.001), without a minus before 0 and never with an exponent.
 function fixed(x, places) {
   const t = x.toFixed(places);
   return Number(t) === 0 ? (0).toFixed(places) : t;
+}
+function degrees(rad) {
+  return fixed(rad * 180 / Math.PI, 3);
 }
 
 async function refreshLocations() {
@@ -388,12 +392,11 @@ async function refreshLocations() {
     row.dataset.name = loc.name;
     cell(row, loc.name);
     cell(row, loc.form);
-    // All six values as a person reads them: mm to 0.1 and degrees to 0.1 (cart), degrees
+    // All six values as a person reads them: mm and degrees to 0.001 (cart), degrees
     // (joint), counts (prec).
-    const deg = x => fixed(x * 180 / Math.PI, 1);
     const v = loc.form === 'prec' ? loc.values.map(x => String(Math.round(x)))
-      : loc.form === 'joint' ? loc.values.map(deg)
-      : loc.values.map((x, i) => (i < 3 ? fixed(x, 1) : deg(x)));
+      : loc.form === 'joint' ? loc.values.map(degrees)
+      : loc.values.map((x, i) => (i < 3 ? fixed(x, 3) : degrees(x)));
     const values = cell(row, v.join(' '));
     values.className = 'values';
     const go = document.createElement('button');

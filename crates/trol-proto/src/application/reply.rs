@@ -8,7 +8,9 @@
 use super::code::{Code, CodeInfo, CodeTable, TROL_ERR_BAD_RSIZE};
 use super::command::{CommandDef, ReplyKind};
 use super::location::{ARM_DIMS, LocName, Location, Tag};
-use super::record::{format_location, format_number, get_location, put_location};
+use super::record::{
+    MM_DECIMALS, format_fixed, format_location, format_number, get_location, put_location,
+};
 
 /// The longest kind a GetVersion reply carries, bytes.
 pub const MAX_KIND: usize = 32;
@@ -395,7 +397,7 @@ impl Reply {
             Reply::Version { protocol, kind } => format!("protocol {protocol}, {kind}"),
             Reply::Gripper(g) => format!(
                 "opening {} mm, {}",
-                format_number(g.opening_mm),
+                format_fixed(g.opening_mm, MM_DECIMALS),
                 match &g.held {
                     Held::Nothing => "holding nothing".to_string(),
                     Held::Object(name) if name.is_empty() => "holding an object".to_string(),
@@ -460,3 +462,26 @@ impl std::fmt::Display for ReplyError {
 }
 
 impl std::error::Error for ReplyError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fingers' opening reads as every other length does: to 0.001 mm, no exponent,
+    /// no -0 (issue 44, item 2).
+    #[test]
+    fn the_opening_reads_to_the_micrometre() {
+        for (mm, text) in [
+            (3.0e-9, "0"),
+            (-1e-12, "0"),
+            (41.99999, "42"),
+            (12.3456, "12.346"),
+        ] {
+            let r = Reply::Gripper(Gripper {
+                opening_mm: mm,
+                held: Held::Nothing,
+            });
+            assert_eq!(r.text(&[]), format!("opening {text} mm, holding nothing"));
+        }
+    }
+}

@@ -99,6 +99,18 @@ try {
   console.log(`store ${JSON.stringify({ stored, back, p1: after.tcp, away: away.tcp, there: there.tcp })}`);
   const row = await page.evaluate(() =>
     document.querySelector('#locations tr[data-name="p1"] td.values').textContent);
+  // 2a. A name the controller refuses (T1 is a scratch location of the C500 backend): the
+  //     refusal stays on the page once the list has been read again.
+  const refreshes = await page.evaluate(() => document.body.dataset.locationRefreshes || '0');
+  await page.fill('#here-name', 'T1');
+  const badName = await click(page, '#here');
+  await page.waitForFunction(
+    r => (document.body.dataset.locationRefreshes || '0') !== r, refreshes, { timeout: 10_000 });
+  const shownRefusal = await page.evaluate(() => ({
+    text: document.getElementById('result').textContent,
+    refused: document.getElementById('result').className === 'refused',
+  }));
+  console.log(`badname ${JSON.stringify({ answer: badName, shown: shownRefusal })}`);
 
   // 2b. In the tool's frame: +x is along the tool (down, here); a turn about the world's z
   //     through the tip; the Halt button on screen with the panel scrolled to its end.

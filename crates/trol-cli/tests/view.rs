@@ -480,6 +480,13 @@ fn the_pendant_in_a_browser_jogs_stores_moves_back_and_halts() {
         assert!((there[i] - p1[i]).abs() < 0.2, "{store}");
     }
 
+    // A refused name stays on the page in red, with the controller's words (issue 44).
+    let bad = json(page.wait_for("badname ", 60), "badname ");
+    assert_eq!(bad["answer"]["ok"], false, "{bad}");
+    assert_eq!(bad["shown"]["refused"], true, "{bad}");
+    let said = bad["shown"]["text"].as_str().unwrap();
+    assert!(said.contains("T1"), "the page does not say why: {bad}");
+
     let frames = json(page.wait_for("frames ", 120), "frames ");
     // The stored place with all six values (mm and degrees to 0.001).
     let row = frames["row"].as_str().unwrap();

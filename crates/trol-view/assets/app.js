@@ -195,7 +195,7 @@ function showObjects(list) {
   }
   for (const [name, m] of objects) if (!seen.has(name)) { scene.remove(m); objects.delete(name); }
   document.getElementById('objects').textContent = list.length
-    ? list.map(o => `${o.name}: ${o.held ? 'in the gripper' : 'resting'} at x ${o.x.toFixed(1)}, y ${o.y.toFixed(1)}, z ${o.z.toFixed(1)} mm`).join('; ')
+    ? list.map(o => `${o.name}: ${o.held ? 'in the gripper' : 'resting'} at x ${fixed(o.x, 3)}, y ${fixed(o.y, 3)}, z ${fixed(o.z, 3)} mm`).join('; ')
     : 'no objects in the world';
 }
 
@@ -342,7 +342,9 @@ let pendantCalls = 0;
 // The arm as the last update showed it (for the hint after a refused jog).
 let lastState = null;
 
-async function control(path, params = {}, method = 'POST') {
+// A pendant request. Its answer goes to the result line (a refusal in red) unless `quiet`:
+// the location list's own refresh must not wipe the refusal it follows.
+async function control(path, params = {}, method = 'POST', quiet = false) {
   const query = new URLSearchParams({ ...params, token: token || '' });
   let answer;
   try {
@@ -351,6 +353,7 @@ async function control(path, params = {}, method = 'POST') {
   } catch (e) {
     answer = { ok: false, error: `no answer: ${e}` };
   }
+  if (quiet) return answer;
   const words = answer.error || `${answer.command}: ${answer.text}`;
   result.textContent = words;
   result.className = answer.ok ? '' : 'refused';
@@ -383,8 +386,13 @@ function degrees(rad) {
   return fixed(rad * 180 / Math.PI, 3);
 }
 
+let locationRefreshes = 0;
 async function refreshLocations() {
-  const answer = await control('locations', {}, 'GET');
+  const answer = await control('locations', {}, 'GET', true);
+  if (!answer.ok) {
+    result.textContent = answer.error || 'the locations could not be read';
+    result.className = 'refused';
+  }
   const list = document.getElementById('locations');
   list.replaceChildren();
   for (const loc of answer.locations || []) {
@@ -410,6 +418,8 @@ async function refreshLocations() {
     del.onclick = async () => { await control('delete', { name: loc.name }); refreshLocations(); };
     cell(row, '').appendChild(del);
   }
+  locationRefreshes += 1;
+  document.body.dataset.locationRefreshes = String(locationRefreshes);
 }
 
 async function startPendant() {

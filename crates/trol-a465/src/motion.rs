@@ -149,12 +149,18 @@ impl Stretch {
     }
 }
 
+/// How long a motion along a path of no length takes to stop (s): it moves nothing.
+const NO_LENGTH_STOP: f64 = 1e-3;
+
 impl Profile {
     /// The fastest trapezoid from s = 0 to 1 with |s'| <= `v` and |s''| <= `a`, starting at
     /// `start`, lasting at least `min_duration`.
     pub fn trapezoid(start: f64, v: f64, a: f64, min_duration: f64) -> Profile {
-        // A path of no length: nothing limits it but the minimum duration.
-        let (v, a) = if v.is_finite() && a.is_finite() {
+        // A path of no length: nothing limits it but the minimum duration. Nothing moves on
+        // it either, so a Halt stops it at once (its own rate would take half the duration:
+        // Ctrl-C during a Home at the home pose waited up to 3 s).
+        let no_length = !(v.is_finite() && a.is_finite());
+        let (v, a) = if !no_length {
             (v, a)
         } else if min_duration > 0.0 {
             (2.0 / min_duration, 4.0 / (min_duration * min_duration))
@@ -203,7 +209,7 @@ impl Profile {
             phases: Arc::new(phases),
             end: start + 2.0 * ta + cruise,
             s_end: 1.0,
-            brake: Brake::Rate(a),
+            brake: Brake::Rate(if no_length { vp / NO_LENGTH_STOP } else { a }),
         }
     }
 

@@ -72,6 +72,41 @@ fn home_all_goes_group_by_group() {
     assert_eq!(arm.joint(2, 0.1, stopped + 1.0), code::NOT_HOMED);
 }
 
+/// A halted homing stands as soon as the arm can brake: at the home pose (nothing moves,
+/// the homing only takes its time) at once, elsewhere within the A465's 0.4 s. At the home
+/// pose it took half the group's time (3 s in the last group), so Ctrl-C during `home 0`
+/// after `trol sim` came back seconds later (issue 44, item 5).
+#[test]
+fn a_halted_homing_stands_at_once() {
+    for from in [[0.0; 6], [0.3, -0.4, 0.6, 1.0, -0.8, 2.0]] {
+        for halt in [1.0, 3.0, 5.0, 8.0, 9.0, 11.5] {
+            // There, and unhomed (as after a power cycle).
+            let mut arm = homed_arm();
+            assert_eq!(arm.ma(from, 0.0), code::OK);
+            let t0 = arm.done_at(0.0);
+            assert_eq!(arm.commanded(t0), from);
+            arm.set_homed([false; 6]);
+            assert_eq!(arm.home(0, t0), code::OK);
+            let halt = t0 + halt;
+            assert_eq!(arm.halt(halt), code::OK);
+            let stopped = arm.done_at(halt);
+            assert!(
+                stopped - halt <= 0.4,
+                "from {from:?}, halted at {halt} s: stands {:.3} s later",
+                stopped - halt
+            );
+            if from == [0.0; 6] {
+                assert!(
+                    stopped - halt < 0.05,
+                    "at the home pose: {}",
+                    stopped - halt
+                );
+            }
+            assert_eq!(arm.finish_status(stopped + 1e-9), code::OK);
+        }
+    }
+}
+
 #[test]
 fn a_joint_move_ends_together_and_the_slowest_joint_sets_the_time() {
     let mut arm = homed_arm();

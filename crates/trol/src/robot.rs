@@ -1274,10 +1274,17 @@ impl Robot {
         loop {
             if cancel.load(Ordering::SeqCst) {
                 self.halt()?;
-                while self.is_moving()? {
-                    std::thread::sleep(POLL);
+                loop {
+                    match self.is_moving() {
+                        Ok(true) => std::thread::sleep(POLL),
+                        Ok(false) => return Ok(Waited::Halted),
+                        // The controller answered the Halt once the arm stood; a Finish that
+                        // then reports the halted motion's failure (BIOS_NOT_HOMED after a
+                        // halted Home) reports an arm that stands: the wait was cancelled.
+                        Err(Error::Refused { .. }) => return Ok(Waited::Halted),
+                        Err(e) => return Err(e),
+                    }
                 }
-                return Ok(Waited::Halted);
             }
             if !self.is_moving()? {
                 return Ok(Waited::Idle);

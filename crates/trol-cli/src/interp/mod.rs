@@ -429,6 +429,9 @@ impl Session {
             let label = format!("{} ... (Ctrl-C halts the arm)", def.name);
             return match waiting(&label, || robot.finish_unless(interrupted())) {
                 Ok(Waited::Idle) => Ok(trol::Code(0).describe(robot.codes())),
+                Ok(Waited::Halted) if !wait => Err("interrupted: Halt sent, the arm has stopped \
+                     before it was homed (the axes not yet homed stay so: home again)"
+                    .into()),
                 Ok(Waited::Halted) => Err("interrupted: Halt sent, the arm has stopped".into()),
                 Err(e) => Err(describe(e, robot)),
             };

@@ -151,6 +151,8 @@ pub struct Viewed {
     pub url: String,
     /// A warning when the view is open to other machines.
     pub exposure: Option<String>,
+    /// The pages that opened the view.
+    pub watchers: trol_view::Watchers,
 }
 
 /// Start the embedded simulator with its live view served at `addr`, and connect to it.
@@ -163,7 +165,7 @@ pub fn embedded_viewed(
     let shared = backend.share();
     let view = trol_view::serve(addr, shared)
         .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
-    let (url, exposure) = (view.url(), view.exposure());
+    let (url, exposure, watchers) = (view.url(), view.exposure(), view.watchers());
     let (line, handle) = trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
     let mut robot = Robot::over(Box::new(line), link, Some(handle));
     robot.keep(view);
@@ -171,6 +173,7 @@ pub fn embedded_viewed(
         robot,
         url,
         exposure,
+        watchers,
     })
 }
 

@@ -11,7 +11,8 @@ use trol_proto::application::record::Value;
 use trol_proto::application::table;
 
 use crate::common::{
-    Conn, catch_interrupts, interrupted, sleep_unless_interrupted, stdout_closed, waiting,
+    Conn, catch_interrupts, clear_interrupt, interrupted, sleep_unless_interrupted, stdout_closed,
+    waiting,
 };
 
 #[derive(Args, Debug)]
@@ -31,6 +32,34 @@ pub struct DemoArgs {
     /// after the last step (up to 3600)
     #[arg(long, value_name = "S", default_value_t = 0.0)]
     linger: f64,
+    /// With the view: before the first step, wait up to this many seconds for a page to
+    /// open it (the demo at 5x real time is over in seconds); 0 starts at once
+    #[arg(long, value_name = "S", default_value_t = 30.0)]
+    wait_view: f64,
+}
+
+/// Before the first step: wait up to `secs` for a page to open the view (or Ctrl-C), saying
+/// so, so that a person who opens the printed address sees the whole demo.
+fn wait_for_a_page(watchers: &trol_view::Watchers, secs: f64) {
+    if secs <= 0.0 || watchers.opened() > 0 {
+        return;
+    }
+    say!(
+        "  waiting for a page to open the view (at most {secs} s; Ctrl-C or --wait-view 0 \
+         starts at once)"
+    );
+    let until = std::time::Instant::now() + std::time::Duration::from_secs_f64(secs);
+    while watchers.opened() == 0 && std::time::Instant::now() < until {
+        if sleep_unless_interrupted(std::time::Duration::from_millis(50)) {
+            clear_interrupt();
+            break;
+        }
+    }
+    if watchers.opened() > 0 {
+        say!("  a page opened the view: starting");
+    } else {
+        say!("  no page opened the view: starting anyway");
+    }
 }
 
 /// The location of the manual's example: 400 mm in front of the robot, 150 mm above the
@@ -47,7 +76,15 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
             a.linger
         ));
     }
+    if !(a.wait_view.is_finite() && (0.0..=3600.0).contains(&a.wait_view)) {
+        return Err(format!(
+            "--wait-view: give 0 to 3600 seconds, not {}",
+            a.wait_view
+        ));
+    }
     let cfg = a.conn.config()?;
+    // Ctrl-C from here on halts the arm (and ends the wait for a page) instead of killing.
+    catch_interrupts();
     if a.view.is_some() && cfg.port != "sim" {
         return Err(format!(
             "--view: the demo serves the view only with the embedded simulator (port sim), \
@@ -100,6 +137,7 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                     tracing::warn!("{w}");
                 }
                 viewing = true;
+                wait_for_a_page(&viewed.watchers, a.wait_view);
                 viewed.robot
             }
             None => Robot::embedded(settings),
@@ -135,7 +173,6 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
         ("TROLDepart(x -90, straight)", |r| r.depart(&[-90.0], true)),
         ("TROLFinish(FINISH_WAIT)", finish),
     ];
-    catch_interrupts();
     let mut failed = 0;
     for (i, (name, f)) in steps.iter().enumerate() {
         let result = waiting(name, || f(&mut robot));
@@ -204,8 +241,9 @@ fn where_is(robot: &mut Robot) -> String {
     robot
         .position(Tag::Cart, PosMode::Commanded)
         .map(|l| {
-            let v = l.to_array6();
-            format!("x {:7.1} y {:7.1} z {:7.1} mm", v[0], v[1], v[2])
+            // To the micrometre, never -0 (as every surface prints a pose), in columns.
+            let v = trol_proto::application::record::format_values(Tag::Cart, &l.to_array6());
+            format!("x {:>8} y {:>8} z {:>8} mm", v[0], v[1], v[2])
         })
         .unwrap_or_else(|e| format!("position unknown: {e}"))
 }

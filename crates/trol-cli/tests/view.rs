@@ -254,20 +254,79 @@ fn the_page_draws_the_arm_and_follows_it() {
 #[test]
 fn demo_and_sim_serve_the_view_and_refuse_what_they_cannot_do() {
     let dir = scratch("view-cli");
+    // The demo waits for a page before its first step (issue 44, item 5: at 5x real time
+    // it was over before a browser had opened the page)...
+    let demo = Background::start(
+        &dir,
+        &[
+            "demo",
+            "--view",
+            "127.0.0.1:0",
+            "--time-scale",
+            "50",
+            "--wait-view",
+            "120",
+        ],
+        "the view: ",
+    );
+    let addr = demo
+        .name
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    demo.wait_for("waiting for a page to open the view", 30);
+    std::thread::sleep(Duration::from_secs(1));
+    let early = demo.output();
+    assert!(
+        !early.iter().any(|l| l.contains("TROLHome")),
+        "it started before a page opened the view: {early:?}"
+    );
+    // ... and starts once one opened the event stream.
+    let mut page = TcpStream::connect(&addr).unwrap();
+    write!(page, "GET /events HTTP/1.1\r\n\r\n").unwrap();
+    let out = demo.output_until("steps succeeded", 1, 120);
+    assert!(
+        out.iter()
+            .any(|l| l.contains("a page opened the view: starting")),
+        "{out:?}"
+    );
+    assert!(
+        out.iter().any(|l| l.contains("all 11 steps succeeded")),
+        "{out:?}"
+    );
+    drop(page);
+    drop(demo);
+    // Nobody opens it: it starts after the time it said.
     let o = trol(
         &dir,
-        &["demo", "--view", "127.0.0.1:0", "--time-scale", "50"],
+        &[
+            "demo",
+            "--view",
+            "127.0.0.1:0",
+            "--time-scale",
+            "50",
+            "--wait-view",
+            "0.5",
+        ],
         "",
     );
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     assert!(out.contains("  the view: http://127.0.0.1:"), "{out}");
+    assert!(
+        out.contains("no page opened the view: starting anyway"),
+        "{out}"
+    );
     assert!(out.contains("all 11 steps succeeded"), "{out}");
 
     for (args, says) in [
         (
             &["demo", "--view", "--linger", "inf"][..],
             "--linger: give 0 to 3600 seconds",
+        ),
+        (
+            &["demo", "--view", "--wait-view", "-1"][..],
+            "--wait-view: give 0 to 3600 seconds",
         ),
         (
             &["demo", "--view", "--port", "/dev/null"][..],

@@ -221,12 +221,31 @@ impl Frames {
 pub struct ViewServer {
     addr: SocketAddr,
     stop: Arc<AtomicBool>,
+    watchers: Watchers,
+}
+
+/// How many pages have watched a view: its `/events` streams opened since it started (a
+/// page opens one as it loads). A program that shows a short motion waits for the first
+/// ([`ViewServer::watchers`]; `trol demo --view`).
+#[derive(Clone, Debug, Default)]
+pub struct Watchers(Arc<AtomicUsize>);
+
+impl Watchers {
+    /// The streams opened so far.
+    pub fn opened(&self) -> usize {
+        self.0.load(Ordering::SeqCst)
+    }
 }
 
 impl ViewServer {
     /// The address it listens on (with the port the system gave, for port 0).
     pub fn addr(&self) -> SocketAddr {
         self.addr
+    }
+
+    /// Who watches: the pages that opened the view's event stream.
+    pub fn watchers(&self) -> Watchers {
+        self.watchers.clone()
     }
 
     /// The page's address.
@@ -298,6 +317,8 @@ pub fn serve_controlled(
     let clients = Arc::new(Slots::default());
     let frames = Arc::new(Frames::new(shared));
     let waiting = Arc::new(AtomicUsize::new(0));
+    let watchers = Watchers::default();
+    let opened = watchers.clone();
     std::thread::Builder::new()
         .name("trol-view".into())
         .spawn(move || {
@@ -319,6 +340,7 @@ pub fn serve_controlled(
                 let control = control.clone();
                 let flag = flag.clone();
                 let (count, heads) = (clients.clone(), waiting.clone());
+                let opened = opened.clone();
                 let spawned = std::thread::Builder::new()
                     .name("trol-view-client".into())
                     .spawn(move || {
@@ -333,6 +355,10 @@ pub fn serve_controlled(
                             too_many(&mut conn);
                             return;
                         }
+                        let path = head.as_ref().map(|h| h.1.as_str()).unwrap_or("");
+                        if path.split('?').next() == Some("/events") {
+                            opened.0.fetch_add(1, Ordering::SeqCst);
+                        }
                         let _ = answer(conn, head, &shared, &flag, control.as_ref().as_ref());
                         slots.fetch_sub(1, Ordering::SeqCst);
                     });
@@ -341,7 +367,11 @@ pub fn serve_controlled(
                 }
             }
         })?;
-    Ok(ViewServer { addr: local, stop })
+    Ok(ViewServer {
+        addr: local,
+        stop,
+        watchers,
+    })
 }
 
 /// The requests answered now, by kind: each kind has its own limit.

@@ -41,10 +41,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     step("Finish(FINISH_WAIT)", robot.finish())?;
     step("Depart(-90, straight)", robot.depart(&[-90.0], true))?;
     step("Finish(FINISH_WAIT)", robot.finish())?;
-    let at = robot.position(Tag::Cart, PosMode::Actual)?.to_array6();
-    println!(
-        "arm at x {:.1} y {:.1} z {:.1} mm, yaw {:.3} pitch {:.3} roll {:.3} rad",
-        at[0], at[1], at[2], at[3], at[4], at[5]
-    );
+    // x, y, z in mm, yaw, pitch, roll in rad, to the arm's precision.
+    let at = robot.position(Tag::Cart, PosMode::Actual)?;
+    println!("arm at {at}");
     Ok(())
 }

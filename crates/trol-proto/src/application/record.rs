@@ -514,6 +514,14 @@ pub fn format_location(loc: &Location) -> String {
     format!("{}({})", literal_prefix(loc.tag()), values.join(", "))
 }
 
+/// A location prints as the interpreter reads it ([`format_location`]): `println!("{loc}")`
+/// gives `c(400, 0, 150, 0, 1.570796, 0)`; the values themselves keep their full precision.
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&format_location(self))
+    }
+}
+
 /// A call as the interpreter reads it: `TROLAppro test_001 c(-90) straight`.
 pub fn format_call(def: &CommandDef, values: &[Value]) -> String {
     let mut s = def.name.to_string();

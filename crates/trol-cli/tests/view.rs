@@ -667,7 +667,7 @@ fn numbers_read_well(text: &str) {
         "{text:?} is not a plain number"
     );
     assert!(
-        !text.starts_with('-') || text.trim_start_matches(['-', '0', '.']) != "",
+        !text.starts_with('-') || !text.trim_start_matches(['-', '0', '.']).is_empty(),
         "{text:?} is -0"
     );
 }

@@ -68,7 +68,22 @@ try {
         null, { timeout: 60_000 });
       await page.evaluate(() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r))));
       const b = await page.evaluate(() => ({ ...document.body.dataset }));
-      console.log(`held ${JSON.stringify({ off_mm: Number(b.heldOffMm), finger_low_mm: Number(b.fingerLowMm) })}`);
+      // What a person sees of the held cube: pixels of its outline's colour within 40 px
+      // of where it is on the canvas.
+      const outline = await page.evaluate(([x, y]) => {
+        const gl = document.querySelector('#scene canvas');
+        const c = document.createElement('canvas');
+        c.width = 81; c.height = 81;
+        const g = c.getContext('2d');
+        g.drawImage(gl, x - 40, y - 40, 81, 81, 0, 0, 81, 81);
+        const d = g.getImageData(0, 0, 81, 81).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i] > 200 && d[i + 1] < 60 && d[i + 2] > 120) n += 1;
+        }
+        return n;
+      }, (b.heldScreen || '0,0').split(',').map(Number));
+      console.log(`held ${JSON.stringify({ off_mm: Number(b.heldOffMm), finger_low_mm: Number(b.fingerLowMm), label: b.heldLabel, outline_px: outline })}`);
       continue;
     }
     if (line.trim() !== 'watch') continue;

@@ -239,6 +239,13 @@ fn the_page_draws_the_arm_and_follows_it() {
     let held: serde_json::Value =
         serde_json::from_str(held.split("held ").nth(1).unwrap()).unwrap();
     assert!(held["off_mm"].as_f64().unwrap() < 1.0, "{held}");
+    // A person sees it and reads its name (issue 44, item 5: a thin sliver under the
+    // gripper): its outline over the fingers, its name beside it.
+    assert_eq!(held["label"], "cube (held)", "{held}");
+    assert!(
+        held["outline_px"].as_u64().unwrap() >= 40,
+        "the held cube's outline is hardly visible: {held}"
+    );
     let low = held["finger_low_mm"].as_f64().unwrap();
     assert!(
         (4.0..6.0).contains(&low),

@@ -5,6 +5,7 @@ import { OrbitControls } from '/OrbitControls.js';
 
 const COLOURS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b'];
 const NEAR_LIMIT = 10 * Math.PI / 180;
+const OUTLINE = 0xff00aa;     // the objects' edges, drawn over the gripper (a colour nothing else has)
 const HISTORY_S = 10;
 const TRAIL_MAX = 3000;       // points of the tool's trail kept
 
@@ -183,6 +184,17 @@ function showObjects(list) {
     let m = objects.get(o.name);
     if (!m && scene) {
       m = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), new THREE.MeshLambertMaterial({ color: 0xe0a030 }));
+      // Its edges drawn over everything: a cube held between the fingers is mostly behind
+      // them and the palm, and showed as a thin sliver under the gripper.
+      const edges = new THREE.LineSegments(new THREE.EdgesGeometry(new THREE.BoxGeometry(1, 1, 1)),
+        new THREE.LineBasicMaterial({ color: OUTLINE, depthTest: false, transparent: true }));
+      edges.renderOrder = 2;
+      m.add(edges);
+      // Its name on screen, beside it (placed at each frame: placeLabels).
+      const label = document.createElement('div');
+      label.className = 'label';
+      host.appendChild(label);
+      m.userData.label = label;
       scene.add(m);
       objects.set(o.name, m);
     }
@@ -191,9 +203,18 @@ function showObjects(list) {
       const w = o.width / 1000;
       m.scale.set(w, w, w);
       m.position.set(o.x / 1000, o.y / 1000, o.z / 1000 + w / 2);
+      m.userData.label.textContent = o.held ? `${o.name} (held)` : o.name;
     }
   }
-  for (const [name, m] of objects) if (!seen.has(name)) { scene.remove(m); objects.delete(name); }
+  for (const [name, m] of objects) {
+    if (!seen.has(name)) { scene.remove(m); m.userData.label.remove(); objects.delete(name); }
+  }
+  // The fingers see-through while they hold something, so that what they hold shows.
+  const holding = list.some(o => o.held);
+  for (const f of fingers) {
+    f.material.transparent = holding;
+    f.material.opacity = holding ? 0.45 : 1;
+  }
   document.getElementById('objects').textContent = list.length
     ? list.map(o => `${o.name}: ${o.held ? 'in the gripper' : 'resting'} at x ${fixed(o.x, 3)}, y ${fixed(o.y, 3)}, z ${fixed(o.z, 3)} mm`).join('; ')
     : 'no objects in the world';
@@ -259,8 +280,15 @@ function measure(s) {
   if (!gripper) return;
   const tcp = gripper.getWorldPosition(new THREE.Vector3());
   if (held && objects.get(held.name)) {
-    const c = objects.get(held.name).getWorldPosition(new THREE.Vector3());
+    const m = objects.get(held.name);
+    const c = m.getWorldPosition(new THREE.Vector3());
     document.body.dataset.heldOffMm = (c.distanceTo(tcp) * 1000).toFixed(2);
+    document.body.dataset.heldLabel = m.userData.label.hidden ? '' : m.userData.label.textContent;
+    // Where it is on the canvas (device pixels), for a test to look there.
+    const p = c.clone().project(camera);
+    const ratio = renderer.getPixelRatio();
+    document.body.dataset.heldScreen =
+      `${Math.round(((p.x + 1) / 2) * host.clientWidth * ratio)},${Math.round(((1 - p.y) / 2) * host.clientHeight * ratio)}`;
   }
   const low = Math.min(...fingers.map(f => new THREE.Box3().setFromObject(f).min.z));
   document.body.dataset.fingerLowMm = ((low - s.table_z / 1000) * 1000).toFixed(2);
@@ -320,8 +348,21 @@ function plot() {
   }
 }
 
+// Each object's name beside it on the canvas (an HTML label over the scene).
+function placeLabels() {
+  const w = host.clientWidth, h = host.clientHeight;
+  for (const m of objects.values()) {
+    const p = m.getWorldPosition(new THREE.Vector3()).project(camera);
+    const label = m.userData.label;
+    const shown = p.z < 1 && Math.abs(p.x) <= 1 && Math.abs(p.y) <= 1;
+    label.hidden = !shown;
+    label.style.left = `${((p.x + 1) / 2) * w + 14}px`;
+    label.style.top = `${((1 - p.y) / 2) * h - 8}px`;
+  }
+}
+
 function render() {
-  if (renderer) { controls.update(); renderer.render(scene, camera); }
+  if (renderer) { controls.update(); renderer.render(scene, camera); placeLabels(); }
   requestAnimationFrame(render);
 }
 

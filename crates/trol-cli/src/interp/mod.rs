@@ -803,7 +803,9 @@ fn next_step(failure: &str) -> Option<&'static str> {
         (
             "BIOS_OUT_OF_REACH",
             "the A465 reaches about 711 mm from its shoulder, 330 mm above the base \
-             (docs/a465.md); `getposition cart` shows where the tool is",
+             (docs/a465.md); `getposition cart` shows where the tool is. After Home it stands \
+             stretched upright (READY), at the edge of its reach: `jog c(0, 0, -100)` or \
+             `joint 3 0.5` first",
         ),
         (
             "BIOS_JOINT_LIMIT",

@@ -1,13 +1,17 @@
 #!/usr/bin/env bash
 # Run every shell block of README.md's walk-through (between <!-- walk-through --> and
 # <!-- /walk-through -->), as written, one after the other, from the repository's root, so
-# the README cannot drift. HOME is a fresh folder (what the blocks install under ~ lands
+# the README cannot drift. `scripts/readme.sh docs/PAGE.md` does the same for a page of
+# docs/, in an empty folder (a page's blocks make their own files there; nothing lands in
+# the repository), with this build's `trol` (target/debug) first on PATH. HOME is a fresh folder (what the blocks install under ~ lands
 # there), `cargo install` goes to a folder of its own (CARGO_INSTALL_ROOT) that is put on
 # PATH, and cargo shares this repository's target folder. Python: `pip` and `python` are
 # target/py's (made by scripts/test.sh), or the first on PATH.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
+page=${1:-README.md}
+[ -f "$page" ] || { echo "scripts/readme.sh: no page $page" >&2; exit 2; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -18,7 +22,7 @@ awk '
   on && /^```sh$/ { inblock = 1; next }
   on && inblock && /^```$/ { inblock = 0; printf "%c", 0; next }
   on && inblock { print }
-' README.md > "$work/blocks"
+' "$page" > "$work/blocks"
 
 # The toolchain and the crates stay where they are; only HOME moves.
 export RUSTUP_HOME="${RUSTUP_HOME:-$HOME/.rustup}" CARGO_HOME="${CARGO_HOME:-$HOME/.cargo}"
@@ -28,18 +32,23 @@ export PATH="$CARGO_INSTALL_ROOT/bin:$PATH"
 [ -x "$root/target/py/bin/python" ] && export PATH="$root/target/py/bin:$PATH"
 unset TROL_CONFIG
 mkdir -p "$HOME"
+if [ "$page" != README.md ]; then
+  export PATH="$root/target/debug:$PATH"
+  mkdir -p "$work/folder"
+  cd "$work/folder"
+fi
 
 n=0
 while IFS= read -r -d '' block; do
   n=$((n + 1))
-  echo "--- README walk-through, block $n:"
+  echo "--- $page walk-through, block $n:"
   printf '%s\n' "$block" | sed 's/^/    /'
   if ! bash -euo pipefail -c "$block" > "$work/out" 2>&1; then
     cat "$work/out"
-    echo "README walk-through: block $n failed" >&2
+    echo "$page walk-through: block $n failed" >&2
     exit 1
   fi
   tail -n 3 "$work/out" | sed 's/^/  > /'
 done < "$work/blocks"
-[ "$n" -gt 0 ] || { echo "README walk-through: no blocks found" >&2; exit 1; }
-echo "README walk-through: $n passed, 0 failed"
+[ "$n" -gt 0 ] || { echo "$page walk-through: no blocks found" >&2; exit 1; }
+echo "$page walk-through: $n passed, 0 failed"

@@ -129,6 +129,9 @@ stage "the URDF in MuJoCo and pybullet" mujoco_urdf
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).
 stage "the README's walk-through" bash scripts/readme.sh
+# A page of docs/ whose first hour starts a simulated controller: its block, as written, in
+# an empty folder (docs/c500.md's is run by crates/trol-cli/tests/c500_first_hour.rs).
+stage "docs/mars.md's first hour" bash scripts/readme.sh docs/mars.md
 
 if [ ${#FAILED[@]} -gt 0 ]; then
   echo "scripts/test.sh: ${#FAILED[@]} stage(s) failed:"

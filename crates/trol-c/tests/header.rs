@@ -223,3 +223,41 @@ fn the_c_reference_is_the_tables() {
          trol-c --test header"
     );
 }
+
+/// The README's C example compiles as a reader pastes it into a `main`, with every warning
+/// an error (`-Wall -Wextra -Werror`; it warned with -Wpointer-sign before the cast), so the
+/// README cannot show C that a careful compiler refuses (issue 44, item 4).
+#[test]
+fn the_readme_c_example_compiles_without_a_warning() {
+    let root = common::cbuild::root();
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let start = readme.find("```c\n").expect("a C block in the README") + 5;
+    let len = readme[start..].find("```").unwrap();
+    let body = &readme[start..start + len];
+    assert!(body.contains("trol_connect"), "{body}");
+    let dir = std::env::temp_dir().join(format!("trol-readme-c-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let source = dir.join("readme.c");
+    std::fs::write(
+        &source,
+        format!(
+            "#include <stdio.h>\n#include \"trol.h\"\n\nint main(void)\n{{\n{body}return 0;\n}}\n"
+        ),
+    )
+    .unwrap();
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let out = std::process::Command::new(&cc)
+        .arg("-c")
+        .arg(&source)
+        .arg("-I")
+        .arg(root.join("include"))
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(dir.join("readme.o"))
+        .output()
+        .expect("run the C compiler (cc)");
+    assert!(
+        out.status.success(),
+        "the README's C example does not compile cleanly:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -95,16 +95,8 @@ pub struct SimArgs {
     /// (crates/trol-mars/profiles/crs93.toml).
     #[arg(long, value_name = "FILE")]
     profile: Option<PathBuf>,
-    /// Play one of the controllers the public sources allow, by name (the backend's tests
-    /// run across all of them). With --rapl (docs/c500.md, "What TROL assumes"): default,
-    /// colon-refusal, stars-refusal, no-period, ack-at-end, done-lag, estop-line,
-    /// warning-then-ack, no-ack, ma-radians, inch, world-offset, pulses-g3000,
-    /// nul-after-digit, no-echo, not-homed, finish, finish-trusted, finish-at-once,
-    /// finish-refused, finish-deaf, jog-tool, halt-ignored, ctrl-c-cancels-line, unstoppable.
-    /// With --mars (docs/mars.md): default, echo, noise, moving-lag, refusal-line,
-    /// refusal-error-bit, stop-latches, lf-only, r-blocks, gripper-moving, stop-ignored,
-    /// homing-silent, unstoppable.
-    #[arg(long, value_name = "NAME")]
+    /// Play one of the controllers the public sources allow, by name (`--help` lists them)
+    #[arg(long, value_name = "NAME", long_help = variant_help())]
     variant: Option<String>,
     /// With --rapl or --mars: print the profile that describes this simulated controller
     /// (give it to `trol gateway --profile` or trol.cfg's rapl-profile / mars-profile) and
@@ -171,6 +163,19 @@ fn resolve(mut a: SimArgs) -> Result<SimArgs, String> {
     a.objects = a.objects.take().or(cfg.objects);
     a.object = a.object.or(cfg.object);
     Ok(a)
+}
+
+/// `--variant`'s long help, with the names of every variant from the simulated controllers'
+/// own tables, so that it cannot miss one.
+fn variant_help() -> String {
+    let names = |all: &[(&str, &str)]| all.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ");
+    format!(
+        "Play one of the controllers the public sources allow, by name (the backend's tests \
+         run across all of them). With --rapl (docs/c500.md, \"What TROL assumes\"): {}. With \
+         --mars (docs/mars.md): {}.",
+        names(trol_rapl::c500::VARIANTS),
+        names(trol_mars::mars8::VARIANTS)
+    )
 }
 
 fn check_variant(a: &SimArgs) -> Result<(), String> {

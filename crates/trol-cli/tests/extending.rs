@@ -119,7 +119,7 @@ fn the_guides_commands_work_in_process_across_processes_from_c_and_in_the_utilit
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     assert!(
-        out.contains("forwardkin j(0, 0.5, 1)  ->  0 (success), values (551.51086, "),
+        out.contains("forwardkin j(0, 0.5, 1)  ->  0 (success), values (551.510864, "),
         "{out}"
     );
     assert!(out.contains("jointabs 3 0.5  ->  0 (success)"), "{out}");
@@ -145,13 +145,13 @@ fn the_guides_commands_work_in_process_across_processes_from_c_and_in_the_utilit
         "{traced}"
     );
     assert!(
-        traced.contains("0 (success), values (551.51086, "),
+        traced.contains("0 (success), values (551.510864, "),
         "{traced}"
     );
     assert!(traced.contains("TROLJointAbs 2 0.25"), "{traced}");
     let logged = ctl.output().join("\n");
     assert!(
-        logged.contains("TROLForwardKin j(0, 0.5, 1) -> 0 (success), values (551.51086"),
+        logged.contains("TROLForwardKin j(0, 0.5, 1) -> 0 (success), values (551.510864"),
         "{logged}"
     );
     assert!(

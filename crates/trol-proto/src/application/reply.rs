@@ -9,7 +9,8 @@ use super::code::{Code, CodeInfo, CodeTable, TROL_ERR_BAD_RSIZE};
 use super::command::{CommandDef, ReplyKind};
 use super::location::{ARM_DIMS, LocName, Location, Tag};
 use super::record::{
-    MM_DECIMALS, format_fixed, format_location, format_number, get_location, put_location,
+    MM_DECIMALS, RAD_DECIMALS, format_fixed, format_location, format_number, get_location,
+    put_location,
 };
 
 /// The longest kind a GetVersion reply carries, bytes.
@@ -425,7 +426,18 @@ impl Reply {
                 }
             }
             Reply::Reals { value, values } => {
-                let v: Vec<String> = values.iter().map(|x| format_number(*x)).collect();
+                // As a person reads numbers on every surface: to 1e-6, no exponent for what
+                // rounds to zero (a pose's 6.745675e-15 is 0); huge values as they are.
+                let v: Vec<String> = values
+                    .iter()
+                    .map(|x| {
+                        if x.abs() < 1e9 {
+                            format_fixed(*x, RAD_DECIMALS)
+                        } else {
+                            format_number(*x)
+                        }
+                    })
+                    .collect();
                 format!("{}, values ({})", value.describe(bios), v.join(", "))
             }
             Reply::Bytes { value, bytes } => {
@@ -483,5 +495,18 @@ mod tests {
             });
             assert_eq!(r.text(&[]), format!("opening {text} mm, holding nothing"));
         }
+    }
+
+    /// Reals read to 1e-6 without an exponent (issue 44, item 2).
+    #[test]
+    fn reals_read_to_a_millionth() {
+        let r = Reply::Reals {
+            value: Code(0),
+            values: vec![f64::from(551.51086f32), 6.745675e-15, -1e-9, 0.5, 2.5e12],
+        };
+        assert_eq!(
+            r.text(&[]),
+            "0 (success), values (551.510864, 0, 0, 0.5, 2500000000000)"
+        );
     }
 }

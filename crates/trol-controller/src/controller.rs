@@ -31,8 +31,19 @@ pub struct Pendant {
     tx: std::sync::mpsc::SyncSender<PendantCall>,
 }
 
-/// A request from the pendant and where its reply goes.
-type PendantCall = (Vec<u8>, std::sync::mpsc::SyncSender<Vec<u8>>);
+/// The request that follows a pendant request, made from its reply (the pendant's turn:
+/// where the tool is, then the move there): both run in one step of the controller, with
+/// nothing from the line between them. `None`: nothing follows (the first reply is the
+/// answer).
+pub type FollowUp = Box<dyn FnOnce(&[u8]) -> Option<Vec<u8>> + Send>;
+
+/// A request from the pendant, what follows it, and where the reply goes (with whether the
+/// follow-up ran).
+type PendantCall = (
+    Vec<u8>,
+    Option<FollowUp>,
+    std::sync::mpsc::SyncSender<(Vec<u8>, bool)>,
+);
 
 /// Why a pendant request got no reply.
 #[derive(Debug, thiserror::Error)]
@@ -60,8 +71,21 @@ impl Pendant {
 
     /// Send `request` (a record) and wait at most `limit` for its reply.
     pub fn call(&self, request: Vec<u8>, limit: Duration) -> Result<Vec<u8>, PendantError> {
+        self.call_then(request, None, limit).map(|(reply, _)| reply)
+    }
+
+    /// Send `request`, and the request `follow` makes of its reply right after it, in the
+    /// same step of the controller (no transaction of the line between the two); wait at
+    /// most `limit`. The reply is the second request's when one followed (`true`), else the
+    /// first's.
+    pub fn call_then(
+        &self,
+        request: Vec<u8>,
+        follow: Option<FollowUp>,
+        limit: Duration,
+    ) -> Result<(Vec<u8>, bool), PendantError> {
         let (back, reply) = std::sync::mpsc::sync_channel(1);
-        match self.tx.try_send((request, back)) {
+        match self.tx.try_send((request, follow, back)) {
             Ok(()) => {}
             Err(std::sync::mpsc::TrySendError::Full(_)) => {
                 return Err(PendantError::Timeout(Duration::ZERO));
@@ -201,25 +225,36 @@ impl<P: Port, B: Backend> Controller<P, B> {
             return;
         };
         let calls: Vec<PendantCall> = rx.0.try_iter().collect();
-        for (request, back) in calls {
-            let reply = self.pcp.handle_aside(&request);
-            self.pcp.backend_mut().after_request();
-            if let Some(log) = self.log.as_mut() {
-                let world = self.pcp.backend_mut().world();
-                let note = self.pcp.take_note();
-                log(&LogEntry {
-                    catalog: self.pcp.catalog(),
-                    request: &request,
-                    reply: &reply,
-                    event: ServerEvent::Executed,
-                    executed: true,
-                    from_pendant: true,
-                    world,
-                    note,
-                });
+        for (request, follow, back) in calls {
+            let mut reply = self.run_aside(&request);
+            let mut followed = false;
+            if let Some(next) = follow.and_then(|f| f(&reply)) {
+                reply = self.run_aside(&next);
+                followed = true;
             }
-            let _ = back.try_send(reply);
+            let _ = back.try_send((reply, followed));
         }
+    }
+
+    /// Run one pendant request, logged as from the pendant.
+    fn run_aside(&mut self, request: &[u8]) -> Vec<u8> {
+        let reply = self.pcp.handle_aside(request);
+        self.pcp.backend_mut().after_request();
+        if let Some(log) = self.log.as_mut() {
+            let world = self.pcp.backend_mut().world();
+            let note = self.pcp.take_note();
+            log(&LogEntry {
+                catalog: self.pcp.catalog(),
+                request,
+                reply: &reply,
+                event: ServerEvent::Executed,
+                executed: true,
+                from_pendant: true,
+                world,
+                note,
+            });
+        }
+        reply
     }
 
     /// Have the backend report its arm ([`Backend::report`]) at most every `every`, between

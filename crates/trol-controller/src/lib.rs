@@ -24,7 +24,8 @@ pub mod terminal;
 pub use a465::{A465_CODES, arm_target, stored_location, table};
 pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};
 pub use controller::{
-    Controller, Embedded, LogEntry, LogFn, Mode, Pendant, PendantError, PendantInbox, WatchdogTrip,
+    Controller, Embedded, FollowUp, LogEntry, LogFn, Mode, Pendant, PendantError, PendantInbox,
+    WatchdogTrip,
 };
 pub use pcp::{Call, Context, Executed, Handled, Handler, Pcp, RegisterError, Status};
 

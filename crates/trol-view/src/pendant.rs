@@ -133,14 +133,13 @@ pub fn answer(
             if wants_post { "POST only" } else { "GET only" },
         );
     }
-    let call = match path {
-        "/control/turn" => turned(&args, control),
-        _ => request(path, &args),
-    };
+    if path == "/control/turn" {
+        return turned(&args, control);
+    }
+    let call = request(path, &args);
     let (def, values) = match call {
         Ok(call) => call,
         Err(Refused::Bad(e)) => return refusal("400 Bad Request", e),
-        Err(Refused::Answer(a)) => return a,
     };
     let bytes = match record::encode(def, &values) {
         Ok(b) => b,
@@ -153,10 +152,9 @@ pub fn answer(
     answered(def, &reply, control)
 }
 
-/// Why a pendant request was not sent: a bad request, or an answer already.
+/// Why a pendant request was not sent: a bad request.
 enum Refused {
     Bad(String),
-    Answer(Answer),
 }
 
 impl From<String> for Refused {
@@ -171,65 +169,77 @@ impl From<&str> for Refused {
     }
 }
 
-/// Send `def` with `values` through the controller's pendant and answer as the page reads it.
-fn call(def: &'static CommandDef, values: &[Value], control: &Control) -> Answer {
-    let bytes = match record::encode(def, values) {
-        Ok(b) => b,
-        Err(e) => return refusal("400 Bad Request", e.to_string()),
-    };
-    match control.pendant.call(bytes, CALL_LIMIT) {
-        Ok(r) => answered(def, &r, control),
-        Err(e) => refusal("503 Service Unavailable", e.to_string()),
-    }
-}
-
 /// A turn of the tool about a world axis through its tip (`axis` x, y or z, `degrees`): where
-/// the tool is (TROLGetPosition, commanded), turned, as a TROLMoveII.
-fn turned(
-    args: &HashMap<String, String>,
-    control: &Control,
-) -> Result<(&'static CommandDef, Vec<Value>), Refused> {
+/// the tool is (TROLGetPosition, commanded), turned, as a TROLMoveII. Both run in one step of
+/// the controller ([`trol_controller::Pendant::call_then`]): a motion the line's host sends
+/// cannot come between them and make the turn start from where the tool no longer is.
+fn turned(args: &HashMap<String, String>, control: &Control) -> Answer {
     let axis = match args.get("axis").map(String::as_str) {
         Some("x") => glam::DVec3::X,
         Some("y") => glam::DVec3::Y,
         Some("z") => glam::DVec3::Z,
-        Some(v) => return Err(format!("`axis`: {v:?} is not x, y or z").into()),
-        None => return Err("`axis` is missing".into()),
+        Some(v) => return refusal("400 Bad Request", format!("`axis`: {v:?} is not x, y or z")),
+        None => return refusal("400 Bad Request", "`axis` is missing"),
     };
-    let degrees = args
+    let Some(degrees) = args
         .get("degrees")
-        .ok_or("`degrees` is missing")?
-        .parse::<f64>()
-        .ok()
+        .and_then(|d| d.parse::<f64>().ok())
         .filter(|d| d.is_finite() && d.abs() <= 90.0)
-        .ok_or("`degrees`: a number of at most 90 either way")?;
+    else {
+        return refusal(
+            "400 Bad Request",
+            "`degrees`: a number of at most 90 either way",
+        );
+    };
     let straight = matches!(args.get("straight").map(String::as_str), Some("1" | "true"));
-    let at = call(
+    let Ok(where_) = record::encode(
         &table::GET_POSITION,
         &[
             Value::Int(Tag::Cart as u8),
             Value::Int(trol_proto::application::table::POS_COMMANDED),
         ],
-        control,
-    );
-    let Some(values) = at.1["position"].as_array().filter(|v| v.len() == 6) else {
-        return Err(Refused::Answer(at));
+    ) else {
+        return refusal(
+            "500 Internal Server Error",
+            "GetPosition could not be encoded",
+        );
     };
-    let v: [f64; 6] = std::array::from_fn(|i| values[i].as_f64().unwrap_or(f64::NAN));
-    let pose = trol_a465::Pose::from_xyzypr(v);
-    let turn = glam::DMat3::from_axis_angle(axis, degrees.to_radians());
-    let new = trol_a465::Pose {
-        rot: turn * pose.rot,
-        pos: pose.pos,
+    let follow: trol_controller::FollowUp = Box::new(move |reply: &[u8]| {
+        let Ok(Reply::Position(loc)) = Reply::decode(&table::GET_POSITION, reply) else {
+            return None;
+        };
+        let v = loc.to_array6();
+        if v.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let pose = trol_a465::Pose::from_xyzypr(v);
+        let turn = glam::DMat3::from_axis_angle(axis, degrees.to_radians());
+        let new = trol_a465::Pose {
+            rot: turn * pose.rot,
+            pos: pose.pos,
+        }
+        .to_xyzypr();
+        record::encode(
+            &table::MOVE_II,
+            &[
+                Value::Loc(Location::Cart(new.to_vec())),
+                Value::Flag(straight),
+            ],
+        )
+        .ok()
+    });
+    match control.pendant.call_then(where_, Some(follow), CALL_LIMIT) {
+        Ok((reply, true)) => answered(&table::MOVE_II, &reply, control),
+        // Where the tool is could not be read: that answer, as the page reads it.
+        Ok((reply, false)) => {
+            let (status, mut body) = answered(&table::GET_POSITION, &reply, control);
+            if let Some(o) = body.as_object_mut() {
+                o.insert("ok".into(), json!(false));
+            }
+            (status, body)
+        }
+        Err(e) => refusal("503 Service Unavailable", e.to_string()),
     }
-    .to_xyzypr();
-    Ok((
-        &table::MOVE_II,
-        vec![
-            Value::Loc(Location::Cart(new.to_vec())),
-            Value::Flag(straight),
-        ],
-    ))
 }
 
 /// The controller's reply to `def` as the page reads it.

@@ -68,6 +68,14 @@ stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 stage "cargo test --workspace" cargo test --workspace --no-fail-fast
 # The client with its live view (a feature the utilities and libtrol leave out).
 stage "cargo test -p trol --features view" cargo test -p trol --features view --test api
+# The client without its backends, and with each alone: each builds and its own tests pass.
+client_features() {
+  cargo test -p trol --no-default-features --lib &&
+    for feature in sim rapl mars; do
+      cargo test -p trol --no-default-features --features "$feature" --lib || return 1
+    done
+}
+stage "the client's features one by one" client_features
 
 # TROL for Python (crates/trol-py, outside the cargo workspace): scripts/wheel.sh builds it
 # as a binary wheel (maturin, into target/wheels); the wheel goes into a fresh virtual

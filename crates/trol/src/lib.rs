@@ -61,7 +61,7 @@ pub use trol_sim::SimSettings;
 #[cfg(feature = "sim")]
 use trol_a465::arm::{ArmSettings, parse_objects};
 
-#[cfg(any(feature = "sim", feature = "mars"))]
+#[cfg(feature = "sim")]
 fn read_config_file(path: &std::path::Path) -> Result<String> {
     std::fs::read_to_string(path)
         .map_err(|e| SetupError::Config(format!("{}: {e}", path.display())).into())

@@ -29,6 +29,8 @@
 #![warn(missing_docs, missing_debug_implementations)]
 
 pub mod arm;
+#[cfg(feature = "backend")]
+pub mod backend;
 pub mod kinematics;
 pub mod model;
 pub mod motion;

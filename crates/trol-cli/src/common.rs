@@ -96,7 +96,7 @@ impl Conn {
         if let Some(l) = &self.locations {
             // Checked now, not at the first command that needs the table: a misspelt folder,
             // a bad line or a reserved name is the start's failure (issue 44, item 3).
-            trol_controller::table::load(l).map_err(|e| format!("--locations: {e}"))?;
+            trol_a465::backend::table::load(l).map_err(|e| format!("--locations: {e}"))?;
             cfg.locations = Some(l.clone());
         }
         Ok((cfg, source))

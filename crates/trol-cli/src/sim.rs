@@ -221,7 +221,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     // which TROLSaveLocations writes there (docs/teach.md).
     let new_file = a.locations.as_ref().is_some_and(|p| !p.exists());
     let locations = match &a.locations {
-        Some(p) => trol_controller::table::load(p)?,
+        Some(p) => trol_a465::backend::table::load(p)?,
         None => Vec::new(),
     };
     let n_locations = locations.len();

@@ -5,7 +5,6 @@
 //!   arguments, GetStatus bookkeeping, replies that wait for an idle arm), sans-IO;
 //! - [`terminal`]: terminal mode and the activation sequence;
 //! - [`controller`]: the loop that runs both modes over a port, and the embedded controller;
-//! - [`a465`]: what the backends that plan with the A465 model share (codes, targets).
 //!
 //! The simulated A465 is a backend in its own crate, `trol-sim`.
 //!
@@ -15,13 +14,11 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs, missing_debug_implementations)]
 
-pub mod a465;
 pub mod backend;
 pub mod controller;
 pub mod pcp;
 pub mod terminal;
 
-pub use a465::{A465_CODES, arm_target, stored_location, table};
 pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};
 pub use controller::{
     Controller, Embedded, FollowUp, LogEntry, LogFn, Mode, Pendant, PendantError, PendantInbox,

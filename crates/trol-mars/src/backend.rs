@@ -24,8 +24,9 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
+use trol_a465::backend::A465_CODES;
 use trol_a465::model::joints_to_counts;
-use trol_controller::{A465_CODES, ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
+use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, LocName, Location, Tag};
 
@@ -907,9 +908,9 @@ impl MarsBackend {
         // answers); the arm model plans in the A465 controller's.
         if let Target::Location(Location::Prec(irc)) = t {
             let loc = Location::Prec(self.irc_to_a465(irc).to_vec());
-            return trol_controller::arm_target(&self.planner, &Target::Location(loc));
+            return trol_a465::backend::arm_target(&self.planner, &Target::Location(loc));
         }
-        trol_controller::arm_target(&self.planner, t)
+        trol_a465::backend::arm_target(&self.planner, t)
     }
 
     /// The unit's IRC counts (missing ones 0) as the A465 controller's encoder counts, which
@@ -1117,13 +1118,13 @@ impl Backend for MarsBackend {
             Location::Prec(irc) => Location::Prec(self.irc_to_a465(irc).to_vec()),
             other => other.clone(),
         };
-        trol_controller::table::define(&mut self.planner, name, &loc)
+        trol_a465::backend::table::define(&mut self.planner, name, &loc)
     }
     fn delete_location(&mut self, name: LocName) -> BiosResult {
-        trol_controller::table::delete(&mut self.planner, name)
+        trol_a465::backend::table::delete(&mut self.planner, name)
     }
     fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
-        Ok(trol_controller::table::list(&self.planner)
+        Ok(trol_a465::backend::table::list(&self.planner)
             .into_iter()
             .map(|(n, l)| match l {
                 Location::Prec(c) => (n, Location::Prec(self.a465_to_irc(&c))),
@@ -1132,7 +1133,7 @@ impl Backend for MarsBackend {
             .collect())
     }
     fn save_locations(&mut self) -> BiosResult {
-        trol_controller::table::save(&self.planner, self.locations_file.as_deref())
+        trol_a465::backend::table::save(&self.planner, self.locations_file.as_deref())
     }
     fn take_note(&mut self) -> Option<String> {
         self.planner.take_refusal()

@@ -39,8 +39,8 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use trol_a465::arm::code as sim_code;
+use trol_a465::backend::A465_CODES;
 use trol_a465::kinematics::{Kinematics, Pose};
-use trol_controller::A465_CODES;
 use trol_controller::backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};

@@ -11,10 +11,10 @@
 use std::time::Instant;
 
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, Which, code};
+use trol_a465::backend::{A465_CODES, arm_target};
 use trol_a465::model::joints_to_counts;
 use trol_controller::{
-    A465_CODES, Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, Target, arm_target,
-    embedded_with,
+    Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, Target, embedded_with,
 };
 use trol_port::memory::MemoryLine;
 use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag};
@@ -245,19 +245,19 @@ impl Backend for SimBackend {
     }
     fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
         let now = self.now();
-        trol_controller::table::here(&mut self.arm, name, tag, now)
+        trol_a465::backend::table::here(&mut self.arm, name, tag, now)
     }
     fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
-        trol_controller::table::define(&mut self.arm, name, loc)
+        trol_a465::backend::table::define(&mut self.arm, name, loc)
     }
     fn delete_location(&mut self, name: LocName) -> BiosResult {
-        trol_controller::table::delete(&mut self.arm, name)
+        trol_a465::backend::table::delete(&mut self.arm, name)
     }
     fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
-        Ok(trol_controller::table::list(&self.arm))
+        Ok(trol_a465::backend::table::list(&self.arm))
     }
     fn save_locations(&mut self) -> BiosResult {
-        trol_controller::table::save(&self.arm, self.locations_file.as_deref())
+        trol_a465::backend::table::save(&self.arm, self.locations_file.as_deref())
     }
     fn after_request(&mut self) {
         self.publish();

@@ -74,7 +74,9 @@ fn read_config_file(path: &std::path::Path) -> Result<String> {
 #[cfg(any(feature = "sim", feature = "mars"))]
 pub fn config_locations(cfg: &Config) -> Result<Vec<(String, trol_a465::arm::Stored)>> {
     match &cfg.locations {
-        Some(path) => trol_controller::table::load(path).map_err(|e| SetupError::Config(e).into()),
+        Some(path) => {
+            trol_a465::backend::table::load(path).map_err(|e| SetupError::Config(e).into())
+        }
         None => Ok(Vec::new()),
     }
 }

@@ -1,11 +1,13 @@
-//! What every backend that plans with the A465 model ([`trol_a465::arm`]) shares: the
-//! planner's BIOS codes and the translation of a backend target into the model's.
+//! What every controller backend that plans with the A465 model ([`crate::arm`]) shares: the
+//! planner's BIOS codes, the translation of a backend target into the model's, and the
+//! location table. Here, with the arm, so that the controller's contract (trol-controller)
+//! knows no arm (feature `backend`).
 
-use trol_a465::arm::{self, Arm, HereForm, Stored, code};
+use crate::arm::{self, Arm, HereForm, Stored, code};
 use trol_proto::application::table::MAX_LOCATIONS;
 use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 
-use crate::backend::{BackendError, BiosResult, Target};
+use trol_controller::{BackendError, BiosResult, Target};
 
 /// The BIOS codes of the A465's planner (docs/a465.md, "BIOS codes"): the simulated arm's
 /// table, and the first part of every backend's that plans with the model.

@@ -22,12 +22,13 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
         assert!(s.contains("-> 0 (success)"), "{s}");
     }
     assert!(out.contains("all 11 steps succeeded"), "{out}");
-    // The arm ends 90 mm above test_001 (400, 0, 150).
-    assert!(
-        steps
-            .last()
-            .unwrap()
-            .contains("x   400.0 y     0.0 z   240.0 mm"),
+    // The arm ends 90 mm above test_001 (400, 0, 150), printed to the micrometre (trailing
+    // zeros left out) without -0.
+    let last: Vec<&str> = steps.last().unwrap().split_whitespace().collect();
+    let at = last.iter().position(|w| *w == "x").expect("x");
+    assert_eq!(
+        &last[at..at + 7],
+        ["x", "400", "y", "0", "z", "240", "mm"],
         "{out}"
     );
     // It says that motion commands return before the motion ends, shows the arm moving,

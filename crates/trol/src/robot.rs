@@ -1279,9 +1279,17 @@ impl Robot {
                         Ok(true) => std::thread::sleep(POLL),
                         Ok(false) => return Ok(Waited::Halted),
                         // The controller answered the Halt once the arm stood; a Finish that
-                        // then reports the halted motion's failure (BIOS_NOT_HOMED after a
-                        // halted Home) reports an arm that stands: the wait was cancelled.
-                        Err(Error::Refused { .. }) => return Ok(Waited::Halted),
+                        // then reports a halted Home (BIOS_NOT_HOMED: the axes not yet homed
+                        // stay so) reports an arm that stands: the wait was cancelled. Any
+                        // other failure (the controller unsure, say) is the caller's to see.
+                        Err(Error::Refused { code, .. })
+                            if self
+                                .codes
+                                .iter()
+                                .any(|c| c.value == code.0 && c.name == "BIOS_NOT_HOMED") =>
+                        {
+                            return Ok(Waited::Halted);
+                        }
                         Err(e) => return Err(e),
                     }
                 }

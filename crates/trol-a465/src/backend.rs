@@ -9,6 +9,27 @@ use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 
 use trol_controller::{BackendError, BiosResult, Target};
 
+/// The A465 planner's codes followed by a backend's own (`extra`), as one table built at
+/// compile time: `N` is `A465_CODES.len() + extra.len()` (checked). Every backend that plans
+/// with the model names its codes so.
+pub const fn with_a465_codes<const N: usize>(extra: &[CodeInfo]) -> [CodeInfo; N] {
+    assert!(
+        N == A465_CODES.len() + extra.len(),
+        "N must be the two tables' lengths"
+    );
+    let mut all = [A465_CODES[0]; N];
+    let mut i = 0;
+    while i < A465_CODES.len() {
+        all[i] = A465_CODES[i];
+        i += 1;
+    }
+    while i < N {
+        all[i] = extra[i - A465_CODES.len()];
+        i += 1;
+    }
+    all
+}
+
 /// The BIOS codes of the A465's planner (docs/a465.md, "BIOS codes"): the simulated arm's
 /// table, and the first part of every backend's that plans with the model.
 pub const A465_CODES: &CodeTable = &[

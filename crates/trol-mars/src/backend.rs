@@ -80,17 +80,7 @@ pub static MARS_CODES: &CodeTable = &{
             meaning: "the unit stopped with the arm short of the motion's end",
         },
     ];
-    let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
-    let mut i = 0;
-    while i < A465_CODES.len() {
-        all[i] = A465_CODES[i];
-        i += 1;
-    }
-    while i < all.len() {
-        all[i] = EXTRA[i - A465_CODES.len()];
-        i += 1;
-    }
-    all
+    trol_a465::backend::with_a465_codes::<{ A465_CODES.len() + EXTRA.len() }>(&EXTRA)
 };
 
 /// How long a reply may take (a command at 19200 baud takes a few ms).

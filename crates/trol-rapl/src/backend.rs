@@ -139,17 +139,7 @@ pub static RAPL_CODES: &CodeTable = &{
                       end (a servo fault, a stop at the controller): check the arm",
         },
     ];
-    let mut all = [EXTRA[0]; A465_CODES.len() + EXTRA.len()];
-    let mut i = 0;
-    while i < A465_CODES.len() {
-        all[i] = A465_CODES[i];
-        i += 1;
-    }
-    while i < all.len() {
-        all[i] = EXTRA[i - A465_CODES.len()];
-        i += 1;
-    }
-    all
+    trol_a465::backend::with_a465_codes::<{ A465_CODES.len() + EXTRA.len() }>(&EXTRA)
 };
 
 /// Why a session could not be opened.

@@ -9,6 +9,19 @@ use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 
 use trol_controller::{BackendError, BiosResult, Target};
 
+/// The BIOS codes every real controller's backend has beside the planner's (each backend
+/// names them in its own words in its table): one number each, on every backend.
+pub mod real {
+    /// The arm has no power (LIMP, an e-stop, the unit's power bit).
+    pub const ARM_POWER: i16 = -8;
+    /// The call has no form on this controller.
+    pub const UNSUPPORTED: i16 = -11;
+    /// A call that needs the arm at rest while a motion or homing has not ended.
+    pub const BUSY: i16 = -16;
+    /// The controller calls a motion done, and the arm stands short of its end.
+    pub const NOT_AT_TARGET: i16 = -22;
+}
+
 /// The A465 planner's codes followed by a backend's own (`extra`), as one table built at
 /// compile time: `N` is `A465_CODES.len() + extra.len()` (checked). Every backend that plans
 /// with the model names its codes so.

@@ -33,18 +33,14 @@ use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, LocName, Locat
 use crate::line::{self, Lines, Reply, st};
 use crate::profile::Profile;
 
-/// Arm power is off (ST bit 0x10000).
-pub const ARM_POWER: i16 = -8;
-/// No gripper axis in the profile.
-pub const UNSUPPORTED: i16 = -11;
-/// A call that needs the arm at rest while a motion or homing has not ended.
-pub const BUSY: i16 = -16;
+// The codes every real controller's backend shares (trol_a465::backend::real): arm power
+// off (ST bit 0x10000), no gripper axis in the profile, a call that needs the arm at rest
+// while a motion or homing has not ended, the unit stopped short of a motion's end.
+pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
 /// The unit reports an error (ST bit 0x8).
 pub const MARS_ERROR: i16 = -20;
 /// The motion stop is active (ST bit 0x20000).
 pub const MOTION_STOP: i16 = -21;
-/// The unit stopped with the arm short of the motion's end.
-pub const NOT_AT_TARGET: i16 = -22;
 
 /// The BIOS codes of the MARS 8 backend: the simulator's, and those of the unit.
 pub static MARS_CODES: &CodeTable = &{

@@ -54,14 +54,15 @@ use crate::profile::{
 use crate::session::{ACK, CTRL_Z, Reply, Session, SessionConfig, SessionError};
 use crate::text::{self, Listed};
 
-/// The arm has no power (LIMP, an e-stop).
-pub const ARM_POWER: i16 = -8;
+// The codes every real controller's backend shares (trol_a465::backend::real): the arm has
+// no power (LIMP, an e-stop), a call with no RAPL-II form, a motion computed from where the
+// arm is while another has not ended, the arm standing short of a motion the controller
+// calls done.
+pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
 /// Cartesian values need the controller's angle order.
 pub const NO_ANGLES: i16 = -9;
 /// An error line the profile does not map.
 pub const RAPL_ERROR: i16 = -10;
-/// No RAPL-II form for the call.
-pub const UNSUPPORTED: i16 = -11;
 /// MA and MI need their units.
 pub const NO_JOINT_UNITS: i16 = -12;
 /// Cartesian values need the controller's length units.
@@ -70,10 +71,6 @@ pub const NO_UNITS: i16 = -13;
 pub const NO_PULSES: i16 = -14;
 /// A straight Jog needs JOG's frame.
 pub const NO_JOG_FRAME: i16 = -15;
-/// A motion computed from where the arm is, while another motion has not ended.
-pub const BUSY: i16 = -16;
-/// The controller says a motion is done, and the arm stands short of its end.
-pub const NOT_AT_TARGET: i16 = -22;
 
 /// The BIOS codes of the RAPL-II backend: the simulator's, and those of a real controller.
 pub static RAPL_CODES: &CodeTable = &{

@@ -205,9 +205,11 @@ fn the_page_draws_the_arm_and_follows_it() {
         six(&followed),
         by_api,
     );
-    // The tool's trail was drawn along the motion.
+    // The tool's trail was drawn along the motion: a point at each update that showed it
+    // moving (up to 10). How many updates a page draws depends on the machine's load (5 on
+    // a busy 2-core machine, where a fixed 10 failed), not on the view.
     assert!(
-        followed["trail"].as_u64().unwrap() >= 10,
+        followed["trail"].as_u64().unwrap() >= moving_frames.min(10),
         "trail: {followed}"
     );
 

@@ -234,20 +234,40 @@ const LINE_MANY_SEGMENTS: usize = 5_000;
 /// where the wrist would have to turn far faster than the tool moves, and is refused with
 /// SINGULAR_PATH before anything moves (docs/a465.md, "Straight lines").
 pub const LINE_MAX_FACTOR: f64 = 20.0;
-/// A line from where the arm is that takes at most this multiple of its least time is taken
-/// as it is; a slower one is compared with the lines that first turn the free joints of a
-/// singular pose (J5 = 0, READY).
-const LINE_GOOD_FACTOR: f64 = 3.0;
 /// Where along a line its leaving direction is read (s; a turn of the free joints at a
 /// singular pose aims there): near enough that the free joints are as at the start, far
 /// enough that the wrist is clear of J5 = 0 by more than the inverse kinematics' band.
 const LINE_PROBE: f64 = 1e-5;
+/// The probe's distance along a line, and farther: multiples of it.
+const LINE_PROBE_FARTHER: [f64; 3] = [1.0, 10.0, 100.0];
+/// Starts nearer than this in every joint (rad) are one: the line read a little farther on
+/// gives the same way with the free joints a little on.
+const LINE_SAME_START: f64 = 3e-3;
 /// The same in the eased parameter σ of a line from the stretched elbow ([`Ease`]), where
 /// the joints go as σ.
 const LINE_PROBE_EASED: f64 = 1e-4;
 /// And a line is refused for its time only when it would take this much longer still, s: a
 /// line whose ends are (nearly) the same pose needs no time, and its few stretches a little.
 pub const LINE_SLACK: f64 = 0.1;
+
+/// The joints in words, for the planner's messages.
+const JOINT_NAMES: [&str; 6] = [
+    "the waist (J1)",
+    "the shoulder (J2)",
+    "the elbow (J3)",
+    "the forearm's roll (J4)",
+    "the wrist (J5)",
+    "the flange (J6)",
+];
+
+/// Where along a line (s) its leaving direction is read: [`LINE_PROBE`], or
+/// [`LINE_PROBE_EASED`] in σ from the stretched elbow.
+fn line_probe(ease: Ease) -> f64 {
+    match ease {
+        Ease::None | Ease::Out => LINE_PROBE,
+        Ease::In | Ease::Both => ease.at(LINE_PROBE_EASED).0,
+    }
+}
 
 /// A motion: a path and its profile in time.
 #[derive(Clone, Debug)]
@@ -375,6 +395,11 @@ fn max_step(a: &Joints, b: &Joints) -> f64 {
     (0..6).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max)
 }
 
+/// [`max_step`] with each joint's difference taken the short way round.
+fn wrapped_step(a: &Joints, b: &Joints) -> f64 {
+    (0..6).map(|i| wrap(a[i] - b[i]).abs()).fold(0.0, f64::max)
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Fingers {
     from: f64,
@@ -422,6 +447,27 @@ pub struct Arm {
     held: Option<Held>,
     /// Why the last straight line was refused, in words, not yet taken.
     refusal: Option<String>,
+    /// What the planner found for the last straight line.
+    last_line: Option<LineOutcome>,
+}
+
+/// What the planner found for a straight line (the survey's and the tests' view of it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LineOutcome {
+    /// Accepted.
+    Accepted {
+        /// The least time any arm within the A465's limits needs for this line from where
+        /// it stood, s: the turn of the free joints the way along it needs first (none off
+        /// a singular pose), then the longer of the joint-interpolated move between the
+        /// line's ends and its length at the tool's linear limits; the fastest way counts.
+        least: f64,
+    },
+    /// Refused, and no arm follows it: every way along the line from where the arm stands
+    /// meets a joint limit, or a point of it has no configuration within the limits.
+    Blocked,
+    /// Refused: the line meets a singular pose where the joints would jump, or it would take
+    /// too long near one.
+    Singular,
 }
 
 /// Where planning a straight line failed: its code, how far along the line (0..1), and the
@@ -453,6 +499,7 @@ impl Arm {
             objects: Vec::new(),
             held: None,
             refusal: None,
+            last_line: None,
         };
         for o in arm.settings.objects.clone() {
             arm.objects.push(o);
@@ -1066,6 +1113,11 @@ impl Arm {
         let mut best: Option<(f64, Option<Path>, Path, Profile)> = None;
         let mut farthest: Option<LineFail> = None;
         let mut least = f64::INFINITY;
+        // Whether every start that leaves the way the line does later meets a joint limit
+        // (a start that cannot even reach the probe point smoothly is not aimed along the
+        // line: its free joints point elsewhere).
+        let mut limits_everywhere = true;
+        let mut any_limit = false;
         // |J3| at the target: the same in every configuration (the wrist centre's distance
         // from the shoulder fixes it).
         let j3_end = self
@@ -1081,6 +1133,7 @@ impl Arm {
             if k == 1 && best.is_none() {
                 if let Some((code, why)) = self.unreachable_point(&line) {
                     self.refusal = Some(why);
+                    self.last_line = Some(LineOutcome::Blocked);
                     return code;
                 }
             }
@@ -1095,10 +1148,20 @@ impl Arm {
                 }
                 None => 0.0,
             };
+            // A start whose turn alone takes as long as the least time of a way already
+            // found neither wins nor lowers that least time.
+            if turn_time >= least {
+                continue;
+            }
             let ease = Ease::for_elbow(q_start[2], j3_end);
             let path = match self.plan_line(&line, *q_start, ease) {
                 Ok(p) => p,
                 Err(f) => {
+                    if f.code == code::JOINT_LIMIT {
+                        any_limit = true;
+                    } else if f.at > line_probe(ease) {
+                        limits_everywhere = false;
+                    }
                     // The start that got farthest says best where the line cannot go on.
                     if farthest.is_none_or(|g| f.at > g.at) {
                         farthest = Some(f);
@@ -1112,18 +1175,20 @@ impl Arm {
             }
             let profile = self.line_profile(&path, length, start + turn_time, ease);
             let total = profile.end() - start;
-            least = least.min(self.line_least_time(q0, path.at(1.0), length));
+            least = least.min(turn_time + self.line_least_time(*q_start, path.at(1.0), length));
             if best.as_ref().is_none_or(|b| total < b.0) {
                 best = Some((total, turn, path, profile));
             }
-            // At the pace of the line's own ends: no other start can do much better.
-            if total <= LINE_GOOD_FACTOR * least + LINE_SLACK {
-                break;
-            }
         }
         let Some((total, turn, path, profile)) = best else {
-            let (code, why) = self.why_no_line(&line, farthest);
+            let blocked = limits_everywhere && any_limit;
+            let (code, why) = self.why_no_line(&line, farthest, blocked);
             self.refusal = Some(why);
+            self.last_line = Some(if blocked {
+                LineOutcome::Blocked
+            } else {
+                LineOutcome::Singular
+            });
             return code;
         };
         if total > LINE_MAX_FACTOR * least + LINE_SLACK {
@@ -1132,6 +1197,7 @@ impl Arm {
                  s, more than {LINE_MAX_FACTOR} times the {least:.1} s it needs: go through a \
                  point off the line first, or move there in joints (straight 0)"
             ));
+            self.last_line = Some(LineOutcome::Singular);
             return code::SINGULAR_PATH;
         }
         if let Some(turn) = turn {
@@ -1141,7 +1207,14 @@ impl Arm {
             self.push(turn, now);
         }
         self.push_timed(path, profile);
+        self.last_line = Some(LineOutcome::Accepted { least });
         code::OK
+    }
+
+    /// What the planner found for the last straight line asked for (accepted with its least
+    /// time, or why it was refused).
+    pub fn last_line(&self) -> Option<LineOutcome> {
+        self.last_line
     }
 
     /// Why the last straight line was refused (which pose, where on the line, what to do),
@@ -1151,9 +1224,11 @@ impl Arm {
     }
 
     /// The code and the words for a straight line no start could follow: a point of it that
-    /// no configuration reaches within the limits (JOINT_LIMIT, or OUT_OF_REACH), or else
-    /// the singular pose where the line from where the arm is had to jump (`fail`).
-    fn why_no_line(&self, line: &Line, fail: Option<LineFail>) -> (i16, String) {
+    /// no configuration reaches within the limits (JOINT_LIMIT, or OUT_OF_REACH), every way
+    /// along it meeting a joint limit (`blocked`: JOINT_LIMIT), or else the singular pose
+    /// where the line from where the arm is had to jump (`fail`, the start that got
+    /// farthest).
+    fn why_no_line(&self, line: &Line, fail: Option<LineFail>, blocked: bool) -> (i16, String) {
         if let Some(why) = self.unreachable_point(line) {
             return why;
         }
@@ -1164,13 +1239,29 @@ impl Arm {
                 format!("the straight line cannot be followed smoothly: {do_this}"),
             );
         };
-        if f.code != code::SINGULAR_PATH {
-            return (
-                f.code,
+        if f.code != code::SINGULAR_PATH || blocked {
+            let p = line.at(f.at).pos;
+            let joint = first_outside_limits(&f.q).map_or_else(String::new, |j| {
                 format!(
-                    "the straight line passes a joint limit at {:.0} % of its length in the \
-                     arm's configuration: {do_this}",
-                    100.0 * f.at
+                    " ({} would pass its ±{:.0} deg)",
+                    JOINT_NAMES[j],
+                    crate::model::limits()[j].to_degrees()
+                )
+            });
+            let every = if blocked {
+                "every way the arm can follow the straight line from where it stands meets a \
+                 joint limit: the farthest reaches"
+            } else {
+                "the straight line meets a joint limit in the arm's configuration at"
+            };
+            return (
+                if blocked { code::JOINT_LIMIT } else { f.code },
+                format!(
+                    "{every} {:.0} % of its length ({:.1}, {:.1}, {:.1}){joint}: {do_this}",
+                    100.0 * f.at,
+                    p.x,
+                    p.y,
+                    p.z
                 ),
             );
         }
@@ -1203,14 +1294,6 @@ impl Arm {
     /// at all), with its code and the words: no arm follows such a line.
     fn unreachable_point(&self, line: &Line) -> Option<(i16, String)> {
         let lim = crate::model::limits();
-        const NAMES: [&str; 6] = [
-            "the waist (J1)",
-            "the shoulder (J2)",
-            "the elbow (J3)",
-            "the forearm's roll (J4)",
-            "the wrist (J5)",
-            "the flange (J6)",
-        ];
         let do_this = LINE_ADVICE;
         for i in 0..=LINE_CHECKS {
             let s = i as f64 / LINE_CHECKS as f64;
@@ -1255,7 +1338,7 @@ impl Arm {
                     p.x,
                     p.y,
                     p.z,
-                    NAMES[worst],
+                    JOINT_NAMES[worst],
                     lim[worst].to_degrees()
                 ),
             ));
@@ -1276,19 +1359,25 @@ impl Arm {
         let mut starts = vec![q0];
         // Where the free joints must be as the line leaves: its pose a very little way
         // along (in the eased parameter, where the joints go linearly).
-        let probe_s = match ease {
-            Ease::None | Ease::Out => LINE_PROBE,
-            Ease::In | Ease::Both => ease.at(LINE_PROBE_EASED).0,
-        };
-        let probe = self.kin.ik_all_exact(&line.at(probe_s), &q0);
+        // A line whose wrist leaves J5 = 0 slowly is still within the inverse kinematics'
+        // band a very little way along (J4 kept there): it is read farther on as well.
+        let probe_s = line_probe(ease);
+        let mut probes = Vec::new();
+        for far in LINE_PROBE_FARTHER {
+            probes.extend_from_slice(
+                self.kin
+                    .ik_all_exact(&line.at((probe_s * far).min(1.0)), &q0)
+                    .as_slice(),
+            );
+        }
         let mut found: Vec<(f64, Joints)> = Vec::new();
-        for sol in probe.as_slice() {
+        for sol in &probes {
             let qp: Joints = std::array::from_fn(|i| q0[i] + wrap(sol.q[i] - q0[i]));
             let again = self.kin.ik_all(&line.from, &qp);
             let Some(at) = again
                 .as_slice()
                 .iter()
-                .min_by(|a, b| max_step(&a.q, &qp).total_cmp(&max_step(&b.q, &qp)))
+                .min_by(|a, b| wrapped_step(&a.q, &qp).total_cmp(&wrapped_step(&b.q, &qp)))
             else {
                 continue;
             };
@@ -1320,7 +1409,8 @@ impl Arm {
                 {
                     continue;
                 }
-                if found.iter().all(|(_, f)| max_step(f, &q) > 1e-6) {
+                // The same way read at a farther probe: the nearer reading is kept.
+                if found.iter().all(|(_, f)| max_step(f, &q) > LINE_SAME_START) {
                     found.push((moved, q));
                 }
             }
@@ -1345,10 +1435,12 @@ impl Arm {
         };
         let solve = |s: f64, near: &Joints| -> Result<Joints, LineFail> {
             let all = self.kin.ik_all_exact(&on_line(s), near);
+            // Nearest as the joints turn: a joint past ±180° comes back as its other end,
+            // and is the same place continued (then past its limit: JOINT_LIMIT, not a jump).
             let best = all
                 .as_slice()
                 .iter()
-                .min_by(|a, b| max_step(&a.q, near).total_cmp(&max_step(&b.q, near)))
+                .min_by(|a, b| wrapped_step(&a.q, near).total_cmp(&wrapped_step(&b.q, near)))
                 .ok_or(fail(code::OUT_OF_REACH, s, *near))?;
             // Continue each joint from the previous one, without a wrap.
             Ok(std::array::from_fn(|i| near[i] + wrap(best.q[i] - near[i])))

@@ -3,13 +3,14 @@
 //! J5 = 0 (issue 42) to everyday targets (the table's working volume, the tool down or
 //! level, reachable by a joint move), each tried on the model in its own time: the share
 //! accepted, each line's duration against its least time, the joint limits along it, and how
-//! far it leaves the line. Lines with a point no configuration reaches within the limits are
-//! counted apart: no arm follows them.
+//! far it leaves the line. Lines no arm within the limits can follow are counted apart: a
+//! point of them that no configuration reaches, or every way along them from the start
+//! meeting a joint limit.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::arm::{Arm, ArmSettings, Target, code};
+use crate::arm::{Arm, ArmSettings, LineOutcome, Target, code};
 use crate::model::limits;
 use crate::{Kinematics, Pose};
 
@@ -23,10 +24,18 @@ pub struct SetReport {
     /// Lines with a point that no configuration reaches within the joint limits: no arm
     /// can follow them (refused, and not counted in the share).
     pub impossible: usize,
+    /// Lines whose every way from the start (in each configuration the arm can leave in)
+    /// meets a joint limit: no arm within the limits follows them (refused with
+    /// JOINT_LIMIT, not counted in the share).
+    pub blocked: usize,
     /// Lines accepted as straight lines.
     pub accepted: usize,
-    /// Share accepted, percent.
+    /// Share accepted of the lines an arm can follow (tried, less impossible and blocked),
+    /// percent.
     pub accepted_percent: f64,
+    /// Share accepted of all the lines tried (every target reachable by a joint move),
+    /// percent.
+    pub accepted_of_tried_percent: f64,
     /// Refusals by code.
     pub refused: Vec<(i16, usize)>,
     /// Duration over least time: the median.
@@ -35,6 +44,10 @@ pub struct SetReport {
     pub ratio_p99: f64,
     /// Duration over least time: the largest.
     pub ratio_max: f64,
+    /// Duration over the joint-interpolated move from where the arm stood to the line's end
+    /// (or its length at the linear limits), a turn of the free joints first not counted in
+    /// it: the largest.
+    pub plain_ratio_max: f64,
     /// Samples outside a joint limit (should be 0).
     pub limit_excursions: usize,
     /// Largest distance of the tool centre point from the line, mm.
@@ -84,6 +97,9 @@ struct Tally {
     tried: usize,
     /// Lines with a point no configuration reaches within the limits.
     impossible: usize,
+    /// Lines whose every way meets a joint limit.
+    blocked: usize,
+    plain_max: f64,
     accepted: usize,
     refused: std::collections::BTreeMap<i16, usize>,
     ratios: Vec<f64>,
@@ -115,19 +131,29 @@ fn feasible(kin: &Kinematics, a: &Pose, b: &Pose) -> bool {
     })
 }
 
-/// Try the straight line from `q0` to `target`; count it when a joint move reaches the target.
+/// Whether a joint move from `q0` reaches `target` (the survey's lines all do).
+fn joint_move_reaches(q0: [f64; 6], target: [f64; 6]) -> bool {
+    arm_at(q0).move_to(Target::Cart(target), false, 0.0) == code::OK
+}
+
+/// Try the straight line from `q0` to `target` (a joint move reaches it).
 fn try_line(q0: [f64; 6], target: [f64; 6], t: &mut Tally, show: bool) {
     let kin = Kinematics::default();
-    let mut joint = arm_at(q0);
-    if joint.move_to(Target::Cart(target), false, 0.0) != code::OK {
-        return;
-    }
     t.tried += 1;
     let mut arm = arm_at(q0);
     let c = arm.move_to(Target::Cart(target), true, 0.0);
     if c != code::OK {
         if !feasible(&kin, &kin.fk(&q0), &Pose::from_xyzypr(target)) {
             t.impossible += 1;
+            return;
+        }
+        if arm.last_line() == Some(LineOutcome::Blocked) {
+            t.blocked += 1;
+            if show {
+                let why = arm.take_refusal().unwrap_or_default();
+                t.shown
+                    .push(format!("blocked {c}: from {q0:.4?} to {target:.3?}: {why}"));
+            }
             return;
         }
         *t.refused.entry(c).or_default() += 1;
@@ -145,8 +171,19 @@ fn try_line(q0: [f64; 6], target: [f64; 6], t: &mut Tally, show: bool) {
     let from = kin.fk(&q0);
     let to = Pose::from_xyzypr(target);
     let length = (to.pos - from.pos).length();
-    let least = arm.line_least_time(q0, arm.planned_end(), length);
-    t.ratios.push((end - start) / least.max(1e-9));
+    let Some(LineOutcome::Accepted { least }) = arm.last_line() else {
+        unreachable!("an accepted line has its least time");
+    };
+    let ratio = (end - start) / least.max(1e-9);
+    t.ratios.push(ratio);
+    let plain = arm.line_least_time(q0, arm.planned_end(), length);
+    t.plain_max = t.plain_max.max((end - start) / plain.max(1e-9));
+    if show && ratio > 2.5 {
+        t.shown.push(format!(
+            "slow {ratio:.2}: from {q0:.4?} to {target:.3?}: {:.3} s for least {least:.3} s",
+            end - start
+        ));
+    }
     let lim = limits();
     let n = 400;
     for i in 0..=n {
@@ -174,12 +211,16 @@ fn report(set: &'static str, mut t: Tally) -> SetReport {
         set,
         tried: t.tried,
         impossible: t.impossible,
+        blocked: t.blocked,
         accepted: t.accepted,
-        accepted_percent: 100.0 * t.accepted as f64 / (t.tried - t.impossible).max(1) as f64,
+        accepted_percent: 100.0 * t.accepted as f64
+            / (t.tried - t.impossible - t.blocked).max(1) as f64,
+        accepted_of_tried_percent: 100.0 * t.accepted as f64 / t.tried.max(1) as f64,
         refused: t.refused.into_iter().collect(),
         ratio_median: pick(0.5),
         ratio_p99: pick(0.99),
         ratio_max: pick(1.0),
+        plain_ratio_max: t.plain_max,
         limit_excursions: t.limit_excursions,
         max_off_line_mm: t.max_off,
     }
@@ -190,6 +231,8 @@ fn tally() -> Tally {
         shown: Vec::new(),
         tried: 0,
         impossible: 0,
+        blocked: 0,
+        plain_max: 0.0,
         accepted: 0,
         refused: Default::default(),
         ratios: Vec::new(),
@@ -198,20 +241,24 @@ fn tally() -> Tally {
     }
 }
 
-/// The sets of lines, `count` each.
-pub fn survey(count: u32, seed: u64, show: bool) -> Vec<SetReport> {
+/// The survey's lines, `count` of each set (from READY, from J5 = 0): each its start (the
+/// joints) and its target (x y z mm, yaw pitch roll rad), a target a joint move reaches. The
+/// same seed draws the same lines.
+pub fn everyday_lines(count: u32, seed: u64) -> [Vec<([f64; 6], [f64; 6])>; 2] {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut ready = tally();
+    let mut ready = Vec::new();
     let mut guard = 0;
-    while ready.tried < count as usize && guard < 100 * count {
+    while ready.len() < count as usize && guard < 100 * count {
         guard += 1;
         let target = everyday_target(&mut rng);
-        try_line([0.0; 6], target, &mut ready, show);
+        if joint_move_reaches([0.0; 6], target) {
+            ready.push(([0.0; 6], target));
+        }
     }
     let lim = limits();
-    let mut wrist = tally();
+    let mut wrist = Vec::new();
     let mut guard = 0;
-    while wrist.tried < count as usize && guard < 100 * count {
+    while wrist.len() < count as usize && guard < 100 * count {
         guard += 1;
         // A random pose with J5 = 0, the arm over the table.
         let mut q: [f64; 6] = std::array::from_fn(|i| rng.random_range(-lim[i]..lim[i]) * 0.8);
@@ -223,7 +270,23 @@ pub fn survey(count: u32, seed: u64, show: bool) -> Vec<SetReport> {
             continue;
         }
         let target = everyday_target(&mut rng);
-        try_line(q, target, &mut wrist, show);
+        if joint_move_reaches(q, target) {
+            wrist.push((q, target));
+        }
+    }
+    [ready, wrist]
+}
+
+/// The sets of lines, `count` each.
+pub fn survey(count: u32, seed: u64, show: bool) -> Vec<SetReport> {
+    let [ready_lines, wrist_lines] = everyday_lines(count, seed);
+    let mut ready = tally();
+    for (q0, target) in ready_lines {
+        try_line(q0, target, &mut ready, show);
+    }
+    let mut wrist = tally();
+    for (q0, target) in wrist_lines {
+        try_line(q0, target, &mut wrist, show);
     }
     vec![report("from READY", ready), report("from J5 = 0", wrist)]
 }

@@ -436,21 +436,6 @@ fn a_line_no_arm_can_follow_is_refused_with_where_and_what_to_do() {
     assert_eq!(arm.move_to(Target::Cart(to), false, 0.0), code::OK);
 }
 
-/// The survey behind docs/a465.md's figures (`trol bench lines`): of the everyday lines an
-/// arm can follow at all, from READY and from J5 = 0, nearly all are taken, none leaves
-/// the limits or the line.
-#[test]
-fn the_line_survey_takes_the_lines_an_arm_can_follow() {
-    let sets = trol_a465::survey::survey(120, 7, false);
-    for s in &sets {
-        assert!(s.tried - s.impossible >= 20, "{s:?}");
-        assert!(s.accepted_percent >= 85.0, "{s:?}");
-        assert_eq!(s.limit_excursions, 0, "{s:?}");
-        assert!(s.max_off_line_mm < 0.02, "{s:?}");
-        assert!(s.ratio_max < 4.0, "{s:?}");
-    }
-}
-
 #[test]
 fn a_line_near_the_base_axis_is_followed_slowly_within_j1s_speed() {
     let mut arm = homed_arm();

@@ -443,6 +443,11 @@ struct FinishReport {
     moves: u32,
     /// From the end of the motion (the simulated arm stands) to Finish's return.
     after_motion_end: Spread,
+    /// From the call of TROLJoint (after the Finish of the motion before) to the simulated
+    /// arm starting to move.
+    joint_call_to_start: Spread,
+    /// The same for TROLMA.
+    ma_call_to_start: Spread,
 }
 
 #[derive(Serialize)]
@@ -1124,6 +1129,8 @@ struct GatewayPath {
 /// loop notes when the arm comes to a stand.
 struct C500Twin {
     stopped_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
+    /// When the arm last started to move.
+    started_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
     /// When a command that waited for the arm (a motion behind another) went on.
     released_at: std::sync::Arc<std::sync::Mutex<Option<Instant>>>,
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
@@ -1146,8 +1153,10 @@ fn c500_line(profile: trol_rapl::Profile) -> Result<(trol_rapl::RaplBackend, C50
     let (rapl_host, mut rapl_ctl) = memory::pair(Some(profile.baud));
     let stop = Arc::new(AtomicBool::new(false));
     let stopped_at = Arc::new(Mutex::new(None));
+    let started_at = Arc::new(Mutex::new(None));
     let released_at = Arc::new(Mutex::new(None));
     let (flag, noted, released) = (stop.clone(), stopped_at.clone(), released_at.clone());
+    let started = started_at.clone();
     let c500_profile = profile.clone();
     let c500 = std::thread::spawn(move || {
         let arm = trol_a465::arm::Arm::new(trol_a465::arm::ArmSettings {
@@ -1168,6 +1177,9 @@ fn c500_line(profile: trol_rapl::Profile) -> Result<(trol_rapl::RaplBackend, C50
                 if was_moving && !moving {
                     *noted.lock().unwrap() = Some(Instant::now());
                 }
+                if !was_moving && moving {
+                    *started.lock().unwrap() = Some(Instant::now());
+                }
                 was_moving = moving;
                 let waiting = c.is_waiting();
                 if was_waiting && !waiting {
@@ -1183,6 +1195,7 @@ fn c500_line(profile: trol_rapl::Profile) -> Result<(trol_rapl::RaplBackend, C50
         backend,
         C500Twin {
             stopped_at,
+            started_at,
             released_at,
             stop,
             c500: Some(c500),
@@ -1303,13 +1316,31 @@ fn gateway(a: GatewayArgs) -> Result<(), String> {
             ..profile
         })?;
         let mut after = Vec::new();
+        let (mut joint_start, mut ma_start) = (Vec::new(), Vec::new());
         for i in 0..a.moves {
-            // Joint 6 by 0.3 rad, back and forth: about a quarter of a second at full speed.
-            let step = if i % 2 == 0 { 0.3 } else { -0.3 };
+            // Joint 6 by 0.3 rad (TROLJoint), and back (TROLMA): about a quarter of a
+            // second each at full speed.
             *path.twin.stopped_at.lock().unwrap() = None;
-            path.robot.joint(6, step).map_err(err)?;
+            *path.twin.started_at.lock().unwrap() = None;
+            let called = Instant::now();
+            if i % 2 == 0 {
+                path.robot.joint(6, 0.3).map_err(err)?;
+            } else {
+                path.robot.ma(&[0.0; 6]).map_err(err)?;
+            }
             path.robot.finish().map_err(err)?;
             let returned = Instant::now();
+            let Some(started) = *path.twin.started_at.lock().unwrap() else {
+                return Err(format!(
+                    "Finish returned before the arm started (completion {completion})"
+                ));
+            };
+            let to_start = started.duration_since(called).as_secs_f64() * 1e3;
+            if i % 2 == 0 {
+                joint_start.push(to_start);
+            } else {
+                ma_start.push(to_start);
+            }
             let Some(stood) = *path.twin.stopped_at.lock().unwrap() else {
                 return Err(format!(
                     "Finish returned before the arm stood (completion {completion})"
@@ -1321,6 +1352,8 @@ fn gateway(a: GatewayArgs) -> Result<(), String> {
             completion: completion.to_string(),
             moves: a.moves,
             after_motion_end: Spread::of(after),
+            joint_call_to_start: Spread::of(joint_start),
+            ma_call_to_start: Spread::of(ma_start),
         });
     }
     let robwork = robwork_anchor(a.baud, a.moves)?;
@@ -1354,6 +1387,17 @@ fn gateway(a: GatewayArgs) -> Result<(), String> {
                     f.completion, f.moves
                 ),
                 &f.after_motion_end,
+            );
+            t += &line(
+                &format!(
+                    "  TROLJoint, the call to the arm's start ({})",
+                    f.completion
+                ),
+                &f.joint_call_to_start,
+            );
+            t += &line(
+                &format!("  TROLMA, the call to the arm's start ({})", f.completion),
+                &f.ma_call_to_start,
             );
         }
         t += &line(

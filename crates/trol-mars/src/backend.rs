@@ -511,11 +511,15 @@ impl MarsBackend {
         Ok(())
     }
 
-    /// Send queued segment lines while the unit's queue has room.
-    fn pump(&mut self) -> Result<(), Fail> {
+    /// Send queued segment lines while the unit's queue has room (`room`: the status word
+    /// was read a moment ago and showed room, so the first lines go without another look).
+    fn pump_from(&mut self, room: bool) -> Result<(), Fail> {
         let mut sent = 0;
         while !self.pending.is_empty() {
-            if sent % CHECK_EVERY == 0 && self.status()? & st::QUEUE_FULL != 0 {
+            if sent % CHECK_EVERY == 0
+                && !(room && sent == 0)
+                && self.status()? & st::QUEUE_FULL != 0
+            {
                 break;
             }
             let l = self.pending.pop_front().expect("not empty");
@@ -526,6 +530,11 @@ impl MarsBackend {
             self.sync()?;
         }
         Ok(())
+    }
+
+    /// [`MarsBackend::pump_from`] with a look at the unit's queue first.
+    fn pump(&mut self) -> Result<(), Fail> {
+        self.pump_from(false)
     }
 
     /// Halt as the arm shows it (issue 37): `STOP:`, and where the arm is not seen standing
@@ -636,6 +645,7 @@ impl MarsBackend {
         }
         self.planner.set_homed(self.homed);
         let now = self.now();
+        let busy_before = self.motion.is_some() || !self.pending.is_empty();
         if self.motion.is_none() && self.pending.is_empty() {
             if s & st::MOVING != 0 {
                 // Moving, and not by TROL's doing: a pendant, or another program.
@@ -697,8 +707,11 @@ impl MarsBackend {
             end: t1,
             seen_moving: false,
         });
+        // The status word read above, before this motion, showed the unit's queue with room
+        // and nothing of ours in it: no second look before the first lines (issue 43).
+        let room = s & st::QUEUE_FULL == 0 && !busy_before;
         let confirmed = self
-            .pump()
+            .pump_from(room)
             .map_err(|f| f.unsure())
             .and_then(|()| self.take_unasked())
             .and_then(|()| self.status().map_err(|f| f.unsure()));

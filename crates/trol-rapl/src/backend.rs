@@ -407,7 +407,48 @@ pub struct RaplBackend {
     log_fn: Option<LogFn>,
     transcript: Option<Recorder>,
     status: Option<text::Status>,
+    /// What was seen of the arm and may stand in for a read (issue 43).
+    seen: Seen,
+    /// How long it may ([`SEEN_FOR`]).
+    seen_for: Duration,
     closed: bool,
+}
+
+/// How long what was seen of the arm stands in for a read before a motion (issue 43): a
+/// STATUS that showed it idle, and where the motion before ended. Only while nothing but
+/// reads (STATUS, W0, W2, ...) went to the controller since, and nothing came unasked: any
+/// other line, any byte unasked, Ctrl-C or a failure forgets it. A motion sent on it that
+/// the controller refuses (arm power lost meanwhile, the pendant holding control) is
+/// refused by its own reply, read as every motion's is. 250 ms: about as old as a STATUS
+/// read before the motion is by the time the motion is typed (its 638 bytes take 166 ms at
+/// 38400 Bd), so the arm's state is not trusted for longer than before; a program's next
+/// motion after Finish comes within a few milliseconds.
+pub const SEEN_FOR: Duration = Duration::from_millis(250);
+
+/// What the backend saw of the arm, each with when (see [`SEEN_FOR`]).
+#[derive(Clone, Debug, Default)]
+struct Seen {
+    /// A STATUS that showed every axis DONE, powered and homed, with no motion of ours
+    /// under way (its end confirmed).
+    idle: Option<(std::time::Instant, text::Status)>,
+    /// Where the last motion ended as commanded (its joints, degrees), its arrival confirmed
+    /// by W2: what W0 would read.
+    end: Option<(std::time::Instant, [f64; 6])>,
+}
+
+impl Seen {
+    fn idle(&self, within: Duration) -> Option<&text::Status> {
+        self.idle
+            .as_ref()
+            .filter(|(t, _)| t.elapsed() <= within)
+            .map(|(_, s)| s)
+    }
+
+    fn end(&self, within: Duration) -> Option<[f64; 6]> {
+        self.end
+            .filter(|(t, _)| t.elapsed() <= within)
+            .map(|(_, q)| q)
+    }
 }
 
 const LOG_KEEP: usize = 200;
@@ -452,6 +493,8 @@ impl RaplBackend {
             log_fn,
             transcript: record,
             status: None,
+            seen: Seen::default(),
+            seen_for: SEEN_FOR,
             closed: false,
         };
         if let Err(e) = b.open() {
@@ -460,6 +503,20 @@ impl RaplBackend {
             return Err(e);
         }
         Ok(b)
+    }
+
+    /// Forget what was seen of the arm: a line that is not a read went out, something came
+    /// unasked, or something failed.
+    fn forget(&mut self) {
+        self.seen = Seen::default();
+    }
+
+    /// Whether `line` only reads (cannot move the arm or change what it does).
+    fn only_reads(line: &str) -> bool {
+        let word = line.split_whitespace().next().unwrap_or("");
+        crate::probe::READ_ONLY
+            .iter()
+            .any(|k| k.eq_ignore_ascii_case(word))
     }
 
     fn note(&mut self, line: String) {
@@ -493,6 +550,13 @@ impl RaplBackend {
     /// or what NOHELP's answer showed with `ack = "auto"`).
     pub fn expects_ack(&self) -> bool {
         self.ack
+    }
+
+    /// How long what was seen of the arm stands in for a read before a motion ([`SEEN_FOR`]
+    /// by default; zero: a read before every motion). For tests, and for a cautious
+    /// application.
+    pub fn set_seen_for(&mut self, d: Duration) {
+        self.seen_for = d;
     }
 
     /// Type a line that cannot move the arm (its keyword is one of
@@ -530,6 +594,7 @@ impl RaplBackend {
         stop: &std::sync::atomic::AtomicBool,
     ) -> Result<Reply, BackendError> {
         self.last_poll = None;
+        self.forget();
         self.settle()?;
         let now = self.now();
         self.session
@@ -570,6 +635,7 @@ impl RaplBackend {
 
     /// Ctrl-C, and what came back up to the prompt.
     fn ctrl_c(&mut self) -> Result<String, BackendError> {
+        self.forget();
         let now = self.now();
         self.session.resync(now);
         match self.pump() {
@@ -699,6 +765,7 @@ impl RaplBackend {
         }
         let stray = self.session.take_stray();
         if !stray.is_empty() || self.session.is_lost() {
+            self.forget();
             if !stray.is_empty() {
                 let text = String::from_utf8_lossy(&stray).into_owned();
                 let said = lines(&text)
@@ -748,6 +815,7 @@ impl RaplBackend {
             })
             .collect();
         if !said.is_empty() {
+            self.forget();
             self.note(format!(
                 "the C500 said, while a line was typed: {}",
                 said.join(" / ")
@@ -768,6 +836,7 @@ impl RaplBackend {
             return Ok(());
         }
         let text = std::mem::take(&mut self.unasked);
+        self.forget();
         self.outstanding = None;
         let dropped = self.queue.len();
         self.queue.clear();
@@ -815,6 +884,9 @@ impl RaplBackend {
                  TROLFinish(FINISH_WAIT) first"
             )));
         }
+        if !Self::only_reads(line) {
+            self.forget();
+        }
         self.settle()?;
         let now = self.now();
         let started = if urgent {
@@ -823,12 +895,14 @@ impl RaplBackend {
             self.session.send_line(line, timeout, now)
         };
         if let Err(e) = started {
+            self.forget();
             self.note(format!("`{line}` not sent: {e}"));
             return Err(BackendError::Link(e.to_string()));
         }
         match self.pump() {
             Ok(Ok(r)) => Ok(r),
             Ok(Err(e)) => {
+                self.forget();
                 self.note(format!("`{line}`: {e}"));
                 self.keep_unasked(&format!("{line}\r"));
                 Err(if e.surely_not_run() {
@@ -837,7 +911,10 @@ impl RaplBackend {
                     BackendError::Unsure(e.to_string())
                 })
             }
-            Err(e) => Err(BackendError::Unsure(format!("`{line}`: {e}"))),
+            Err(e) => {
+                self.forget();
+                Err(BackendError::Unsure(format!("`{line}`: {e}")))
+            }
         }
     }
 
@@ -846,6 +923,9 @@ impl RaplBackend {
     fn answer(&mut self, line: &str, r: Reply, output: bool) -> Result<Answer, BackendError> {
         let refused = self.refusal(&r);
         let printed = lines(&r.text).join(" / ");
+        if refused.is_some() || (self.ack && !r.ack) || (!output && !printed.is_empty()) {
+            self.forget();
+        }
         if let Some((n, t)) = refused {
             if r.ack {
                 let e = format!(
@@ -942,6 +1022,9 @@ impl RaplBackend {
         let r = self.output("STATUS")?;
         let s = text::read_status(&r.text).map_err(BackendError::Link)?;
         self.status = Some(s.clone());
+        let idle =
+            s.done.iter().all(|d| *d) && s.homed.iter().all(|h| *h) && !s.limp.iter().any(|l| *l);
+        self.seen.idle = idle.then(|| (std::time::Instant::now(), s.clone()));
         Ok(s)
     }
 
@@ -960,10 +1043,23 @@ impl RaplBackend {
         if let Some(e) = self.deferred.take() {
             return Err(e);
         }
-        let moving = self.poll()?;
-        let st = self.status.clone().ok_or_else(|| {
-            BackendError::Link("STATUS could not be read before the motion".into())
-        })?;
+        // Idle as seen a moment ago, with nothing but reads since: no read needed (issue 43).
+        let seen = (self.outstanding.is_none()
+            && self.queue.is_empty()
+            && self.awaiting.is_none()
+            && !self.finishing)
+            .then(|| self.seen.idle(self.seen_for).cloned())
+            .flatten();
+        let (moving, st) = match seen {
+            Some(st) => (false, st),
+            None => {
+                let moving = self.poll()?;
+                let st = self.status.clone().ok_or_else(|| {
+                    BackendError::Link("STATUS could not be read before the motion".into())
+                })?;
+                (moving, st)
+            }
+        };
         if st.limp.iter().any(|l| *l) {
             self.note(
                 "refused before sending: STATUS says the arm has no power (LIMP): restore arm \
@@ -1029,6 +1125,29 @@ impl RaplBackend {
         )
     }
 
+    /// A joint motion relative to where the arm stands (JOINT, MI): as
+    /// [`RaplBackend::relative_line`], from the end of the motion before where that was seen
+    /// a moment ago (no W0 read), else from W0; `end` gives its end (joints, degrees).
+    fn relative_joints(
+        &mut self,
+        line: String,
+        busy: bool,
+        end: impl FnOnce([f64; 6]) -> [f64; 6] + Send + 'static,
+    ) -> BiosResult {
+        self.relative(
+            line.clone(),
+            busy,
+            Box::new(move |b| {
+                let q = match b.standing_joints()? {
+                    Ok(q) => q,
+                    Err(c) => return Ok(c),
+                };
+                let expect = Expect::Joints(end(q));
+                b.submit(Motion { line, expect }, false)
+            }),
+        )
+    }
+
     /// A relative motion: now, computed from where the arm stands, when it stands; queued
     /// and computed when its turn comes while another runs. `what` names it in the log.
     fn relative(&mut self, what: String, busy: bool, now: Later) -> BiosResult {
@@ -1076,6 +1195,7 @@ impl RaplBackend {
     /// checked), then a refusal has the reply window to come; without one the motion runs,
     /// and its answer is read by [`RaplBackend::poll`].
     fn launch_answered_at_end(&mut self, m: Motion) -> BiosResult {
+        self.forget();
         self.settle()?;
         let now = self.now();
         self.session
@@ -1174,10 +1294,15 @@ impl RaplBackend {
     /// ours is under way; starts the next queued motion once the last has ended. Whether
     /// anything still moves.
     fn poll(&mut self) -> Result<bool, BackendError> {
-        if self.finishing {
-            return self.await_finish();
+        let r = if self.finishing {
+            self.await_finish()
+        } else {
+            self.poll_status()
+        };
+        if r.is_err() {
+            self.forget();
         }
-        self.poll_status()
+        r
     }
 
     /// One look at the arm by STATUS (and W2), as [`RaplBackend::poll`] describes.
@@ -1325,6 +1450,7 @@ impl RaplBackend {
 
     /// Type FINISH; its answer is read by [`RaplBackend::await_finish`].
     fn type_finish(&mut self) -> Result<(), BackendError> {
+        self.forget();
         self.report_unasked()?;
         let now = self.now();
         if let Err(e) = self.session.send_line("FINISH", self.motion_timeout(), now) {
@@ -1375,6 +1501,12 @@ impl RaplBackend {
         };
         match answer {
             Ok(Answer::Done(_)) => {
+                if self.profile.finish_ack_means_arrived {
+                    if let Some(expect) = self.outstanding.as_ref().map(|o| o.motion.expect.clone())
+                    {
+                        self.seen_at_end(&expect);
+                    }
+                }
                 if self.profile.finish_ack_means_arrived || self.arrived()? {
                     self.outstanding = None;
                     return self.next_in_queue();
@@ -1555,8 +1687,25 @@ impl RaplBackend {
         };
         if arrived {
             self.rest = Some(p.joints);
+            self.seen_at_end(&expect);
         }
         Ok(arrived)
+    }
+
+    /// A motion seen to end where it was sent (W2 there, or FINISH's ACK where the profile
+    /// has it mean arrival): the arm stands at its end, idle, and powered and homed as the
+    /// last STATUS said (the motion ran), as of now ([`SEEN_FOR`]).
+    fn seen_at_end(&mut self, expect: &Expect) {
+        let now = std::time::Instant::now();
+        self.seen.end = match expect {
+            Expect::Joints(q) => Some((now, *q)),
+            _ => None,
+        };
+        self.seen.idle = self
+            .status
+            .clone()
+            .filter(|s| s.homed.iter().all(|h| *h) && !s.limp.iter().any(|l| *l))
+            .map(|s| (now, s));
     }
 
     /// Whether two WORLD rows are the same pose within the profile's tolerance (the angles
@@ -2145,6 +2294,18 @@ impl RaplBackend {
         self.read_position(PosMode::Commanded).map(Ok)
     }
 
+    /// Where the arm stands in joints (degrees): the end of the motion before, seen arrived a
+    /// moment ago with nothing but reads since ([`SEEN_FOR`]), else W0 as
+    /// [`RaplBackend::standing`] reads it.
+    fn standing_joints(&mut self) -> Result<Result<[f64; 6], i16>, BackendError> {
+        if self.outstanding.is_none() && self.queue.is_empty() {
+            if let Some(q) = self.seen.end(self.seen_for) {
+                return Ok(Ok(q));
+            }
+        }
+        Ok(self.standing()?.map(|p| p.joints))
+    }
+
     fn here(&mut self) -> Result<Result<Pose, i16>, BackendError> {
         let p = match self.standing()? {
             Ok(p) => p,
@@ -2191,9 +2352,7 @@ impl RaplBackend {
                 let expect = Expect::Joints(deg);
                 return b.submit(Motion { line, expect }, busy);
             }
-            b.relative_line(line, busy, move |p| {
-                Expect::Joints(std::array::from_fn(|i| p.joints[i] + deg[i]))
-            })
+            b.relative_joints(line, busy, move |q| std::array::from_fn(|i| q[i] + deg[i]))
         })
     }
 }
@@ -2447,10 +2606,9 @@ impl Backend for RaplBackend {
         let deg = radians.to_degrees();
         let line = format!("JOINT {joint},{}", text::num(deg));
         self.motion_with(false, |b, busy| {
-            b.relative_line(line, busy, move |p| {
-                let mut q = p.joints;
+            b.relative_joints(line, busy, move |mut q| {
                 q[usize::from(joint - 1)] += deg;
-                Expect::Joints(q)
+                q
             })
         })
     }

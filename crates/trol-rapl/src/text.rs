@@ -3,16 +3,15 @@
 //! written and read by the same rules; the layouts follow the public samples in
 //! ../shared/reference/a465.md §2.3, with six axes wrapped after five as on the G3000).
 
-/// A number as a command carries it: four decimals, never `-0.0000`, never an exponent.
+/// A number as a command carries it: to four decimals, without trailing zeros (`0`, `-3`,
+/// `12.5`: a line shorter to type, issue 43), never `-0`, never an exponent.
 pub fn num(v: f64) -> String {
     let s = format!("{v:.4}");
-    if s.trim_start_matches('-')
-        .bytes()
-        .all(|b| b == b'0' || b == b'.')
-    {
-        "0.0000".into()
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s.trim_start_matches('-').bytes().all(|b| b == b'0') {
+        "0".into()
     } else {
-        s
+        s.into()
     }
 }
 
@@ -368,9 +367,12 @@ mod tests {
 
     #[test]
     fn numbers_and_error_lines() {
-        assert_eq!(num(-0.00001), "0.0000");
+        assert_eq!(num(-0.00001), "0");
         assert_eq!(num(12.34567), "12.3457");
-        assert_eq!(num(-3.0), "-3.0000");
+        assert_eq!(num(-3.0), "-3");
+        assert_eq!(num(100.0), "100");
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(-0.25), "-0.25");
         assert_eq!(
             error_line("\r\n012-COMMAND ERROR.\r\n"),
             Some((12, "COMMAND ERROR".into()))

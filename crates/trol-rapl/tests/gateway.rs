@@ -698,3 +698,69 @@ fn teaching_maps_to_here_point_dlocn_and_listl_on_every_variant() {
         }
     }
 }
+
+/// The lines the controller ran after the first `from`.
+fn ran_since(sim: &common::Sim, from: usize) -> Vec<String> {
+    sim.ran().into_iter().skip(from).collect()
+}
+
+/// Issue 43: a motion right after another was seen to end goes without a read first (the
+/// STATUS that showed the end, and the end itself, stand in for STATUS and W0); a relative
+/// motion is computed from that end. What the arm does meanwhile is still the arm's to say:
+/// power lost since is refused by the motion's own reply, and nothing moves.
+#[test]
+fn a_motion_after_a_seen_end_goes_at_once_and_a_lost_power_still_refuses_it() {
+    let (port, sim) = start(Profile::simulator(), None);
+    let mut b = RaplBackend::connect(port, Profile::simulator()).unwrap();
+    // However busy the machine running this test, the sighting stands (a wall-clock bound
+    // would make the test depend on the machine's load).
+    b.set_seen_for(std::time::Duration::from_secs(600));
+    assert_eq!(b.ma([0.0, 0.2, 0.3, 0.0, 0.0, 0.0]).unwrap(), 0);
+    wait_idle(&mut b);
+    let mark = sim.ran().len();
+    assert_eq!(b.joint(6, 0.1).unwrap(), 0);
+    let typed = ran_since(&sim, mark);
+    assert!(
+        typed.first().is_some_and(|l| l.starts_with("JOINT 6,")),
+        "the motion first, no read before it: {typed:?}"
+    );
+    wait_idle(&mut b);
+    let q = sim.planned_end();
+    assert!((q[5] - 0.1).abs() < 1e-3, "{q:?}");
+    // Power lost while it stands, and no word of it on the line (this controller prints
+    // none): the next motion is refused by the controller, and the arm stays.
+    sim.emergency_stop();
+    while sim.has_power() {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    let before = sim.planned_end();
+    let c = match b.joint(6, -0.1) {
+        Ok(c) => c,
+        Err(BackendError::Refused(c)) => c,
+        Err(e) => panic!("{e}"),
+    };
+    assert_eq!(c, trol_rapl::backend::ARM_POWER, "{:?}", b.log_lines());
+    assert_eq!(sim.planned_end(), before);
+    assert!(!sim.moving());
+}
+
+/// What was seen stands in for a read only for a moment ([`trol_rapl::backend::SEEN_FOR`]):
+/// after that, STATUS and W0 are read before the motion.
+#[test]
+fn an_old_sighting_is_read_again_before_a_motion() {
+    let (port, sim) = start(Profile::simulator(), None);
+    let mut b = RaplBackend::connect(port, Profile::simulator()).unwrap();
+    assert_eq!(b.ma([0.0, 0.2, 0.3, 0.0, 0.0, 0.0]).unwrap(), 0);
+    wait_idle(&mut b);
+    std::thread::sleep(trol_rapl::backend::SEEN_FOR + std::time::Duration::from_millis(50));
+    let mark = sim.ran().len();
+    assert_eq!(b.joint(6, 0.1).unwrap(), 0);
+    let typed = ran_since(&sim, mark);
+    let status = typed.iter().position(|l| l == "STATUS");
+    let w0 = typed.iter().position(|l| l == "W0");
+    let joint = typed.iter().position(|l| l.starts_with("JOINT 6,"));
+    assert!(
+        status.is_some() && w0.is_some() && status < joint && w0 < joint,
+        "STATUS and W0 before the motion: {typed:?}"
+    );
+}

@@ -174,23 +174,39 @@ pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenEr
             why: "empty; give a device path such as /dev/ttyUSB0, or socket://HOST:PORT".into(),
         });
     }
-    Ok(Box::new(
-        serial::SerialLine::open_with(name, settings.baud, settings.rts_cts).map_err(|source| {
-            // EBUSY: the device was opened for exclusive use by another process.
-            if source.kind() == io::ErrorKind::ResourceBusy || source.raw_os_error() == Some(16) {
-                OpenError::Busy {
-                    name: name.to_string(),
-                    holders: holders(name),
-                }
-            } else {
-                OpenError::Io {
-                    name: name.to_string(),
-                    source,
-                }
+    let busy =
+        |e: &io::Error| e.kind() == io::ErrorKind::ResourceBusy || e.raw_os_error() == Some(16);
+    // A device held only for a moment is not busy: a process that forked from this one (to
+    // run another program) holds a copy of a port just closed here until its exec closes it.
+    let grace = std::time::Instant::now() + BUSY_GRACE;
+    let opened = loop {
+        match serial::SerialLine::open_with(name, settings.baud, settings.rts_cts) {
+            Err(e) if busy(&e) && std::time::Instant::now() < grace => {
+                std::thread::sleep(std::time::Duration::from_millis(20));
             }
-        })?,
-    ))
+            other => break other,
+        }
+    };
+    Ok(Box::new(opened.map_err(|source| {
+        // EBUSY: the device was opened for exclusive use by another process.
+        if busy(&source) {
+            OpenError::Busy {
+                name: name.to_string(),
+                holders: holders(name),
+            }
+        } else {
+            OpenError::Io {
+                name: name.to_string(),
+                source,
+            }
+        }
+    })?))
 }
+
+/// How long a device opened for exclusive use elsewhere is tried again before it counts as
+/// busy ([`OpenError::Busy`]): long enough for a process forked from this one to exec (and
+/// so close its copy of a port just closed here) on a loaded machine.
+pub const BUSY_GRACE: std::time::Duration = std::time::Duration::from_millis(1000);
 
 /// A process that has a port open.
 #[derive(Clone, Debug, PartialEq, Eq)]

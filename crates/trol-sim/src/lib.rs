@@ -17,6 +17,7 @@ use trol_controller::{
     Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, Target, embedded_with,
 };
 use trol_port::memory::MemoryLine;
+use trol_proto::application::record::{MM_DECIMALS, format_fixed};
 use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag};
 use trol_proto::link::LinkConfig;
 
@@ -281,7 +282,15 @@ impl Backend for SimBackend {
                 } else {
                     "resting"
                 };
-                format!("{} at x {x:.1} y {y:.1} z {z:.1} mm, {place}", o.name)
+                // To the arm's 0.001 mm, as every surface prints a length (issue 42).
+                let mm = |v: f64| format_fixed(v, MM_DECIMALS);
+                format!(
+                    "{} at x {} y {} z {} mm, {place}",
+                    o.name,
+                    mm(x),
+                    mm(y),
+                    mm(z)
+                )
             })
             .collect();
         Some(words.join("; "))

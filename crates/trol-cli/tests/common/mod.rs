@@ -303,3 +303,42 @@ pub fn probe_with_poses(
     assert!(status.success(), "{args:?}:\n{out}");
     out
 }
+
+/// The objects a world line names (`cube at x 400 y 0 z 135 mm, resting; ...`): each name,
+/// where it is (mm) and where it rests ("resting", "in the gripper"), from the last such
+/// line in `text`.
+pub fn world_objects(text: &str) -> Vec<(String, [f64; 3], String)> {
+    let Some(line) = text.lines().rev().find(|l| l.contains(" mm, ")) else {
+        return Vec::new();
+    };
+    let line = line.rsplit(": ").next().unwrap_or(line);
+    line.split("; ")
+        .filter_map(|o| {
+            let (name, rest) = o.split_once(" at x ")?;
+            let (xyz, place) = rest.split_once(" mm, ")?;
+            let v: Vec<f64> = xyz
+                .split(' ')
+                .filter(|w| !matches!(*w, "y" | "z"))
+                .map(|w| w.parse().ok())
+                .collect::<Option<_>>()?;
+            let name = name.rsplit(' ').next().unwrap_or(name);
+            Some((
+                name.to_string(),
+                [*v.first()?, *v.get(1)?, *v.get(2)?],
+                place.to_string(),
+            ))
+        })
+        .collect()
+}
+
+/// Whether `text`'s last world line puts `name` within 0.05 mm of `at` (None: any), `place`.
+pub fn object_is(text: &str, name: &str, at: [Option<f64>; 3], place: &str) -> bool {
+    world_objects(text).iter().any(|(n, p, pl)| {
+        n == name
+            && pl == place
+            && at
+                .iter()
+                .zip(p)
+                .all(|(want, got)| want.is_none_or(|w| (w - got).abs() <= 0.05))
+    })
+}

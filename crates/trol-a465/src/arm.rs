@@ -164,6 +164,10 @@ pub struct ArmSettings {
     pub objects: Vec<WorldObject>,
     /// Whether the arm counts as homed from the start (default false, as after power-up).
     pub homed: bool,
+    /// The joints' top speeds at 100 %, rad/s, where the controller holds the arm below the
+    /// published ones (a MARS 8's REGMS; issue 43): each joint at the lower of the two.
+    /// None: the published speeds.
+    pub joint_speeds: Option<[f64; 6]>,
 }
 
 impl Default for ArmSettings {
@@ -173,6 +177,7 @@ impl Default for ArmSettings {
             object_width: None,
             objects: Vec::new(),
             homed: false,
+            joint_speeds: None,
         }
     }
 }
@@ -839,7 +844,7 @@ impl Arm {
                 to[a] = 0.0;
             }
             let path = Path::Joint { from, to };
-            let (speeds, accels) = joint_limits(HOME_SPEED);
+            let (speeds, accels) = self.joint_limits_at(HOME_SPEED);
             let (v, a) = path.bounds().limits(&speeds, &accels);
             let start = self.planned_start_time(now);
             let profile = Profile::trapezoid(start, v, a, HOME_TIME * axes.len() as f64);
@@ -1022,7 +1027,7 @@ impl Arm {
 
     /// Queue a motion along `path`, timed by the joint limits at the speed setting.
     fn push(&mut self, path: Path, now: f64) {
-        let (speeds, accels) = joint_limits(self.speed);
+        let (speeds, accels) = self.joint_limits_at(self.speed);
         let (v, a) = path.bounds().limits(&speeds, &accels);
         let start = self.planned_start_time(now);
         let profile = Profile::trapezoid(start, v, a, 0.0);
@@ -1038,6 +1043,21 @@ impl Arm {
     }
 
     /// The tool's linear limits at the speed setting: (mm/s, mm/s²).
+    /// [`joint_limits`] at `percent` for this arm: each joint's speed at most its
+    /// controller's top speed ([`ArmSettings::joint_speeds`]) scaled the same way.
+    fn joint_limits_at(&self, percent: f64) -> ([f64; 6], [f64; 6]) {
+        let (mut speeds, accels) = joint_limits(percent);
+        if let Some(top) = self.settings.joint_speeds {
+            let f = percent.clamp(1.0, 100.0) / 100.0;
+            for (v, t) in speeds.iter_mut().zip(top) {
+                if t.is_finite() && t > 0.0 {
+                    *v = v.min(t * f);
+                }
+            }
+        }
+        (speeds, accels)
+    }
+
     fn linear_limits(&self) -> (f64, f64) {
         let f = self.speed.clamp(1.0, 100.0) / 100.0;
         (MAX_LINEAR_SPEED * f, MAX_LINEAR_ACCEL * f)
@@ -1046,7 +1066,7 @@ impl Arm {
     /// A straight line's path of `length` mm timed along it ([`Profile::along`]) from
     /// `start`, within the joint limits at the speed setting and the tool's linear limits.
     fn line_profile(&self, path: &Path, length: f64, start: f64, ease: Ease) -> Profile {
-        let (speeds, accels) = joint_limits(self.speed);
+        let (speeds, accels) = self.joint_limits_at(self.speed);
         let lin = self.linear_limits();
         // A line with very many samples (near a singular pose) gets one stretch per segment:
         // its grid is fine already, and the memory stays bounded.
@@ -1071,7 +1091,7 @@ impl Arm {
     /// joint-interpolated move between its ends at the speed setting, or its length at the
     /// tool's linear limits, whichever takes longer.
     pub fn line_least_time(&self, from: Joints, to: Joints, length: f64) -> f64 {
-        let (speeds, accels) = joint_limits(self.speed);
+        let (speeds, accels) = self.joint_limits_at(self.speed);
         let (v, a) = Path::Joint { from, to }.bounds().limits(&speeds, &accels);
         let joints = Profile::trapezoid(0.0, v, a, 0.0).end();
         let (lv, la) = self.linear_limits();
@@ -1107,7 +1127,7 @@ impl Arm {
         let line = Line::new(from, to);
         let length = (to.pos - from.pos).length();
         let start = self.planned_start_time(now);
-        let (speeds, accels) = joint_limits(self.speed);
+        let (speeds, accels) = self.joint_limits_at(self.speed);
         // The line from where the arm is; if it is slow or refused, from each place the free
         // joints can turn to first: the fastest wins.
         let mut best: Option<(f64, Option<Path>, Path, Profile)> = None;

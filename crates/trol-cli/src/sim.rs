@@ -239,6 +239,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
             object_width: a.object,
             objects,
             homed: a.r.homed,
+            ..ArmSettings::default()
         },
         time_scale: a.r.time_scale,
         locations,

@@ -236,8 +236,12 @@ impl MarsBackend {
     ) -> Result<MarsBackend, MarsError> {
         let name = port.name();
         let homed = [profile.assume_homed; 6];
+        // The unit holds each axis to its REGMS: planned at those speeds, a motion's time is
+        // the arm's (issue 43). Accelerations stay the model's: REGACC's unit is not settled
+        // by the public sources, and the unit (and its twin) accelerate at least as fast.
         let mut planner = Arm::new(ArmSettings {
             homed: profile.assume_homed,
+            joint_speeds: Some(profile.top_speeds()),
             ..ArmSettings::default()
         });
         for (n, l) in locations {

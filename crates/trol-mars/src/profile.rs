@@ -264,6 +264,15 @@ impl Profile {
         self.lines[j] * 4.0 * self.gears[j] / 360.0 * self.direction[j]
     }
 
+    /// Each joint's top speed as the unit holds it (REGMS, IRC*256/ms), TROL's rad/s: what the
+    /// planner plans with, so that a motion's time is the unit's (issue 43).
+    pub fn top_speeds(&self) -> [f64; 6] {
+        std::array::from_fn(|j| {
+            let irc_per_s = self.speed[j] as f64 / 256.0 * 1000.0;
+            (irc_per_s / self.irc_per_deg(j).abs()).to_radians()
+        })
+    }
+
     /// Joint `j`'s range, IRC, low end first.
     pub fn range_irc(&self, j: usize) -> (i64, i64) {
         let (a, b) = (self.lower_irc[j], self.upper_irc[j]);

@@ -95,6 +95,7 @@ pub fn sim_settings(cfg: &Config) -> Result<SimSettings> {
             object_width: cfg.object,
             objects,
             homed: cfg.homed,
+            ..ArmSettings::default()
         },
         time_scale: cfg.time_scale,
         locations: config_locations(cfg)?,

@@ -1110,6 +1110,9 @@ impl Arm {
     /// ([`Arm::line_starts`]); the turn is a motion of its own before the line, and its time
     /// counts in the line's.
     fn move_line(&mut self, to: Pose, now: f64) -> i16 {
+        // Set below once the planner has a verdict; refused before it (not homed, out of
+        // reach, below the table), the line has none.
+        self.last_line = None;
         if let Err(c) = self.need_homed(now) {
             return c;
         }
@@ -1232,7 +1235,8 @@ impl Arm {
     }
 
     /// What the planner found for the last straight line asked for (accepted with its least
-    /// time, or why it was refused).
+    /// time, or why it was refused); None when it was refused before planning (not homed,
+    /// the target out of reach or below the table).
     pub fn last_line(&self) -> Option<LineOutcome> {
         self.last_line
     }

@@ -206,8 +206,10 @@ pub const KEEPALIVE_SILENCE: Duration = Duration::from_millis(1500);
 /// What an in-process line (the embedded controller's, port `sim`, `rapl:`, `mars:`) waits
 /// beyond the timeouts of a line to another process: its controller cannot die apart from
 /// the program, only be held back by a busy machine, and must not time out for that (issue
-/// 42: one TROL_ERR_COMM in 1,100 Defines under heavy load).
-#[cfg(any(feature = "sim", feature = "rapl", feature = "mars"))]
+/// 42: one TROL_ERR_COMM in 1,100 Defines under heavy load). Its reply time and the silence
+/// its keep-alive allows grow by as much, also when the version check learns them again
+/// (issue 44: InitTROL(1) had put them back to 3.7 s and 1.5 s, and a 1998 program's first
+/// TROLHome on `rapl:` came back TROL_ERR_COMM under load).
 pub const IN_PROCESS_SLACK: Duration = Duration::from_secs(5);
 
 /// The link settings of an in-process line: `cfg`'s block check, every timeout at least
@@ -575,7 +577,7 @@ impl Robot {
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time + IN_PROCESS_SLACK);
+        robot.set_reply_time(reply_time);
         robot.codes = trol_rapl::RAPL_CODES;
         Ok(robot)
     }
@@ -619,7 +621,7 @@ impl Robot {
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time + IN_PROCESS_SLACK);
+        robot.set_reply_time(reply_time);
         robot.codes = trol_mars::MARS_CODES;
         Ok(robot)
     }
@@ -643,7 +645,7 @@ impl Robot {
         let (line, handle) =
             trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
-        robot.set_reply_time(SIM_REPLY_TIME + IN_PROCESS_SLACK);
+        robot.set_reply_time(SIM_REPLY_TIME);
         robot.view = Some(view);
         Ok(robot)
     }
@@ -670,7 +672,7 @@ impl Robot {
         let cfg = in_process(cfg);
         let (line, handle) = trol_sim::embedded(settings, cfg);
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
-        robot.set_reply_time(SIM_REPLY_TIME + IN_PROCESS_SLACK);
+        robot.set_reply_time(SIM_REPLY_TIME);
         robot
     }
 
@@ -744,9 +746,10 @@ impl Robot {
     /// TROLGetReplyTime answers; an in-process controller's backend says it): every call
     /// but a wait without limit then waits [`prompt_reply_timeout`] for its reply, unless
     /// the application set the reply timeout, and the default ErrAppTimeOut grants Home no
-    /// 90 s more (that was for a 1998 server, which answered Home at its end).
+    /// 90 s more (that was for a 1998 server, which answered Home at its end). An
+    /// in-process controller is given [`IN_PROCESS_SLACK`] more.
     pub fn set_reply_time(&mut self, reply_time: Duration) {
-        self.prompt = Some(prompt_reply_timeout(reply_time));
+        self.prompt = Some(prompt_reply_timeout(reply_time + self.in_process_slack()));
         self.default_handlers();
     }
 
@@ -1266,6 +1269,14 @@ impl Robot {
         self.transactor.reply_timeout()
     }
 
+    /// How long a call (but a wait without limit) waits for its reply: the controller's
+    /// reply time and a margin ([`Robot::set_reply_time`]); `None` where the controller
+    /// did not say it, or the application set the reply timeout: then the manual's
+    /// [`Robot::reply_timeout`].
+    pub fn call_reply_timeout(&self) -> Option<Duration> {
+        self.prompt.filter(|_| !self.reply_timeout_set)
+    }
+
     /// [`Robot::finish`] that gives up when `cancel` becomes true (set from a Ctrl-C handler or
     /// another thread): it then sends Halt, waits for the arm to brake to a stop, and returns
     /// [`Waited::Halted`]. `cancel` is left as it is; the caller resets it.
@@ -1633,10 +1644,21 @@ impl Robot {
     /// A reply timeout the application set (SetL3_TO_Intervall) stays its own: no silence
     /// shortens it.
     pub fn set_keepalive(&mut self, interval: Option<Duration>) {
+        let slack = self.in_process_slack();
         let silence = interval
             .filter(|_| !self.reply_timeout_set)
-            .map(keepalive_silence);
+            .map(|i| keepalive_silence(i) + slack);
         self.transactor.initiator_mut().set_silence(silence);
+    }
+
+    /// What an in-process controller is given beyond a controller in another process
+    /// ([`IN_PROCESS_SLACK`]): it cannot die apart from this program, only be held back.
+    fn in_process_slack(&self) -> Duration {
+        if self._embedded.is_some() {
+            IN_PROCESS_SLACK
+        } else {
+            Duration::ZERO
+        }
     }
 
     /// The longest silence a reply is waited through, where the controller keeps the line

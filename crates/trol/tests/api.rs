@@ -853,6 +853,32 @@ fn a_controller_names_its_own_codes_at_connect() {
 }
 
 #[test]
+fn an_in_process_controller_keeps_its_slack_after_the_version_check() {
+    // The version check learns the controller's reply time and keep-alive again: for an
+    // in-process one, a busy machine may hold its thread back, so both keep the slack
+    // (issue 44: InitTROL(1) put them back to the bare figures, and a 1998 program's
+    // first TROLHome on `rapl:` came back TROL_ERR_COMM under load).
+    let mut robot = Robot::embedded(settings());
+    let before = robot
+        .call_reply_timeout()
+        .expect("the backend says its reply time");
+    assert!(before >= trol::IN_PROCESS_SLACK, "{before:?}");
+    trol::check_server(&mut robot).unwrap();
+    assert_eq!(robot.call_reply_timeout(), Some(before));
+    let silence = robot
+        .keepalive_silence()
+        .expect("the simulator keeps the line alive");
+    assert!(
+        silence >= trol::KEEPALIVE_SILENCE + trol::IN_PROCESS_SLACK,
+        "{silence:?}"
+    );
+    // The application's own reply timeout is the bound of every wait, as the manual's.
+    robot.set_reply_timeout_tenths(20).unwrap();
+    assert_eq!(robot.call_reply_timeout(), None);
+    assert_eq!(robot.keepalive_silence(), None);
+}
+
+#[test]
 fn the_host_checks_the_controllers_version_and_kind() {
     // The simulator: this library's version; its codes are the simulated A465's.
     let mut robot = Robot::embedded(settings());

@@ -5,6 +5,8 @@
 //!   arguments, GetStatus bookkeeping, replies that wait for an idle arm), sans-IO;
 //! - [`terminal`]: terminal mode and the activation sequence;
 //! - [`controller`]: the loop that runs both modes over a port, and the embedded controller;
+//! - [`real`]: what every backend for a real controller does the same way (Halt as the arm
+//!   shows it);
 //!
 //! The simulated A465 is a backend in its own crate, `trol-sim`.
 //!
@@ -17,6 +19,7 @@
 pub mod backend;
 pub mod controller;
 pub mod pcp;
+pub mod real;
 pub mod terminal;
 
 pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};

@@ -26,6 +26,7 @@ use std::time::{Duration, Instant};
 use trol_a465::arm::{self, Arm, ArmSettings, Stored, code};
 use trol_a465::backend::A465_CODES;
 use trol_a465::model::joints_to_counts;
+use trol_controller::real;
 use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, LocName, Location, Tag};
@@ -87,10 +88,7 @@ pub const HOMING_GROUP_LIMIT: Duration = Duration::from_secs(30);
 /// How long a stop may take to show on the unit: the A465's longest braking (0.4 s) and a
 /// margin for the reads.
 pub const STOP_WITHIN: Duration = Duration::from_millis(900);
-/// The gap between two `COORDAP?` reads that show the arm standing.
-pub const STILL_GAP: Duration = Duration::from_millis(250);
-/// How far a joint may move between two reads of a standing arm, degrees.
-pub const STILL_DEG: f64 = 0.02;
+pub use trol_controller::real::{STILL_DEG, STILL_GAP};
 /// The longest a Halt takes, both its stops included (within the reply time).
 pub const HALT_WITHIN: Duration = Duration::from_millis(2100);
 /// The unit's parameter for how smoothly segments join (ctu-crs sends 5).
@@ -541,86 +539,29 @@ impl MarsBackend {
         self.pump_from(false)
     }
 
-    /// Halt as the arm shows it (issue 37): `STOP:`, and where the arm is not seen standing
+    /// Halt as the arm shows it (issue 37; the rule is the shared one of
+    /// [`trol_controller::real::halt`]): `STOP:`, and where the arm is not seen standing
     /// within [`STOP_WITHIN`], `PURGE:` (which resets the motors; the arm counts as not
     /// homed after it). Success only once the moving bit is clear and two `COORDAP?` reads
     /// [`STILL_GAP`] apart agree; otherwise TROL_ERR_NOT_STOPPED, and what was under way is
     /// kept, so that Finish goes on reporting the arm as the unit shows it.
     fn stop_and_see(&mut self) -> BiosResult {
-        let until = Instant::now() + HALT_WITHIN;
-        let mut said = Vec::new();
-        for stop in ["STOP:", "PURGE:"] {
-            if Instant::now() >= until {
-                break;
-            }
-            if let Err(e) = self.send(&line::command(stop)) {
-                said.push(format!("{stop} not sent: {e}"));
-                continue;
-            }
-            if stop == "PURGE:" {
-                // The motors were reset: the regulator set-up goes again, and the arm is
-                // homed again before it moves.
-                self.set_up = false;
-                self.homed = [false; 6];
-                self.planner.set_homed(self.homed);
-                self.say("Halt: PURGE: sent; the arm must be homed again (TROLHome)");
-            }
-            if let Err(f) = self.sync() {
-                said.push(format!("{stop} {}", f.text()));
-                continue;
-            }
-            match self.seen_standing(until) {
-                Ok(true) if Instant::now() <= until + STILL_GAP => {
-                    if !said.is_empty() {
-                        self.say(&format!(
-                            "Halt: the arm stands after {stop}, where {} did not stop it",
-                            said.join("; ")
-                        ));
-                    }
-                    self.abandon();
-                    return Ok(code::OK);
+        let times = real::HaltTimes {
+            halt_within: HALT_WITHIN,
+            stop_within: STOP_WITHIN,
+        };
+        match real::halt(&mut Stopper(self), &["STOP:", "PURGE:"], times) {
+            real::Halted::Standing { note, .. } => {
+                if let Some(note) = note {
+                    self.say(&note);
                 }
-                Ok(true) => {
-                    said.push(format!(
-                        "{stop}: the arm stood only after the Halt's time (its motion may have \
-                         ended by itself)"
-                    ));
-                    break;
-                }
-                Ok(false) => said.push(format!("{stop}: the arm still moved")),
-                Err(f) => said.push(format!("{stop}: {}", f.text())),
+                self.abandon();
+                Ok(code::OK)
             }
-        }
-        let text = format!("{}; use the emergency stop", said.join("; "));
-        self.say(&format!("Halt: the arm was not seen standing: {text}"));
-        Err(BackendError::NotStopped(text))
-    }
-
-    /// Whether the unit shows the arm standing within [`STOP_WITHIN`] (or `until`, if
-    /// sooner): the moving bit clear, and two `COORDAP?` reads [`STILL_GAP`] apart within
-    /// [`STILL_DEG`] of each other on every axis.
-    fn seen_standing(&mut self, until: Instant) -> Result<bool, Fail> {
-        let until = until.min(Instant::now() + STOP_WITHIN);
-        let tol: [f64; 6] =
-            std::array::from_fn(|j| (STILL_DEG * self.profile.irc_per_deg(j)).abs().max(2.0));
-        let mut last: Option<[f64; 6]> = None;
-        loop {
-            let s = self.status()?;
-            last = if s & st::MOVING != 0 {
-                None
-            } else {
-                let c = self.counters()?;
-                if let Some(q) = last {
-                    if (0..6).all(|j| (q[j] - c[j]).abs() <= tol[j]) {
-                        return Ok(true);
-                    }
-                }
-                Some(c)
-            };
-            if Instant::now() + STILL_GAP > until {
-                return Ok(false);
+            real::Halted::NotStopped(text) => {
+                self.say(&format!("Halt: the arm was not seen standing: {text}"));
+                Err(BackendError::NotStopped(text))
             }
-            std::thread::sleep(STILL_GAP);
         }
     }
 
@@ -1209,5 +1150,48 @@ impl std::fmt::Debug for MarsBackend {
         f.debug_struct("MarsBackend")
             .field("port", &self.port.name())
             .finish_non_exhaustive()
+    }
+}
+
+/// The MARS 8's side of the shared Halt ([`trol_controller::real`]): `STOP:` and `PURGE:`,
+/// each confirmed by `STAMP`; the status word's moving bit and `COORDAP?` (IRC) as the
+/// reading.
+struct Stopper<'a>(&'a mut MarsBackend);
+
+impl real::Stopping for Stopper<'_> {
+    type Stop = &'static str;
+    fn stop_name(&self, stop: &'static str) -> String {
+        stop.into()
+    }
+    fn send_stop(&mut self, stop: &'static str) -> Result<String, String> {
+        let b = &mut *self.0;
+        b.send(&line::command(stop))
+            .map_err(|e| format!("not sent: {e}"))?;
+        if stop == "PURGE:" {
+            // The motors were reset: the regulator set-up goes again, and the arm is homed
+            // again before it moves.
+            b.set_up = false;
+            b.homed = [false; 6];
+            b.planner.set_homed(b.homed);
+            b.say("Halt: PURGE: sent; the arm must be homed again (TROLHome)");
+        }
+        b.sync().map(|_| "taken".to_string()).map_err(|f| f.text())
+    }
+    fn reading(&mut self) -> Result<Option<[f64; 6]>, String> {
+        let b = &mut *self.0;
+        if b.status().map_err(|f| f.text())? & st::MOVING != 0 {
+            return Ok(None);
+        }
+        b.counters().map(Some).map_err(|f| f.text())
+    }
+    fn still_within(&self) -> [f64; 6] {
+        let p = &self.0.profile;
+        std::array::from_fn(|j| (STILL_DEG * p.irc_per_deg(j)).abs().max(2.0))
+    }
+    fn now(&self) -> Instant {
+        Instant::now()
+    }
+    fn pause(&mut self, d: Duration) {
+        std::thread::sleep(d);
     }
 }

@@ -42,6 +42,7 @@ use trol_a465::arm::code as sim_code;
 use trol_a465::backend::A465_CODES;
 use trol_a465::kinematics::{Kinematics, Pose};
 use trol_controller::backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
+use trol_controller::real;
 use trol_port::Port;
 use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 use trol_proto::time::Instant;
@@ -349,12 +350,7 @@ const _: () = assert!(
 /// reads.
 pub const STOP_WITHIN: Duration = Duration::from_millis(1000);
 
-/// The gap between two W2 reads that show the arm standing.
-pub const STILL_GAP: Duration = Duration::from_millis(250);
-
-/// How far a joint may move between two reads of a standing arm, degrees (the servo's
-/// dither; a motion at the slowest speed moves about 1 degree in [`STILL_GAP`]).
-pub const STILL_DEG: f64 = 0.02;
+pub use trol_controller::real::{STILL_DEG, STILL_GAP};
 
 /// The longest a Halt takes, all its stops included: within the reply time the host waits.
 pub const HALT_WITHIN: Duration = Duration::from_millis(3300);
@@ -374,6 +370,48 @@ impl Stop {
             Stop::Abort => "ABORT",
             Stop::CtrlC => "Ctrl-C",
         }
+    }
+}
+
+/// The C500's side of the shared Halt ([`trol_controller::real`]): its stops, W2's JOINTS
+/// row (degrees) as the reading.
+struct Stopper<'a>(&'a mut RaplBackend);
+
+impl real::Stopping for Stopper<'_> {
+    type Stop = Stop;
+    fn stop_name(&self, stop: Stop) -> String {
+        stop.word().into()
+    }
+    fn send_stop(&mut self, stop: Stop) -> Result<String, String> {
+        let b = &mut *self.0;
+        match stop {
+            Stop::CtrlC => {
+                b.awaiting = None;
+                b.interrupt()
+                    .map(|_| "prompt back".to_string())
+                    .map_err(|e| e.to_string())
+            }
+            Stop::Halt | Stop::Abort => match b.command_as(stop.word(), true) {
+                Ok(0) => Ok("acknowledged".into()),
+                Ok(c) => Ok(format!("refused, {c}")),
+                Err(e) => Err(e.to_string()),
+            },
+        }
+    }
+    fn reading(&mut self) -> Result<Option<[f64; 6]>, String> {
+        self.0
+            .read_position(PosMode::Actual)
+            .map(|p| Some(p.joints))
+            .map_err(|e| format!("W2: {e}"))
+    }
+    fn still_within(&self) -> [f64; 6] {
+        [real::STILL_DEG; 6]
+    }
+    fn now(&self) -> std::time::Instant {
+        std::time::Instant::now()
+    }
+    fn pause(&mut self, d: Duration) {
+        std::thread::sleep(d);
     }
 }
 
@@ -2109,7 +2147,7 @@ impl RaplBackend {
             },
         }
         let until = std::time::Instant::now() + STOP_WITHIN;
-        self.seen_standing(until)
+        real::seen_standing(&mut Stopper(self), until, STOP_WITHIN).map_err(BackendError::Link)
     }
 
     /// The stops to try, in order: Ctrl-C first where the interpreter is busy with a line
@@ -2133,105 +2171,31 @@ impl RaplBackend {
         order
     }
 
-    /// Halt as the arm shows it (issue 37): each stop of [`RaplBackend::stop_order`] in
-    /// turn, until W2 shows the arm standing; success only then. Where none is seen to work
-    /// within [`HALT_WITHIN`] of the call, TROL_ERR_NOT_STOPPED with what each stop got. No
-    /// profile key makes a stop count that was not seen.
+    /// Halt as the arm shows it (issue 37; the rule is the shared one of
+    /// [`trol_controller::real::halt`]): each stop of [`RaplBackend::stop_order`] in turn,
+    /// until W2 shows the arm standing; success only then. Where none is seen to work within
+    /// [`HALT_WITHIN`] of the call, TROL_ERR_NOT_STOPPED with what each stop got. No profile
+    /// key makes a stop count that was not seen.
     fn stop_and_see(&mut self) -> BiosResult {
-        let until = std::time::Instant::now() + HALT_WITHIN;
-        let mut said = Vec::new();
-        for stop in self.stop_order() {
-            if std::time::Instant::now() >= until {
-                break;
+        let order = self.stop_order();
+        let times = real::HaltTimes {
+            halt_within: HALT_WITHIN,
+            stop_within: STOP_WITHIN,
+        };
+        match real::halt(&mut Stopper(self), &order, times) {
+            real::Halted::Standing { at, note } => {
+                self.rest = Some(at);
+                self.outstanding = None;
+                self.awaiting = None;
+                if let Some(note) = note {
+                    self.note(note);
+                }
+                Ok(0)
             }
-            let sent = match stop {
-                Stop::CtrlC => {
-                    self.awaiting = None;
-                    self.interrupt().map(|_| "prompt back".to_string())
-                }
-                Stop::Halt | Stop::Abort => match self.command_as(stop.word(), true) {
-                    Ok(0) => Ok("acknowledged".to_string()),
-                    Ok(c) => Ok(format!("refused, {c}")),
-                    Err(e) => Err(e),
-                },
-            };
-            let sent = match sent {
-                Ok(s) => s,
-                Err(e) => {
-                    said.push(format!("{}: {e}", stop.word()));
-                    continue;
-                }
-            };
-            match self.seen_standing(until) {
-                // Standing only after the Halt's time: the motion ran to its end, no stop
-                // was seen to work.
-                Ok(Ok(_)) if std::time::Instant::now() > until + STILL_GAP => {
-                    said.push(format!(
-                        "{}: {sent}, and the arm stood only {:.1} s after the Halt (its \
-                         motion may have ended by itself)",
-                        stop.word(),
-                        (std::time::Instant::now() + HALT_WITHIN - until).as_secs_f64()
-                    ));
-                    break;
-                }
-                Ok(Ok(q)) => {
-                    self.rest = Some(q);
-                    self.outstanding = None;
-                    self.awaiting = None;
-                    if !said.is_empty() {
-                        self.note(format!(
-                            "Halt: the arm stands after {} ({}), where {} did not stop it",
-                            stop.word(),
-                            sent,
-                            said.join("; ")
-                        ));
-                    }
-                    return Ok(0);
-                }
-                Ok(Err(why)) => said.push(format!("{}: {sent}, but {why}", stop.word())),
-                Err(e) => said.push(format!("{}: {sent}, then W2: {e}", stop.word())),
+            real::Halted::NotStopped(text) => {
+                self.note(format!("Halt: the arm was not seen standing: {text}"));
+                Err(BackendError::NotStopped(text))
             }
-        }
-        let text = format!(
-            "{}; use the emergency stop",
-            if said.is_empty() {
-                "no stop could be sent".to_string()
-            } else {
-                said.join("; ")
-            }
-        );
-        self.note(format!("Halt: the arm was not seen standing: {text}"));
-        Err(BackendError::NotStopped(text))
-    }
-
-    /// Whether W2 shows the arm standing: two reads [`STILL_GAP`] apart whose JOINTS rows
-    /// agree within [`STILL_DEG`], within [`STOP_WITHIN`] (or `until`, if sooner).
-    fn seen_standing(
-        &mut self,
-        until: std::time::Instant,
-    ) -> Result<Result<[f64; 6], String>, BackendError> {
-        let until = until.min(std::time::Instant::now() + STOP_WITHIN);
-        let mut last: Option<[f64; 6]> = None;
-        loop {
-            let p = self.read_position(PosMode::Actual)?;
-            if let Some(q) = last {
-                let moved = q
-                    .iter()
-                    .zip(&p.joints)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
-                if moved <= STILL_DEG {
-                    return Ok(Ok(p.joints));
-                }
-                if std::time::Instant::now() + STILL_GAP > until {
-                    return Ok(Err(format!(
-                        "the arm still moved ({moved:.3} deg in {} ms)",
-                        STILL_GAP.as_millis()
-                    )));
-                }
-            }
-            last = Some(p.joints);
-            std::thread::sleep(STILL_GAP);
         }
     }
 

@@ -1,0 +1,307 @@
+//! Before and at a motion: the gate (power, homing, busy), the queue, relative motions
+//! computed from where the last one ends, and typing the motion line.
+
+use super::*;
+
+impl RaplBackend {
+    /// Whether a motion may be sent now: power and homing checked, and whether the arm is
+    /// busy (a motion of ours not seen to end, a queue, or the DONE row).
+    pub(super) fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
+        self.release()?;
+        // A controller that answers a motion at its end takes nothing before: the next motion
+        // waits in the queue for that answer, as the controller itself would, and the call
+        // returns at once (a request that waited for the motion's end would outlast the
+        // host's reply timeout; Halt and Finish get through meanwhile).
+        if self.awaiting.is_some() && self.await_end()? {
+            return Ok(Gate::Busy);
+        }
+        self.report_unasked()?;
+        if let Some(e) = self.deferred.take() {
+            return Err(e);
+        }
+        // Idle as seen a moment ago, with nothing but reads since: no read needed (issue 43).
+        let seen = (self.outstanding.is_none()
+            && self.queue.is_empty()
+            && self.awaiting.is_none()
+            && !self.finishing)
+            .then(|| self.seen.idle(self.seen_for).cloned())
+            .flatten();
+        let (moving, st) = match seen {
+            Some(st) => (false, st),
+            None => {
+                let moving = self.poll()?;
+                let st = self.status.clone().ok_or_else(|| {
+                    BackendError::Link("STATUS could not be read before the motion".into())
+                })?;
+                (moving, st)
+            }
+        };
+        if st.limp.iter().any(|l| *l) {
+            self.note(
+                "refused before sending: STATUS says the arm has no power (LIMP): restore arm \
+                 power at the controller"
+                    .into(),
+            );
+            return Ok(Gate::Refuse(ARM_POWER));
+        }
+        if !homing && !st.homed.iter().all(|h| *h) {
+            self.note(
+                "refused before sending: STATUS says the arm is not homed: call TROLHome(0) \
+                 (with the arm near its home position)"
+                    .into(),
+            );
+            return Ok(Gate::Refuse(sim_code::NOT_HOMED));
+        }
+        Ok(if moving || !self.queue.is_empty() {
+            Gate::Busy
+        } else {
+            Gate::Idle
+        })
+    }
+
+    /// Send a motion now or queue it behind the one under way.
+    pub(super) fn submit(&mut self, m: Motion, busy: bool) -> BiosResult {
+        if busy {
+            if self.queue.len() >= QUEUE {
+                self.note(format!(
+                    "`{}` refused: {QUEUE} motions wait already",
+                    m.line
+                ));
+                return Ok(sim_code::QUEUE_FULL);
+            }
+            self.note(format!(
+                "`{}` waits for the motion under way to end",
+                m.line
+            ));
+            self.queue.push_back(Queued::Motion(m));
+            return Ok(0);
+        }
+        self.launch(m)
+    }
+
+    /// A motion line whose end is computed from where the arm stands (JOINT, MI, JOG): now,
+    /// or when its turn comes ([`RaplBackend::relative`]); `end` gives its end from there.
+    pub(super) fn relative_line(
+        &mut self,
+        line: String,
+        busy: bool,
+        end: impl FnOnce(&text::Position) -> Expect + Send + 'static,
+    ) -> BiosResult {
+        self.relative(
+            line.clone(),
+            busy,
+            Box::new(move |b| {
+                let p = match b.standing()? {
+                    Ok(p) => p,
+                    Err(c) => return Ok(c),
+                };
+                let expect = end(&p);
+                b.submit(Motion { line, expect }, false)
+            }),
+        )
+    }
+
+    /// A joint motion relative to where the arm stands (JOINT, MI): as
+    /// [`RaplBackend::relative_line`], from the end of the motion before where that was seen
+    /// a moment ago (no W0 read), else from W0; `end` gives its end (joints, degrees).
+    pub(super) fn relative_joints(
+        &mut self,
+        line: String,
+        busy: bool,
+        end: impl FnOnce([f64; 6]) -> [f64; 6] + Send + 'static,
+    ) -> BiosResult {
+        self.relative(
+            line.clone(),
+            busy,
+            Box::new(move |b| {
+                let q = match b.standing_joints()? {
+                    Ok(q) => q,
+                    Err(c) => return Ok(c),
+                };
+                let expect = Expect::Joints(end(q));
+                b.submit(Motion { line, expect }, false)
+            }),
+        )
+    }
+
+    /// A relative motion: now, computed from where the arm stands, when it stands; queued
+    /// and computed when its turn comes while another runs. `what` names it in the log.
+    pub(super) fn relative(&mut self, what: String, busy: bool, now: Later) -> BiosResult {
+        if !busy {
+            return now(self);
+        }
+        if self.queue.len() >= QUEUE {
+            self.note(format!("`{what}` refused: {QUEUE} motions wait already"));
+            return Ok(sim_code::QUEUE_FULL);
+        }
+        self.note(format!(
+            "`{what}` waits for the motion under way to end; it is computed from where that \
+             one ends"
+        ));
+        self.queue.push_back(Queued::Later(what, now));
+        Ok(0)
+    }
+
+    /// Type a motion line; on the success form it is under way.
+    pub(super) fn launch(&mut self, m: Motion) -> BiosResult {
+        self.last_poll = None;
+        if self.profile.motion_ack == MotionAck::End {
+            return self.launch_answered_at_end(m);
+        }
+        match self.command(&m.line) {
+            Ok(0) => {
+                self.outstanding = Some(Outstanding::new(m, false, self.rest));
+                Ok(0)
+            }
+            other => {
+                if !self.queue.is_empty() {
+                    self.note(format!(
+                        "{} queued motion(s) dropped after `{}` failed: not sent",
+                        self.queue.len(),
+                        m.line
+                    ));
+                    self.queue.clear();
+                }
+                other
+            }
+        }
+    }
+
+    /// A motion on a controller that answers at the motion's end: typed whole (every echo
+    /// checked), then a refusal has the reply window to come; without one the motion runs,
+    /// and its answer is read by [`RaplBackend::poll`].
+    pub(super) fn launch_answered_at_end(&mut self, m: Motion) -> BiosResult {
+        self.forget();
+        self.settle()?;
+        let now = self.now();
+        self.session
+            .send_line(&m.line, self.motion_timeout(), now)
+            .map_err(|e| BackendError::Link(e.to_string()))?;
+        let window = std::time::Instant::now() + self.reply_timeout().min(Duration::from_secs(1));
+        match self.pump_until(None, Some(window)) {
+            Ok(Some(Ok(r))) => {
+                // Answered within the window: a refusal, or a motion that already ended.
+                match self.answer(&m.line, r, false)? {
+                    Answer::Refused(n, _) => {
+                        self.queue.clear();
+                        Ok(self.code_of_refusal(n))
+                    }
+                    Answer::Done(_) => {
+                        self.outstanding = Some(Outstanding::new(m, true, self.rest));
+                        Ok(0)
+                    }
+                }
+            }
+            Ok(Some(Err(e))) => {
+                self.note(format!("`{}`: {e}", m.line));
+                self.queue.clear();
+                Err(if e.surely_not_run() {
+                    BackendError::Link(e.to_string())
+                } else {
+                    BackendError::Unsure(e.to_string())
+                })
+            }
+            Ok(None) => {
+                self.note(format!(
+                    "`{}` taken, no refusal within the reply window: under way (its answer \
+                     comes at its end)",
+                    m.line
+                ));
+                self.awaiting = Some(m.line.clone());
+                self.outstanding = Some(Outstanding::new(m, true, self.rest));
+                Ok(0)
+            }
+            Err(e) => Err(BackendError::Unsure(format!("`{}`: {e}", m.line))),
+        }
+    }
+
+    /// The answer of a motion that answers at its end: still running (true), ended in its
+    /// success form (false), or its refusal or failure.
+    pub(super) fn await_end(&mut self) -> Result<bool, BackendError> {
+        let Some(line) = self.awaiting.clone() else {
+            return Ok(false);
+        };
+        let until = std::time::Instant::now() + Duration::from_millis(self.profile.poll_ms);
+        let ev = self
+            .pump_until(None, Some(until))
+            .map_err(|e| BackendError::Unsure(format!("`{line}`: {e}")))?;
+        let Some(ev) = ev else {
+            if self.past_motion_timeout() {
+                self.awaiting = None;
+                self.outstanding = None;
+                self.queue.clear();
+                let _ = self.interrupt();
+                return Err(BackendError::Unsure(format!(
+                    "`{line}` was not answered within motion_timeout_s ({} s): Ctrl-C sent; \
+                     whether it ran to its end is not known",
+                    self.profile.motion_timeout_s
+                )));
+            }
+            return Ok(true);
+        };
+        self.awaiting = None;
+        match ev {
+            Ok(r) => match self.answer(&line, r, false) {
+                Ok(Answer::Done(_)) => Ok(false),
+                Ok(Answer::Refused(n, t)) => {
+                    self.outstanding = None;
+                    self.queue.clear();
+                    self.note(format!("`{line}` ended in a refusal: {n:03}-{t}"));
+                    Err(BackendError::Refused(match self.meaning(n) {
+                        Meaning::Code(c) => c,
+                        Meaning::Location => RAPL_ERROR,
+                    }))
+                }
+                Err(e) => {
+                    self.outstanding = None;
+                    self.queue.clear();
+                    Err(e)
+                }
+            },
+            Err(e) => {
+                self.outstanding = None;
+                self.queue.clear();
+                Err(BackendError::Unsure(format!("`{line}`: {e}")))
+            }
+        }
+    }
+
+    /// The gate, then `f` with whether the arm is busy.
+    pub(super) fn motion_with(
+        &mut self,
+        homing: bool,
+        f: impl FnOnce(&mut Self, bool) -> BiosResult,
+    ) -> BiosResult {
+        match self.gate(homing)? {
+            Gate::Refuse(c) => Ok(c),
+            Gate::Idle => f(self, false),
+            Gate::Busy => f(self, true),
+        }
+    }
+
+    pub(super) fn joints(&mut self, cmd: &str, q: [f64; 6], relative: bool) -> BiosResult {
+        let Some(units) = self.joint_units else {
+            self.note(format!(
+                "refused {cmd} before sending: its units are not known; set joint_units in the \
+                 RAPL-II profile (docs/c500.md, Settle the conventions)"
+            ));
+            return Ok(NO_JOINT_UNITS);
+        };
+        if q.iter().any(|x| !x.is_finite()) {
+            return Ok(code_of("BIOS_BAD_ARGUMENT"));
+        }
+        let v = match units {
+            JointUnits::Degrees => q.map(f64::to_degrees),
+            JointUnits::Radians => q,
+        };
+        let line = format!("{cmd} {}", join(&v));
+        let deg = q.map(f64::to_degrees);
+        self.motion_with(false, |b, busy| {
+            if !relative {
+                let expect = Expect::Joints(deg);
+                return b.submit(Motion { line, expect }, busy);
+            }
+            b.relative_joints(line, busy, move |q| std::array::from_fn(|i| q[i] + deg[i]))
+        })
+    }
+}

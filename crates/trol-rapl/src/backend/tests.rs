@@ -1,0 +1,233 @@
+//! The backend's pieces against the simulated C500 ([`crate::c500::C500`], sans-IO) driven
+//! on the caller's thread: every byte the backend sends is fed to the twin at once, and the
+//! twin's time is the test's clock at 20x. No thread, no pacing: what is checked is what the
+//! backend types and what it makes of the answers.
+
+use std::time::Instant as StdInstant;
+
+use trol_a465::arm::{Arm, ArmSettings, Stored};
+use trol_controller::backend::Backend;
+
+use super::halt::Stop;
+use super::*;
+use crate::c500::{self, C500};
+
+/// The twin as a port on the caller's thread.
+struct TwinPort {
+    c500: C500,
+    epoch: StdInstant,
+    scale: f64,
+    log: Arc<Mutex<Vec<String>>>,
+}
+
+impl TwinPort {
+    fn now(&self) -> f64 {
+        self.epoch.elapsed().as_secs_f64() * self.scale
+    }
+    fn turn(&mut self) {
+        let now = self.now();
+        self.c500.tick(now);
+        let ran = self.c500.take_log();
+        self.log.lock().unwrap().extend(ran);
+    }
+}
+
+impl Port for TwinPort {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let now = self.now();
+        self.c500.feed(bytes, now);
+        self.turn();
+        Ok(())
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: StdInstant) -> io::Result<usize> {
+        loop {
+            self.turn();
+            let out = self.c500.take_output(buf.len());
+            if !out.is_empty() {
+                buf[..out.len()].copy_from_slice(&out);
+                return Ok(out.len());
+            }
+            if StdInstant::now() >= deadline {
+                return Ok(0);
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        self.turn();
+        Ok(usize::from(self.c500.has_output()))
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.turn();
+        let _ = self.c500.take_output(usize::MAX);
+        Ok(())
+    }
+    fn name(&self) -> String {
+        "twin".into()
+    }
+}
+
+/// A backend on the twin of variant `name`, its arm homed or not; the lines the twin ran.
+fn on(name: &str, homed: bool) -> (RaplBackend, Arc<Mutex<Vec<String>>>) {
+    on_scaled(name, homed, 20.0)
+}
+
+/// [`on`] at another time scale (1.0: the arm's own pace).
+fn on_scaled(name: &str, homed: bool, scale: f64) -> (RaplBackend, Arc<Mutex<Vec<String>>>) {
+    let (profile, _) = c500::variant(name).expect("a variant");
+    let arm = Arm::new(ArmSettings {
+        homed,
+        ..Default::default()
+    });
+    let test_001 = [400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
+    let twin = C500::new(
+        profile,
+        arm,
+        vec![("test_001".into(), Stored::Cart(test_001))],
+    );
+    // The profile that describes this controller, as `trol sim --rapl --print-profile`.
+    let profile = twin.describe();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let port = TwinPort {
+        c500: twin,
+        epoch: StdInstant::now(),
+        scale,
+        log: log.clone(),
+    };
+    let b = RaplBackend::connect(Box::new(port), profile).expect("the session opens");
+    (b, log)
+}
+
+/// The code of a call that must reach the controller (a failure of the line fails the test).
+fn code(r: BiosResult) -> i16 {
+    r.unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn ran(log: &Arc<Mutex<Vec<String>>>) -> Vec<String> {
+    log.lock().unwrap().clone()
+}
+
+/// Finish until the arm is done (at most 10 s of the test's clock).
+fn finish(b: &mut RaplBackend) -> Result<(), BackendError> {
+    let until = StdInstant::now() + Duration::from_secs(10);
+    while b.moving()? {
+        assert!(StdInstant::now() < until, "the motion did not end");
+    }
+    Ok(())
+}
+
+#[test]
+fn opening_reads_the_state_and_types_nothing_that_moves() {
+    let (b, log) = on("not-homed", false);
+    let st = b.opening_status().expect("STATUS read at opening");
+    assert!(!st.homed.iter().all(|h| *h));
+    let lines = ran(&log);
+    assert!(lines.contains(&"STATUS".to_string()), "{lines:?}");
+    assert!(
+        lines
+            .iter()
+            .all(|l| RaplBackend::only_reads(l) || l == "NOHELP"),
+        "{lines:?}"
+    );
+}
+
+#[test]
+fn the_gate_refuses_before_typing_on_an_arm_not_homed() {
+    let (mut b, log) = on("not-homed", false);
+    let before = ran(&log).len();
+    assert_eq!(code(b.joint(1, 0.1)), sim_code::NOT_HOMED);
+    let typed = ran(&log)[before..].to_vec();
+    assert!(
+        typed.iter().all(|l| RaplBackend::only_reads(l)),
+        "{typed:?}"
+    );
+}
+
+#[test]
+fn a_motion_while_one_runs_waits_in_the_queue_and_goes_after_it() {
+    let (mut b, log) = on("default", true);
+    assert_eq!(code(b.joint(1, 0.3)), 0);
+    assert_eq!(code(b.joint(1, -0.3)), 0);
+    // The second is not on the line while the first runs.
+    let joints = |l: &[String]| l.iter().filter(|l| l.starts_with("JOINT 1,")).count();
+    assert_eq!(joints(&ran(&log)), 1, "{:?}", ran(&log));
+    finish(&mut b).unwrap();
+    assert_eq!(joints(&ran(&log)), 2, "{:?}", ran(&log));
+    assert!(b.queue.is_empty() && b.outstanding.is_none());
+}
+
+#[test]
+fn finish_ends_a_motion_only_with_the_arm_at_its_end() {
+    let (mut b, log) = on("default", true);
+    assert_eq!(code(b.joint(2, 0.2)), 0);
+    finish(&mut b).unwrap();
+    // The end was seen on the arm (W2), not taken from the DONE row alone.
+    assert!(ran(&log).iter().any(|l| l == "W2"), "{:?}", ran(&log));
+}
+
+#[test]
+fn scratch_points_rotate_and_are_read_back_before_a_move_names_them() {
+    let (mut b, log) = on("default", true);
+    let a = b.scratch_name();
+    let c = b.scratch_name();
+    assert_ne!(a, c);
+    let target = Target::Location(Location::Cart(vec![
+        400.0,
+        50.0,
+        240.0,
+        0.0,
+        std::f64::consts::FRAC_PI_2,
+        0.0,
+    ]));
+    assert_eq!(code(b.move_to(&target, false)), 0);
+    let lines = ran(&log);
+    let point = lines.iter().position(|l| l.starts_with("POINT ")).unwrap();
+    let name = lines[point].split_whitespace().nth(1).unwrap().to_string();
+    let listl = lines.iter().position(|l| *l == format!("LISTL {name}"));
+    let mv = lines.iter().position(|l| *l == format!("MOVE {name}"));
+    assert!(
+        matches!((listl, mv), (Some(r), Some(m)) if point < r && r < m),
+        "{lines:?}"
+    );
+    finish(&mut b).unwrap();
+}
+
+#[test]
+fn the_stops_go_in_the_profile_s_order_and_halt_is_success_only_when_seen() {
+    let (mut b, _) = on("default", true);
+    assert_eq!(b.stop_order(), [Stop::Halt, Stop::Abort, Stop::CtrlC]);
+    b.profile.halt = Halt::Abort;
+    assert_eq!(b.stop_order(), [Stop::Abort, Stop::Halt, Stop::CtrlC]);
+    b.profile.halt = Halt::CtrlC;
+    assert_eq!(b.stop_order(), [Stop::CtrlC, Stop::Halt, Stop::Abort]);
+    b.profile.halt = Halt::Halt;
+    // A motion answered at its end keeps the interpreter busy: Ctrl-C first.
+    b.awaiting = Some("MOVE X".into());
+    assert_eq!(b.stop_order()[0], Stop::CtrlC);
+    b.awaiting = None;
+
+    // A controller that ignores HALT: ABORT stops the arm, and only then is Halt done.
+    // At the arm's own pace and 10 % speed, so that no motion ends by itself meanwhile.
+    let (mut b, log) = on_scaled("halt-ignored", true, 1.0);
+    assert_eq!(code(b.speed(10)), 0);
+    assert_eq!(code(b.joint(1, 1.5)), 0);
+    assert_eq!(code(b.halt()), 0);
+    let lines = ran(&log);
+    assert!(lines.iter().any(|l| l == "ABORT"), "{lines:?}");
+    assert!(!b.moving().unwrap());
+
+    // One no stop stops: never success.
+    let (mut b, _) = on_scaled("unstoppable", true, 1.0);
+    assert_eq!(code(b.speed(10)), 0);
+    assert_eq!(code(b.joint(1, 1.5)), 0);
+    assert!(matches!(b.halt(), Err(BackendError::NotStopped(_))));
+}
+
+#[test]
+fn a_refusal_in_the_profile_s_form_is_a_refusal_with_its_code() {
+    let (mut b, _) = on("stars-refusal", true);
+    // Past J1's limit: the twin refuses, in stars.
+    let r = code(b.joint(1, 10.0));
+    assert_eq!(r, RAPL_ERROR, "{:?}", b.log_lines());
+    assert!(b.log_lines().iter().any(|l| l.contains("***")));
+}

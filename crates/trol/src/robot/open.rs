@@ -1,0 +1,410 @@
+//! Opening a connection: by port name or trol.cfg, in-process controllers (the simulated
+//! A465, `rapl:`, `mars:`), over a port already open, and opening again after a cut.
+
+use super::*;
+
+/// The error for a port this build cannot serve: the cargo feature it needs.
+#[allow(dead_code)]
+pub(super) fn not_built(port: &str, feature: &str, what: &str) -> Error {
+    SetupError::Config(format!(
+        "port {port}: {what} needs TROL built with the cargo feature `{feature}` (this build \
+         has no {what}: add `features = [\"{feature}\"]` to the trol dependency)"
+    ))
+    .into()
+}
+
+/// The link settings of an in-process line: `cfg`'s block check, every timeout at least
+/// [`IN_PROCESS_SLACK`].
+#[cfg(any(feature = "sim", feature = "rapl", feature = "mars"))]
+pub(super) fn in_process(cfg: LinkConfig) -> LinkConfig {
+    let t = cfg.timeouts;
+    let at_least = |d: Duration| d.max(IN_PROCESS_SLACK);
+    LinkConfig {
+        timeouts: trol_proto::link::Timeouts {
+            enq: at_least(t.enq),
+            ack: at_least(t.ack),
+            nak_code: at_least(t.nak_code),
+            start: at_least(t.start),
+            termc: at_least(t.termc),
+            eot: at_least(t.eot),
+            reset: t.reset,
+        },
+        ..cfg
+    }
+}
+
+impl Robot {
+    /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
+    /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
+    /// with default settings, and check the controller as every surface does: the same as
+    /// [`Robot::connect`] (it skipped the check once, so that a program that opened a
+    /// connection this way never learnt the controller's version, codes or reply time).
+    pub fn open(port: &str, baud: u32) -> Result<Robot> {
+        Robot::connect(port, baud)
+    }
+
+    /// Open the port and send nothing: for a tool that activates a controller in terminal
+    /// mode first ([`crate::activate`]: InitTROL(0), `trol init`) or relays its bytes. The
+    /// connection learns nothing of its controller until [`crate::check_server`] runs:
+    /// without it, no repeats and the manual's reply timeout.
+    pub fn open_unchecked(port: &str, baud: u32) -> Result<Robot> {
+        Robot::open_checked(port, baud, None)
+    }
+
+    /// Connect and check the controller, as every surface does (the utilities, C's
+    /// InitTROL(1) and trol_connect, Python's `Robot.open`): [`Robot::open`], then
+    /// [`crate::check_server`]: GetStatus, the protocol version (GetVersion, refused with
+    /// [`SetupError::Incompatible`]) and the controller's BIOS codes (GetCodes, for
+    /// [`Robot::codes`]).
+    pub fn connect(port: &str, baud: u32) -> Result<Robot> {
+        let mut robot = Robot::open_unchecked(port, baud)?;
+        crate::check_server(&mut robot)?;
+        Ok(robot)
+    }
+
+    /// [`Robot::connect`] as trol.cfg says ([`Robot::from_config`], then the same check).
+    pub fn connect_config(cfg: &Config) -> Result<Robot> {
+        let mut robot = Robot::from_config(cfg)?;
+        crate::check_server(&mut robot)?;
+        Ok(robot)
+    }
+
+    /// Like [`Robot::open_unchecked`], with the link's block check (`check` in trol.cfg): no
+    /// fallback to the manual's LRC.
+    pub fn open_with(port: &str, baud: u32, check: BlockCheck) -> Result<Robot> {
+        Robot::open_checked(port, baud, Some(check))
+    }
+
+    /// [`Robot::open_unchecked`] with the block check trol.cfg names, if any: without one, CRC-16,
+    /// and the manual's LRC if the controller refuses every CRC-16 block at first contact
+    /// and takes LRC ones (a controller that speaks only the manual's protocol).
+    pub fn open_checked(port: &str, baud: u32, check: Option<BlockCheck>) -> Result<Robot> {
+        let cfg = LinkConfig {
+            check: check.unwrap_or_default(),
+            ..LinkConfig::for_line(baud, Duration::ZERO)
+        };
+        if port == "sim" {
+            #[cfg(feature = "sim")]
+            return Ok(Robot::embedded_on(SimSettings::default(), cfg));
+            #[cfg(not(feature = "sim"))]
+            return Err(not_built(port, "sim", "the embedded simulator"));
+        }
+        if let Some(device) = port.strip_prefix(RAPL_PREFIX) {
+            #[cfg(feature = "rapl")]
+            return Robot::rapl(device, trol_rapl::Profile::default(), cfg);
+            #[cfg(not(feature = "rapl"))]
+            return Err(not_built(device, "rapl", "the RAPL-II backend"));
+        }
+        if port.starts_with(MARS_PREFIX) {
+            return Err(SetupError::Config(format!(
+                "{port}: an A465 on a MARS 8 needs its arm profile: name it in trol.cfg \
+                 (`mars-profile = FILE`; crates/trol-mars/profiles/crs93.toml is CTU's CRS93) or call \
+                 Robot::mars"
+            ))
+            .into());
+        }
+        let settings = PortSettings {
+            baud,
+            ..PortSettings::default()
+        };
+        let p = trol_port::open(port, &settings).map_err(SetupError::Port)?;
+        let mut robot = Robot::over(p, cfg, None);
+        robot.origin = Some((port.to_string(), settings));
+        robot.check_auto = check.is_none();
+        Ok(robot)
+    }
+
+    /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings;
+    /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
+    /// `rapl-profile`).
+    pub fn from_config(cfg: &Config) -> Result<Robot> {
+        let mut robot = Robot::from_config_as_is(cfg)?;
+        // A locations file that is not there yet is an empty table (docs/teach.md): said
+        // once, so that a misspelt name is not a silent empty table.
+        if let Some(file) = cfg.locations.as_ref().filter(|f| !f.exists()) {
+            robot.add_notice(&format!(
+                "{} does not exist yet: the location table starts empty, and \
+                 TROLSaveLocations creates the file",
+                file.display()
+            ));
+        }
+        Ok(robot)
+    }
+
+    pub(super) fn from_config_as_is(cfg: &Config) -> Result<Robot> {
+        #[cfg(not(feature = "mars"))]
+        if cfg.port.starts_with(MARS_PREFIX) {
+            return Err(not_built(&cfg.port, "mars", "the MARS 8 backend"));
+        }
+        #[cfg(feature = "mars")]
+        if let Some(device) = cfg.port.strip_prefix(MARS_PREFIX) {
+            let profile = match &cfg.mars_profile {
+                Some(path) => trol_mars::Profile::from_file(path)
+                    .map_err(|e| SetupError::Config(e.to_string()))?,
+                None => {
+                    return Err(SetupError::Config(format!(
+                        "port {}: an A465 on a MARS 8 needs its arm profile: add \
+                         `mars-profile = FILE` to trol.cfg (crates/trol-mars/profiles/crs93.toml is CTU's \
+                         CRS93; docs/mars.md)",
+                        cfg.port
+                    ))
+                    .into());
+                }
+            };
+            let link = LinkConfig {
+                check: cfg.block_check(),
+                ..LinkConfig::default()
+            };
+            let locations = crate::config_locations(cfg)?;
+            // TROLSaveLocations writes trol.cfg's locations file back (docs/teach.md).
+            return Robot::mars(device, profile, (locations, cfg.locations.clone()), link);
+        }
+        #[cfg(feature = "rapl")]
+        if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
+            let profile = match &cfg.rapl_profile {
+                Some(path) => trol_rapl::Profile::from_file(path)
+                    .map_err(|e| SetupError::Config(e.to_string()))?,
+                None => trol_rapl::Profile::default(),
+            };
+            let link = LinkConfig {
+                check: cfg.block_check(),
+                ..LinkConfig::default()
+            };
+            return Robot::rapl(device, profile, link);
+        }
+        #[cfg(feature = "sim")]
+        if cfg.port == "sim" {
+            let link = LinkConfig {
+                check: cfg.block_check(),
+                ..LinkConfig::default()
+            };
+            let settings = crate::sim_settings(cfg)?;
+            return match &cfg.view {
+                #[cfg(not(feature = "view"))]
+                Some(_) => Err(SetupError::Config(
+                    "trol.cfg asks for the live view (`view =`), and this build of TROL has \
+                     none (the C library leaves it out): run `trol sim --view ADDR --port \
+                     listen://127.0.0.1:PORT` and name `socket://127.0.0.1:PORT` as the port"
+                        .into(),
+                )
+                .into()),
+                #[cfg(feature = "view")]
+                Some(addr) => {
+                    let robot = Robot::embedded_viewed(settings, link, addr)?;
+                    // trol.cfg asked for it: say where it is (port 0 picks one).
+                    if let Some(view) = &robot.view {
+                        eprintln!("trol: the view of the simulated arm: {}", view.url());
+                        if let Some(w) = view.exposure() {
+                            eprintln!("trol: warning: {w}");
+                        }
+                    }
+                    Ok(robot)
+                }
+                None => Ok(Robot::embedded_on(settings, link)),
+            };
+        }
+        Robot::open_checked(&cfg.port, cfg.baud, cfg.check)
+    }
+
+    /// Connect as ./trol.cfg (or $TROL_CONFIG) says.
+    pub fn from_default_config() -> Result<Robot> {
+        let cfg = Config::load().map_err(|e| SetupError::Config(e.to_string()))?;
+        Robot::from_config(&cfg)
+    }
+
+    #[cfg(feature = "rapl")]
+    /// Embed the controller with the RAPL-II backend: open DEVICE (a serial device, or
+    /// `socket://HOST:PORT`) at the profile's baud rate, open the RAPL-II session, and serve
+    /// TROL to this process over an in-memory line (docs/c500.md).
+    pub fn rapl(device: &str, profile: trol_rapl::Profile, link: LinkConfig) -> Result<Robot> {
+        let settings = PortSettings {
+            baud: profile.baud,
+            ..PortSettings::default()
+        };
+        let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        // The controller's texts (refusals, what it says unasked, resynchronisations) go to the
+        // log as the gateway prints them: `-v` in the utilities, RUST_LOG=trol=info elsewhere.
+        let backend = trol_rapl::RaplBackend::connect_with(
+            port,
+            profile,
+            Some(Box::new(
+                |line: &str| tracing::info!(target: "trol::rapl", "c500: {line}"),
+            )),
+            None,
+        )
+        .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
+        robot.codes = trol_rapl::RAPL_CODES;
+        Ok(robot)
+    }
+
+    #[cfg(feature = "mars")]
+    /// Embed the controller with the MARS 8 backend: open DEVICE (a serial device with
+    /// RTS/CTS, or `socket://HOST:PORT`) at the profile's baud rate, read the unit's state
+    /// (nothing moves), and serve TROL to this process over an in-memory line
+    /// (docs/mars.md). TROL's own location table starts with `locations`: the locations and
+    /// the file they came from, which TROLSaveLocations writes back (docs/teach.md).
+    pub fn mars(
+        device: &str,
+        profile: trol_mars::Profile,
+        locations: (
+            Vec<(String, trol_a465::arm::Stored)>,
+            Option<std::path::PathBuf>,
+        ),
+        link: LinkConfig,
+    ) -> Result<Robot> {
+        let (locations, file) = locations;
+        let settings = PortSettings {
+            baud: profile.baud,
+            rts_cts: true,
+            ..PortSettings::default()
+        };
+        let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let backend = trol_mars::MarsBackend::connect(
+            port,
+            profile,
+            Some(Box::new(
+                |line: &str| tracing::info!(target: "trol::mars", "mars: {line}"),
+            )),
+            None,
+            locations,
+        )
+        .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let mut backend = backend;
+        backend.set_locations_file(file);
+        let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
+        robot.codes = trol_mars::MARS_CODES;
+        Ok(robot)
+    }
+
+    /// Start an embedded controller (simulated A465) and connect to it.
+    #[cfg(feature = "sim")]
+    pub fn embedded(settings: SimSettings) -> Robot {
+        Robot::embedded_on(settings, LinkConfig::default())
+    }
+
+    /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`
+    /// (`host:port`; docs: crates/trol-view), and connect to it. The view lives as long as the
+    /// connection; [`Robot::view_url`] says where it is.
+    #[cfg(feature = "view")]
+    pub fn embedded_viewed(settings: SimSettings, cfg: LinkConfig, addr: &str) -> Result<Robot> {
+        let mut backend = trol_sim::SimBackend::new(settings);
+        let shared = backend.share();
+        let view = trol_view::serve(addr, shared)
+            .map_err(|e| SetupError::Config(format!("cannot serve the view at {addr}: {e}")))?;
+        let cfg = in_process(cfg);
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+        let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.set_reply_time(SIM_REPLY_TIME);
+        robot.view = Some(view);
+        Ok(robot)
+    }
+
+    /// Where the live view of an embedded simulator is served, if it is.
+    pub fn view_url(&self) -> Option<String> {
+        #[cfg(feature = "view")]
+        return self.view.as_ref().map(|v| v.url());
+        #[cfg(not(feature = "view"))]
+        None
+    }
+
+    /// A warning when the live view is open to other machines (see
+    /// [`trol_view::ViewServer::exposure`]).
+    pub fn view_exposure(&self) -> Option<String> {
+        #[cfg(feature = "view")]
+        return self.view.as_ref().and_then(|v| v.exposure());
+        #[cfg(not(feature = "view"))]
+        None
+    }
+
+    #[cfg(feature = "sim")]
+    pub(super) fn embedded_on(settings: SimSettings, cfg: LinkConfig) -> Robot {
+        let cfg = in_process(cfg);
+        let (line, handle) = trol_sim::embedded(settings, cfg);
+        let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+        robot.set_reply_time(SIM_REPLY_TIME);
+        robot
+    }
+
+    /// Connect over a port that is already open (for tests, relays, and controllers of the
+    /// application's own). `embedded` keeps an in-process controller alive as long as the
+    /// connection.
+    ///
+    /// A request whose transaction failed is sent again (exactly once, docs/protocol.md) only
+    /// to a controller that announced its memory of the last request: an in-process one, or
+    /// one whose version check ([`Robot::check_version`], part of [`Robot::connect`]) found
+    /// this protocol. Until then, and for a controller that speaks only the manual's
+    /// protocol, the first failure is the call's, as in the manual ([`Robot::set_repeats`]
+    /// chooses otherwise).
+    pub fn over(port: Box<dyn Port>, cfg: LinkConfig, embedded: Option<Embedded>) -> Robot {
+        let catalog = Catalog::builtin();
+        let mut transactor = Transactor::new(port, cfg);
+        if embedded.is_none() {
+            transactor.set_repeats(0);
+        }
+        let mut robot = Robot {
+            transactor,
+            catalog,
+            own_handlers: false,
+            codes: crate::default_codes(),
+            _embedded: embedded,
+            origin: None,
+            broken: false,
+            reactivate: None,
+            epoch: None,
+            #[cfg(feature = "view")]
+            view: None,
+            kept: Vec::new(),
+            check_auto: false,
+            check_settled: false,
+            lrc_tried: false,
+            repeats_set: false,
+            manual_peer: false,
+            prompt: None,
+            reply_timeout_set: false,
+            notice: None,
+        };
+        robot.default_handlers();
+        robot
+    }
+
+    /// Open the port again now (after a failure, or when the controller restarted), check the
+    /// server with GetStatus, and activate it if it is in terminal mode and
+    /// [`Robot::set_reactivate`] allows.
+    pub fn reconnect(&mut self) -> Result<()> {
+        let Some((name, settings)) = self.origin.clone() else {
+            return Err(SetupError::NoServer(
+                "this connection was not opened by a port name, so it cannot be opened again"
+                    .into(),
+            )
+            .into());
+        };
+        let port = trol_port::open(&name, &settings).map_err(SetupError::Port)?;
+        self.transactor.replace_port(port);
+        self.broken = false;
+        // A probe: one attempt, so that a controller in terminal mode is found out quickly.
+        let repeats = self.transactor.repeats();
+        self.transactor.set_repeats(0);
+        let probe = self.status_record();
+        self.transactor.set_repeats(repeats);
+        match probe {
+            Ok(status) if self.note_status_form(&status) => Ok(()),
+            Ok(_) => self.check_version().map(drop),
+            Err(e) => match self.reactivate {
+                Some(tool) => crate::activate(self, &tool),
+                None => Err(e),
+            },
+        }
+    }
+}

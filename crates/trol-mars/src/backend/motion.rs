@@ -1,0 +1,134 @@
+//! A motion: the gate, the plan from the A465 model at the unit's own speeds, its check
+//! against the profile's range, and the segments sent.
+
+use super::*;
+
+impl MarsBackend {
+    /// Gate, plan with the planner, check the plan against the profile, send it, confirm.
+    pub(super) fn motion(&mut self, f: impl FnOnce(&mut Arm, f64) -> i16) -> BiosResult {
+        self.take_unasked()?;
+        if self.homing.is_some() {
+            return Ok(BUSY);
+        }
+        let s = self.status().map_err(|f| f.not_run())?;
+        if let Some(c) = Self::fault(s) {
+            return Ok(c);
+        }
+        self.planner.set_homed(self.homed);
+        let now = self.now();
+        let busy_before = self.motion.is_some() || !self.pending.is_empty();
+        if self.motion.is_none() && self.pending.is_empty() {
+            if s & st::MOVING != 0 {
+                // Moving, and not by TROL's doing: a pendant, or another program.
+                return Ok(BUSY);
+            }
+            let q = self.actual().map_err(|f| f.not_run())?;
+            self.planner.place(q);
+        }
+        let before = self.planner.clone();
+        let c = f(&mut self.planner, now);
+        if c != code::OK {
+            self.planner = before;
+            return Ok(c);
+        }
+        let Some((t0, t1, joint)) = self.planner.last_motion() else {
+            return Ok(code::OK);
+        };
+        if before.last_motion() == Some((t0, t1, joint)) {
+            // Nothing new was planned (a motion of no length).
+            return Ok(code::OK);
+        }
+        let seg = self.profile.segment_ms as f64 / 1000.0;
+        let n = if joint {
+            1
+        } else {
+            ((t1 - t0) / seg).ceil().max(1.0) as usize
+        };
+        let mut lines = vec![format!("COORDISCONT:{DISCONT}")];
+        let mut prev = t0;
+        let mut last = [0.0; 6];
+        for k in 1..=n {
+            let t = t0 + (t1 - t0) * k as f64 / n as f64;
+            let q = self.planner.planned_at(t);
+            let irc = self.profile.joints_to_irc(&q).map(f64::round);
+            if let Some(j) = self.profile.outside(&irc) {
+                self.planner = before;
+                self.say(&format!(
+                    "refused: joint {} would leave the profile's range ({} IRC)",
+                    j + 1,
+                    irc[j]
+                ));
+                return Ok(code::JOINT_LIMIT);
+            }
+            let ms = ((t - prev) * 1000.0).round().max(1.0) as i64;
+            lines.push(format!(
+                "COORDMVT:{ms},{}",
+                irc.map(|v| (v as i64).to_string()).join(",")
+            ));
+            prev = t;
+            last = irc;
+        }
+        if let Err(e) = self.set_up() {
+            self.planner = before;
+            return Err(e);
+        }
+        self.pending.extend(lines);
+        self.motion = Some(Outstanding {
+            target: last,
+            end: t1,
+            seen_moving: false,
+        });
+        // The status word read above, before this motion, showed the unit's queue with room
+        // and nothing of ours in it: no second look before the first lines (issue 43).
+        let room = s & st::QUEUE_FULL == 0 && !busy_before;
+        let confirmed = self
+            .pump_from(room)
+            .map_err(|f| f.unsure())
+            .and_then(|()| self.take_unasked())
+            .and_then(|()| self.status().map_err(|f| f.unsure()));
+        match confirmed {
+            Ok(s) => match Self::fault(s) {
+                Some(c) => {
+                    self.abandon();
+                    Ok(c)
+                }
+                None => Ok(code::OK),
+            },
+            Err(e) => {
+                // Whether the unit took it is not known: TROL keeps nothing of it, sends
+                // nothing more of it, and the next motion starts from where the arm is
+                // (refused as BUSY while the unit says it moves).
+                self.pending.clear();
+                self.motion = None;
+                Err(e)
+            }
+        }
+    }
+
+    pub(super) fn target(&self, t: &Target) -> Result<arm::Target, BackendError> {
+        // A precision point given here is the unit's IRC counts (what GetPosition(POS_PREC)
+        // answers); the arm model plans in the A465 controller's.
+        if let Target::Location(Location::Prec(irc)) = t {
+            let loc = Location::Prec(self.irc_to_a465(irc).to_vec());
+            return trol_a465::backend::arm_target(&self.planner, &Target::Location(loc));
+        }
+        trol_a465::backend::arm_target(&self.planner, t)
+    }
+
+    /// The unit's IRC counts (missing ones 0) as the A465 controller's encoder counts, which
+    /// the arm model and TROL's location table keep.
+    pub(super) fn irc_to_a465(&self, irc: &[i32]) -> [i32; 6] {
+        let c: [f64; 6] = std::array::from_fn(|i| f64::from(irc.get(i).copied().unwrap_or(0)));
+        joints_to_counts(&self.profile.irc_to_joints(&c))
+    }
+
+    /// The A465 controller's counts as the unit's IRC counts.
+    pub(super) fn a465_to_irc(&self, counts: &[i32]) -> Vec<i32> {
+        let c: [f64; 6] = std::array::from_fn(|i| f64::from(counts.get(i).copied().unwrap_or(0)));
+        let q = trol_a465::model::counts_to_joints(&c);
+        self.profile
+            .joints_to_irc(&q)
+            .map(|v| v.round() as i32)
+            .to_vec()
+    }
+}

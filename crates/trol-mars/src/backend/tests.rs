@@ -1,0 +1,166 @@
+//! The backend's pieces against the simulated MARS 8 ([`crate::mars8::Mars8`], sans-IO)
+//! driven on the caller's thread: what the backend sends is fed to the unit at once, and
+//! what the unit prints is read back. The unit runs at 10x on the test's clock with CTU's
+//! CRS93 profile at REGMS x 10, so the backend's plan and the unit agree (as in
+//! tests/variants.rs).
+
+use std::time::Instant as StdInstant;
+
+use trol_controller::backend::Backend;
+
+use super::*;
+use crate::mars8::{self, Mars8};
+
+struct TwinPort {
+    unit: Arc<Mutex<Mars8>>,
+    out: VecDeque<u8>,
+}
+
+impl Port for TwinPort {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let said = self.unit.lock().unwrap().feed(bytes);
+        self.out.extend(said);
+        Ok(())
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: StdInstant) -> io::Result<usize> {
+        loop {
+            let said = self.unit.lock().unwrap().tick();
+            self.out.extend(said);
+            if !self.out.is_empty() {
+                let n = buf.len().min(self.out.len());
+                for (b, x) in buf.iter_mut().zip(self.out.drain(..n)) {
+                    *b = x;
+                }
+                return Ok(n);
+            }
+            if StdInstant::now() >= deadline {
+                return Ok(0);
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        let said = self.unit.lock().unwrap().tick();
+        self.out.extend(said);
+        Ok(self.out.len())
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.out.clear();
+        Ok(())
+    }
+    fn name(&self) -> String {
+        "twin".into()
+    }
+}
+
+fn fast() -> Profile {
+    let mut p = Profile::crs93();
+    p.speed = p.speed.map(|v| v * 10);
+    p
+}
+
+/// A backend on the unit of variant `name`, its arm homed or not.
+fn on(name: &str, homed: bool) -> (MarsBackend, Arc<Mutex<Mars8>>) {
+    on_paced(name, homed, false)
+}
+
+/// [`on`], at the arm's own pace (`slow`: CTU's CRS93 as it is, the unit at 1x), so that
+/// no motion ends by itself while a Halt is tried.
+fn on_paced(name: &str, homed: bool, slow: bool) -> (MarsBackend, Arc<Mutex<Mars8>>) {
+    let sw = mars8::variant(name).expect("a variant");
+    let scale = if slow { 1.0 } else { 10.0 };
+    let unit = Arc::new(Mutex::new(Mars8::new(Profile::crs93(), sw, homed, scale)));
+    let port = TwinPort {
+        unit: unit.clone(),
+        out: VecDeque::new(),
+    };
+    let mut profile = if slow { Profile::crs93() } else { fast() };
+    profile.assume_homed = homed;
+    let b = MarsBackend::connect(Box::new(port), profile, None, None, Vec::new())
+        .expect("the session opens");
+    (b, unit)
+}
+
+fn received(unit: &Arc<Mutex<Mars8>>) -> Vec<String> {
+    unit.lock().unwrap().received().to_vec()
+}
+
+fn code(r: BiosResult) -> i16 {
+    r.unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn finish(b: &mut MarsBackend) {
+    let until = StdInstant::now() + Duration::from_secs(20);
+    while b.moving().unwrap_or_else(|e| panic!("{e}")) {
+        assert!(StdInstant::now() < until, "the motion did not end");
+    }
+}
+
+const READS: [&str; 5] = ["ECHO:0", "VER?", "ST?", "COORDAP?", "STAMP"];
+
+fn reads_only(lines: &[String]) -> bool {
+    lines.iter().all(|l| READS.iter().any(|r| l.starts_with(r)))
+}
+
+#[test]
+fn opening_reads_only() {
+    let (_b, unit) = on("default", false);
+    let lines = received(&unit);
+    assert!(lines.iter().any(|l| l == "VER?"), "{lines:?}");
+    assert!(reads_only(&lines), "{lines:?}");
+}
+
+#[test]
+fn the_gate_refuses_a_motion_before_home_and_sends_nothing_that_moves() {
+    let (mut b, unit) = on("default", false);
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, 0.1)), code::NOT_HOMED);
+    let sent = received(&unit)[before..].to_vec();
+    assert!(reads_only(&sent), "{sent:?}");
+}
+
+#[test]
+fn a_motion_goes_as_segments_confirmed_by_stamp_and_ends_at_its_target() {
+    let (mut b, unit) = on("default", true);
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, 0.2)), 0);
+    let sent = received(&unit)[before..].to_vec();
+    assert!(sent.iter().any(|l| l.starts_with("COORDMVT:")), "{sent:?}");
+    let last_move = sent
+        .iter()
+        .rposition(|l| l.starts_with("COORDMVT:"))
+        .unwrap();
+    assert!(
+        sent[last_move..].iter().any(|l| l.starts_with("STAMP:")),
+        "{sent:?}"
+    );
+    finish(&mut b);
+    let q = unit.lock().unwrap().joints();
+    assert!((q[0] - 0.2).abs() < 1e-3, "{q:?}");
+}
+
+#[test]
+fn halt_is_success_only_when_the_unit_shows_the_arm_standing() {
+    // STOP: works.
+    let (mut b, unit) = on_paced("default", true, true);
+    assert_eq!(code(b.speed(10)), 0);
+    assert_eq!(code(b.joint(1, 1.5)), 0);
+    assert_eq!(code(b.halt()), 0);
+    assert!(!unit.lock().unwrap().is_moving());
+    assert!(!received(&unit).iter().any(|l| l == "PURGE:"));
+
+    // STOP: is taken and ignored: PURGE: stops it, and the arm must be homed again.
+    let (mut b, unit) = on_paced("stop-ignored", true, true);
+    assert_eq!(code(b.speed(10)), 0);
+    assert_eq!(code(b.joint(1, 1.5)), 0);
+    assert_eq!(code(b.halt()), 0);
+    assert!(received(&unit).iter().any(|l| l == "PURGE:"));
+    assert!(!unit.lock().unwrap().is_moving());
+    assert_eq!(code(b.joint(1, 0.1)), code::NOT_HOMED);
+
+    // Nothing stops it: never success.
+    let (mut b, _) = on_paced("unstoppable", true, true);
+    assert_eq!(code(b.speed(10)), 0);
+    assert_eq!(code(b.joint(1, 1.5)), 0);
+    assert!(matches!(b.halt(), Err(BackendError::NotStopped(_))));
+}

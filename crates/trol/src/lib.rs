@@ -44,8 +44,8 @@ mod robot;
 pub use config::{Config, ConfigError};
 pub use robot::{
     ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK, KEEPALIVE_SILENCE, MARS_PREFIX,
-    MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, PosMode, Result, Robot, SetupError, StatusRecord, Waited,
-    prompt_policy, prompt_reply_timeout, timeout_policy, wait_idle,
+    MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT, PosMode, Result, Robot, SetupError,
+    StatusRecord, Waited, prompt_policy, prompt_reply_timeout, timeout_policy, wait_idle,
 };
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;

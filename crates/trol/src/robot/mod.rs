@@ -185,7 +185,9 @@ pub const POLL: Duration = Duration::from_millis(20);
 /// The reply timeout of one poll of a wait (TROLFinish(FINISH_STATUS)): the controller
 /// answers it at once (a C500 gateway after one STATUS, 0.7 s at 9600 Bd), so a controller
 /// that dies during a wait is noticed within about 3 s (this, then one unanswered ENQ),
-/// whatever the reply timeout of other calls.
+/// whatever the reply timeout of other calls. An in-process controller is given
+/// [`IN_PROCESS_SLACK`] more: its poll reads a real controller's line on a thread a busy
+/// machine may hold back (issue 44: a C500's STATUS poll on `rapl:` missed 2 s under load).
 pub const POLL_REPLY_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// What a call waits for its reply beyond the time the controller says it takes at most
@@ -730,10 +732,10 @@ impl Robot {
         let prompt = self
             .prompt
             .filter(|_| !self.reply_timeout_set && def.extra_wait(&request).is_some());
-        let short = match (poll, prompt) {
-            (true, Some(p)) => Some(p.min(POLL_REPLY_TIMEOUT)),
-            (true, None) => Some(POLL_REPLY_TIMEOUT),
-            (false, p) => p,
+        let short = if poll {
+            Some(self.poll_reply_timeout())
+        } else {
+            prompt
         };
         let usual = self.transactor.initiator().reply_timeout();
         let shortened = short.filter(|s| *s < usual);
@@ -805,6 +807,16 @@ impl Robot {
     /// The reply timeout (SetL3_TO_Intervall).
     pub fn reply_timeout(&self) -> Duration {
         self.transactor.reply_timeout()
+    }
+
+    /// How long one poll of a wait (TROLFinish(FINISH_STATUS)) waits for its reply:
+    /// [`POLL_REPLY_TIMEOUT`] (more for an in-process controller), at most what other
+    /// calls wait; the application's reply timeout where it set one.
+    pub fn poll_reply_timeout(&self) -> Duration {
+        let bound = POLL_REPLY_TIMEOUT + self.in_process_slack();
+        self.call_reply_timeout()
+            .map_or(bound, |p| p.min(bound))
+            .min(self.transactor.initiator().reply_timeout())
     }
 
     /// How long a call (but a wait without limit) waits for its reply: the controller's

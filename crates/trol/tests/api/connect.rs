@@ -196,7 +196,8 @@ pub(super) fn an_in_process_controller_keeps_its_slack_after_the_version_check()
     // The version check learns the controller's reply time and keep-alive again: for an
     // in-process one, a busy machine may hold its thread back, so both keep the slack
     // (issue 44: InitTROL(1) put them back to the bare figures, and a 1998 program's
-    // first TROLHome on `rapl:` came back TROL_ERR_COMM under load).
+    // first TROLHome on `rapl:` came back TROL_ERR_COMM under load; a poll of its Finish
+    // had 2 s, and one reading a C500's STATUS missed them under load).
     let mut robot = Robot::embedded(settings());
     let before = robot
         .call_reply_timeout()
@@ -204,6 +205,13 @@ pub(super) fn an_in_process_controller_keeps_its_slack_after_the_version_check()
     assert!(before >= trol::IN_PROCESS_SLACK, "{before:?}");
     trol::check_server(&mut robot).unwrap();
     assert_eq!(robot.call_reply_timeout(), Some(before));
+    // A poll of a wait too: it may read a real controller's line (a C500's STATUS).
+    let poll = robot.poll_reply_timeout();
+    assert!(
+        poll > trol::POLL_REPLY_TIMEOUT
+            && poll >= before.min(trol::POLL_REPLY_TIMEOUT + trol::IN_PROCESS_SLACK),
+        "{poll:?}"
+    );
     let silence = robot
         .keepalive_silence()
         .expect("the simulator keeps the line alive");
@@ -215,6 +223,7 @@ pub(super) fn an_in_process_controller_keeps_its_slack_after_the_version_check()
     robot.set_reply_timeout_tenths(20).unwrap();
     assert_eq!(robot.call_reply_timeout(), None);
     assert_eq!(robot.keepalive_silence(), None);
+    assert_eq!(robot.poll_reply_timeout(), Duration::from_secs(2));
 }
 
 #[test]

@@ -42,40 +42,69 @@ impl Backend for MarsBackend {
             return Ok(false);
         }
         let grip = self.gripper_step(s & st::MOVING != 0)?;
-        let Some(m) = self.motion.clone() else {
+        let Some(m) = self.motion.as_mut() else {
             return Ok(grip);
         };
-        if !self.pending.is_empty() || s & st::MOVING != 0 {
-            if let Some(o) = self.motion.as_mut() {
-                o.seen_moving |= s & st::MOVING != 0;
-            }
+        if s & st::MOVING != 0 {
+            m.watch.saw_moving();
+            return Ok(true);
+        }
+        if !self.pending.is_empty() {
             return Ok(true);
         }
         let c = self.counters().map_err(|f| f.not_run())?;
         let tol = self.profile.arrive_irc;
-        // At the end within arrive_irc, once the moving bit was seen up and down again, or
-        // (a motion too short to show it) not before the planned end: counters within the
-        // tolerance before either are an arm still slowing down, and a unit whose moving bit
-        // lags then showed it moving at the next call, which was refused BIOS_BUSY.
-        if (m.seen_moving || self.now() >= m.end)
-            && (0..6).all(|j| (c[j] - m.target[j]).abs() <= tol)
-        {
-            self.motion = None;
-            let q = self.profile.irc_to_joints(&c);
-            self.planner.place(q);
-            return Ok(grip);
+        let times = real::EndTimes {
+            settle: Duration::from_millis(self.profile.settle_ms),
+            give_up: Duration::ZERO,
+        };
+        let m = self.motion.as_mut().expect("a motion under way");
+        let now = Instant::now();
+        m.watch.saw_at(now, c);
+        let at_end = (0..6).all(|j| (c[j] - m.target[j]).abs() <= tol);
+        // The shared end rule (real::EndWatch): at the end within arrive_irc once the
+        // moving bit was seen up and down again, or (a motion too short to show it) not
+        // before the planned end: counters within the tolerance before either are an arm
+        // still slowing down, and a unit whose moving bit lags then showed it moving at the
+        // next call, which was refused BIOS_BUSY. Short of the end, standing, after the
+        // planned end and the settle time: a stop short.
+        let target = m.target;
+        match m.watch.verdict(
+            now,
+            at_end,
+            real::EndTimes {
+                give_up: m.give_up,
+                ..times
+            },
+        ) {
+            real::End::Arrived => {
+                self.motion = None;
+                let q = self.profile.irc_to_joints(&c);
+                self.planner.place(q);
+                Ok(grip)
+            }
+            real::End::Running => Ok(true),
+            real::End::StoppedShort(_) => {
+                let far: Vec<String> = (0..6)
+                    .filter(|&j| (c[j] - target[j]).abs() > tol)
+                    .map(|j| format!("joint {} at {} IRC for {}", j + 1, c[j], target[j]))
+                    .collect();
+                self.say(&format!("the unit stopped short: {}", far.join(", ")));
+                self.abandon();
+                Err(BackendError::Refused(NOT_AT_TARGET))
+            }
+            real::End::TimedOut => {
+                let text = format!(
+                    "the unit's moving bit is clear, but the arm is neither at the motion's end \
+                     nor standing (COORDAP? {c:?} for {target:?}) past the planned end and {} \
+                     s: whether the motion runs as asked is not known; nothing further was sent",
+                    END_MARGIN.as_secs()
+                );
+                self.say(&text);
+                self.abandon();
+                Err(BackendError::Unsure(text))
+            }
         }
-        let settle = self.profile.settle_ms as f64 / 1000.0;
-        if self.now() < m.end + settle {
-            return Ok(true);
-        }
-        let far: Vec<String> = (0..6)
-            .filter(|&j| (c[j] - m.target[j]).abs() > tol)
-            .map(|j| format!("joint {} at {} IRC for {}", j + 1, c[j], m.target[j]))
-            .collect();
-        self.say(&format!("the unit stopped short: {}", far.join(", ")));
-        self.abandon();
-        Err(BackendError::Refused(NOT_AT_TARGET))
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
         self.fingers(f64::from(dist), true)

@@ -35,8 +35,7 @@ impl real::Stopping for Stopper<'_> {
         b.counters().map(Some).map_err(|f| f.text())
     }
     fn still_within(&self) -> [f64; 6] {
-        let p = &self.0.profile;
-        std::array::from_fn(|j| (STILL_DEG * p.irc_per_deg(j)).abs().max(2.0))
+        self.0.still_irc()
     }
     fn now(&self) -> Instant {
         Instant::now()
@@ -71,6 +70,13 @@ impl MarsBackend {
                 Err(BackendError::NotStopped(text))
             }
         }
+    }
+
+    /// How far two `COORDAP?` reads of a standing arm may differ, IRC: [`STILL_DEG`], and
+    /// at least 2 counts of encoder dither.
+    pub(super) fn still_irc(&self) -> [f64; 6] {
+        let p = &self.profile;
+        std::array::from_fn(|j| (STILL_DEG * p.irc_per_deg(j)).abs().max(2.0))
     }
 
     /// Forget what was under way (after a fault or Halt) and take the arm as where it is.

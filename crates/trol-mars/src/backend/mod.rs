@@ -152,11 +152,19 @@ pub type LogFn = Box<dyn FnMut(&str) + Send>;
 
 #[derive(Clone, Debug)]
 struct Outstanding {
+    /// Its end, IRC.
     target: [f64; 6],
-    end: f64,
-    /// The unit's moving bit was seen up since the motion was sent.
-    seen_moving: bool,
+    /// Its end, look by look (the shared rule: the moving bit, `COORDAP?`, the planned end).
+    watch: real::EndWatch,
+    /// From its sending: the plan's time, the settle time and [`END_MARGIN`].
+    give_up: Duration,
 }
+
+/// How long past its planned end and the settle time a motion whose end is neither seen
+/// nor ruled out (the moving bit clear, the arm neither at the end nor standing) is looked
+/// for before it is given up as unsure. Assumed: the unit's own speeds govern its motions,
+/// and TROL's plan may be several times shorter than the unit's (issue 43, item 5).
+pub const END_MARGIN: Duration = Duration::from_secs(20);
 
 #[derive(Clone, Debug)]
 struct Homing {

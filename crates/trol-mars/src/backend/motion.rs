@@ -73,10 +73,19 @@ impl MarsBackend {
             return Err(e);
         }
         self.pending.extend(lines);
+        let sent = Instant::now();
+        let planned = self.epoch + Duration::from_secs_f64(t1.max(0.0));
+        let from = if busy_before {
+            None
+        } else {
+            Some(self.profile.joints_to_irc(&self.planner.planned_at(t0)))
+        };
         self.motion = Some(Outstanding {
             target: last,
-            end: t1,
-            seen_moving: false,
+            watch: real::EndWatch::new(sent, from, self.still_irc()).planned_to_end(planned),
+            give_up: planned.saturating_duration_since(sent)
+                + Duration::from_millis(self.profile.settle_ms)
+                + END_MARGIN,
         });
         // The status word read above, before this motion, showed the unit's queue with room
         // and nothing of ours in it: no second look before the first lines (issue 43).

@@ -101,7 +101,7 @@ impl Backend for RaplBackend {
         self.last_poll = None;
         if !self.queue.is_empty() {
             let n = self.queue.len();
-            self.queue.clear();
+            self.queue.drop_all();
             self.note(format!("Halt: {n} queued motion(s) dropped, not sent"));
         }
         let r = self.stop_and_see();

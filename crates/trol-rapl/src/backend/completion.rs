@@ -50,16 +50,16 @@ impl RaplBackend {
         };
         if st.limp.iter().any(|l| *l) {
             let ours = self.outstanding.take();
-            let dropped = std::mem::take(&mut self.queue);
-            if ours.is_some() || !dropped.is_empty() {
+            let dropped = self.queue.drop_all();
+            if ours.is_some() || dropped > 0 {
                 self.note(format!(
                     "the arm lost power (STATUS's LIMP row says Y){}{}",
                     ours.map(|o| format!(" during `{}`", o.motion.line))
                         .unwrap_or_default(),
-                    if dropped.is_empty() {
+                    if dropped == 0 {
                         String::new()
                     } else {
-                        format!("; {} queued motion(s) dropped, not sent", dropped.len())
+                        format!("; {dropped} queued motion(s) dropped, not sent")
                     }
                 ));
                 return Err(BackendError::Refused(ARM_POWER));
@@ -76,69 +76,81 @@ impl RaplBackend {
         if o.motion.expect != Expect::Homed && !st.homed.iter().all(|h| *h) {
             let line = o.motion.line.clone();
             self.outstanding = None;
-            self.queue.clear();
+            self.queue.drop_all();
             self.note(format!(
                 "the arm lost its homing during `{line}` (STATUS's HOMED row says N); queue dropped"
             ));
             return Err(BackendError::Refused(sim_code::NOT_HOMED));
         }
         if !done {
-            o.seen_moving = true;
+            o.watch.saw_moving();
             return Ok(true);
         }
-        if self.arrived()? {
-            self.outstanding = None;
-            return self.next_in_queue();
+        // The shared end rule (real::EndWatch): W2 at the motion's end is arrival; W2
+        // standing short of it for settle_ms after the motion ran (STATUS said not done, W2
+        // moved, or W2 left where the arm last rested) is a stop short, known within the
+        // motion's own time and settle_ms (issue 37, item 7); a motion never seen running
+        // waits for motion_timeout_s (the DONE row may lag), then is unsure.
+        match self.look_at_end()? {
+            real::End::Arrived => {
+                self.outstanding = None;
+                self.next_in_queue()
+            }
+            real::End::Running => Ok(true),
+            real::End::StoppedShort(at) => {
+                let (line, expect) = self.end_of_outstanding();
+                self.queue.drop_all();
+                self.note(format!(
+                    "`{line}`: the C500 says done, and the arm (W2 joints {}) has stood still for \
+                     {} ms short of the motion's end ({expect:?}): it stopped short; the queue \
+                     was dropped",
+                    join(&at),
+                    self.profile.settle_ms
+                ));
+                Err(BackendError::Refused(NOT_AT_TARGET))
+            }
+            real::End::TimedOut => {
+                let (line, expect) = self.end_of_outstanding();
+                self.queue.drop_all();
+                let e = format!(
+                    "`{line}`: the C500 says done, but after {} s the arm (W2) is not at the \
+                     motion's end ({expect:?}); whether it ran as asked is not known, and the \
+                     queue was dropped",
+                    self.profile.motion_timeout_s
+                );
+                self.note(e.clone());
+                Err(BackendError::Unsure(e))
+            }
         }
-        let o = self.outstanding.as_ref().expect("a motion under way");
-        // The motion ran (STATUS said not done, W2 moved, or W2 left where the arm last
-        // rested), the controller says done, and the arm has stood still short of the end
-        // for `settle_ms`: it stopped short (a servo fault, a stop at the controller) without
-        // a word. Known within the motion's own time and settle_ms, not after
-        // motion_timeout_s (issue 37, item 7). A motion that never left its start and
-        // never showed as running still waits for motion_timeout_s: the DONE row may lag.
-        let settle = Duration::from_millis(self.profile.settle_ms);
-        let left_rest = match (o.from, o.standing) {
-            (Some(a), Some((_, b))) => a.iter().zip(&b).any(|(x, y)| (x - y).abs() > STILL_DEG),
-            _ => false,
-        };
-        if (o.seen_moving || o.w2_moved || left_rest)
-            && o.standing.is_some_and(|(t, _)| t.elapsed() >= settle)
-        {
-            let line = o.motion.line.clone();
-            let expect = o.motion.expect.clone();
-            let at = o.standing.map(|(_, q)| q).unwrap_or_default();
-            self.outstanding = None;
-            self.queue.clear();
-            self.note(format!(
-                "`{line}`: the C500 says done, and the arm (W2 joints {}) has stood still for \
-                 {} ms short of the motion's end ({expect:?}): it stopped short; the queue was \
-                 dropped",
-                join(&at),
-                settle.as_millis()
-            ));
-            return Err(BackendError::Refused(NOT_AT_TARGET));
+    }
+
+    /// Give up the motion under way: its line and end, for the message.
+    fn end_of_outstanding(&mut self) -> (String, Expect) {
+        self.outstanding
+            .take()
+            .map(|o| (o.motion.line, o.motion.expect))
+            .unwrap_or((String::new(), Expect::Unknown))
+    }
+
+    /// Drop what waits in the queue, unsent, and say so (`after`: what failed).
+    pub(super) fn drop_queue(&mut self, after: &str) {
+        let n = self.queue.drop_all();
+        if let Some(note) = real::MotionQueue::<Queued>::dropped_note(n, after) {
+            self.note(note);
         }
-        if o.since.elapsed() > self.motion_timeout() {
-            let line = o.motion.line.clone();
-            let expect = o.motion.expect.clone();
-            self.outstanding = None;
-            self.queue.clear();
-            let e = format!(
-                "`{line}`: the C500 says done, but after {} s the arm (W2) is not at the \
-                 motion's end ({expect:?}); whether it ran as asked is not known, and the queue \
-                 was dropped",
-                self.profile.motion_timeout_s
-            );
-            self.note(e.clone());
-            return Err(BackendError::Unsure(e));
+    }
+
+    /// The times of the shared end rule: the profile's settle time, and motion_timeout_s.
+    fn end_times(&self) -> real::EndTimes {
+        real::EndTimes {
+            settle: Duration::from_millis(self.profile.settle_ms),
+            give_up: self.motion_timeout(),
         }
-        Ok(true)
     }
 
     /// Give up the motion under way and the queue (nothing more of them is sent); its line.
     pub(super) fn give_up(&mut self) -> String {
-        self.queue.clear();
+        self.queue.drop_all();
         self.outstanding
             .take()
             .map(|o| o.motion.line)
@@ -147,9 +159,10 @@ impl RaplBackend {
 
     /// Whether the motion under way was sent longer ago than `motion_timeout_s`.
     pub(super) fn past_motion_timeout(&self) -> bool {
-        self.outstanding
-            .as_ref()
-            .is_some_and(|o| o.since.elapsed() > self.motion_timeout())
+        self.outstanding.as_ref().is_some_and(|o| {
+            o.watch
+                .older_than(std::time::Instant::now(), self.motion_timeout())
+        })
     }
 
     /// Whether FINISH should go out now: `completion = "finish"`, a motion of ours under way
@@ -221,7 +234,9 @@ impl RaplBackend {
                         self.seen_at_end(&expect);
                     }
                 }
-                if self.profile.finish_ack_means_arrived || self.arrived()? {
+                if self.profile.finish_ack_means_arrived
+                    || self.look_at_end()? == real::End::Arrived
+                {
                     self.outstanding = None;
                     return self.next_in_queue();
                 }
@@ -234,7 +249,7 @@ impl RaplBackend {
                 // This controller answers FINISH with an error only when the motion stopped
                 // short (the profile says so).
                 self.outstanding = None;
-                let dropped = std::mem::take(&mut self.queue).len();
+                let dropped = self.queue.drop_all();
                 self.note(format!(
                     "`{line}` ended short: FINISH answered {n:03}-{t}{}",
                     if dropped > 0 {
@@ -261,7 +276,7 @@ impl RaplBackend {
             }
             Err(e) => {
                 self.outstanding = None;
-                self.queue.clear();
+                self.queue.drop_all();
                 return Err(e);
             }
         }
@@ -306,7 +321,7 @@ impl RaplBackend {
     }
 
     pub(super) fn next_in_queue(&mut self) -> Result<bool, BackendError> {
-        let Some(q) = self.queue.pop_front() else {
+        let Some(q) = self.queue.pop() else {
             return Ok(false);
         };
         let line = q.line().to_string();
@@ -315,15 +330,11 @@ impl RaplBackend {
             Queued::Later(_, f) => {
                 // Computed now, from where the arm stands (the motion before it ended): the
                 // rest of the queue waits aside, so that the arm counts as standing.
-                let rest = std::mem::take(&mut self.queue);
+                let rest = self.queue.set_aside();
                 let r = f(self);
-                if matches!(r, Ok(0)) {
-                    self.queue = rest;
-                } else if !rest.is_empty() {
-                    self.note(format!(
-                        "{} queued motion(s) dropped after `{line}` failed: not sent",
-                        rest.len()
-                    ));
+                self.queue.restore(rest);
+                if !matches!(r, Ok(0)) {
+                    self.drop_queue(&format!("`{line}` failed"));
                 }
                 r
             }
@@ -337,29 +348,22 @@ impl RaplBackend {
         }
     }
 
-    /// Whether the arm is where the motion under way ends (the controller said done).
-    pub(super) fn arrived(&mut self) -> Result<bool, BackendError> {
+    /// One look at the end of the motion under way, the controller having said done: W2
+    /// read, fed to the shared end rule with whether it puts the arm at the motion's end
+    /// (within `arrive_deg`, `arrive_mm`). On arrival the arm is at rest there.
+    pub(super) fn look_at_end(&mut self) -> Result<real::End, BackendError> {
         let expect = match &self.outstanding {
             Some(o) => o.motion.expect.clone(),
-            None => return Ok(true),
+            None => return Ok(real::End::Arrived),
         };
         let p = self.read_position(PosMode::Actual)?;
-        if let Some(o) = self.outstanding.as_mut() {
-            match o.standing {
-                Some((_, q))
-                    if q.iter()
-                        .zip(&p.joints)
-                        .all(|(a, b)| (a - b).abs() <= STILL_DEG) => {}
-                Some(_) => {
-                    o.w2_moved = true;
-                    o.standing = Some((std::time::Instant::now(), p.joints));
-                }
-                None => o.standing = Some((std::time::Instant::now(), p.joints)),
-            }
-        }
+        let now = std::time::Instant::now();
+        let times = self.end_times();
         let tol = self.profile.arrive_deg;
-        let arrived = match expect {
-            Expect::Joints(q) => p.joints.iter().zip(&q).all(|(a, b)| (a - b).abs() <= tol),
+        let o = self.outstanding.as_mut().expect("a motion under way");
+        o.watch.saw_at(now, p.joints);
+        let at_end = match &expect {
+            Expect::Joints(q) => p.joints.iter().zip(q).all(|(a, b)| (a - b).abs() <= tol),
             Expect::Pulses(c) => {
                 let scale = self
                     .frames
@@ -368,42 +372,31 @@ impl RaplBackend {
                     .unwrap_or([1.0; 6]);
                 p.pulses
                     .iter()
-                    .zip(&c)
+                    .zip(c)
                     .zip(&scale)
                     .all(|((a, b), k)| ((a - b) as f64).abs() <= tol * k)
             }
-            Expect::World(w) => self.world_near(&p.world, &w),
+            Expect::World(w) => self.world_near(&p.world, w),
             Expect::Unknown | Expect::Homed => {
                 let homed = self
                     .status
                     .as_ref()
                     .is_some_and(|s| s.homed.iter().all(|h| *h));
-                let o = self.outstanding.as_mut().expect("a motion under way");
-                if expect == Expect::Homed && !homed {
-                    false
-                } else if o.seen_moving {
-                    true
-                } else {
-                    let settle = Duration::from_millis(self.profile.settle_ms);
-                    match o.still {
-                        Some((t, q))
-                            if q.iter().zip(&p.joints).all(|(a, b)| (a - b).abs() <= tol) =>
-                        {
-                            t.elapsed() >= settle
-                        }
-                        _ => {
-                            o.still = Some((std::time::Instant::now(), p.joints));
-                            false
-                        }
-                    }
-                }
+                // No end to compare with: it ran (the controller said it moves), or it has
+                // stood for settle_ms where it is.
+                let o = self.outstanding.as_ref().expect("a motion under way");
+                (expect != Expect::Homed || homed)
+                    && (o.watch.seen_moving()
+                        || o.watch.stood_for(now).is_some_and(|d| d >= times.settle))
             }
         };
-        if arrived {
+        let o = self.outstanding.as_ref().expect("a motion under way");
+        let end = o.watch.verdict(now, at_end, times);
+        if end == real::End::Arrived {
             self.rest = Some(p.joints);
             self.seen_at_end(&expect);
         }
-        Ok(arrived)
+        Ok(end)
     }
 
     /// A motion seen to end where it was sent (W2 there, or FINISH's ACK where the profile

@@ -339,7 +339,7 @@ impl RaplBackend {
         self.forget();
         self.outstanding = None;
         let dropped = self.queue.len();
-        self.queue.clear();
+        self.queue.drop_all();
         let known = lines(&text)
             .into_iter()
             .find_map(|l| self.forms.iter().find_map(|f| f.read(&l)));

@@ -289,31 +289,24 @@ impl Queued {
 #[derive(Debug)]
 struct Outstanding {
     motion: Motion,
-    since: std::time::Instant,
-    seen_moving: bool,
-    still: Option<(std::time::Instant, [f64; 6])>,
-    /// Since when W2 has read the arm within [`STILL_DEG`] of one place, and that place.
-    standing: Option<(std::time::Instant, [f64; 6])>,
-    /// W2 has read the arm in two places since the motion was sent.
-    w2_moved: bool,
-    /// Where W2 last saw the arm at rest before the motion was sent (the end of the one
-    /// before), if it did.
-    from: Option<[f64; 6]>,
+    /// Its end, look by look (the shared rule: STATUS's DONE row or FINISH, and W2).
+    watch: real::EndWatch,
     /// FINISH was answered for it without settling its end (`completion = "finish"`): its
     /// end is looked for by STATUS.
     finish_tried: bool,
 }
 
 impl Outstanding {
+    /// `seen_moving`: the controller answered it at its end (it ran); `from`: where W2 last
+    /// saw the arm at rest before it (the end of the one before), if it did.
     fn new(motion: Motion, seen_moving: bool, from: Option<[f64; 6]>) -> Outstanding {
+        let mut watch = real::EndWatch::new(std::time::Instant::now(), from, [STILL_DEG; 6]);
+        if seen_moving {
+            watch.saw_moving();
+        }
         Outstanding {
             motion,
-            since: std::time::Instant::now(),
-            seen_moving,
-            still: None,
-            standing: None,
-            w2_moved: false,
-            from,
+            watch,
             finish_tried: false,
         }
     }
@@ -325,16 +318,6 @@ enum Answer {
     Done(Reply),
     /// A refusal in one of the profile's forms: number (0 for a form without one), text.
     Refused(u16, String),
-}
-
-/// How a motion may go now.
-enum Gate {
-    /// Refused before anything was sent, with this code.
-    Refuse(i16),
-    /// The arm stands: send it.
-    Idle,
-    /// A motion runs or waits: queue it.
-    Busy,
 }
 
 /// How long one look for FINISH's answer listens (`completion = "finish"`): the end is seen
@@ -379,7 +362,7 @@ pub struct RaplBackend {
     outstanding: Option<Outstanding>,
     /// Where W2 last saw the arm at rest (a motion's confirmed end, a Halt's stop).
     rest: Option<[f64; 6]>,
-    queue: VecDeque<Queued>,
+    queue: real::MotionQueue<Queued>,
     deferred: Option<BackendError>,
     /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
     /// "end"`): the controller's interpreter is busy until then.
@@ -469,7 +452,7 @@ impl RaplBackend {
             last_poll: None,
             outstanding: None,
             rest: None,
-            queue: VecDeque::new(),
+            queue: real::MotionQueue::new(QUEUE),
             deferred: None,
             awaiting: None,
             finishing: false,

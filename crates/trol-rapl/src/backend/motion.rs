@@ -4,16 +4,17 @@
 use super::*;
 
 impl RaplBackend {
-    /// Whether a motion may be sent now: power and homing checked, and whether the arm is
-    /// busy (a motion of ours not seen to end, a queue, or the DONE row).
-    pub(super) fn gate(&mut self, homing: bool) -> Result<Gate, BackendError> {
+    /// Whether a motion may be sent now, wait in the queue, or is refused: the shared gate
+    /// ([`real::gate`]) on STATUS (read now, or seen a moment ago with nothing since).
+    /// `homing`: the motion is a Home.
+    pub(super) fn gate(&mut self, homing: bool) -> Result<real::Gate, BackendError> {
         self.release()?;
         // A controller that answers a motion at its end takes nothing before: the next motion
         // waits in the queue for that answer, as the controller itself would, and the call
         // returns at once (a request that waited for the motion's end would outlast the
         // host's reply timeout; Halt and Finish get through meanwhile).
         if self.awaiting.is_some() && self.await_end()? {
-            return Ok(Gate::Busy);
+            return Ok(real::Gate::Queue);
         }
         self.report_unasked()?;
         if let Some(e) = self.deferred.take() {
@@ -36,44 +37,44 @@ impl RaplBackend {
                 (moving, st)
             }
         };
-        if st.limp.iter().any(|l| *l) {
-            self.note(
-                "refused before sending: STATUS says the arm has no power (LIMP): restore arm \
-                 power at the controller"
-                    .into(),
-            );
-            return Ok(Gate::Refuse(ARM_POWER));
+        let home = |m: &Motion| m.expect == Expect::Homed;
+        let snapshot = real::Snapshot {
+            powered: !st.limp.iter().any(|l| *l),
+            homed: st.homed.iter().all(|h| *h),
+            in_control: true,
+            moving,
+            ours: self.outstanding.is_some() || !self.queue.is_empty(),
+            homing: self.outstanding.as_ref().is_some_and(|o| home(&o.motion))
+                || self
+                    .queue
+                    .iter()
+                    .any(|q| matches!(q, Queued::Motion(m) if home(m))),
+        };
+        let gate = real::gate(&snapshot, homing);
+        if let real::Gate::Refuse(why) = gate {
+            self.note(format!("{} (STATUS)", why.text()));
         }
-        if !homing && !st.homed.iter().all(|h| *h) {
-            self.note(
-                "refused before sending: STATUS says the arm is not homed: call TROLHome(0) \
-                 (with the arm near its home position)"
-                    .into(),
-            );
-            return Ok(Gate::Refuse(sim_code::NOT_HOMED));
+        Ok(gate)
+    }
+
+    /// The code of a refusal by the gate.
+    pub(super) fn refusal_code(why: real::Refusal) -> i16 {
+        match why {
+            real::Refusal::NoPower => ARM_POWER,
+            real::Refusal::NotHomed => sim_code::NOT_HOMED,
+            real::Refusal::NoControl | real::Refusal::Busy => BUSY,
         }
-        Ok(if moving || !self.queue.is_empty() {
-            Gate::Busy
-        } else {
-            Gate::Idle
-        })
     }
 
     /// Send a motion now or queue it behind the one under way.
     pub(super) fn submit(&mut self, m: Motion, busy: bool) -> BiosResult {
         if busy {
-            if self.queue.len() >= QUEUE {
-                self.note(format!(
-                    "`{}` refused: {QUEUE} motions wait already",
-                    m.line
-                ));
+            let line = m.line.clone();
+            if self.queue.push(Queued::Motion(m)).is_err() {
+                self.note(format!("`{line}` refused: {QUEUE} motions wait already"));
                 return Ok(sim_code::QUEUE_FULL);
             }
-            self.note(format!(
-                "`{}` waits for the motion under way to end",
-                m.line
-            ));
-            self.queue.push_back(Queued::Motion(m));
+            self.note(format!("`{line}` waits for the motion under way to end"));
             return Ok(0);
         }
         self.launch(m)
@@ -130,7 +131,7 @@ impl RaplBackend {
         if !busy {
             return now(self);
         }
-        if self.queue.len() >= QUEUE {
+        if self.queue.push(Queued::Later(what.clone(), now)).is_err() {
             self.note(format!("`{what}` refused: {QUEUE} motions wait already"));
             return Ok(sim_code::QUEUE_FULL);
         }
@@ -138,7 +139,6 @@ impl RaplBackend {
             "`{what}` waits for the motion under way to end; it is computed from where that \
              one ends"
         ));
-        self.queue.push_back(Queued::Later(what, now));
         Ok(0)
     }
 
@@ -154,14 +154,7 @@ impl RaplBackend {
                 Ok(0)
             }
             other => {
-                if !self.queue.is_empty() {
-                    self.note(format!(
-                        "{} queued motion(s) dropped after `{}` failed: not sent",
-                        self.queue.len(),
-                        m.line
-                    ));
-                    self.queue.clear();
-                }
+                self.drop_queue(&format!("`{}` failed", m.line));
                 other
             }
         }
@@ -183,7 +176,7 @@ impl RaplBackend {
                 // Answered within the window: a refusal, or a motion that already ended.
                 match self.answer(&m.line, r, false)? {
                     Answer::Refused(n, _) => {
-                        self.queue.clear();
+                        self.queue.drop_all();
                         Ok(self.code_of_refusal(n))
                     }
                     Answer::Done(_) => {
@@ -194,7 +187,7 @@ impl RaplBackend {
             }
             Ok(Some(Err(e))) => {
                 self.note(format!("`{}`: {e}", m.line));
-                self.queue.clear();
+                self.queue.drop_all();
                 Err(if e.surely_not_run() {
                     BackendError::Link(e.to_string())
                 } else {
@@ -229,7 +222,7 @@ impl RaplBackend {
             if self.past_motion_timeout() {
                 self.awaiting = None;
                 self.outstanding = None;
-                self.queue.clear();
+                self.queue.drop_all();
                 let _ = self.interrupt();
                 return Err(BackendError::Unsure(format!(
                     "`{line}` was not answered within motion_timeout_s ({} s): Ctrl-C sent; \
@@ -245,7 +238,7 @@ impl RaplBackend {
                 Ok(Answer::Done(_)) => Ok(false),
                 Ok(Answer::Refused(n, t)) => {
                     self.outstanding = None;
-                    self.queue.clear();
+                    self.queue.drop_all();
                     self.note(format!("`{line}` ended in a refusal: {n:03}-{t}"));
                     Err(BackendError::Refused(match self.meaning(n) {
                         Meaning::Code(c) => c,
@@ -254,13 +247,13 @@ impl RaplBackend {
                 }
                 Err(e) => {
                     self.outstanding = None;
-                    self.queue.clear();
+                    self.queue.drop_all();
                     Err(e)
                 }
             },
             Err(e) => {
                 self.outstanding = None;
-                self.queue.clear();
+                self.queue.drop_all();
                 Err(BackendError::Unsure(format!("`{line}`: {e}")))
             }
         }
@@ -273,9 +266,9 @@ impl RaplBackend {
         f: impl FnOnce(&mut Self, bool) -> BiosResult,
     ) -> BiosResult {
         match self.gate(homing)? {
-            Gate::Refuse(c) => Ok(c),
-            Gate::Idle => f(self, false),
-            Gate::Busy => f(self, true),
+            real::Gate::Refuse(why) => Ok(Self::refusal_code(why)),
+            real::Gate::Send => f(self, false),
+            real::Gate::Queue => f(self, true),
         }
     }
 

@@ -192,7 +192,7 @@ impl RaplBackend {
         }
         if !self.queue.is_empty() {
             let n = self.queue.len();
-            self.queue.clear();
+            self.queue.drop_all();
             self.note(format!("{n} queued motion(s) dropped at close, not sent"));
         }
         let t = self.reply_timeout();

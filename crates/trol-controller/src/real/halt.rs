@@ -1,13 +1,5 @@
-//! What every backend for a real controller does the same way, written once: the rules the
-//! brief sets for real controllers, which a backend must not word or weigh its own way.
-//!
-//! - [`halt`]: Halt as the arm shows it. Each of the controller's stops in turn, mildest
-//!   first, until two readings [`STILL_GAP`] apart agree; success only then, and only
-//!   within the Halt's time. No profile key makes a stop count that was not seen.
-//! - [`seen_standing`]: the "standing" test Halt and the supervised steps use.
-//!
-//! A backend supplies its stops, its readings and its clock ([`Stopping`]); the rules
-//! here never sleep or read a clock of their own, so their tests run in virtual time.
+//! Halt as the arm shows it ([`halt`]), and the "standing" test ([`seen_standing`]) it and the
+//! supervised steps use.
 
 use std::time::{Duration, Instant};
 

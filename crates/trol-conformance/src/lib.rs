@@ -1,0 +1,376 @@
+//! One conformance suite for every simulated controller (issue 39, item 2): the simulated
+//! A465, every simulated C500 variant (RAPL-II) and every simulated MARS 8 variant, each
+//! driven through TROL's API ([`trol::Robot`]) and checked against the twin's own arm, not
+//! against what TROL says.
+//!
+//! What every controller must do ([`run`]):
+//!
+//! - **the manual's API semantics**: TROLHome, then a motion and TROLFinish, leaves the arm
+//!   where the motion asked, and TROLGetPosition says so; motions sent back to back without
+//!   a Finish between them (a 1998 program) run one after the other; a motion out of the
+//!   arm's range is refused and moves nothing;
+//! - **the rule for real controllers**: no call reports success for a motion the arm did not
+//!   make (no false success); nothing moves that was not asked for (a refused call, a line
+//!   the controller printed unasked); a Halt reports success only with the arm standing;
+//!   after a failure the next call works.
+//!
+//! Where a controller may differ, the difference is named once, in [`Differences`], with
+//! the reason; [`subjects`] builds each controller with its differences.
+
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod subjects;
+
+use std::time::{Duration, Instant};
+
+use trol::{PosMode, Robot, Tag};
+use trol_proto::application::code::{TROL_ERR_NOT_STOPPED, TROL_ERR_ROBOT_UNSURE};
+
+/// The twin's own arm: the truth the suite checks TROL's answers against.
+pub trait Twin: Send {
+    /// Where the arm is, TROL's joints (radians).
+    fn joints(&self) -> [f64; 6];
+    /// Whether the arm (or the gripper) moves.
+    fn moving(&self) -> bool;
+    /// Make the controller print a line nobody asked for; `false` where this controller
+    /// has no line to print on (the simulated A465).
+    fn say_unasked(&self, text: &str) -> bool;
+}
+
+/// How a controller may differ from the others, each with its reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Differences {
+    /// The arm starts not homed: a motion before TROLHome is refused (a real controller's
+    /// encoders mean nothing before homing; the simulated A465 starts homed).
+    pub starts_unhomed: bool,
+    /// No stop this controller has stops its arm (a fault the twin simulates): Halt must
+    /// say TROL_ERR_NOT_STOPPED, never success.
+    pub unstoppable: bool,
+    /// How far (radians, every joint) the arm may end from a motion's target and still be
+    /// there: the controller's own arrival tolerance and its encoder resolution.
+    pub arrive_rad: f64,
+}
+
+impl Default for Differences {
+    fn default() -> Self {
+        Differences {
+            starts_unhomed: false,
+            unstoppable: false,
+            arrive_rad: 2e-3,
+        }
+    }
+}
+
+/// A controller under test: TROL's API on it, its twin's arm, and how it may differ.
+pub struct Subject {
+    /// Its name in messages (`C500 default`, `MARS 8 moving-lag`).
+    pub label: String,
+    /// TROL's API on it.
+    pub robot: Robot,
+    /// Its arm.
+    pub twin: Box<dyn Twin>,
+    /// How it may differ.
+    pub differences: Differences,
+}
+
+/// A joint position every controller reaches from home (radians).
+pub const Q1: [f64; 6] = [0.3, 0.2, 0.9, -0.4, 0.6, 0.5];
+/// A second one.
+pub const Q2: [f64; 6] = [0.2, 0.1, 0.8, -0.3, 0.5, 0.4];
+/// A far one, for a motion long enough to halt.
+pub const FAR: [f64; 6] = [-1.2, 0.5, 1.6, 1.0, 1.2, -1.0];
+/// Joint 1 beyond every A465's range.
+pub const OUT_OF_RANGE: [f64; 6] = [4.0, 0.2, 0.9, -0.4, 0.6, 0.5];
+
+/// The longest any step may take on a loaded machine.
+const STEP: Duration = Duration::from_secs(30);
+
+fn code(r: trol::Result<()>) -> i16 {
+    match r {
+        Ok(()) => 0,
+        Err(e) => e.code().0,
+    }
+}
+
+fn near(a: &[f64; 6], b: &[f64; 6], tol: f64) -> bool {
+    (0..6).all(|i| (a[i] - b[i]).abs() <= tol)
+}
+
+fn fmt(q: &[f64; 6]) -> String {
+    format!(
+        "[{}]",
+        q.iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// What one run found.
+#[derive(Debug, Default)]
+pub struct Findings {
+    /// Rule broken: the test fails on any.
+    pub broken: Vec<String>,
+    /// What happened, step by step (shown when something broke).
+    pub steps: Vec<String>,
+}
+
+impl Findings {
+    fn step(&mut self, s: String) {
+        self.steps.push(s);
+    }
+    fn broke(&mut self, s: String) {
+        self.steps.push(format!("BROKEN: {s}"));
+        self.broken.push(s);
+    }
+}
+
+/// Whether the twin's arm stands: two readings 250 ms apart that agree, the twin saying
+/// nothing moves.
+fn stands(twin: &dyn Twin) -> Result<(), String> {
+    let a = twin.joints();
+    std::thread::sleep(Duration::from_millis(250));
+    let b = twin.joints();
+    if twin.moving() {
+        return Err(format!("the twin says its arm moves (at {})", fmt(&b)));
+    }
+    if !near(&a, &b, STILL_RAD) {
+        return Err(format!(
+            "the arm went from {} to {} in 250 ms",
+            fmt(&a),
+            fmt(&b)
+        ));
+    }
+    Ok(())
+}
+
+/// How far two readings of a standing arm may differ (encoder dither), radians: the
+/// backends' own [`trol_controller::real::STILL_DEG`].
+const STILL_RAD: f64 = trol_controller::real::STILL_DEG * std::f64::consts::PI / 180.0;
+
+/// Whether the arm is still at `before` and stands.
+fn unmoved(twin: &dyn Twin, before: &[f64; 6]) -> Result<(), String> {
+    let now = twin.joints();
+    if twin.moving() {
+        return Err(format!("the twin says its arm moves (at {})", fmt(&now)));
+    }
+    if !near(before, &now, STILL_RAD) {
+        return Err(format!("from {} to {}", fmt(before), fmt(&now)));
+    }
+    Ok(())
+}
+
+/// Wait for the twin's arm to start moving (bounded); whether it did.
+fn wait_moving(twin: &dyn Twin, within: Duration) -> bool {
+    let until = Instant::now() + within;
+    while Instant::now() < until {
+        if twin.moving() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    false
+}
+
+/// A motion and its Finish: success only with the arm at `q`.
+fn motion(s: &mut Subject, f: &mut Findings, what: &str, q: [f64; 6]) -> bool {
+    let tol = s.differences.arrive_rad;
+    let sent = code(s.robot.ma(&q));
+    let done = if sent == 0 {
+        code(s.robot.finish())
+    } else {
+        sent
+    };
+    let at = s.twin.joints();
+    f.step(format!(
+        "{what}: MA {} -> {sent}, Finish -> {done}, arm at {}",
+        fmt(&q),
+        fmt(&at)
+    ));
+    if done == 0 && !near(&at, &q, tol) {
+        f.broke(format!(
+            "{what}: success, but the arm is at {} for {}",
+            fmt(&at),
+            fmt(&q)
+        ));
+    }
+    done == 0
+}
+
+/// Run every check on `s`.
+pub fn run(s: &mut Subject) -> Findings {
+    let mut f = Findings::default();
+    let label = s.label.clone();
+
+    // Before TROLHome: a real controller's arm refuses every motion, and nothing moves.
+    if s.differences.starts_unhomed {
+        let before = s.twin.joints();
+        let c = code(s.robot.ma(&Q1));
+        std::thread::sleep(Duration::from_millis(200));
+        f.step(format!("MA before TROLHome -> {c}"));
+        if c == 0 {
+            f.broke("a motion before TROLHome was accepted".into());
+        }
+        if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+            f.broke(format!("the arm moved before TROLHome: {e}"));
+        }
+    }
+    let h = code(s.robot.home(0));
+    let hf = if h == 0 { code(s.robot.finish()) } else { h };
+    f.step(format!("TROLHome(0) -> {h}, Finish -> {hf}"));
+    if hf != 0 {
+        f.broke(format!(
+            "TROLHome(0) failed ({hf}): nothing further can be checked"
+        ));
+        return f;
+    }
+    if let Err(e) = stands(s.twin.as_ref()) {
+        f.broke(format!(
+            "TROLHome and Finish succeeded with the arm still moving: {e}"
+        ));
+    }
+
+    // A motion arrives, and GetPosition says where.
+    if !motion(s, &mut f, "a joint motion", Q1) {
+        f.broke("a joint motion within range failed".into());
+    }
+    match s.robot.position(Tag::Joint, PosMode::Actual) {
+        Ok(loc) => {
+            let got = loc.to_array6();
+            if !near(&got, &s.twin.joints(), s.differences.arrive_rad) {
+                f.broke(format!(
+                    "TROLGetPosition says {} where the arm is at {}",
+                    fmt(&got),
+                    fmt(&s.twin.joints())
+                ));
+            }
+        }
+        Err(e) => f.broke(format!("TROLGetPosition failed: {e}")),
+    }
+
+    // Back to back, without a Finish between (a 1998 program): one after the other.
+    let a = code(s.robot.ma(&Q2));
+    let b = code(s.robot.ma(&Q1));
+    let c = code(s.robot.finish());
+    let at = s.twin.joints();
+    f.step(format!(
+        "MA Q2 -> {a}, MA Q1 -> {b} (no Finish between), Finish -> {c}, arm at {}",
+        fmt(&at)
+    ));
+    if a != 0 || b != 0 || c != 0 {
+        f.broke(format!(
+            "two motions back to back failed: {a}, {b}, Finish {c}"
+        ));
+    } else if !near(&at, &Q1, s.differences.arrive_rad) {
+        f.broke(format!(
+            "two motions back to back succeeded, but the arm is at {}",
+            fmt(&at)
+        ));
+    }
+
+    // Out of range: refused, nothing moves.
+    let before = s.twin.joints();
+    let c = code(s.robot.ma(&OUT_OF_RANGE));
+    let cf = code(s.robot.finish());
+    f.step(format!("MA out of range -> {c}, Finish -> {cf}"));
+    if c == 0 && cf == 0 {
+        f.broke("a motion out of the arm's range succeeded".into());
+    }
+    if !near(&before, &s.twin.joints(), s.differences.arrive_rad) {
+        f.broke(format!(
+            "a refused motion moved the arm from {} to {}",
+            fmt(&before),
+            fmt(&s.twin.joints())
+        ));
+    }
+
+    // A line nobody asked for: the next call is UNSURE and moves nothing; the one after works.
+    if s.twin.say_unasked("OVERCURRENT B") {
+        std::thread::sleep(Duration::from_millis(100));
+        let before = s.twin.joints();
+        let c = code(s.robot.ma(&Q2));
+        std::thread::sleep(Duration::from_millis(200));
+        f.step(format!("MA after an unasked line -> {c}"));
+        if c == 0 {
+            let cf = code(s.robot.finish());
+            f.broke(format!(
+                "a motion after an unasked line was reported sent (Finish {cf})"
+            ));
+        } else if c != TROL_ERR_ROBOT_UNSURE.0 {
+            f.step(format!(
+                "(not UNSURE but {c}: a refusal; allowed, as nothing moved)"
+            ));
+        }
+        if c != 0 {
+            if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+                f.broke(format!("the arm moved after an unasked line: {e}"));
+            }
+        }
+        if !motion(s, &mut f, "the call after UNSURE", Q1) {
+            f.broke("the call after an unasked line did not work".into());
+        }
+    }
+
+    // Halt while a motion runs: success only with the arm standing.
+    let c = code(s.robot.ma(&FAR));
+    if c != 0 {
+        f.broke(format!("a far motion within range was refused ({c})"));
+    } else if !wait_moving(s.twin.as_ref(), STEP) {
+        f.step("the far motion was over before it was seen: Halt not checked".into());
+        let _ = s.robot.finish();
+    } else {
+        let h = code(s.robot.halt());
+        let standing = stands(s.twin.as_ref());
+        f.step(format!(
+            "Halt during the far motion -> {h}; the arm stands: {standing:?}"
+        ));
+        if let (0, Err(e)) = (h, &standing) {
+            f.broke(format!(
+                "Halt reported success while the arm still moved: {e}"
+            ));
+        }
+        if s.differences.unstoppable {
+            // Success only where the motion ran to its end within the Halt's time (the arm
+            // was seen standing, at its target): no stop is claimed then.
+            let ran_out = h == 0
+                && standing.is_ok()
+                && near(&s.twin.joints(), &FAR, s.differences.arrive_rad);
+            if h != TROL_ERR_NOT_STOPPED.0 && !ran_out {
+                f.broke(format!("nothing stops this arm, but Halt answered {h}"));
+            }
+        } else if h != 0 {
+            f.broke(format!("Halt did not stop a stoppable arm ({h})"));
+        }
+        // Let anything that runs end, within a bound; the Finish's code may name the halt.
+        let until = Instant::now() + STEP;
+        while s.twin.moving() && Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let cf = code(s.robot.finish());
+        f.step(format!("Finish after the Halt -> {cf}"));
+        if cf == 0 && h == 0 && !near(&s.twin.joints(), &FAR, s.differences.arrive_rad) {
+            // A halted motion ends short; a Finish may say so, or say nothing of a motion
+            // it no longer follows. It must not say the arm reached FAR.
+            let got = s.robot.position(Tag::Joint, PosMode::Actual);
+            if let Ok(loc) = got {
+                if near(&loc.to_array6(), &FAR, s.differences.arrive_rad) {
+                    f.broke("after a Halt, GetPosition says the arm reached its target".into());
+                }
+            }
+        }
+    }
+    // After a Halt (or a failed one), the next call works where the arm can move.
+    if !s.differences.unstoppable {
+        let h = code(s.robot.home(0));
+        let hf = if h == 0 { code(s.robot.finish()) } else { h };
+        if hf != 0 {
+            f.step(format!("TROLHome after the Halt -> {hf}"));
+        }
+        if !motion(s, &mut f, "the motion after the Halt", Q2) {
+            f.broke("the motion after a Halt did not work".into());
+        }
+    }
+    f.steps.insert(0, format!("{label}:"));
+    f
+}

@@ -1,0 +1,246 @@
+//! The controllers under test, each with its twin and its differences: the one place where
+//! a backend's documented differences are listed.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+
+use trol::Robot;
+use trol_a465::arm::{Arm, ArmSettings};
+use trol_controller::Pcp;
+use trol_port::memory;
+use trol_proto::link::LinkConfig;
+
+use crate::{Differences, Subject, Twin};
+
+/// The twins run faster than real time, so that the suite is quick, but slow enough that a
+/// far motion lasts longer than it takes to see it move and Halt it.
+const SCALE: f64 = 4.0;
+
+/// The line between the backend and a simulated controller.
+const BAUD: u32 = 115_200;
+
+/// A twin's thread, stopped when the subject is dropped.
+struct Runs {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Drop for Runs {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn robot_over<B: trol_controller::Backend + 'static>(
+    backend: B,
+    codes: &'static trol_proto::application::CodeTable,
+) -> Robot {
+    let cfg = LinkConfig::default();
+    let (line, handle) = trol_controller::embedded_with(Pcp::new(backend), cfg);
+    let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
+    robot.set_codes(codes);
+    robot
+}
+
+// ---- the simulated A465 (port `sim`) ----
+
+struct SimTwin(trol_sim::SharedArm);
+
+impl Twin for SimTwin {
+    fn joints(&self) -> [f64; 6] {
+        let mut v = self.0.lock().unwrap();
+        let v = v.as_mut().expect("the simulator shares its arm");
+        let now = v.now();
+        v.arm.actual(now)
+    }
+    fn moving(&self) -> bool {
+        let mut v = self.0.lock().unwrap();
+        let v = v.as_mut().expect("the simulator shares its arm");
+        let now = v.now();
+        v.arm.is_moving(now)
+    }
+    fn say_unasked(&self, _text: &str) -> bool {
+        false
+    }
+}
+
+/// The simulated A465, not homed at start (the differences: none; it has no line of its
+/// own, so no line comes unasked).
+pub fn sim() -> Subject {
+    let mut b = trol_sim::SimBackend::new(trol_sim::SimSettings {
+        arm: ArmSettings {
+            homed: false,
+            ..Default::default()
+        },
+        time_scale: SCALE,
+        ..Default::default()
+    });
+    let view = b.share();
+    Subject {
+        label: "the simulated A465".into(),
+        robot: robot_over(b, trol_sim::SIM_CODES),
+        twin: Box::new(SimTwin(view)),
+        differences: Differences {
+            starts_unhomed: true,
+            ..Differences::default()
+        },
+    }
+}
+
+// ---- a C500 in RAPL-II (`rapl:`) ----
+
+/// C500 variants the suite does not drive, each with its reason: the matching profile
+/// cannot drive them in full, and TROL must fail safe there, which
+/// crates/trol-rapl/tests/variants.rs checks (every call refused or UNSURE, nothing moved).
+pub const C500_FAIL_SAFE: &[(&str, &str)] = &[
+    (
+        "warning-then-ack",
+        "a warning line before ACK leaves every motion UNSURE",
+    ),
+    (
+        "no-echo",
+        "a controller that echoes nothing cannot be typed to",
+    ),
+    (
+        "finish-deaf",
+        "FINISH never answers: every Finish ends UNSURE",
+    ),
+];
+
+struct C500Twin {
+    joints: Arc<Mutex<[f64; 6]>>,
+    moving: Arc<AtomicBool>,
+    _runs: Runs,
+}
+
+impl Twin for C500Twin {
+    fn joints(&self) -> [f64; 6] {
+        *self.joints.lock().unwrap()
+    }
+    fn moving(&self) -> bool {
+        self.moving.load(Ordering::SeqCst)
+    }
+    fn say_unasked(&self, _text: &str) -> bool {
+        // The simulated C500 prints unasked only where its variant does (estop-line).
+        false
+    }
+}
+
+/// A simulated C500 of variant `name` (`trol_rapl::c500::VARIANTS`), driven with the
+/// profile that matches it. Differences: a variant may start not homed; on `unstoppable`
+/// no stop stops the arm.
+pub fn c500(name: &str) -> Subject {
+    let (twin, homed) = trol_rapl::c500::variant(name).expect("a C500 variant");
+    let twin = trol_rapl::Profile { baud: BAUD, ..twin };
+    let arm = Arm::new(ArmSettings {
+        homed,
+        ..Default::default()
+    });
+    let mut c = trol_rapl::C500::new(twin, arm, Vec::new());
+    let matching = c.describe();
+    let (host, ctl) = memory::pair(Some(BAUD));
+    let stop = Arc::new(AtomicBool::new(false));
+    let joints = Arc::new(Mutex::new([0.0; 6]));
+    let moving = Arc::new(AtomicBool::new(false));
+    let thread = {
+        let (stop, joints, moving) = (stop.clone(), joints.clone(), moving.clone());
+        std::thread::spawn(move || {
+            let mut port = ctl;
+            let _ = trol_rapl::c500::serve_with(
+                &mut port,
+                &mut c,
+                SCALE,
+                &stop,
+                &mut |_| {},
+                &mut |c, now| {
+                    *joints.lock().unwrap() = c.arm_mut().actual(now);
+                    moving.store(c.arm_moving(now), Ordering::SeqCst);
+                },
+            );
+        })
+    };
+    let runs = Runs {
+        stop,
+        thread: Some(thread),
+    };
+    let backend = trol_rapl::RaplBackend::connect(Box::new(host), matching)
+        .unwrap_or_else(|e| panic!("C500 {name}: the session opens: {e}"));
+    Subject {
+        label: format!("C500 {name}"),
+        robot: robot_over(backend, trol_rapl::RAPL_CODES),
+        twin: Box::new(C500Twin {
+            joints,
+            moving,
+            _runs: runs,
+        }),
+        differences: Differences {
+            starts_unhomed: !homed,
+            unstoppable: name == "unstoppable",
+            ..Differences::default()
+        },
+    }
+}
+
+// ---- a MARS 8 (`mars:`) ----
+
+struct MarsTwin {
+    unit: trol_mars::mars8::Shared,
+    _runs: Runs,
+}
+
+impl Twin for MarsTwin {
+    fn joints(&self) -> [f64; 6] {
+        self.unit.lock().unwrap().joints()
+    }
+    fn moving(&self) -> bool {
+        self.unit.lock().unwrap().is_moving()
+    }
+    fn say_unasked(&self, text: &str) -> bool {
+        self.unit.lock().unwrap().say(text);
+        true
+    }
+}
+
+/// A simulated MARS 8 of variant `name` (`trol_mars::mars8::VARIANTS`), CTU's CRS93 profile
+/// with every axis' speed ten times as fast and the unit at ten times real time. Differences:
+/// it starts not homed (a MARS 8 hard-homes each axis); on `unstoppable` no stop stops the
+/// arm.
+pub fn mars(name: &str) -> Subject {
+    let sw = trol_mars::mars8::variant(name).expect("a MARS 8 variant");
+    let mut fast = trol_mars::Profile::crs93();
+    fast.speed = fast.speed.map(|v| v * 10);
+    let (host, unit_side) = memory::pair(Some(BAUD));
+    let unit = Arc::new(Mutex::new(trol_mars::Mars8::new(
+        trol_mars::Profile::crs93(),
+        sw,
+        false,
+        10.0,
+    )));
+    let stop = Arc::new(AtomicBool::new(false));
+    let thread = {
+        let (unit, stop) = (unit.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let _ = trol_mars::mars8::serve(Box::new(unit_side), unit, stop);
+        })
+    };
+    let runs = Runs {
+        stop,
+        thread: Some(thread),
+    };
+    let backend = trol_mars::MarsBackend::connect(Box::new(host), fast, None, None, Vec::new())
+        .unwrap_or_else(|e| panic!("MARS 8 {name}: the session opens: {e}"));
+    Subject {
+        label: format!("MARS 8 {name}"),
+        robot: robot_over(backend, trol_mars::MARS_CODES),
+        twin: Box::new(MarsTwin { unit, _runs: runs }),
+        differences: Differences {
+            starts_unhomed: true,
+            unstoppable: name == "unstoppable",
+            ..Differences::default()
+        },
+    }
+}

@@ -7,21 +7,41 @@ impl MarsBackend {
     /// Gate, plan with the planner, check the plan against the profile, send it, confirm.
     pub(super) fn motion(&mut self, f: impl FnOnce(&mut Arm, f64) -> i16) -> BiosResult {
         self.take_unasked()?;
-        if self.homing.is_some() {
-            return Ok(BUSY);
-        }
         let s = self.status().map_err(|f| f.not_run())?;
-        if let Some(c) = Self::fault(s) {
-            return Ok(c);
+        let powered = s & st::POWER_OFF == 0;
+        if powered {
+            // The unit's own faults, which the shared gate has no word for: the motion stop,
+            // the error bit.
+            if let Some(c) = Self::fault(s) {
+                return Ok(c);
+            }
+        }
+        let busy_before = self.motion.is_some() || !self.pending.is_empty();
+        let snapshot = real::Snapshot {
+            powered,
+            homed: self.homed.iter().all(|h| *h),
+            in_control: true,
+            moving: s & st::MOVING != 0,
+            ours: busy_before,
+            homing: self.homing.is_some(),
+        };
+        match real::gate(&snapshot, false) {
+            real::Gate::Refuse(why) => {
+                self.say(why.text());
+                return Ok(match why {
+                    real::Refusal::NoPower => ARM_POWER,
+                    real::Refusal::NotHomed => code::NOT_HOMED,
+                    real::Refusal::NoControl | real::Refusal::Busy => BUSY,
+                });
+            }
+            // A MARS 8's hard homing runs group by group under TROL: nothing waits behind
+            // it (where the simulated A465 and a C500 queue a motion behind a Home).
+            real::Gate::Queue if self.homing.is_some() => return Ok(BUSY),
+            real::Gate::Queue | real::Gate::Send => {}
         }
         self.planner.set_homed(self.homed);
         let now = self.now();
-        let busy_before = self.motion.is_some() || !self.pending.is_empty();
-        if self.motion.is_none() && self.pending.is_empty() {
-            if s & st::MOVING != 0 {
-                // Moving, and not by TROL's doing: a pendant, or another program.
-                return Ok(BUSY);
-            }
+        if !busy_before {
             let q = self.actual().map_err(|f| f.not_run())?;
             self.planner.place(q);
         }

@@ -157,6 +157,20 @@ fn a_motion_while_one_runs_waits_in_the_queue_and_goes_after_it() {
 }
 
 #[test]
+fn a_motion_behind_a_home_waits_for_it_and_goes_once_the_arm_is_homed() {
+    // The shared gate (real::gate): not homed, but a HOME of TROL's is under way, so the
+    // motion waits behind it (as on the simulated A465) instead of being refused.
+    let (mut b, log) = on("not-homed", false);
+    assert_eq!(code(b.home(0)), 0);
+    assert_eq!(code(b.joint(1, 0.3)), 0);
+    let joints = |l: &[String]| l.iter().filter(|l| l.starts_with("JOINT 1,")).count();
+    assert_eq!(joints(&ran(&log)), 0, "{:?}", ran(&log));
+    finish(&mut b).unwrap();
+    assert_eq!(joints(&ran(&log)), 1, "{:?}", ran(&log));
+    assert!(b.queue.is_empty() && b.outstanding.is_none());
+}
+
+#[test]
 fn finish_ends_a_motion_only_with_the_arm_at_its_end() {
     let (mut b, log) = on("default", true);
     assert_eq!(code(b.joint(2, 0.2)), 0);

@@ -111,8 +111,11 @@ stage "Python: pytest" python_tests
 python_examples() {
   local root=$PWD plots
   plots=$(mktemp -d)
+  local rc=0
   (cd examples && no_rust "$PY" pick.py) &&
-    (cd "$plots" && no_rust "$PY" "$root/examples/plot_motion.py" && test -s motion.png)
+    (cd "$plots" && no_rust "$PY" "$root/examples/plot_motion.py" && test -s motion.png) || rc=$?
+  rm -rf "$plots"
+  return $rc
 }
 stage "Python: the examples (pick.py, plot_motion.py)" python_examples
 stage "Python: stubs (mypy.stubtest)" bash -c "cd /tmp && '$PY' -m mypy.stubtest trol"

@@ -134,10 +134,8 @@ fn run_with(link: Link) -> String {
     );
     let line = TcpLine::listen("127.0.0.1:0", Duration::from_secs(10)).unwrap();
     let addr = line.local_addr().unwrap();
-    let dir = std::env::temp_dir().join(format!(
-        "trol-callbacks-dir-{link:?}-{}",
-        std::process::id()
-    ));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("trol-callbacks-dir-{link:?}"));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
         dir.join("trol.cfg"),
@@ -501,7 +499,7 @@ fn teaching_from_c_stores_lists_deletes_and_saves() {
         ),
     ];
     let out = run_c("teach", Link::Shared, &dir_files, &[]);
-    let dir = std::env::temp_dir().join(format!("trol-c-teach-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-c-teach");
     let saved = std::fs::read_to_string(dir.join("taught.txt")).unwrap();
     assert!(
         saved.contains("\np1 4") && !saved.contains("#park"),
@@ -568,7 +566,8 @@ fn run_c(name: &str, link: Link, files: &[(&str, &str)], args: &[&str]) -> Strin
         name,
         link,
     );
-    let dir = std::env::temp_dir().join(format!("trol-c-{name}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("trol-c-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     for (file, text) in files {
         std::fs::write(dir.join(file), text).unwrap();

@@ -63,7 +63,7 @@ fn the_position_example_reads_all_forms_and_the_status() {
 fn the_installed_library_builds_a_program_through_pkg_config() {
     common::cbuild::build_libtrol();
     let root = root();
-    let prefix = std::env::temp_dir().join(format!("trol-prefix-{}", std::process::id()));
+    let prefix = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-prefix");
     let _ = std::fs::remove_dir_all(&prefix);
     let install = std::process::Command::new("bash")
         .arg(root.join("scripts/install-c.sh"))

@@ -54,7 +54,8 @@ fn the_header_agrees_with_the_table() {
         c.push_str(&format!("    printf(\"{name} %ld\\n\", (long)({name}));\n"));
     }
     c.push_str("    return 0;\n}\n");
-    let dir = std::env::temp_dir().join(format!("trol-header-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-header");
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let src = dir.join("codes.c");
     std::fs::write(&src, c).unwrap();
@@ -235,7 +236,8 @@ fn the_readme_c_example_compiles_without_a_warning() {
     let len = readme[start..].find("```").unwrap();
     let body = &readme[start..start + len];
     assert!(body.contains("trol_connect"), "{body}");
-    let dir = std::env::temp_dir().join(format!("trol-readme-c-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-readme-c");
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let source = dir.join("readme.c");
     std::fs::write(

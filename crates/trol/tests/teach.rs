@@ -18,7 +18,7 @@ fn settings() -> SimSettings {
 
 /// A folder of its own for one test.
 fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("trol-teach-{name}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("trol-teach-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -42,7 +42,8 @@ fn from_config(dir: &std::path::Path, locations: &str) -> Result<Robot, String> 
 /// is sent.
 #[test]
 fn taught_locations_are_stored_listed_deleted_moved_to_and_survive_a_restart() {
-    let dir = std::env::temp_dir().join(format!("trol-teach-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-teach");
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("taught.txt");
     std::fs::write(&file, "; nothing taught yet\n").unwrap();

@@ -75,7 +75,8 @@ pub fn compile(source: &Path, name: &str, link: Link) -> PathBuf {
 fn compile_now(source: &Path, name: &str, link: Link) -> PathBuf {
     build_libtrol();
     let lib = lib_dir();
-    let out = std::env::temp_dir().join(format!("trol-{name}-{link:?}-{}", std::process::id()));
+    let out =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("trol-{name}-{link:?}"));
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let mut cmd = Command::new(&cc);
     cmd.arg(source)

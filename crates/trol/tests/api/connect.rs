@@ -5,7 +5,8 @@ use super::*;
 
 #[test]
 pub(super) fn robots_from_a_config_file() {
-    let dir = std::env::temp_dir().join(format!("trol-cfg-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-cfg");
+    let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("locs.txt"), "p2 420 0 400 0 1.5707963 0\n").unwrap();
     std::fs::write(dir.join("objs.txt"), "cube 420 0 385 30\n").unwrap();

@@ -120,7 +120,9 @@ fn trol_round(port: &str, count: u32) -> Result<f64, String> {
         baud: 38400,
         ..Default::default()
     };
-    let mut robot = trol::Robot::from_config(&cfg).map_err(|e| e.to_string())?;
+    let mut robot = trol::Connect::config(&cfg)
+        .connect()
+        .map_err(|e| e.to_string())?;
     robot.speed(100).map_err(|e| e.to_string())?;
     for _ in 0..50 {
         robot.speed(100).map_err(|e| e.to_string())?;

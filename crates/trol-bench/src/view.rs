@@ -186,7 +186,7 @@ pub fn view(a: ViewArgs) -> Result<(), String> {
         .trim_start_matches("http://")
         .trim_end_matches('/')
         .to_string();
-    let mut robot = trol::Robot::open(&sim.port, 38400).map_err(|e| e.to_string())?;
+    let mut robot = trol::Robot::connect(&sim.port, 38400).map_err(|e| e.to_string())?;
     robot.speed(100).map_err(|e| e.to_string())?;
     let mut measurements = Vec::new();
     let mut measure = |who: String, robot: &mut trol::Robot| -> Result<(), String> {

@@ -3,20 +3,14 @@
 
 use super::*;
 
-pub(crate) fn open_from_config() -> Result<(Robot, Config), String> {
-    let cfg = Config::load().map_err(|e| e.to_string())?;
-    let robot = Robot::from_config(&cfg).map_err(|e| e.to_string())?;
-    Ok((robot, cfg))
-}
-
 /// InitTROL(1): open the port of trol.cfg and check that the server answers.
 /// InitTROL(0) (the init utility): also bring the controller from terminal mode into server
 /// mode and apply trol.cfg's tool transform.
 #[unsafe(no_mangle)]
 pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
     guard(INITTROL_FAILURE, || {
-        let (mut robot, cfg) = match open_from_config() {
-            Ok(x) => x,
+        let cfg = match Config::load() {
+            Ok(cfg) => cfg,
             Err(why) => {
                 eprintln!("InitTROL: {why}");
                 return INITTROL_FAILURE;
@@ -26,24 +20,24 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
             let st = state();
             (st.callbacks, st.reply_tenths, st.delay, st.repeats)
         };
+        // The one connect path (trol::Connect), with what the application set before
+        // (SetL3_TO_Intervall, SetDelay, the repeats; each checked when it was set).
+        let mut connect = trol_client::Connect::config(&cfg)
+            .reply_timeout_tenths(tenths)
+            .delay(delay);
         if let Some(n) = repeats {
-            robot.set_repeats(n);
+            connect = connect.repeats(n);
         }
-        // Both were checked when they were set.
-        let _ = robot.set_reply_timeout_tenths(tenths);
-        let _ = robot.set_delay(delay);
-        let ok = if serOnly == 0 {
-            trol_client::activate(&mut robot, &cfg.tool)
-                .map_err(|e| eprintln!("InitTROL: {e}"))
-                .is_ok()
-        } else {
-            trol_client::check_server(&mut robot)
-                .map_err(|e| eprintln!("InitTROL: {e}"))
-                .is_ok()
+        if serOnly == 0 {
+            connect = connect.activate();
+        }
+        let mut robot = match connect.connect() {
+            Ok(robot) => robot,
+            Err(e) => {
+                eprintln!("InitTROL: {e}");
+                return INITTROL_FAILURE;
+            }
         };
-        if !ok {
-            return INITTROL_FAILURE;
-        }
         if let Some(notice) = robot.take_notice()
             && trol_client::notice_due("InitTROL", &cfg.port, &notice)
         {

@@ -106,11 +106,10 @@ impl Conn {
     /// (InitTROL(1)).
     pub fn robot(&self) -> Result<(Robot, Config), String> {
         let cfg = self.config()?;
-        let mut robot = robot_from_config(&cfg)?;
-        // The check every surface makes (Robot::connect_config): the server answers, speaks
-        // this protocol version, and tells its BIOS codes. The embedded controller starts in
+        // The check every surface makes (trol::Connect): the server answers, speaks this
+        // protocol version, and tells its BIOS codes. The embedded controller starts in
         // server mode with the tool of trol.cfg, and answers the same.
-        trol::check_server(&mut robot).map_err(|e| e.to_string())?;
+        let mut robot = robot_from_config(&cfg, false)?;
         if let Some(notice) = robot.take_notice()
             && trol::notice_due("trol", &cfg.port, &notice)
         {
@@ -124,10 +123,11 @@ impl Conn {
     }
 }
 
-/// Connect as `cfg` says, as [`Robot::from_config`] does; with `view = ADDR` and the embedded
-/// simulator, the live view is the utilities' own (the client library and libtrol carry no
-/// view): served here and kept with the connection.
-pub fn robot_from_config(cfg: &Config) -> Result<Robot, String> {
+/// Connect as `cfg` says and check the controller, as [`trol::Connect`] does (with `activate`,
+/// bring it from terminal mode into server mode first, as InitTROL(0)); with `view = ADDR`
+/// and the embedded simulator, the live view is the utilities' own (the client library and
+/// libtrol carry no view): served here and kept with the connection.
+pub fn robot_from_config(cfg: &Config, activate: bool) -> Result<Robot, String> {
     match &cfg.view {
         Some(addr) if cfg.port == "sim" => {
             let settings = trol::sim_settings(cfg).map_err(|e| e.to_string())?;
@@ -140,9 +140,17 @@ pub fn robot_from_config(cfg: &Config) -> Result<Robot, String> {
             if let Some(w) = &viewed.exposure {
                 crate::tell!("trol: warning: {w}");
             }
-            Ok(viewed.robot)
+            let mut robot = viewed.robot;
+            trol::check_server(&mut robot).map_err(|e| e.to_string())?;
+            Ok(robot)
         }
-        _ => Robot::from_config(cfg).map_err(|e| e.to_string()),
+        _ if activate => trol::Connect::config(cfg)
+            .activate()
+            .connect()
+            .map_err(|e| e.to_string()),
+        _ => trol::Connect::config(cfg)
+            .connect()
+            .map_err(|e| e.to_string()),
     }
 }
 
@@ -164,12 +172,17 @@ pub fn embedded_viewed(
     link: trol_proto::link::LinkConfig,
     addr: &str,
 ) -> Result<Viewed, String> {
-    let mut backend = trol_sim::SimBackend::new(settings);
-    let shared = backend.share();
-    let view = trol_view::serve(addr, shared)
+    let backend = trol_sim::SimBackend::new(settings);
+    let slot = trol_controller::SharedReport::default();
+    let view = trol_view::serve(addr, slot.clone())
         .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
     let (url, exposure, watchers) = (view.url(), view.exposure(), view.watchers());
-    let (line, handle) = trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+    let (line, handle) = trol_controller::embedded_reporting(
+        trol_controller::Pcp::new(backend),
+        link,
+        slot,
+        trol_view::REPORT_INTERVAL,
+    );
     let mut robot = Robot::over(Box::new(line), link, Some(handle));
     robot.keep(view);
     Ok(Viewed {

@@ -140,7 +140,9 @@ pub fn run(mut a: DemoArgs) -> Result<ExitCode, String> {
                 wait_for_a_page(&viewed.watchers, a.wait_view);
                 viewed.robot
             }
-            None => Robot::embedded(settings),
+            None => trol::Connect::sim(settings)
+                .connect()
+                .map_err(|e| e.to_string())?,
         }
     } else {
         let (robot, _) = a.conn.robot()?;

@@ -140,11 +140,7 @@ fn serve_backend<B: trol_controller::Backend>(
     let view = match &a.view {
         Some(addr) => {
             let slot = trol_controller::SharedReport::default();
-            let view = trol_view::serve_controlled(
-                addr,
-                trol_view::Source::Reported(slot.clone()),
-                control,
-            )
+            let view = trol_view::serve_controlled(addr, slot.clone(), control)
             .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
             Some((slot, view))
         }

@@ -1,7 +1,7 @@
 //! `trol init` and `trol cleanup` (the manual's inittrol and cluptrol, "Initialisierung"):
 //! activate the controller's TROL server with the tool transform of trol.cfg, and end it.
 
-use trol::Robot;
+use trol::Connect;
 
 use crate::common::Conn;
 
@@ -30,8 +30,10 @@ pub fn init(conn: &Conn) -> Result<(), String> {
         );
         return Ok(());
     }
-    let mut robot = Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(open_failed)?;
-    trol::activate(&mut robot, &cfg.tool).map_err(|e| format!("{e}"))?;
+    let mut robot = Connect::config(&cfg)
+        .activate()
+        .connect()
+        .map_err(open_failed)?;
     if let Some(notice) = robot.take_notice() {
         say!("note: {notice}");
     }
@@ -50,7 +52,7 @@ pub fn cleanup(conn: &Conn) -> Result<(), String> {
         say!("port sim: the embedded simulator ends with each program; nothing to end.");
         return Ok(());
     }
-    let mut robot = Robot::open_checked(&cfg.port, cfg.baud, cfg.check).map_err(open_failed)?;
+    let mut robot = Connect::config(&cfg).connect().map_err(open_failed)?;
     robot.terminate_pcp().map_err(|e| {
         format!(
             "the controller did not take TerminatePCP: {e}. Is its TROL server active (`trol \

@@ -250,18 +250,21 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         return run_rapl(&a, settings);
     }
     // The view first: an address in use ends the start before anything is served.
-    let mut backend = SimBackend::new(settings);
+    let backend = SimBackend::new(settings);
     let (pendant, inbox) = trol_controller::Pendant::channel();
     let control = a.control.then(|| trol_view::Control {
         from: a.control_from.clone(),
         ..trol_view::Control::new(pendant, trol_sim::SIM_CODES)
     });
     let token = control.as_ref().map(|c| c.token.clone());
+    // The view reads what the simulator reports, as for every backend.
     let view = match &a.view {
-        Some(addr) => Some(
-            trol_view::serve_controlled(addr, trol_view::Source::Sim(backend.share()), control)
-                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?,
-        ),
+        Some(addr) => {
+            let slot = trol_controller::SharedReport::default();
+            let view = trol_view::serve_controlled(addr, slot.clone(), control)
+                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
+            Some((slot, view))
+        }
         None => None,
     };
     // A new pty or a listening socket, like the application's side of a relay.
@@ -294,7 +297,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if !a.server {
         say!("  {}", crate::link::activation_hint(&a.port, &name));
     }
-    if let Some(v) = &view {
+    if let Some((_, v)) = &view {
         say!("  the view: {}", v.url());
         if let Some(t) = &token {
             say!(
@@ -325,6 +328,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     let mut controller = Controller::new(opened.port, cfg, pcp, mode);
     if a.control {
         controller.set_pendant(inbox);
+    }
+    if let Some((slot, _)) = &view {
+        controller.report_into(slot.clone(), trol_view::REPORT_INTERVAL);
     }
     if let Some(pci) = a.manual {
         say!(
@@ -402,9 +408,10 @@ pub fn serve<P: trol_port::Port, B: trol_controller::Backend>(
         }
     }));
     let mut last_mode = controller.mode();
+    let slice = controller.slice();
     loop {
         controller
-            .step(Duration::from_millis(50))
+            .step(slice)
             .map_err(|e| format!("the line failed: {e}"))?;
         if let Some(trip) = controller.take_watchdog_trip() {
             say!(

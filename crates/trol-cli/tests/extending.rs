@@ -219,7 +219,7 @@ fn every_surface_knows_every_builtin_command() {
         )],
         ..SimSettings::default()
     };
-    let mut robot = Robot::embedded(settings);
+    let mut robot = trol::Connect::sim(settings).connect().unwrap();
     robot.home(0).unwrap();
     // TerminatePCP last: it ends the server.
     let mut defs: Vec<_> = BUILTIN.to_vec();

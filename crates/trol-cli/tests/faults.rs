@@ -81,17 +81,21 @@ fn a_frozen_controller_over_tcp_fails_the_call_within_seconds() {
     frozen_controller_on("listen://127.0.0.1:0");
 }
 
-/// One way in that always checks (issue 38, item 5): `Robot::open` checks the controller as
-/// `Robot::connect` does (its version, codes and reply time: the repeats it allows follow);
-/// `Robot::open_unchecked`, for tools that activate a controller first, sends nothing.
+/// One way in that always checks (issue 38, item 5; issue 39, item 5): `Robot::connect` checks
+/// the controller (its version, codes and reply time: the repeats it allows follow);
+/// `Connect::without_check`, for a test double, sends nothing.
 #[test]
 fn robot_open_checks_the_controller() {
     let dir = scratch("open-checks");
     let sim = Background::start(&dir, &["sim", "--server"], "serving on ");
-    let robot = Robot::open(&sim.name, 38400).expect("open");
+    let robot = Robot::connect(&sim.name, 38400).expect("connect");
     assert_eq!(robot.repeats(), 2, "the version check granted the repeats");
     drop(robot);
-    let mut robot = Robot::open_unchecked(&sim.name, 38400).expect("open_unchecked");
+    let mut robot = trol::Connect::port(&sim.name)
+        .baud(38400)
+        .without_check()
+        .connect()
+        .expect("without_check");
     assert_eq!(robot.repeats(), 0, "nothing known of the controller yet");
     trol::check_server(&mut robot).unwrap();
     assert_eq!(robot.repeats(), 2);

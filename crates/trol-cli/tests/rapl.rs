@@ -220,7 +220,10 @@ fn halt_reaches_the_arm_while_the_application_waits_for_the_motion() {
     // Real time: the motion takes seconds.
     let sim = rapl_sim(&dir, &["--homed"]);
     let profile = trol_rapl::Profile::from_file(&dir.join("c500.toml")).unwrap();
-    let mut robot = trol::Robot::rapl(&sim.name, profile, Default::default()).unwrap();
+    let mut robot = trol::Connect::port(&format!("rapl:{}", sim.name))
+        .rapl_profile(profile)
+        .connect()
+        .unwrap();
     robot.joint(1, 2.5).unwrap();
     let halt = AtomicBool::new(false);
     let waited = std::thread::scope(|s| {

@@ -92,7 +92,7 @@ fn the_page_draws_the_arm_and_follows_it() {
         .trim_start_matches("http://")
         .trim_end_matches('/')
         .to_string();
-    let mut robot = Robot::open(&sim.name, 38400).unwrap();
+    let mut robot = Robot::connect(&sim.name, 38400).unwrap();
     robot.ma(&[0.4, 0.3, 1.2, -0.5, 0.8, 0.2]).unwrap();
     robot.finish().unwrap();
 

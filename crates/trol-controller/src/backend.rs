@@ -39,9 +39,9 @@ pub enum PosMode {
     Actual,
 }
 
-/// The arm as a backend reports it (what its controller says), for a view of any backend:
-/// `trol gateway --view` shows a real arm from these ([`Backend::report`]).
-#[derive(Clone, Debug, PartialEq)]
+/// The arm as a backend reports it (what its controller says, or the simulated arm itself),
+/// for a view of any backend: the live view reads nothing else ([`Backend::report`]).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ArmReport {
     /// Where the encoders say the arm is, radians.
     pub joints: [f64; 6],
@@ -56,6 +56,28 @@ pub struct ArmReport {
     /// Which axes are homed, where the backend knows it: a view shows an axis that is not
     /// as "not homed" rather than a value its counters cannot give yet.
     pub homed: Option<[bool; 6]>,
+    /// The controller's own clock, s, where it has one (the simulation's time): a view plots
+    /// against it; without it, against when the report was taken.
+    pub time: Option<f64>,
+    /// The objects of a simulated world; a real controller knows of none.
+    pub objects: Vec<ReportedObject>,
+    /// The table plane, mm, where the backend knows it.
+    pub table_z: Option<f64>,
+    /// The report is the simulated arm itself, not what a controller says of a real one.
+    pub simulated: bool,
+}
+
+/// An object of a simulated world, as a report gives it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReportedObject {
+    /// Its name.
+    pub name: String,
+    /// Where its centre is, mm.
+    pub pos: [f64; 3],
+    /// Its width, mm.
+    pub width: f64,
+    /// It is between the fingers.
+    pub held: bool,
 }
 
 /// The latest report and when it was taken, shared with a view.
@@ -224,6 +246,13 @@ pub trait Backend: Send {
     /// so it must be as quick as one short read-only command.
     fn report(&mut self) -> Option<ArmReport> {
         None
+    }
+    /// Whether [`Backend::report`] only reads memory (the simulated arm) and so may be asked
+    /// after every request as well: a view then shows the end of a motion as soon as the
+    /// call that waited for it returns. A backend that asks its controller says no (the
+    /// default), and is asked at most as often as the controller was told.
+    fn report_is_free(&self) -> bool {
+        false
     }
     /// Called when the line has been quiet for a moment (no request arrived): a backend that
     /// keeps motions of its own for later (the RAPL-II backend's queue behind a motion under

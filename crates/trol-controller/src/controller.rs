@@ -269,15 +269,38 @@ impl<P: Port, B: Backend> Controller<P, B> {
     /// serving it).
     pub fn report_into(&mut self, slot: SharedReport, every: Duration) {
         self.reports = Some((slot, every, Instant::now() - every));
+        // A view served before the controller runs has the arm at once where that is free.
+        if self.pcp.backend().report_is_free() {
+            self.refresh_report();
+        }
+    }
+
+    /// How long one [`Controller::step`] of a serving loop should wait on a quiet line: 50
+    /// ms, and no longer than the interval of a view's reports, which are renewed while the
+    /// line is quiet.
+    pub fn slice(&self) -> Duration {
+        let most = Duration::from_millis(50);
+        match &self.reports {
+            Some((_, every, _)) => (*every).clamp(POLL, most),
+            None => most,
+        }
     }
 
     fn refresh_report(&mut self) {
-        let Some((slot, every, last)) = &mut self.reports else {
+        let Some((_, every, last)) = &self.reports else {
             return;
         };
         if last.elapsed() < *every {
             return;
         }
+        self.refresh_report_now();
+    }
+
+    /// Renew the report now, whenever it was renewed last.
+    fn refresh_report_now(&mut self) {
+        let Some((slot, _, last)) = &mut self.reports else {
+            return;
+        };
         *last = Instant::now();
         let slot = slot.clone();
         if let Some(r) = self.pcp.backend_mut().report() {
@@ -420,6 +443,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     self.pcp.backend_mut().after_request();
+                    if self.pcp.backend().report_is_free() {
+                        self.refresh_report_now();
+                    }
                     self.log_transaction(ev);
                 }
                 if self.pcp.take_terminate() {
@@ -494,8 +520,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
 
     /// Run until `stop` is set.
     pub fn run(&mut self, stop: &AtomicBool) -> std::io::Result<()> {
+        let slice = self.slice();
         while !stop.load(Ordering::Relaxed) {
-            self.step(Duration::from_millis(50))?;
+            self.step(slice)?;
         }
         Ok(())
     }

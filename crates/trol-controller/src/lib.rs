@@ -22,7 +22,9 @@ pub mod pcp;
 pub mod real;
 pub mod terminal;
 
-pub use backend::{ArmReport, Backend, BackendError, BiosResult, PosMode, SharedReport, Target};
+pub use backend::{
+    ArmReport, Backend, BackendError, BiosResult, PosMode, ReportedObject, SharedReport, Target,
+};
 pub use controller::{
     Controller, Embedded, FollowUp, LogEntry, LogFn, Mode, Pendant, PendantError, PendantInbox,
     WatchdogTrip,
@@ -37,5 +39,19 @@ use trol_proto::link::LinkConfig;
 pub fn embedded_with<B: Backend + 'static>(pcp: Pcp<B>, cfg: LinkConfig) -> (MemoryLine, Embedded) {
     let (host, ctl) = memory::pair(None);
     let controller = Controller::new(ctl, cfg, pcp, Mode::Server);
+    (host, Embedded::spawn(controller))
+}
+
+/// [`embedded_with`], the backend reporting its arm into `slot` at most every `every`
+/// ([`Controller::report_into`]): what a live view reads.
+pub fn embedded_reporting<B: Backend + 'static>(
+    pcp: Pcp<B>,
+    cfg: LinkConfig,
+    slot: SharedReport,
+    every: std::time::Duration,
+) -> (MemoryLine, Embedded) {
+    let (host, ctl) = memory::pair(None);
+    let mut controller = Controller::new(ctl, cfg, pcp, Mode::Server);
+    controller.report_into(slot, every);
     (host, Embedded::spawn(controller))
 }

@@ -377,7 +377,7 @@ fn reply_object<'py>(py: Python<'py>, reply: Reply) -> PyResult<Bound<'py, PyAny
 
 /// A new connection, checked (with ``check``) as InitTROL(1) checks it: one GetStatus, then
 /// the controller's protocol version ([`trol::check_server`]).
-fn connected(py: Python<'_>, robot: trol::Result<trol::Robot>, check: bool) -> PyResult<Robot> {
+fn connected(py: Python<'_>, connect: trol::Connect, check: bool) -> PyResult<Robot> {
     let fail = |error| {
         to_py(
             py,
@@ -387,14 +387,17 @@ fn connected(py: Python<'_>, robot: trol::Result<trol::Robot>, check: bool) -> P
             },
         )
     };
-    let mut robot = robot.map_err(fail)?;
-    if check {
-        py.detach(|| trol::check_server(&mut robot)).map_err(fail)?;
-        if let Some(notice) = robot.take_notice() {
-            // Said once, as a warning the program can filter or turn into an error.
-            let warnings = py.import("warnings")?;
-            warnings.call_method1("warn", (format!("trol: {notice}"),))?;
-        }
+    // The one connect path (trol::Connect); `check=False` only for a test double.
+    let connect = if check {
+        connect
+    } else {
+        connect.without_check()
+    };
+    let mut robot = py.detach(|| connect.connect()).map_err(fail)?;
+    if let Some(notice) = robot.take_notice() {
+        // Said once, as a warning the program can filter or turn into an error.
+        let warnings = py.import("warnings")?;
+        warnings.call_method1("warn", (format!("trol: {notice}"),))?;
     }
     Ok(Robot::new(robot))
 }
@@ -426,8 +429,7 @@ impl Robot {
                 time_scale: scale,
                 ..SimSettings::default()
             };
-            let robot = py.detach(|| trol::Robot::embedded(settings));
-            return connected(py, Ok(robot), check);
+            return connected(py, trol::Connect::sim(settings), check);
         }
         if time_scale.is_some() {
             return Err(argument_error(
@@ -435,9 +437,11 @@ impl Robot {
                 "time_scale applies to port \"sim\" only".into(),
             ));
         }
-        let port = port.to_string();
-        let robot = py.detach(|| trol::Robot::open_unchecked(&port, baud.unwrap_or(9600)));
-        connected(py, robot, check)
+        connected(
+            py,
+            trol::Connect::port(port).baud(baud.unwrap_or(9600)),
+            check,
+        )
     }
 
     /// Connect as trol.cfg says (``path``, else $TROL_CONFIG, else ./trol.cfg), as InitTROL
@@ -450,8 +454,7 @@ impl Robot {
             None => Config::load(),
         }
         .map_err(|e| setup_error(py, e.to_string()))?;
-        let robot = py.detach(|| trol::Robot::from_config(&cfg));
-        connected(py, robot, check)
+        connected(py, trol::Connect::config(&cfg), check)
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {

@@ -2,7 +2,9 @@
 //! on a clock that may run faster than real time, and the embedded controller (port `sim`).
 //!
 //! - [`SimBackend`]: the backend ([`trol_controller::Backend`]);
-//! - [`ArmView`] / [`SharedArm`]: the copy of the arm a live view draws;
+//! - [`ArmView`] / [`SharedArm`]: a copy of the whole arm for tests and conformance checks
+//!   that compare the arm itself with what TROL says (a live view reads the backend's
+//!   report, [`trol_controller::Backend::report`], as for every backend);
 //! - [`embedded`]: the controller the host's port `sim` talks to, on a thread.
 
 #![forbid(unsafe_code)]
@@ -14,7 +16,8 @@ use trol_a465::arm::{self, Arm, ArmSettings, Stored, Which, code};
 use trol_a465::backend::{A465_CODES, arm_target};
 use trol_a465::model::joints_to_counts;
 use trol_controller::{
-    Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, Target, embedded_with,
+    ArmReport, Backend, BackendError, BiosResult, Embedded, Pcp, PosMode, ReportedObject, Target,
+    embedded_with,
 };
 use trol_port::memory::MemoryLine;
 use trol_proto::application::record::{MM_DECIMALS, format_fixed};
@@ -109,8 +112,9 @@ impl SimBackend {
         }
     }
 
-    /// Share a copy of the arm with a view: it is renewed after every request and watchdog
-    /// halt ([`Backend::after_request`]).
+    /// Share a copy of the arm with a test or a conformance check: it is renewed after every
+    /// request and watchdog halt ([`Backend::after_request`]), a clone of the whole arm each
+    /// time, so a live view reads [`Backend::report`] instead.
     pub fn share(&mut self) -> SharedArm {
         let shared = SharedArm::default();
         self.view = Some(shared.clone());
@@ -294,6 +298,40 @@ impl Backend for SimBackend {
             })
             .collect();
         Some(words.join("; "))
+    }
+    fn report_is_free(&self) -> bool {
+        true
+    }
+    fn report(&mut self) -> Option<ArmReport> {
+        // Read from the arm where it is now: no copy of it (issue 39, item 4).
+        let now = self.now();
+        let arm = &mut self.arm;
+        let moving = arm.is_moving(now);
+        let held = arm.held().map(str::to_string);
+        let objects = arm
+            .objects(now)
+            .into_iter()
+            .map(|o| ReportedObject {
+                held: held.as_deref() == Some(o.name.as_str()),
+                name: o.name,
+                pos: o.pos,
+                width: o.width,
+            })
+            .collect();
+        Some(ArmReport {
+            joints: arm.position(now, Which::Actual),
+            moving,
+            target: moving.then(|| arm.planned_end()),
+            gripper_mm: Some(arm.fingers(now)),
+            tool: arm.kinematics().tool(),
+            // The simulation is the arm itself: its joints are known homed or not, and the
+            // view shows them as they are.
+            homed: None,
+            time: Some(now),
+            objects,
+            table_z: Some(arm.settings().table_z),
+            simulated: true,
+        })
     }
     fn gripper(&mut self) -> Result<Gripper, BackendError> {
         let now = self.now();

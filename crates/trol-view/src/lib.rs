@@ -12,9 +12,9 @@
 //! | `/urdf` | the arm's URDF (`trol urdf`) |
 //! | `/three.module.js`, `/three.core.js`, `/OrbitControls.js` | three.js 0.187.0 from the npm registry, embedded (MIT licence: `/LICENSE-three.js.txt`, THIRD_PARTY.md) |
 //!
-//! The view never slows the controller: the controller only renews a copy of the arm after
-//! each request ([`trol_sim::SimBackend::share`]); this server's threads compute
-//! the state from that copy and the simulation's clock. A client that stops reading is
+//! The view never slows the controller: the controller renews what its backend reports of
+//! the arm ([`trol_controller::Backend::report`], a few numbers, no copy of the arm) at most
+//! every [`REPORT_INTERVAL`]; this server's threads encode it once for every viewer. A client that stops reading is
 //! dropped once its socket's buffer is full and a write has waited a second; one that closes
 //! is noticed within a round. Each kind of request has its own limit: [`MAX_CLIENTS`] for the
 //! page, its files and `/state`, [`MAX_STREAMS`] `/events` streams, and [`MAX_CONTROL`]
@@ -41,16 +41,19 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde_json::json;
-use trol_a465::arm::Which;
 use trol_a465::model::LIMITS_RAD;
 use trol_controller::SharedReport;
-use trol_sim::SharedArm;
 
 /// The address the view listens on by default: this machine only.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
 
 /// How often a moving arm's state is sent.
 pub const EVENT_INTERVAL: Duration = Duration::from_millis(20);
+
+/// How often the controller renews its report for a view of the simulated arm
+/// ([`trol_controller::Controller::share_reports`]); a real controller's backend, which asks
+/// the controller for each, is asked less often (`trol gateway`: every 100 ms).
+pub const REPORT_INTERVAL: Duration = EVENT_INTERVAL;
 
 /// At most this many requests for the page, its files and `/state` are answered at once
 /// (a page opens a few while it loads); more get 503.
@@ -83,51 +86,12 @@ const THREE_CORE: &str = include_str!("../vendor/three/three.core.js");
 const ORBIT: &str = include_str!("../vendor/three/OrbitControls.js");
 const THREE_LICENCE: &str = include_str!("../vendor/three/LICENSE-three.js.txt");
 
-/// The state of the arm now, as `/state` and `/events` give it; `None` before the controller
-/// shared its arm.
-pub fn state(shared: &SharedArm) -> Option<serde_json::Value> {
-    let mut slot = shared.lock().ok()?;
-    let view = slot.as_mut()?;
-    let now = view.now();
-    let arm = &mut view.arm;
-    let q = arm.position(now, Which::Actual);
-    let tcp = arm.kinematics().fk_xyzypr(&q);
-    let moving = arm.is_moving(now);
-    let target = moving.then(|| arm.planned_end());
-    let target_tcp = target.map(|t| arm.kinematics().fk_xyzypr(&t));
-    let held = arm.held().map(str::to_string);
-    let objects: Vec<serde_json::Value> = arm
-        .objects(now)
-        .iter()
-        .map(|o| {
-            json!({
-                "name": o.name,
-                "x": o.pos[0], "y": o.pos[1], "z": o.pos[2],
-                "width": o.width,
-                "held": held.as_deref() == Some(o.name.as_str()),
-            })
-        })
-        .collect();
-    Some(json!({
-        "joints": q,
-        "tcp": tcp,
-        "moving": moving,
-        "gripper_mm": arm.fingers(now),
-        "objects": objects,
-        "time": now,
-        "target": target,
-        "target_tcp": target_tcp,
-        "limits": LIMITS_RAD,
-        "table_z": arm.settings().table_z,
-        "tool": arm.kinematics().tool(),
-    }))
-}
-
-/// The state of the arm as its backend last reported it ([`trol_controller::ArmReport`]:
-/// a real arm behind `trol gateway`), in the same form as [`state`]; `None` before the first
-/// report. `time` counts seconds from when this process first served a report; `objects` is
-/// empty (a real controller knows of none).
-pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
+/// The arm's state as `/state` and `/events` give it, from what its backend last reported
+/// ([`trol_controller::ArmReport`]: the simulated arm, or a real arm behind `trol gateway`);
+/// `None` before the first report. `time` is the controller's clock (the simulation's), or
+/// seconds from when this process first served a report; `objects` are the simulated
+/// world's (a real controller knows of none).
+pub fn state(shared: &SharedReport) -> Option<serde_json::Value> {
     static EPOCH: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
     let epoch = *EPOCH.get_or_init(std::time::Instant::now);
     let slot = shared.lock().ok()?;
@@ -135,39 +99,39 @@ pub fn reported_state(shared: &SharedReport) -> Option<serde_json::Value> {
     let kin = trol_a465::kinematics::Kinematics::new(r.tool);
     let tcp = kin.fk_xyzypr(&r.joints);
     let target_tcp = r.target.map(|t| kin.fk_xyzypr(&t));
-    Some(json!({
+    let objects: Vec<serde_json::Value> = r
+        .objects
+        .iter()
+        .map(|o| {
+            json!({
+                "name": o.name,
+                "x": o.pos[0], "y": o.pos[1], "z": o.pos[2],
+                "width": o.width,
+                "held": o.held,
+            })
+        })
+        .collect();
+    let time = r
+        .time
+        .unwrap_or_else(|| at.saturating_duration_since(epoch).as_secs_f64());
+    let mut state = json!({
         "joints": r.joints,
         "tcp": tcp,
         "moving": r.moving,
         "gripper_mm": r.gripper_mm,
-        "objects": [],
-        "time": at.saturating_duration_since(epoch).as_secs_f64(),
+        "objects": objects,
+        "time": time,
         "target": r.target,
         "target_tcp": target_tcp,
         "limits": LIMITS_RAD,
-        "table_z": 0.0,
+        "table_z": r.table_z.unwrap_or(0.0),
         "tool": r.tool,
-        "homed": r.homed,
-        "reported": true,
-    }))
-}
-
-/// What a view shows: the simulated arm itself, or what a backend reports of a real one.
-#[derive(Clone, Debug)]
-pub enum Source {
-    /// The simulated arm's shared copy.
-    Sim(SharedArm),
-    /// A backend's reports (`trol gateway --view`).
-    Reported(SharedReport),
-}
-
-impl Source {
-    fn state(&self) -> Option<serde_json::Value> {
-        match self {
-            Source::Sim(s) => state(s),
-            Source::Reported(r) => reported_state(r),
-        }
+    });
+    if !r.simulated {
+        state["homed"] = json!(r.homed);
+        state["reported"] = json!(true);
     }
+    Some(state)
 }
 
 /// One encoding of the arm's state, shared by every viewer.
@@ -181,18 +145,18 @@ struct Frame {
 /// half [`EVENT_INTERVAL`], whatever the number of viewers (each stream used to take and
 /// encode its own).
 struct Frames {
-    source: Source,
+    source: SharedReport,
     last: Mutex<Option<(std::time::Instant, Arc<Frame>)>>,
     /// How long a frame serves.
     max_age: Duration,
 }
 
 impl Frames {
-    fn new(source: Source) -> Frames {
+    fn new(source: SharedReport) -> Frames {
         Frames::with_age(source, EVENT_INTERVAL / 2)
     }
 
-    fn with_age(source: Source, max_age: Duration) -> Frames {
+    fn with_age(source: SharedReport, max_age: Duration) -> Frames {
         Frames {
             source,
             last: Mutex::new(None),
@@ -208,7 +172,7 @@ impl Frames {
                 return Some(frame.clone());
             }
         }
-        let state = self.source.state()?;
+        let state = state(&self.source)?;
         let text = state.to_string();
         let frame = Arc::new(Frame { state, text });
         *last = Some((std::time::Instant::now(), frame.clone()));
@@ -275,27 +239,17 @@ impl Drop for ViewServer {
     }
 }
 
-/// Serve the view of `shared` on `addr` (`host:port`; port 0 picks a free one) on threads
-/// of its own.
-pub fn serve(addr: &str, shared: SharedArm) -> std::io::Result<ViewServer> {
-    serve_source(addr, Source::Sim(shared))
-}
-
-/// Serve the view of what a backend reports ([`trol_controller::Controller::share_reports`])
-/// on `addr`: the same page, following a real arm.
-pub fn serve_reported(addr: &str, shared: SharedReport) -> std::io::Result<ViewServer> {
-    serve_source(addr, Source::Reported(shared))
-}
-
-/// Serve the view of `source` on `addr`.
-pub fn serve_source(addr: &str, shared: Source) -> std::io::Result<ViewServer> {
+/// Serve the view of what a backend reports ([`trol_controller::Controller::share_reports`]:
+/// the simulated arm, or a real one behind `trol gateway`) on `addr` (`host:port`; port 0
+/// picks a free one), on threads of its own.
+pub fn serve(addr: &str, shared: SharedReport) -> std::io::Result<ViewServer> {
     serve_controlled(addr, shared, None)
 }
 
-/// Serve the view of `source` on `addr`, and with `control` the pendant ([`pendant`]).
+/// [`serve`], and with `control` the pendant ([`pendant`]).
 pub fn serve_controlled(
     addr: &str,
-    shared: Source,
+    shared: SharedReport,
     control: Option<Control>,
 ) -> std::io::Result<ViewServer> {
     let control = Arc::new(control);
@@ -640,18 +594,19 @@ mod tests {
 
     #[test]
     fn every_viewer_gets_the_same_encoding_of_one_moment() {
-        let mut settings = trol_sim::SimSettings::default();
-        settings.arm.homed = true;
-        let mut backend = trol_sim::SimBackend::new(settings);
-        let shared = backend.share();
+        let shared = SharedReport::default();
+        *shared.lock().unwrap() = Some((
+            trol_controller::ArmReport::default(),
+            std::time::Instant::now(),
+        ));
         // Within a frame's age every viewer gets the same frame, encoded once.
-        let frames = Frames::with_age(Source::Sim(shared.clone()), Duration::from_secs(3600));
+        let frames = Frames::with_age(shared.clone(), Duration::from_secs(3600));
         let a = frames.frame().unwrap();
         let b = frames.frame().unwrap();
         assert!(Arc::ptr_eq(&a, &b));
         assert_eq!(a.text, a.state.to_string());
         // Past it, a new one.
-        let frames = Frames::with_age(Source::Sim(shared), Duration::ZERO);
+        let frames = Frames::with_age(shared, Duration::ZERO);
         let a = frames.frame().unwrap();
         assert!(!Arc::ptr_eq(&a, &frames.frame().unwrap()));
     }

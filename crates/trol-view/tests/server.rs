@@ -7,15 +7,56 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use trol_controller::Backend;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+use trol_controller::{Backend, SharedReport};
 use trol_sim::{SimBackend, SimSettings};
 
-fn viewed() -> (SimBackend, trol_view::ViewServer) {
+/// A simulated arm, a thread that renews its report as a controller does (every
+/// [`trol_view::REPORT_INTERVAL`]), and the view of those reports.
+struct Viewed {
+    backend: Arc<Mutex<SimBackend>>,
+    stop: Arc<AtomicBool>,
+    reporter: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for Viewed {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.reporter.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn viewed() -> (Viewed, trol_view::ViewServer) {
     let mut settings = SimSettings::default();
     settings.arm.homed = true;
-    let mut backend = SimBackend::new(settings);
-    let server = trol_view::serve("127.0.0.1:0", backend.share()).unwrap();
-    (backend, server)
+    let backend = Arc::new(Mutex::new(SimBackend::new(settings)));
+    let slot = SharedReport::default();
+    let stop = Arc::new(AtomicBool::new(false));
+    let reporter = {
+        let (backend, slot, stop) = (backend.clone(), slot.clone(), stop.clone());
+        let renew = move || {
+            let report = backend.lock().unwrap().report();
+            *slot.lock().unwrap() = report.map(|r| (r, Instant::now()));
+        };
+        renew();
+        std::thread::spawn(move || {
+            while !stop.load(Ordering::Relaxed) {
+                std::thread::sleep(trol_view::REPORT_INTERVAL);
+                renew();
+            }
+        })
+    };
+    let server = trol_view::serve("127.0.0.1:0", slot).unwrap();
+    let v = Viewed {
+        backend,
+        stop,
+        reporter: Some(reporter),
+    };
+    (v, server)
 }
 
 fn request(server: &trol_view::ViewServer, head: &str) -> String {
@@ -90,7 +131,7 @@ fn updates(reader: &mut BufReader<TcpStream>, until: Instant) -> Vec<(Instant, b
 
 #[test]
 fn events_flow_while_the_arm_moves_and_stop_when_it_stands() {
-    let (mut backend, server) = viewed();
+    let (viewed, server) = viewed();
     let mut s = TcpStream::connect(server.addr()).unwrap();
     s.set_read_timeout(Some(Duration::from_millis(100)))
         .unwrap();
@@ -104,9 +145,11 @@ fn events_flow_while_the_arm_moves_and_stop_when_it_stands() {
     // A motion of about a second (joint 1 by 1 rad at full speed is well under that at the
     // A465's 180 degrees a second; joints 2 and 3 take longer), shared as the controller
     // would after the request.
-    backend.speed(100).unwrap();
-    backend.ma([1.0, 0.6, 1.0, 0.0, 0.0, 0.0]).unwrap();
-    backend.after_request();
+    {
+        let mut backend = viewed.backend.lock().unwrap();
+        backend.speed(100).unwrap();
+        backend.ma([1.0, 0.6, 1.0, 0.0, 0.0, 0.0]).unwrap();
+    }
     let deadline = Instant::now() + Duration::from_secs(20);
     let mut seen = Vec::new();
     while Instant::now() < deadline {

@@ -12,7 +12,7 @@ use trol_proto::link::LinkConfig;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut robot = match std::env::args().nth(1) {
-        Some(port) => Robot::open(&port, 9600)?,
+        Some(port) => Robot::connect(&port, 9600)?,
         None => {
             let settings = SimSettings {
                 time_scale: 20.0,

@@ -3,7 +3,7 @@
 //!
 //!     cargo run --release -p trol --example pick
 
-use trol::{PosMode, Robot, SimSettings, Tag};
+use trol::{Connect, PosMode, SimSettings, Tag};
 use trol_a465::arm::Stored;
 
 fn step(name: &str, r: trol::Result<()>) -> trol::Result<()> {
@@ -16,14 +16,15 @@ fn step(name: &str, r: trol::Result<()>) -> trol::Result<()> {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let down = std::f64::consts::FRAC_PI_2;
-    let mut robot = Robot::embedded(SimSettings {
+    let mut robot = Connect::sim(SimSettings {
         time_scale: 20.0,
         locations: vec![(
             "test_001".into(),
             Stored::Cart([400.0, 0.0, 150.0, 0.0, down, 0.0]),
         )],
         ..SimSettings::default()
-    });
+    })
+    .connect()?;
     step("Home(0)", robot.home(0))?;
     step("Finish(FINISH_WAIT)", robot.finish())?;
     step(

@@ -2,13 +2,14 @@
 //!
 //!     cargo run -p trol --example position
 
-use trol::{PosMode, Robot, SimSettings, Tag};
+use trol::{Connect, PosMode, SimSettings, Tag};
 
 fn main() -> Result<(), trol::Error> {
-    let mut robot = Robot::embedded(SimSettings {
+    let mut robot = Connect::sim(SimSettings {
         time_scale: 20.0,
         ..SimSettings::default()
-    });
+    })
+    .connect()?;
     robot.home(0)?;
     robot.joint(1, 0.5)?;
     robot.finish()?;

@@ -1,13 +1,15 @@
 //! TROL: drive a CRS A465 arm through its C500 controller.
 //!
-//! The Rust API is [`Robot`]: open it on a port (or `sim`, the embedded simulated
-//! controller), then call one method per TROL API function. Errors keep "the controller said
+//! The Rust API is [`Robot`]: connect it to a port (or `sim`, the embedded simulated
+//! controller) with [`Robot::connect`] or the builder [`Connect`], which always checks the
+//! controller's protocol version, then call one method per TROL API function. Errors keep "the controller said
 //! no" ([`Error::Refused`]) apart from "the link failed" ([`Error::Link`]), and
 //! [`Error::code`] gives the manual's return code.
 //!
 //! ```
-//! use trol::{Robot, SimSettings, Tag, PosMode};
-//! let mut robot = Robot::embedded(SimSettings { time_scale: 100.0, ..SimSettings::default() });
+//! use trol::{Connect, SimSettings, Tag, PosMode};
+//! let mut robot = Connect::sim(SimSettings { time_scale: 100.0, ..SimSettings::default() })
+//!     .connect()?;
 //! robot.home(0)?;
 //! robot.joint(1, 0.5)?;
 //! robot.finish()?;
@@ -26,9 +28,9 @@
 //!
 //! | feature | default | what it adds |
 //! |---|---|---|
-//! | `sim` | yes | the embedded simulated A465: port `sim`, [`Robot::embedded`] |
-//! | `rapl` | yes | a real C500 in RAPL-II: port `rapl:DEVICE`, `Robot::rapl` |
-//! | `mars` | yes | an A465 on a MARS 8: port `mars:DEVICE`, `Robot::mars` |
+//! | `sim` | yes | the embedded simulated A465: port `sim`, [`Connect::sim`] |
+//! | `rapl` | yes | a real C500 in RAPL-II: port `rapl:DEVICE`, `Connect::rapl_profile` |
+//! | `mars` | yes | an A465 on a MARS 8: port `mars:DEVICE`, `Connect::mars_profile` |
 //! | `view` | no | the live 3D view of the embedded simulator (`view =` in trol.cfg) |
 //!
 //! The manual's C API (`include/trol.h`, `libtrol.so`, `libtrol.a`) is the crate `trol-c`
@@ -43,9 +45,10 @@ mod robot;
 
 pub use config::{Config, ConfigError};
 pub use robot::{
-    ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK, KEEPALIVE_SILENCE, MARS_PREFIX,
-    MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT, PosMode, Result, Robot, SetupError,
-    StatusRecord, Waited, prompt_policy, prompt_reply_timeout, timeout_policy, wait_idle,
+    Connect, ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK, KEEPALIVE_SILENCE,
+    MARS_PREFIX, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT, PosMode, Result, Robot,
+    SetupError, StatusRecord, Waited, prompt_policy, prompt_reply_timeout, timeout_policy,
+    wait_idle,
 };
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;

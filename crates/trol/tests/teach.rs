@@ -33,7 +33,9 @@ fn from_config(dir: &std::path::Path, locations: &str) -> Result<Robot, String> 
     )
     .unwrap();
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).map_err(|e| e.to_string())?;
-    Robot::from_config(&cfg).map_err(|e| e.to_string())
+    trol::Connect::config(&cfg)
+        .connect()
+        .map_err(|e| e.to_string())
 }
 
 /// Teaching (issue 28, docs/teach.md) on the embedded simulator: store where the arm is in
@@ -53,7 +55,7 @@ fn taught_locations_are_stored_listed_deleted_moved_to_and_survive_a_restart() {
     )
     .unwrap();
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
-    let mut r = Robot::from_config(&cfg).unwrap();
+    let mut r = trol::Connect::config(&cfg).connect().unwrap();
     assert!(r.locations().unwrap().is_empty());
     // Somewhere off READY, then teach it three ways.
     let pose = [420.0, -50.0, 330.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0];
@@ -109,7 +111,7 @@ fn taught_locations_are_stored_listed_deleted_moved_to_and_survive_a_restart() {
     // Saved, then a new controller (a restart) reads them back.
     r.save_locations().unwrap();
     drop(r);
-    let mut again = Robot::from_config(&cfg).unwrap();
+    let mut again = trol::Connect::config(&cfg).connect().unwrap();
     let names: Vec<String> = again
         .locations()
         .unwrap()
@@ -130,7 +132,7 @@ fn taught_locations_are_stored_listed_deleted_moved_to_and_survive_a_restart() {
 /// the table itself works.
 #[test]
 fn saving_without_a_locations_file_says_how_to_get_one() {
-    let mut r = Robot::embedded(settings());
+    let mut r = trol::Connect::sim(settings()).connect().unwrap();
     r.here("p9", Tag::Cart).unwrap();
     let e = r.save_locations().unwrap_err();
     assert_eq!(e.code().0, trol_a465::arm::code::NO_FILE, "{e}");
@@ -143,7 +145,7 @@ fn saving_without_a_locations_file_says_how_to_get_one() {
 /// backend, refused on every backend before anything is sent, with one message.
 #[test]
 fn names_are_one_location_in_any_case_and_reserved_names_are_refused() {
-    let mut r = Robot::embedded(settings());
+    let mut r = trol::Connect::sim(settings()).connect().unwrap();
     r.define(
         "up",
         &Location::Cart(vec![300.0, 0.0, 500.0, 0.0, 1.5, 0.0]),
@@ -287,7 +289,7 @@ fn a_file_with_one_name_in_two_cases_holds_one_location() {
             Stored::Cart([320.0, 0.0, 500.0, 0.0, 1.5, 0.0]),
         ),
     ];
-    let mut r = Robot::embedded(s);
+    let mut r = trol::Connect::sim(s).connect().unwrap();
     let all = r.locations().unwrap();
     assert_eq!(all.len(), 1, "{all:?}");
     assert!((all[0].1.to_array6()[0] - 320.0).abs() < 1e-3);

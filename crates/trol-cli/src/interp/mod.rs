@@ -229,7 +229,7 @@ impl Session {
     fn init(&mut self) -> Result<(), String> {
         let cfg = self.conn.config()?;
         if self.robot.is_none() {
-            let mut robot = crate::common::robot_from_config(&cfg)?;
+            let mut robot = crate::common::robot_from_config(&cfg, true)?;
             for def in self.catalog.iter() {
                 if robot.catalog().get(def.code).is_none() {
                     robot.add_command(*def).map_err(|e| e.to_string())?;

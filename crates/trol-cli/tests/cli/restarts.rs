@@ -22,7 +22,7 @@ pub(super) fn a_controller_killed_during_a_wait_is_reported_within_three_seconds
             ],
             "serving on ",
         );
-        let mut robot = trol::Robot::open(&sim.name, 38400).unwrap();
+        let mut robot = trol::Robot::connect(&sim.name, 38400).unwrap();
         robot.speed(10).unwrap();
         robot.joint(1, 2.0).unwrap(); // over 6 s at 10 %
         let killed = std::thread::spawn(move || {
@@ -67,7 +67,7 @@ pub(super) fn the_same_robot_carries_on_after_the_controller_restarts() {
         )
     };
     let sim = start();
-    let mut robot = trol::Robot::open(&sim.name, 38400).unwrap();
+    let mut robot = trol::Robot::connect(&sim.name, 38400).unwrap();
     robot.joint(1, 0.1).unwrap();
     let before = robot.status_record().unwrap().epoch;
     drop(sim);
@@ -296,7 +296,7 @@ pub(super) fn the_same_robot_carries_on_over_a_serial_device_after_the_controlle
         sim
     };
     let sim = start();
-    let mut robot = trol::Robot::open(device.to_str().unwrap(), 38400).unwrap();
+    let mut robot = trol::Robot::connect(device.to_str().unwrap(), 38400).unwrap();
     robot.joint(1, 0.1).unwrap();
     let before = robot.status_record().unwrap().epoch;
     drop(sim);

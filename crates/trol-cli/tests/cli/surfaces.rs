@@ -269,7 +269,7 @@ pub(super) fn trol_sim_keeps_serving_when_nobody_reads_its_log() {
     };
     // From here on nobody reads: the pipe (64 KiB) and the log queue (4096 lines) hold
     // fewer lines than the calls log.
-    let mut robot = trol::Robot::open(&name, 9600).unwrap();
+    let mut robot = trol::Robot::connect(&name, 9600).unwrap();
     for i in 0..7000u32 {
         robot
             .speed(10 + (i % 90) as u16)

@@ -297,6 +297,7 @@ impl Backend for MarsBackend {
             // The counters of an axis not homed mean nothing yet: the view says so (issue
             // 38: it showed their values, and the last report while the arm homed again).
             homed: Some(self.homed),
+            ..ArmReport::default()
         })
     }
 }

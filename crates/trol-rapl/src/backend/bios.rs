@@ -413,6 +413,7 @@ impl Backend for RaplBackend {
             gripper_mm: None,
             tool: self.tool,
             homed: self.status.as_ref().map(|s| s.homed),
+            ..ArmReport::default()
         })
     }
     fn idle(&mut self) {

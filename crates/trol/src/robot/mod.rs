@@ -22,7 +22,10 @@ use trol_sim::SimSettings;
 
 use crate::config::Config;
 
+mod connect;
 mod open;
+
+pub use connect::Connect;
 
 use calls::reply_check;
 mod calls;

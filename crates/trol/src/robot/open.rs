@@ -36,73 +36,53 @@ pub(super) fn in_process(cfg: LinkConfig) -> LinkConfig {
 impl Robot {
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
-    /// with default settings, and check the controller as every surface does: the same as
-    /// [`Robot::connect`] (it skipped the check once, so that a program that opened a
-    /// connection this way never learnt the controller's version, codes or reply time).
+    /// with default settings, and check the controller: the short form of
+    /// `Connect::port(port).baud(baud).connect()` ([`Connect`]).
+    pub fn connect(port: &str, baud: u32) -> Result<Robot> {
+        Connect::port(port).baud(baud).connect()
+    }
+
+    /// The same as [`Robot::connect`].
+    #[deprecated(since = "0.2.0", note = "use Robot::connect or trol::Connect")]
     pub fn open(port: &str, baud: u32) -> Result<Robot> {
         Robot::connect(port, baud)
     }
 
-    /// Open the port and send nothing: for a tool that activates a controller in terminal
-    /// mode first ([`crate::activate`]: InitTROL(0), `trol init`) or relays its bytes. The
-    /// connection learns nothing of its controller until [`crate::check_server`] runs:
-    /// without it, no repeats and the manual's reply timeout.
+    /// Open the port and check nothing.
+    #[deprecated(
+        since = "0.2.0",
+        note = "use trol::Connect::port(port).baud(baud).without_check().connect() (only for \
+                a test double), or .activate() for a controller in terminal mode"
+    )]
     pub fn open_unchecked(port: &str, baud: u32) -> Result<Robot> {
-        Robot::open_checked(port, baud, None)
+        Connect::port(port).baud(baud).without_check().connect()
     }
 
-    /// Connect and check the controller, as every surface does (the utilities, C's
-    /// InitTROL(1) and trol_connect, Python's `Robot.open`): [`Robot::open`], then
-    /// [`crate::check_server`]: GetStatus, the protocol version (GetVersion, refused with
-    /// [`SetupError::Incompatible`]) and the controller's BIOS codes (GetCodes, for
-    /// [`Robot::codes`]).
-    pub fn connect(port: &str, baud: u32) -> Result<Robot> {
-        let mut robot = Robot::open_unchecked(port, baud)?;
-        crate::check_server(&mut robot)?;
-        Ok(robot)
+    /// Connect as trol.cfg says, without the check.
+    #[deprecated(
+        since = "0.2.0",
+        note = "use trol::Connect::config(cfg).connect(), which also checks the controller"
+    )]
+    pub fn from_config(cfg: &Config) -> Result<Robot> {
+        Connect::config(cfg).without_check().connect()
     }
 
-    /// [`Robot::connect`] as trol.cfg says ([`Robot::from_config`], then the same check).
-    pub fn connect_config(cfg: &Config) -> Result<Robot> {
-        let mut robot = Robot::from_config(cfg)?;
-        crate::check_server(&mut robot)?;
-        Ok(robot)
+    /// Start an embedded controller (simulated A465) and connect to it.
+    #[cfg(feature = "sim")]
+    #[deprecated(since = "0.2.0", note = "use trol::Connect::sim(settings).connect()")]
+    pub fn embedded(settings: SimSettings) -> Robot {
+        Robot::embedded_on(settings, LinkConfig::default())
     }
 
-    /// Like [`Robot::open_unchecked`], with the link's block check (`check` in trol.cfg): no
-    /// fallback to the manual's LRC.
-    pub fn open_with(port: &str, baud: u32, check: BlockCheck) -> Result<Robot> {
-        Robot::open_checked(port, baud, Some(check))
-    }
-
-    /// [`Robot::open_unchecked`] with the block check trol.cfg names, if any: without one, CRC-16,
-    /// and the manual's LRC if the controller refuses every CRC-16 block at first contact
-    /// and takes LRC ones (a controller that speaks only the manual's protocol).
-    pub fn open_checked(port: &str, baud: u32, check: Option<BlockCheck>) -> Result<Robot> {
+    /// Open a plain port (not `sim`, `rapl:` or `mars:`) with the block check trol.cfg
+    /// names, if any: without one, CRC-16, and the manual's LRC if the controller refuses
+    /// every CRC-16 block at first contact and takes LRC ones (a controller that speaks only
+    /// the manual's protocol).
+    pub(super) fn open_port(port: &str, baud: u32, check: Option<BlockCheck>) -> Result<Robot> {
         let cfg = LinkConfig {
             check: check.unwrap_or_default(),
             ..LinkConfig::for_line(baud, Duration::ZERO)
         };
-        if port == "sim" {
-            #[cfg(feature = "sim")]
-            return Ok(Robot::embedded_on(SimSettings::default(), cfg));
-            #[cfg(not(feature = "sim"))]
-            return Err(not_built(port, "sim", "the embedded simulator"));
-        }
-        if let Some(device) = port.strip_prefix(RAPL_PREFIX) {
-            #[cfg(feature = "rapl")]
-            return Robot::rapl(device, trol_rapl::Profile::default(), cfg);
-            #[cfg(not(feature = "rapl"))]
-            return Err(not_built(device, "rapl", "the RAPL-II backend"));
-        }
-        if port.starts_with(MARS_PREFIX) {
-            return Err(SetupError::Config(format!(
-                "{port}: an A465 on a MARS 8 needs its arm profile: name it in trol.cfg \
-                 (`mars-profile = FILE`; crates/trol-mars/profiles/crs93.toml is CTU's CRS93) or call \
-                 Robot::mars"
-            ))
-            .into());
-        }
         let settings = PortSettings {
             baud,
             ..PortSettings::default()
@@ -114,109 +94,15 @@ impl Robot {
         Ok(robot)
     }
 
-    /// Connect as trol.cfg says (the embedded controller gets the file's `sim` settings;
-    /// `rapl:DEVICE` embeds the controller with the RAPL-II backend on DEVICE, configured by
-    /// `rapl-profile`).
-    pub fn from_config(cfg: &Config) -> Result<Robot> {
-        let mut robot = Robot::from_config_as_is(cfg)?;
-        // A locations file that is not there yet is an empty table (docs/teach.md): said
-        // once, so that a misspelt name is not a silent empty table.
-        if let Some(file) = cfg.locations.as_ref().filter(|f| !f.exists()) {
-            robot.add_notice(&format!(
-                "{} does not exist yet: the location table starts empty, and \
-                 TROLSaveLocations creates the file",
-                file.display()
-            ));
-        }
-        Ok(robot)
-    }
-
-    pub(super) fn from_config_as_is(cfg: &Config) -> Result<Robot> {
-        #[cfg(not(feature = "mars"))]
-        if cfg.port.starts_with(MARS_PREFIX) {
-            return Err(not_built(&cfg.port, "mars", "the MARS 8 backend"));
-        }
-        #[cfg(feature = "mars")]
-        if let Some(device) = cfg.port.strip_prefix(MARS_PREFIX) {
-            let profile = match &cfg.mars_profile {
-                Some(path) => trol_mars::Profile::from_file(path)
-                    .map_err(|e| SetupError::Config(e.to_string()))?,
-                None => {
-                    return Err(SetupError::Config(format!(
-                        "port {}: an A465 on a MARS 8 needs its arm profile: add \
-                         `mars-profile = FILE` to trol.cfg (crates/trol-mars/profiles/crs93.toml is CTU's \
-                         CRS93; docs/mars.md)",
-                        cfg.port
-                    ))
-                    .into());
-                }
-            };
-            let link = LinkConfig {
-                check: cfg.block_check(),
-                ..LinkConfig::default()
-            };
-            let locations = crate::config_locations(cfg)?;
-            // TROLSaveLocations writes trol.cfg's locations file back (docs/teach.md).
-            return Robot::mars(device, profile, (locations, cfg.locations.clone()), link);
-        }
-        #[cfg(feature = "rapl")]
-        if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {
-            let profile = match &cfg.rapl_profile {
-                Some(path) => trol_rapl::Profile::from_file(path)
-                    .map_err(|e| SetupError::Config(e.to_string()))?,
-                None => trol_rapl::Profile::default(),
-            };
-            let link = LinkConfig {
-                check: cfg.block_check(),
-                ..LinkConfig::default()
-            };
-            return Robot::rapl(device, profile, link);
-        }
-        #[cfg(feature = "sim")]
-        if cfg.port == "sim" {
-            let link = LinkConfig {
-                check: cfg.block_check(),
-                ..LinkConfig::default()
-            };
-            let settings = crate::sim_settings(cfg)?;
-            return match &cfg.view {
-                #[cfg(not(feature = "view"))]
-                Some(_) => Err(SetupError::Config(
-                    "trol.cfg asks for the live view (`view =`), and this build of TROL has \
-                     none (the C library leaves it out): run `trol sim --view ADDR --port \
-                     listen://127.0.0.1:PORT` and name `socket://127.0.0.1:PORT` as the port"
-                        .into(),
-                )
-                .into()),
-                #[cfg(feature = "view")]
-                Some(addr) => {
-                    let robot = Robot::embedded_viewed(settings, link, addr)?;
-                    // trol.cfg asked for it: say where it is (port 0 picks one).
-                    if let Some(view) = &robot.view {
-                        eprintln!("trol: the view of the simulated arm: {}", view.url());
-                        if let Some(w) = view.exposure() {
-                            eprintln!("trol: warning: {w}");
-                        }
-                    }
-                    Ok(robot)
-                }
-                None => Ok(Robot::embedded_on(settings, link)),
-            };
-        }
-        Robot::open_checked(&cfg.port, cfg.baud, cfg.check)
-    }
-
-    /// Connect as ./trol.cfg (or $TROL_CONFIG) says.
-    pub fn from_default_config() -> Result<Robot> {
-        let cfg = Config::load().map_err(|e| SetupError::Config(e.to_string()))?;
-        Robot::from_config(&cfg)
-    }
-
     #[cfg(feature = "rapl")]
     /// Embed the controller with the RAPL-II backend: open DEVICE (a serial device, or
     /// `socket://HOST:PORT`) at the profile's baud rate, open the RAPL-II session, and serve
     /// TROL to this process over an in-memory line (docs/c500.md).
-    pub fn rapl(device: &str, profile: trol_rapl::Profile, link: LinkConfig) -> Result<Robot> {
+    pub(super) fn open_rapl(
+        device: &str,
+        profile: trol_rapl::Profile,
+        link: LinkConfig,
+    ) -> Result<Robot> {
         let settings = PortSettings {
             baud: profile.baud,
             ..PortSettings::default()
@@ -249,7 +135,7 @@ impl Robot {
     /// (nothing moves), and serve TROL to this process over an in-memory line
     /// (docs/mars.md). TROL's own location table starts with `locations`: the locations and
     /// the file they came from, which TROLSaveLocations writes back (docs/teach.md).
-    pub fn mars(
+    pub(super) fn open_mars(
         device: &str,
         profile: trol_mars::Profile,
         locations: (
@@ -287,24 +173,22 @@ impl Robot {
         Ok(robot)
     }
 
-    /// Start an embedded controller (simulated A465) and connect to it.
-    #[cfg(feature = "sim")]
-    pub fn embedded(settings: SimSettings) -> Robot {
-        Robot::embedded_on(settings, LinkConfig::default())
-    }
-
     /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`
     /// (`host:port`; docs: crates/trol-view), and connect to it. The view lives as long as the
     /// connection; [`Robot::view_url`] says where it is.
     #[cfg(feature = "view")]
-    pub fn embedded_viewed(settings: SimSettings, cfg: LinkConfig, addr: &str) -> Result<Robot> {
-        let mut backend = trol_sim::SimBackend::new(settings);
-        let shared = backend.share();
-        let view = trol_view::serve(addr, shared)
+    pub(super) fn open_viewed(settings: SimSettings, cfg: LinkConfig, addr: &str) -> Result<Robot> {
+        let backend = trol_sim::SimBackend::new(settings);
+        let slot = trol_controller::SharedReport::default();
+        let view = trol_view::serve(addr, slot.clone())
             .map_err(|e| SetupError::Config(format!("cannot serve the view at {addr}: {e}")))?;
         let cfg = in_process(cfg);
-        let (line, handle) =
-            trol_controller::embedded_with(trol_controller::Pcp::new(backend), cfg);
+        let (line, handle) = trol_controller::embedded_reporting(
+            trol_controller::Pcp::new(backend),
+            cfg,
+            slot,
+            trol_view::REPORT_INTERVAL,
+        );
         let mut robot = Robot::over(Box::new(line), cfg, Some(handle));
         robot.set_reply_time(SIM_REPLY_TIME);
         robot.view = Some(view);

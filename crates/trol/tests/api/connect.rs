@@ -28,11 +28,13 @@ pub(super) fn robots_from_a_config_file() {
         )
         .unwrap();
         let cfg = trol::Config::from_file(&dir.join("viewed.cfg")).unwrap();
-        let e = Robot::from_config(&cfg).expect_err("no view in this build");
+        let e = trol::Connect::config(&cfg)
+            .connect()
+            .expect_err("no view in this build");
         assert!(e.to_string().contains("`view =`"), "{e}");
     }
     let cfg = trol::Config::from_file(&dir.join("trol.cfg")).unwrap();
-    let mut r = Robot::from_config(&cfg).unwrap();
+    let mut r = trol::Connect::config(&cfg).connect().unwrap();
     r.move_to("p2", false).unwrap();
     r.finish().unwrap();
     let c = r
@@ -186,7 +188,7 @@ pub(super) fn a_controller_names_its_own_codes_at_connect() {
     }
 
     // The simulator tells its own, the simulated A465's.
-    let mut robot = Robot::embedded(settings());
+    let mut robot = trol::Connect::sim(settings()).connect().unwrap();
     let told = robot.get_codes().unwrap();
     assert_eq!(told.len(), trol_sim::SIM_CODES.len());
     assert!(told.iter().any(|c| c.name == "BIOS_NOT_HOMED"));
@@ -199,7 +201,7 @@ pub(super) fn an_in_process_controller_keeps_its_slack_after_the_version_check()
     // (issue 44: InitTROL(1) put them back to the bare figures, and a 1998 program's
     // first TROLHome on `rapl:` came back TROL_ERR_COMM under load; a poll of its Finish
     // had 2 s, and one reading a C500's STATUS missed them under load).
-    let mut robot = Robot::embedded(settings());
+    let mut robot = trol::Connect::sim(settings()).connect().unwrap();
     let before = robot
         .call_reply_timeout()
         .expect("the backend says its reply time");
@@ -230,7 +232,7 @@ pub(super) fn an_in_process_controller_keeps_its_slack_after_the_version_check()
 #[test]
 pub(super) fn the_host_checks_the_controllers_version_and_kind() {
     // The simulator: this library's version; its codes are the simulated A465's.
-    let mut robot = Robot::embedded(settings());
+    let mut robot = trol::Connect::sim(settings()).connect().unwrap();
     let v = robot.check_version().unwrap();
     assert_eq!(v.protocol, trol::table::PROTOCOL_VERSION);
     assert_eq!(v.kind, "simulated A465");
@@ -314,5 +316,43 @@ pub(super) fn a_1998_host_gets_the_manuals_answer_and_sizes() {
         let reply = robot.transact_raw(&[trol::table::TROL_GET_STATUS]).unwrap();
         assert_eq!(reply.len(), if manual { 4 } else { 8 }, "{line}: {reply:?}");
         assert_eq!(robot.status_record().unwrap().epoch == 0, manual, "{line}");
+    }
+}
+
+/// The one connect path (issue 39, item 5): `Connect` always checks the controller (the
+/// embedded simulator's version check grants the repeats and learns its codes), applies the
+/// settings given before the check, refuses a bad one with the manual's code, and says what a
+/// `mars:` port lacks before anything opens.
+#[test]
+pub(super) fn connect_checks_the_controller_and_applies_its_settings() {
+    let mut robot = trol::Connect::sim(settings())
+        .reply_timeout_tenths(40)
+        .delay(Duration::from_millis(2))
+        .connect()
+        .unwrap();
+    assert_eq!(
+        robot.version().unwrap().protocol,
+        trol::table::PROTOCOL_VERSION
+    );
+    assert_eq!(robot.reply_timeout(), Duration::from_secs(4));
+    assert!(robot.repeats() > 0, "the version check grants the repeats");
+    robot.home(0).unwrap();
+
+    // Set before the check, the repeats stay as the application set them.
+    let robot = trol::Connect::sim(settings()).repeats(0).connect().unwrap();
+    assert_eq!(robot.repeats(), 0);
+
+    let e = trol::Connect::sim(settings())
+        .reply_timeout_tenths(0)
+        .connect()
+        .unwrap_err();
+    assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
+
+    #[cfg(feature = "mars")]
+    {
+        let e = trol::Connect::port("mars:/dev/nowhere")
+            .connect()
+            .unwrap_err();
+        assert!(e.to_string().contains("mars-profile = FILE"), "{e}");
     }
 }

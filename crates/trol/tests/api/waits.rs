@@ -20,7 +20,9 @@ pub(super) fn halt_from_another_thread_stops_the_arm_while_one_waits() {
     let mut sim = settings();
     sim.time_scale = 1.0;
     sim.arm.homed = true;
-    let robot = Arc::new(std::sync::Mutex::new(Robot::embedded(sim)));
+    let robot = Arc::new(std::sync::Mutex::new(
+        trol::Connect::sim(sim).connect().unwrap(),
+    ));
     let shared = robot.clone();
     let waiter = std::thread::spawn(move || {
         let mut r = shared.lock().unwrap();
@@ -47,7 +49,7 @@ pub(super) fn halt_answers_only_with_the_arm_standing() {
     let mut sim = settings();
     sim.time_scale = 0.5;
     sim.arm.homed = true;
-    let mut r = Robot::embedded(sim);
+    let mut r = trol::Connect::sim(sim).connect().unwrap();
     r.speed(100).unwrap();
     r.joint(1, 3.0).unwrap(); // 2.4 s at half real time
     std::thread::sleep(Duration::from_millis(300));
@@ -62,14 +64,12 @@ pub(super) fn halt_answers_only_with_the_arm_standing() {
 #[test]
 #[cfg(feature = "view")]
 pub(super) fn the_watchdog_halts_the_arm_when_the_application_falls_silent() {
-    let mut robot = Robot::embedded_viewed(
-        SimSettings {
-            time_scale: 1.0,
-            ..settings()
-        },
-        Default::default(),
-        "127.0.0.1:0",
-    )
+    let mut robot = trol::Connect::sim(SimSettings {
+        time_scale: 1.0,
+        ..settings()
+    })
+    .view("127.0.0.1:0")
+    .connect()
     .unwrap();
     robot.home(0).unwrap();
     robot.finish().unwrap();
@@ -179,14 +179,16 @@ pub(super) fn an_applications_errapptimeout_bounds_finish() {
     }
     let told = Arc::new(std::sync::atomic::AtomicUsize::new(0));
     for give_up in [false, true] {
-        let mut r = Robot::embedded(SimSettings {
+        let mut r = trol::Connect::sim(SimSettings {
             time_scale: 1.0,
             arm: trol_a465::arm::ArmSettings {
                 homed: true,
                 ..Default::default()
             },
             ..settings()
-        });
+        })
+        .connect()
+        .unwrap();
         if give_up {
             r.set_handlers(Box::new(GivesUp));
         } else {
@@ -264,7 +266,11 @@ pub(super) fn a_controller_that_goes_silent_during_a_wait_is_noticed_within_seco
 pub(super) fn a_halt_reaches_the_arm_while_it_homes() {
     // Real time: homing all axes takes 12 s. The controller answers Home at once and the
     // API waits by polling, so another thread's Halt gets through; the axes stay unhomed.
-    let robot = std::sync::Mutex::new(Robot::embedded(SimSettings::default()));
+    let robot = std::sync::Mutex::new(
+        trol::Connect::sim(SimSettings::default())
+            .connect()
+            .unwrap(),
+    );
     robot
         .lock()
         .unwrap()

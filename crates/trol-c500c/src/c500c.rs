@@ -1,0 +1,648 @@
+//! A simulated C500C with an A465 (`trol sim --c500c`, the backend's tests): the front
+//! console as the public sources show it (shared/reference/c500c.md), the CROS system shell
+//! (`$ `) and the application shell `ash test` (`test> `), over the simulated A465's planner
+//! and clock.
+//!
+//! Where the public sources leave a point open it is a switch ([`Switches`], named in
+//! [`VARIANTS`]); the backend's tests run across every one, with a profile that agrees and
+//! one that does not. What is assumed here and nowhere settled is marked so.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use trol_a465::arm::{Arm, ArmSettings, Which, code};
+use trol_a465::model::joints_to_counts;
+use trol_port::Port;
+
+use crate::reports::{self, ArmStat, Homing, Position};
+
+/// When ash gives its prompt back after a motion command: an open point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Return {
+    /// As soon as the motion has started.
+    AtStart,
+    /// Once the motion has ended.
+    AtEnd,
+}
+
+/// How ash prints a robot error on the console: an open point (the system shell's tools
+/// print `{program}: {message}`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorForm {
+    /// The message alone: `Joint 2 limit exceeded`.
+    Bare,
+    /// After the application's name: `test: Joint 2 limit exceeded`.
+    Prefixed,
+    /// In brackets, as ash's asynchronous lines: `[test: Joint 2 limit exceeded]`.
+    Bracketed,
+}
+
+/// The controller's behaviour where the public sources are silent.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Switches {
+    /// When the prompt returns after a motion command.
+    pub motion_return: Return,
+    /// How a robot error is printed.
+    pub error_form: ErrorForm,
+    /// Typed characters are echoed (the public sources say they are).
+    pub echo: bool,
+    /// Lines end in LF alone instead of CR LF.
+    pub lf_only: bool,
+    /// The pendant holds the point of control at power-on (the factory startup script
+    /// starts it).
+    pub pendant_holds: bool,
+    /// Ctrl-C stops a motion under way (assumed: ash's own way to stop is not public).
+    pub ctrl_c_stops: bool,
+    /// A power loss prints `[test: Lost robot power]`.
+    pub power_loss_line: bool,
+}
+
+impl Default for Switches {
+    fn default() -> Switches {
+        Switches {
+            motion_return: Return::AtStart,
+            error_form: ErrorForm::Bare,
+            echo: true,
+            lf_only: false,
+            pendant_holds: false,
+            ctrl_c_stops: true,
+            power_loss_line: true,
+        }
+    }
+}
+
+/// The named variants: each sets one switch away from the default.
+pub const VARIANTS: &[(&str, &str)] = &[
+    (
+        "default",
+        "the prompt returns as a motion starts, errors bare, echo on, CR LF",
+    ),
+    (
+        "return-at-end",
+        "the prompt returns once a motion has ended",
+    ),
+    (
+        "error-prefixed",
+        "a robot error is printed after the application's name (`test: ...`)",
+    ),
+    (
+        "error-bracketed",
+        "a robot error is printed in brackets (`[test: ...]`)",
+    ),
+    ("echo-off", "typed characters are not echoed"),
+    ("lf-only", "lines end in LF alone"),
+    (
+        "pendant-holds",
+        "the pendant holds the point of control at power-on",
+    ),
+    (
+        "unstoppable",
+        "Ctrl-C does not stop a motion: a fault, for the rule that Halt never says done unseen",
+    ),
+    (
+        "power-loss-silent",
+        "a power loss mid-motion prints nothing",
+    ),
+];
+
+/// The switches of a named variant.
+pub fn variant(name: &str) -> Option<Switches> {
+    let d = Switches::default();
+    Some(match name {
+        "default" => d,
+        "return-at-end" => Switches {
+            motion_return: Return::AtEnd,
+            ..d
+        },
+        "error-prefixed" => Switches {
+            error_form: ErrorForm::Prefixed,
+            ..d
+        },
+        "error-bracketed" => Switches {
+            error_form: ErrorForm::Bracketed,
+            ..d
+        },
+        "echo-off" => Switches { echo: false, ..d },
+        "lf-only" => Switches { lf_only: true, ..d },
+        "pendant-holds" => Switches {
+            pendant_holds: true,
+            ..d
+        },
+        "unstoppable" => Switches {
+            ctrl_c_stops: false,
+            ..d
+        },
+        "power-loss-silent" => Switches {
+            power_loss_line: false,
+            ..d
+        },
+        _ => return None,
+    })
+}
+
+/// The factory application (`/app/test`).
+pub const APP: &str = "test";
+/// What `robotver` says (assumed: the text of a real A465's C500C is not public).
+pub const ROBOT_VERSION: &str = "A465 simulated by TROL 1.0";
+/// What `crosver` says (the form PA's notes show).
+pub const CROS_VERSION: &str = "System type: 'CROS-104 on a C500C'";
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Shell {
+    System,
+    Ash,
+}
+
+/// The simulated controller and its arm.
+pub struct C500c {
+    sw: Switches,
+    arm: Arm,
+    scale: f64,
+    epoch: Instant,
+    shell: Shell,
+    power: bool,
+    pendant: bool,
+    online: bool,
+    /// A command whose prompt waits for the arm to stand (`finish`, or a motion with
+    /// [`Return::AtEnd`]).
+    busy: bool,
+    /// The exit question is asked.
+    asking: bool,
+    typed: Vec<u8>,
+    /// Lines typed while a command runs: the shell reads them once it prompts again.
+    held: Vec<String>,
+    out: Vec<u8>,
+    received: Vec<String>,
+}
+
+impl C500c {
+    /// A controller just switched on, in the system shell, the arm at READY with its power on;
+    /// `homed` starts it homed and calibrated.
+    pub fn new(sw: Switches, homed: bool, time_scale: f64) -> C500c {
+        let arm = Arm::new(ArmSettings {
+            homed,
+            ..ArmSettings::default()
+        });
+        let mut c = C500c {
+            pendant: sw.pendant_holds,
+            sw,
+            arm,
+            scale: time_scale.max(1e-3),
+            epoch: Instant::now(),
+            shell: Shell::System,
+            power: true,
+            online: false,
+            busy: false,
+            asking: false,
+            typed: Vec::new(),
+            held: Vec::new(),
+            out: Vec::new(),
+            received: Vec::new(),
+        };
+        c.prompt();
+        c
+    }
+
+    /// The controller's time, s.
+    pub fn now(&self) -> f64 {
+        self.epoch.elapsed().as_secs_f64() * self.scale
+    }
+
+    /// Every command line received, in order.
+    pub fn received(&self) -> &[String] {
+        &self.received
+    }
+
+    /// Where the arm is, TROL's joints (radians).
+    pub fn joints(&mut self) -> [f64; 6] {
+        let t = self.now();
+        self.arm.position(t, Which::Actual)
+    }
+
+    /// Whether the arm moves.
+    pub fn is_moving(&mut self) -> bool {
+        let t = self.now();
+        self.arm.is_moving(t)
+    }
+
+    /// Give the point of control to the host (`<SHIFT><ESC>` on the pendant), or take it.
+    pub fn set_pendant(&mut self, holds: bool) {
+        self.pendant = holds;
+    }
+
+    /// Cut the arm's power: the axes stop where they are (brakes); with the switch, ash says
+    /// so on the console.
+    pub fn set_power_off(&mut self) {
+        let t = self.now();
+        self.arm.halt(t);
+        self.power = false;
+        if self.sw.power_loss_line {
+            self.line(&format!("[{APP}: Lost robot power]"));
+        }
+    }
+
+    /// Print a line unasked (a fault the tests play).
+    pub fn say(&mut self, text: &str) {
+        self.line(text);
+    }
+
+    fn eol(&self) -> &'static [u8] {
+        if self.sw.lf_only { b"\n" } else { b"\r\n" }
+    }
+
+    fn line(&mut self, text: &str) {
+        self.out.extend_from_slice(text.as_bytes());
+        let eol = self.eol();
+        self.out.extend_from_slice(eol);
+    }
+
+    fn prompt(&mut self) {
+        let p = match self.shell {
+            Shell::System => "$ ".to_string(),
+            Shell::Ash => format!("{APP}> "),
+        };
+        self.out.extend_from_slice(p.as_bytes());
+    }
+
+    fn error(&mut self, message: &str) {
+        let text = match self.sw.error_form {
+            ErrorForm::Bare => message.to_string(),
+            ErrorForm::Prefixed => format!("{APP}: {message}"),
+            ErrorForm::Bracketed => format!("[{APP}: {message}]"),
+        };
+        self.line(&text);
+    }
+
+    /// Feed bytes from the host; returns what the console prints.
+    pub fn feed(&mut self, bytes: &[u8]) -> Vec<u8> {
+        for &b in bytes {
+            match b {
+                0x03 | 0x05 => self.interrupt(b),
+                b'\r' | b'\n' => {
+                    if self.sw.echo {
+                        let eol = self.eol();
+                        self.out.extend_from_slice(eol);
+                    }
+                    let line = String::from_utf8_lossy(&self.typed).into_owned();
+                    self.typed.clear();
+                    if self.busy {
+                        self.held.push(line);
+                    } else {
+                        self.command(&line);
+                    }
+                }
+                0x08 | 0x7f => {
+                    if self.typed.pop().is_some() && self.sw.echo {
+                        self.out.extend_from_slice(b"\x08 \x08");
+                    }
+                }
+                _ => {
+                    if self.typed.len() < 256 {
+                        self.typed.push(b);
+                        if self.sw.echo {
+                            self.out.push(b);
+                        }
+                    }
+                }
+            }
+        }
+        self.tick()
+    }
+
+    /// Let time pass: a command that waits for the arm gives its prompt back once it stands.
+    pub fn tick(&mut self) -> Vec<u8> {
+        if self.busy && !self.is_moving() {
+            self.busy = false;
+            self.prompt();
+            for line in std::mem::take(&mut self.held) {
+                if self.busy {
+                    self.held.push(line);
+                } else {
+                    self.command(&line);
+                }
+            }
+        }
+        std::mem::take(&mut self.out)
+    }
+
+    fn interrupt(&mut self, b: u8) {
+        self.typed.clear();
+        self.held.clear();
+        if self.sw.echo {
+            self.out
+                .extend_from_slice(if b == 0x03 { b"^C" } else { b"^E" });
+        }
+        let eol = self.eol();
+        self.out.extend_from_slice(eol);
+        if b == 0x03 && self.sw.ctrl_c_stops {
+            let t = self.now();
+            self.arm.halt(t);
+        }
+        self.asking = false;
+        self.busy = false;
+        self.prompt();
+    }
+
+    fn command(&mut self, line: &str) {
+        let line = line.trim();
+        self.received.push(line.to_string());
+        if self.asking {
+            self.asking = false;
+            match line {
+                "y" | "yes" => self.shell = Shell::System,
+                "n" | "no" => {}
+                _ => self.line("Please answer 'yes' or 'no':"),
+            }
+            self.prompt();
+            return;
+        }
+        if line.is_empty() {
+            self.prompt();
+            return;
+        }
+        let (word, args) = match line.split_once(char::is_whitespace) {
+            Some((w, a)) => (w, a.trim()),
+            None => (line, ""),
+        };
+        match (self.shell, word) {
+            (_, "crosver") => {
+                self.line(CROS_VERSION);
+                self.line("CROS version 3.1.1 (simulated)");
+            }
+            (Shell::System, "ash") => {
+                let app = args.split_whitespace().next().unwrap_or("");
+                if app != APP {
+                    self.line(&format!("ash: no application '{app}'"));
+                } else {
+                    self.shell = Shell::Ash;
+                    if self.pendant {
+                        self.line(&format!(
+                            "Please shut down the pendant so {APP} can initialize..."
+                        ));
+                    }
+                }
+            }
+            (Shell::System, _) => self.line(&format!("{word}: not found")),
+            (Shell::Ash, "exit") => {
+                self.out
+                    .extend_from_slice(b"Are you sure you want to exit? ");
+                self.asking = true;
+                return;
+            }
+            (Shell::Ash, "robotver") => self.line(&format!("Version string: '{ROBOT_VERSION}'")),
+            (Shell::Ash, "armstat") => {
+                for l in reports::print_armstat(&self.armstat()) {
+                    self.line(&l);
+                }
+            }
+            (Shell::Ash, "w0") => self.position(false),
+            (Shell::Ash, "w2") => self.position(true),
+            (Shell::Ash, "speed") if args.is_empty() => {
+                let s = self.arm.speed().round() as u8;
+                self.line(&format!("Current speed is {s}"));
+            }
+            (Shell::Ash, "speed") => match args.parse::<u8>() {
+                Ok(v) if (1..=100).contains(&v) => {
+                    self.arm.set_speed(f64::from(v));
+                }
+                _ => self.line("error: bad speed."),
+            },
+            (Shell::Ash, "armpower") => match args {
+                "on" => self.power = true,
+                "off" => {
+                    let t = self.now();
+                    self.arm.halt(t);
+                    self.power = false;
+                }
+                _ => self.line("error: missing argument."),
+            },
+            (Shell::Ash, "online") => match args {
+                "on" => self.online = true,
+                "off" => self.online = false,
+                _ => self.line("error: missing argument."),
+            },
+            (Shell::Ash, "finish") => {
+                if self.is_moving() {
+                    self.busy = true;
+                    return;
+                }
+            }
+            (Shell::Ash, "joint" | "home" | "ready") => {
+                if self.motion(word, args) {
+                    return;
+                }
+            }
+            (Shell::Ash, _) => self.line("Unrecognized command."),
+        }
+        self.prompt();
+    }
+
+    fn armstat(&self) -> ArmStat {
+        let homed = self.arm.homed().iter().all(|&h| h);
+        ArmStat {
+            arm: "A465".into(),
+            power: self.power,
+            homing: if homed {
+                Homing::Homed
+            } else {
+                Homing::NotHomed
+            },
+            metric: true,
+            online: self.online,
+        }
+    }
+
+    fn position(&mut self, actual: bool) {
+        let t = self.now();
+        let which = if actual {
+            Which::Actual
+        } else {
+            Which::Commanded
+        };
+        let q = self.arm.position(t, which);
+        let w = self.arm.kinematics().fk_xyzypr(&q);
+        let p = Position {
+            // The A465's encoder counts (assumed; the pulses per degree of an A465 on a
+            // C500C are an open point).
+            pulses: joints_to_counts(&q).map(i64::from),
+            joints_deg: q.map(f64::to_degrees),
+            world: [
+                w[0],
+                w[1],
+                w[2],
+                w[3].to_degrees(),
+                w[4].to_degrees(),
+                w[5].to_degrees(),
+            ],
+        };
+        for l in reports::print_position(&p, actual, true) {
+            self.line(&l);
+        }
+    }
+
+    /// A motion command; true when its prompt waits for the arm.
+    fn motion(&mut self, word: &str, args: &str) -> bool {
+        if self.pendant {
+            self.error(
+                "Ash doesn't have control. Transfer control back by pressing <SHIFT><ESC> on \
+                 the pendant keyboard.",
+            );
+            return false;
+        }
+        if !self.power {
+            self.error("Arm power is OFF");
+            return false;
+        }
+        let t = self.now();
+        let homed = self.arm.homed().iter().all(|&h| h);
+        let result = match word {
+            "home" => {
+                if !args.is_empty() {
+                    self.line("error: too many arguments.");
+                    return false;
+                }
+                self.arm.home(0, t)
+            }
+            _ if !homed => {
+                self.error("Not homed or not calibrated");
+                return false;
+            }
+            "ready" => {
+                if !args.is_empty() {
+                    self.line("error: too many arguments.");
+                    return false;
+                }
+                self.arm.ready(t)
+            }
+            _ => {
+                let Some((n, deg)) = args.split_once(',') else {
+                    self.line("error: missing comma.");
+                    return false;
+                };
+                let (Ok(n), Ok(deg)) = (n.trim().parse::<u8>(), deg.trim().parse::<f64>()) else {
+                    self.line("error: missing number.");
+                    return false;
+                };
+                if !(1..=6).contains(&n) {
+                    self.line("error: bad axis.");
+                    return false;
+                }
+                let r = self.arm.joint(n, deg.to_radians(), t);
+                if r == code::JOINT_LIMIT {
+                    self.error(&format!("Joint {n} limit exceeded"));
+                    return false;
+                }
+                r
+            }
+        };
+        match result {
+            code::OK => {}
+            code::JOINT_LIMIT => {
+                self.error("Joint 1 limit exceeded");
+                return false;
+            }
+            code::OUT_OF_REACH => {
+                self.error("Location out of reach");
+                return false;
+            }
+            _ => {
+                self.error("Invalid argument");
+                return false;
+            }
+        }
+        if self.sw.motion_return == Return::AtEnd && self.is_moving() {
+            self.busy = true;
+            return true;
+        }
+        false
+    }
+}
+
+impl std::fmt::Debug for C500c {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("C500c")
+            .field("switches", &self.sw)
+            .field("time_scale", &self.scale)
+            .finish_non_exhaustive()
+    }
+}
+
+/// A controller shared between its serving thread and a test or the CLI.
+pub type Shared = Arc<Mutex<C500c>>;
+
+/// Serve the controller on `port` until `stop` is set or the port fails.
+pub fn serve(mut port: Box<dyn Port>, unit: Shared, stop: Arc<AtomicBool>) -> std::io::Result<()> {
+    let mut buf = [0u8; 512];
+    while !stop.load(Ordering::Relaxed) {
+        let n = port.recv(&mut buf, Instant::now() + Duration::from_millis(5))?;
+        let out = {
+            let mut u = unit.lock().unwrap_or_else(|e| e.into_inner());
+            u.feed(&buf[..n])
+        };
+        if !out.is_empty() {
+            port.send(&out)?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::console::{Console, Said};
+
+    fn said(c: &mut C500c, typed: &str) -> Vec<Said> {
+        Console::default().feed(&c.feed(typed.as_bytes()))
+    }
+
+    #[test]
+    fn the_factory_application_answers_as_the_public_sources_print() {
+        let mut c = C500c::new(Switches::default(), true, 100.0);
+        assert_eq!(c.tick(), b"$ ");
+        let s = said(&mut c, "ash test\r");
+        assert_eq!(
+            s,
+            vec![Said::Line("ash test".into()), Said::Prompt("test".into())]
+        );
+        // robotver as A255ROS cuts it: the version from byte 27 to the quote.
+        let out = String::from_utf8(c.feed(b"robotver\r")).unwrap();
+        assert_eq!(&out[10..27], "Version string: '");
+        assert!(out[27..].starts_with(ROBOT_VERSION));
+        let w2 = String::from_utf8(c.feed(b"w2\r")).unwrap();
+        assert_eq!(&w2[98..106], "PULSES  ");
+        let s = said(&mut c, "exit\r");
+        assert_eq!(
+            s.last(),
+            Some(&Said::Question("Are you sure you want to exit?".into()))
+        );
+        let s = said(&mut c, "y\r");
+        assert_eq!(s.last(), Some(&Said::Prompt("$".into())));
+    }
+
+    #[test]
+    fn motions_refuse_as_crs_words_it() {
+        let mut c = C500c::new(Switches::default(), false, 100.0);
+        c.feed(b"ash test\r");
+        let s = said(&mut c, "joint 1,10\r");
+        assert!(
+            s.contains(&Said::Line("Not homed or not calibrated".into())),
+            "{s:?}"
+        );
+        c.feed(b"home\r");
+        assert!(c.is_moving());
+        let mut c = C500c::new(Switches::default(), true, 100.0);
+        c.feed(b"ash test\r");
+        let s = said(&mut c, "joint 2,170\r");
+        assert!(
+            s.contains(&Said::Line("Joint 2 limit exceeded".into())),
+            "{s:?}"
+        );
+        assert!(!c.is_moving());
+        let s = said(&mut c, "joint 2 10\r");
+        assert!(
+            s.contains(&Said::Line("error: missing comma.".into())),
+            "{s:?}"
+        );
+    }
+}

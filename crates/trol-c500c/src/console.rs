@@ -1,0 +1,230 @@
+//! The C500C's front console, sans-IO: bytes in, what the console said out
+//! (docs/c500c.md, "The line"; shared/reference/c500c.md).
+//!
+//! The console is a text terminal: typed characters are echoed, lines end CR LF, and a shell
+//! waits for the next line with a prompt that no line end follows: `$ ` for the CROS system
+//! shell, `<app>> ` or `<app>[<v3>]> ` for the application shell `ash`. Some commands ask a
+//! question back and wait on the same line (`Are you sure you want to exit?`), and a few
+//! lines come unasked, in brackets (`[test: Lost robot power]`). [`Console::feed`] turns
+//! bytes into [`Said`] items; the partial line that waits is judged a prompt or a question
+//! only when it matches one exactly, so a line cut by the serial driver is not taken for one.
+
+/// The longest line kept; a longer one is cut there (a noisy line cannot fill memory).
+pub const MAX_LINE: usize = 512;
+
+/// The questions ash is known to ask (CRS's texts in the flash of a C500C): a partial line
+/// ending in one of these waits for an answer.
+pub const QUESTIONS: &[&str] = &[
+    "Are you sure you want to exit?",
+    "-- create it?",
+    "Limp ALL robot axes?",
+    "(y/n) ?",
+    "Please answer 'yes' or 'no':",
+];
+
+/// What the console said.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Said {
+    /// A whole line (its CR LF taken off).
+    Line(String),
+    /// A shell's prompt: `$` for the system shell, or the application's name for ash
+    /// (`test` for `test> `).
+    Prompt(String),
+    /// A question that waits for an answer on its own line.
+    Question(String),
+}
+
+/// Splits what the console prints into lines, prompts and questions.
+#[derive(Debug, Default)]
+pub struct Console {
+    buf: Vec<u8>,
+    /// The last byte was CR (a CR LF pair ends one line, not two).
+    after_cr: bool,
+}
+
+impl Console {
+    /// Feed bytes; returns what they complete.
+    pub fn feed(&mut self, bytes: &[u8]) -> Vec<Said> {
+        let mut out = Vec::new();
+        for &b in bytes {
+            match b {
+                b'\n' if self.after_cr => {
+                    self.after_cr = false;
+                }
+                b'\r' | b'\n' => {
+                    self.after_cr = b == b'\r';
+                    // A prompt the console printed before the line (a shell that prompts
+                    // and then prints, with no line end between) is a prompt of its own.
+                    let mut line = text(&self.buf);
+                    while let Some((app, len)) = leading_prompt(&line) {
+                        out.push(Said::Prompt(app));
+                        line.drain(..len);
+                    }
+                    out.push(Said::Line(line));
+                    self.buf.clear();
+                }
+                _ => {
+                    self.after_cr = false;
+                    if self.buf.len() < MAX_LINE {
+                        self.buf.push(b);
+                    }
+                }
+            }
+        }
+        let mut partial = text(&self.buf);
+        // Prompts one after the other (a shell given empty lines, its echo off).
+        let mut prompts = Vec::new();
+        while let Some((app, len)) = leading_prompt(&partial) {
+            prompts.push(app);
+            partial.drain(..len);
+        }
+        if !prompts.is_empty() && partial.is_empty() {
+            out.extend(prompts.into_iter().map(Said::Prompt));
+            self.buf.clear();
+        } else if QUESTIONS.iter().any(|q| partial.trim_end().ends_with(q)) {
+            out.push(Said::Question(partial.trim_end().to_string()));
+            self.buf.clear();
+        }
+        out
+    }
+
+    /// Bytes received that no line end, prompt or question has closed yet.
+    pub fn partial(&self) -> String {
+        text(&self.buf)
+    }
+
+    /// Forget a partial line.
+    pub fn clear(&mut self) {
+        self.buf.clear();
+        self.after_cr = false;
+    }
+}
+
+/// The shell whose prompt `partial` is, if it is one exactly: `$ ` (the system shell, `$`),
+/// `NAME> ` or `NAME[FILE]> ` (ash running application NAME).
+pub fn prompt(partial: &str) -> Option<String> {
+    if partial == "$ " {
+        return Some("$".into());
+    }
+    let head = partial.strip_suffix("> ")?;
+    let name = match head.split_once('[') {
+        Some((name, rest)) => {
+            let file = rest.strip_suffix(']')?;
+            if file.is_empty() || file.contains(['[', ']']) {
+                return None;
+            }
+            name
+        }
+        None => head,
+    };
+    let word = !name.is_empty()
+        && name.len() <= 32
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    word.then(|| name.to_string())
+}
+
+/// A prompt at the start of `text` and its length.
+fn leading_prompt(text: &str) -> Option<(String, usize)> {
+    let end = text.find(' ')? + 1;
+    prompt(&text[..end]).map(|app| (app, end))
+}
+
+/// Bytes as text: printable ASCII as is, anything else as `\xNN`.
+pub fn text(bytes: &[u8]) -> String {
+    let mut s = String::new();
+    for &b in bytes {
+        if (0x20..0x7f).contains(&b) {
+            s.push(b as char);
+        } else {
+            s.push_str(&format!("\\x{b:02x}"));
+        }
+    }
+    s
+}
+
+/// An unasked line: `[<app>: <text>]` (ash's asynchronous lines, such as `[test: Lost robot
+/// power]`) or `[pendant done.]`.
+pub fn bracketed(line: &str) -> Option<&str> {
+    line.trim()
+        .strip_prefix('[')
+        .and_then(|l| l.strip_suffix(']'))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn all(c: &mut Console, chunks: &[&[u8]]) -> Vec<Said> {
+        chunks.iter().flat_map(|b| c.feed(b)).collect()
+    }
+
+    #[test]
+    fn lines_prompts_and_questions_in_any_cut() {
+        let bytes = b"robotver\r\nVersion string: 'A465 v2.1'\r\ntest> ";
+        let whole = all(&mut Console::default(), &[bytes]);
+        assert_eq!(
+            whole,
+            vec![
+                Said::Line("robotver".into()),
+                Said::Line("Version string: 'A465 v2.1'".into()),
+                Said::Prompt("test".into()),
+            ]
+        );
+        // Byte by byte: the same, and no prompt taken from a line cut short (`test>` before
+        // its space).
+        let mut c = Console::default();
+        let single: Vec<&[u8]> = bytes.chunks(1).collect();
+        assert_eq!(all(&mut c, &single), whole);
+        let asked = all(
+            &mut Console::default(),
+            &[b"exit\r\nAre you sure you want to exit? "],
+        );
+        assert_eq!(
+            asked.last(),
+            Some(&Said::Question("Are you sure you want to exit?".into()))
+        );
+    }
+
+    #[test]
+    fn only_exact_prompts_count() {
+        assert_eq!(prompt("$ "), Some("$".into()));
+        assert_eq!(prompt("test> "), Some("test".into()));
+        assert_eq!(prompt("test[test.v3]> "), Some("test".into()));
+        for not in ["test>", "a b> ", "> ", "Joint 1 > ", "x[]> ", "x[a]b> "] {
+            assert_eq!(prompt(not), None, "{not}");
+        }
+    }
+
+    #[test]
+    fn lf_alone_and_cr_alone_end_lines_and_noise_is_shown() {
+        let mut c = Console::default();
+        let said = c.feed(b"a\nb\rc\r\n\x00\xffd\n");
+        assert_eq!(
+            said,
+            vec![
+                Said::Line("a".into()),
+                Said::Line("b".into()),
+                Said::Line("c".into()),
+                Said::Line("\\x00\\xffd".into()),
+            ]
+        );
+        assert_eq!(
+            bracketed("[test: Lost robot power]"),
+            Some("test: Lost robot power")
+        );
+        // Echo off: prompts one after the other, and a prompt before a line.
+        let said = Console::default().feed(b"$ $ $ ");
+        assert_eq!(said, vec![Said::Prompt("$".into()); 3]);
+        let said = Console::default().feed(b"test> Current speed is 5\r\ntest> ");
+        assert_eq!(
+            said,
+            vec![
+                Said::Prompt("test".into()),
+                Said::Line("Current speed is 5".into()),
+                Said::Prompt("test".into())
+            ]
+        );
+    }
+}

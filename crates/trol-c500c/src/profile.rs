@@ -1,0 +1,141 @@
+//! The C500C profile (docs/c500c.md, "The profile"): what the public sources leave open and
+//! only the arm can settle, one TOML file per controller. A key that is not set is not
+//! guessed: the calls that need it are refused before anything is sent, naming the key and
+//! the probe step that measures it.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+/// When ash gives its prompt back after a motion command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MotionReturn {
+    /// As the motion starts: its end is waited for with `finish`.
+    Start,
+    /// Once it has ended.
+    End,
+}
+
+/// A profile (the keys of the TOML file).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields, rename_all = "kebab-case")]
+pub struct Profile {
+    /// Baud rate of the front console (57600 8N1, the public sources agree).
+    pub baud: u32,
+    /// The ash application TROL runs (`test`, the factory one).
+    pub app: String,
+    /// When the prompt returns after a motion command (unset: motions are refused; `trol
+    /// c500c probe`'s supervised step "motion return" measures it).
+    pub motion_return: Option<MotionReturn>,
+    /// How long the arm must stand short of a motion's end, with ash done, before that counts
+    /// as a stop short, ms.
+    pub settle_ms: u64,
+    /// How long past a motion's planned end its end is looked for before it is given up as
+    /// unsure, s (assumed).
+    pub end_margin_s: u64,
+}
+
+impl Default for Profile {
+    fn default() -> Profile {
+        Profile {
+            baud: 57600,
+            app: "test".into(),
+            motion_return: None,
+            settle_ms: 300,
+            end_margin_s: 10,
+        }
+    }
+}
+
+/// The longest profile file read.
+pub const MAX_FILE: u64 = 64 * 1024;
+
+/// A profile file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+#[error("C500C profile {file}: {message}")]
+pub struct ProfileError {
+    /// The file.
+    pub file: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl Profile {
+    /// Read a profile file.
+    pub fn from_file(path: &Path) -> Result<Profile, ProfileError> {
+        use std::io::Read;
+        let file = path.display().to_string();
+        let err = |message: String| ProfileError {
+            file: file.clone(),
+            message,
+        };
+        let mut text = String::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_FILE + 1).read_to_string(&mut text))
+            .map_err(|e| {
+                err(format!(
+                    "cannot read it ({e}); `trol sim --c500c --print-profile` prints one to \
+                     start from"
+                ))
+            })?;
+        if text.len() as u64 > MAX_FILE {
+            return Err(err(format!("longer than {MAX_FILE} bytes: not a profile")));
+        }
+        Profile::parse(&text).map_err(err)
+    }
+
+    /// Parse a profile's text.
+    pub fn parse(text: &str) -> Result<Profile, String> {
+        let p: Profile = toml::from_str(text).map_err(|e| e.to_string().trim().to_string())?;
+        if ![9600, 19200, 38400, 57600, 115200].contains(&p.baud) {
+            return Err(format!(
+                "baud = {}: the C500C's console runs at 57600 (one of 9600, 19200, 38400, \
+                 57600, 115200)",
+                p.baud
+            ));
+        }
+        let word = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+        if p.app.is_empty() || p.app.len() > 32 || !p.app.chars().all(word) {
+            return Err(format!(
+                "app = {:?}: the name of an ash application (`test`, the factory one)",
+                p.app
+            ));
+        }
+        if !(50..=5000).contains(&p.settle_ms) {
+            return Err(format!("settle-ms = {}: 50 to 5000", p.settle_ms));
+        }
+        if !(1..=120).contains(&p.end_margin_s) {
+            return Err(format!("end-margin-s = {}: 1 to 120", p.end_margin_s));
+        }
+        Ok(p)
+    }
+
+    /// The profile as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keys_are_checked_and_unknown_ones_refused() {
+        assert_eq!(Profile::parse("").unwrap(), Profile::default());
+        let p = Profile::parse("motion-return = \"end\"\napp = \"cell\"\n").unwrap();
+        assert_eq!(p.motion_return, Some(MotionReturn::End));
+        assert_eq!(p.app, "cell");
+        assert_eq!(Profile::parse(&p.to_toml()).unwrap(), p);
+        for bad in [
+            "motion-return = \"later\"",
+            "baud = 1200",
+            "app = \"a b\"",
+            "settle-ms = 0",
+            "angles = \"zyx\"",
+        ] {
+            assert!(Profile::parse(bad).is_err(), "{bad}");
+        }
+    }
+}

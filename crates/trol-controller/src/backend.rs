@@ -80,8 +80,56 @@ pub struct ReportedObject {
     pub held: bool,
 }
 
-/// The latest report and when it was taken, shared with a view.
-pub type SharedReport = std::sync::Arc<std::sync::Mutex<Option<(ArmReport, std::time::Instant)>>>;
+/// The latest report and when it was taken, shared between the controller that renews it and
+/// a view that reads it. Reports are renewed only while someone reads them: a reader says so
+/// ([`SharedReport::want`]), and the controller renews the report for [`WANT_HOLD`] after
+/// that (a backend that asks its controller for each report then keeps its line free while
+/// nobody watches).
+#[derive(Clone, Debug, Default)]
+pub struct SharedReport {
+    slot: std::sync::Arc<std::sync::Mutex<Slot>>,
+}
+
+#[derive(Debug, Default)]
+struct Slot {
+    report: Option<(ArmReport, std::time::Instant)>,
+    wanted: Option<std::time::Instant>,
+}
+
+/// How long one [`SharedReport::want`] keeps the controller renewing the report.
+pub const WANT_HOLD: std::time::Duration = std::time::Duration::from_secs(2);
+
+impl SharedReport {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Slot> {
+        self.slot.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// The latest report and when it was taken (`None` before the first).
+    pub fn latest(&self) -> Option<(ArmReport, std::time::Instant)> {
+        self.lock().report.clone()
+    }
+
+    /// Say that a reader wants reports from now on (for [`WANT_HOLD`]); whether one wanted
+    /// them already (else the latest report may be as old as the last reader left it).
+    pub fn want(&self) -> bool {
+        let mut slot = self.lock();
+        let warm = slot.wanted.is_some_and(|at| at.elapsed() < WANT_HOLD);
+        slot.wanted = Some(std::time::Instant::now());
+        warm
+    }
+
+    /// Whether a reader wanted reports within the last [`WANT_HOLD`].
+    pub fn wanted(&self) -> bool {
+        self.lock()
+            .wanted
+            .is_some_and(|at| at.elapsed() < WANT_HOLD)
+    }
+
+    /// Put a new report, taken now.
+    pub fn put(&self, report: ArmReport) {
+        self.lock().report = Some((report, std::time::Instant::now()));
+    }
+}
 
 /// A call the backend could not make.
 #[derive(Debug, thiserror::Error)]

@@ -271,7 +271,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.reports = Some((slot, every, Instant::now() - every));
         // A view served before the controller runs has the arm at once where that is free.
         if self.pcp.backend().report_is_free() {
-            self.refresh_report();
+            self.refresh_report_now();
         }
     }
 
@@ -287,10 +287,10 @@ impl<P: Port, B: Backend> Controller<P, B> {
     }
 
     fn refresh_report(&mut self) {
-        let Some((_, every, last)) = &self.reports else {
+        let Some((slot, every, last)) = &self.reports else {
             return;
         };
-        if last.elapsed() < *every {
+        if last.elapsed() < *every || !slot.wanted() {
             return;
         }
         self.refresh_report_now();
@@ -304,9 +304,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
         *last = Instant::now();
         let slot = slot.clone();
         if let Some(r) = self.pcp.backend_mut().report() {
-            if let Ok(mut s) = slot.lock() {
-                *s = Some((r, Instant::now()));
-            }
+            slot.put(r);
         }
     }
 
@@ -443,7 +441,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
                     self.pcp.backend_mut().after_request();
-                    if self.pcp.backend().report_is_free() {
+                    let watched = self.reports.as_ref().is_some_and(|(s, _, _)| s.wanted());
+                    if watched && self.pcp.backend().report_is_free() {
                         self.refresh_report_now();
                     }
                     self.log_transaction(ev);

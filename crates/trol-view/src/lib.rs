@@ -50,6 +50,11 @@ pub const DEFAULT_ADDR: &str = "127.0.0.1:8465";
 /// How often a moving arm's state is sent.
 pub const EVENT_INTERVAL: Duration = Duration::from_millis(20);
 
+/// How long a request waits for the controller's report of now after a time with nobody
+/// watching (the controller renews its report only while someone reads it); past that it gets
+/// the latest report there is.
+pub const FRESH_WAIT: Duration = Duration::from_millis(300);
+
 /// How often the controller renews its report for a view of the simulated arm
 /// ([`trol_controller::Controller::share_reports`]); a real controller's backend, which asks
 /// the controller for each, is asked less often (`trol gateway`: every 100 ms).
@@ -94,8 +99,8 @@ const THREE_LICENCE: &str = include_str!("../vendor/three/LICENSE-three.js.txt")
 pub fn state(shared: &SharedReport) -> Option<serde_json::Value> {
     static EPOCH: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
     let epoch = *EPOCH.get_or_init(std::time::Instant::now);
-    let slot = shared.lock().ok()?;
-    let (r, at) = slot.as_ref()?;
+    let (r, at) = shared.latest()?;
+    let at = &at;
     let kin = trol_a465::kinematics::Kinematics::new(r.tool);
     let tcp = kin.fk_xyzypr(&r.joints);
     let target_tcp = r.target.map(|t| kin.fk_xyzypr(&t));
@@ -167,7 +172,16 @@ impl Frames {
     /// The newest frame; `None` before the controller shared its arm.
     fn frame(&self) -> Option<Arc<Frame>> {
         let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some((at, frame)) = last.as_ref() {
+        // The controller renews its report only while someone reads it: after a time with
+        // nobody watching, wait (a little) for a report of now.
+        let asked = std::time::Instant::now();
+        if !self.source.want() {
+            while asked.elapsed() < FRESH_WAIT
+                && self.source.latest().is_none_or(|(_, at)| at < asked)
+            {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        } else if let Some((at, frame)) = last.as_ref() {
             if at.elapsed() < self.max_age {
                 return Some(frame.clone());
             }
@@ -595,10 +609,8 @@ mod tests {
     #[test]
     fn every_viewer_gets_the_same_encoding_of_one_moment() {
         let shared = SharedReport::default();
-        *shared.lock().unwrap() = Some((
-            trol_controller::ArmReport::default(),
-            std::time::Instant::now(),
-        ));
+        shared.want();
+        shared.put(trol_controller::ArmReport::default());
         // Within a frame's age every viewer gets the same frame, encoded once.
         let frames = Frames::with_age(shared.clone(), Duration::from_secs(3600));
         let a = frames.frame().unwrap();

@@ -39,8 +39,9 @@ fn viewed() -> (Viewed, trol_view::ViewServer) {
     let reporter = {
         let (backend, slot, stop) = (backend.clone(), slot.clone(), stop.clone());
         let renew = move || {
-            let report = backend.lock().unwrap().report();
-            *slot.lock().unwrap() = report.map(|r| (r, Instant::now()));
+            if let Some(r) = backend.lock().unwrap().report() {
+                slot.put(r);
+            }
         };
         renew();
         std::thread::spawn(move || {

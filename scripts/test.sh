@@ -71,7 +71,7 @@ stage "cargo test -p trol --features view" cargo test -p trol --features view --
 # The client without its backends, and with each alone: each builds and its own tests pass.
 client_features() {
   cargo test -p trol --no-default-features --lib &&
-    for feature in sim rapl mars; do
+    for feature in sim rapl mars c500c; do
       cargo test -p trol --no-default-features --features "$feature" --lib || return 1
     done
 }
@@ -143,6 +143,7 @@ stage "the README's walk-through" bash scripts/readme.sh
 # A page of docs/ whose first hour starts a simulated controller: its block, as written, in
 # an empty folder (docs/c500.md's is run by crates/trol-cli/tests/c500_first_hour.rs).
 stage "docs/mars.md's first hour" bash scripts/readme.sh docs/mars.md
+stage "docs/c500c.md's first hour" bash scripts/readme.sh docs/c500c.md
 
 if [ ${#FAILED[@]} -gt 0 ]; then
   echo "scripts/test.sh: ${#FAILED[@]} stage(s) failed:"

@@ -803,7 +803,8 @@ impl Backend for C500cBackend {
         // A Halt: its stop, and the readings that show the arm standing.
         HALT_WITHIN + REPLY_LIMIT
     }
-    fn appro(&mut self, _: &Target, _: [f64; 6], _: bool) -> BiosResult {
+    fn appro(&mut self, target: &Target, _: [f64; 6], _: bool) -> BiosResult {
+        self.named(target)?;
         self.cartesian()
     }
     fn depart(&mut self, _: [f64; 6], _: bool) -> BiosResult {
@@ -812,7 +813,8 @@ impl Backend for C500cBackend {
     fn jog(&mut self, _: [f64; 3], _: bool) -> BiosResult {
         self.cartesian()
     }
-    fn move_to(&mut self, _: &Target, _: bool) -> BiosResult {
+    fn move_to(&mut self, target: &Target, _: bool) -> BiosResult {
+        self.named(target)?;
         self.cartesian()
     }
     fn close(&mut self, _: u8) -> BiosResult {
@@ -982,6 +984,15 @@ impl Backend for C500cBackend {
 }
 
 impl C500cBackend {
+    /// A location by name: TROL keeps no table of the C500C's yet (its ash variables are
+    /// for later), so no name is known.
+    fn named(&mut self, target: &Target) -> Result<(), BackendError> {
+        match target {
+            Target::Name(name) => Err(BackendError::UnknownLocation(name.clone())),
+            Target::Location(_) => Ok(()),
+        }
+    }
+
     fn cartesian(&mut self) -> BiosResult {
         self.unsettled(
             "a cartesian motion needs the composition order of the WORLD row's Z-Rot, Y-Rot \

@@ -21,12 +21,14 @@ Examples:
   trol sim --rapl &                                                      # a simulated C500 ...
   trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
   trol gateway --controller mars:/dev/ttyUSB0 --profile crates/trol-mars/profiles/crs93.toml  # a MARS 8
+  trol gateway --controller c500c:/dev/ttyUSB0 --profile c500c.toml     # a C500C (docs/c500c.md)
 
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]
 pub struct GatewayArgs {
     /// The C500's host port: a serial device (or socket://HOST:PORT to a networked one),
-    /// opened at the profile's baud rate; or mars:DEVICE for an A465 on a MARS 8.
+    /// opened at the profile's baud rate; or mars:DEVICE for an A465 on a MARS 8; or
+    /// c500c:DEVICE for an A465 on its C500C (the front console).
     #[arg(long, value_name = "DEVICE")]
     controller: String,
     /// Where to serve TROL: `pty` (a new pseudo-terminal), a serial device, or
@@ -38,7 +40,8 @@ pub struct GatewayArgs {
     baud: u32,
     /// The C500's RAPL-II profile (docs/c500.md); default: the safe one, which refuses
     /// cartesian commands and MA/MI until their conventions are set. With mars:DEVICE: the
-    /// arm profile (docs/mars.md), which it needs.
+    /// arm profile (docs/mars.md), which it needs. With c500c:DEVICE: the C500C profile
+    /// (docs/c500c.md); default: nothing settled, every motion refused naming the key.
     #[arg(long, value_name = "FILE")]
     profile: Option<PathBuf>,
     /// The block check until an activation line names one: crc16 (TROL's) or lrc.
@@ -74,6 +77,9 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
     if let Some(device) = a.controller.strip_prefix(trol_mars::PREFIX) {
         return run_mars(&a, device);
     }
+    if let Some(device) = a.controller.strip_prefix(trol_c500c::PREFIX) {
+        return run_c500c(&a, device);
+    }
     let profile = match &a.profile {
         Some(p) => trol_rapl::Profile::from_file(p).map_err(|e| e.to_string())?,
         None => trol_rapl::Profile::default(),
@@ -91,6 +97,29 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
     )
     .map_err(|e| e.to_string())?;
     serve_backend(&a, backend, "the C500", trol_rapl::RAPL_CODES)
+}
+
+/// `--controller c500c:DEVICE`: an A465 on its C500C, through ash.
+fn run_c500c(a: &GatewayArgs, device: &str) -> Result<(), String> {
+    let profile = match &a.profile {
+        Some(p) => trol_c500c::Profile::from_file(p).map_err(|e| e.to_string())?,
+        // Nothing settled: every motion is refused, naming the key (docs/c500c.md).
+        None => trol_c500c::Profile::default(),
+    };
+    let settings = trol_port::PortSettings {
+        baud: profile.baud,
+        ..trol_port::PortSettings::default()
+    };
+    let port = trol_port::open(device, &settings)
+        .map_err(|e| format!("cannot open the C500C's console {device}: {e}"))?;
+    let backend = trol_c500c::C500cBackend::connect(
+        port,
+        profile,
+        Some(Box::new(|line: &str| say!("  c500c: {line}"))),
+    )
+    .map_err(|e| e.to_string())?;
+    let what = format!("the C500C ({})", backend.version());
+    serve_backend(a, backend, &what, trol_c500c::C500C_CODES)
 }
 
 /// `--controller mars:DEVICE`: an A465 on a MARS 8.
@@ -141,7 +170,7 @@ fn serve_backend<B: trol_controller::Backend>(
         Some(addr) => {
             let slot = trol_controller::SharedReport::default();
             let view = trol_view::serve_controlled(addr, slot.clone(), control)
-            .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
+                .map_err(|e| format!("cannot serve the view at {addr}: {e}"))?;
             Some((slot, view))
         }
         None => None,

@@ -71,7 +71,7 @@ pub struct SimArgs {
     /// TROL added unknown, no memory of the last request (a repeat runs again). PCI says what
     /// its replies carry in the PCI, which the manual leaves open: `zero` (default) or `echo`
     /// (the request's). --check does not apply. For trying a host against an old controller.
-    #[arg(long, value_name = "PCI", num_args = 0..=1, default_missing_value = "zero", value_parser = parse_manual_pci, conflicts_with_all = ["rapl", "mars"])]
+    #[arg(long, value_name = "PCI", num_args = 0..=1, default_missing_value = "zero", value_parser = parse_manual_pci, conflicts_with_all = ["rapl", "mars", "c500c"])]
     manual: Option<ManualLayer3>,
     /// Commands an application added, described in FILE (docs/extending.md): the log shows
     /// them by name. `trol sim` has no handlers for them and answers TROL_ERR_UNKNOWN; a
@@ -89,6 +89,11 @@ pub struct SimArgs {
     /// apply.
     #[arg(long, conflicts_with = "rapl")]
     mars: bool,
+    /// Be a CRS C500C with an A465 instead (what `c500c:DEVICE` and `trol gateway
+    /// --controller c500c:DEVICE` drive): its front console at 57600 Bd, the CROS system
+    /// shell and ash (docs/c500c.md); --baud, --server and --check do not apply.
+    #[arg(long, conflicts_with_all = ["rapl", "mars"])]
+    c500c: bool,
     /// With --rapl: how the simulated C500 behaves on each open point (a RAPL-II profile,
     /// docs/c500.md); default: the simulator's (mm, angles yaw pitch roll, MA/MI in degrees).
     /// With --mars: the arm profile (docs/mars.md); default: CTU's CRS93
@@ -98,14 +103,14 @@ pub struct SimArgs {
     /// Play one of the controllers the public sources allow, by name (`--help` lists them)
     #[arg(long, value_name = "NAME", long_help = variant_help())]
     variant: Option<String>,
-    /// With --rapl or --mars: print the profile that describes this simulated controller
-    /// (give it to `trol gateway --profile` or trol.cfg's rapl-profile / mars-profile) and
-    /// exit.
+    /// With --rapl, --mars or --c500c: print the profile that describes this simulated
+    /// controller (give it to `trol gateway --profile` or trol.cfg's rapl-profile /
+    /// mars-profile / c500c-profile) and exit.
     #[arg(long)]
     print_profile: bool,
     /// Serve the live 3D view of the arm at ADDR (default 127.0.0.1:8465, this machine only;
     /// name an address to serve others): open it in a browser. Not with --rapl.
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with_all = ["rapl", "mars"])]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = trol_view::DEFAULT_ADDR, conflicts_with_all = ["rapl", "mars", "c500c"])]
     view: Option<String>,
     /// With --view: the page is also a pendant that drives the arm (jog, speed, store a
     /// location, move to one, delete, Halt; docs/teach.md). It takes requests from this
@@ -172,9 +177,10 @@ fn variant_help() -> String {
     format!(
         "Play one of the controllers the public sources allow, by name (the backend's tests \
          run across all of them). With --rapl (docs/c500.md, \"What TROL assumes\"): {}. With \
-         --mars (docs/mars.md): {}.",
+         --mars (docs/mars.md): {}. With --c500c (docs/c500c.md): {}.",
         names(trol_rapl::c500::VARIANTS),
-        names(trol_mars::mars8::VARIANTS)
+        names(trol_mars::mars8::VARIANTS),
+        names(trol_c500c::c500c::VARIANTS)
     )
 }
 
@@ -186,8 +192,13 @@ fn check_variant(a: &SimArgs) -> Result<(), String> {
         trol_rapl::c500::VARIANTS.iter().map(|(n, _)| *n).collect()
     } else if a.mars {
         trol_mars::mars8::VARIANTS.iter().map(|(n, _)| *n).collect()
+    } else if a.c500c {
+        trol_c500c::c500c::VARIANTS
+            .iter()
+            .map(|(n, _)| *n)
+            .collect()
     } else {
-        return Err("--variant needs --rapl or --mars".into());
+        return Err("--variant needs --rapl, --mars or --c500c".into());
     };
     if a.profile.is_some() && a.rapl {
         return Err("--variant and --profile: give one".into());
@@ -205,8 +216,14 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     crate::common::log_in_background();
     check_variant(&a)?;
     let a = resolve(a)?;
-    if (a.profile.is_some() || a.print_profile) && !(a.rapl || a.mars) {
-        return Err("--profile and --print-profile need --rapl or --mars".into());
+    if a.profile.is_some() && a.c500c {
+        return Err(
+            "--profile does not apply to --c500c: its behaviour is the variant's (--variant);              --print-profile prints the profile that matches it"
+                .into(),
+        );
+    }
+    if (a.profile.is_some() || a.print_profile) && !(a.rapl || a.mars || a.c500c) {
+        return Err("--profile and --print-profile need --rapl, --mars or --c500c".into());
     }
     if a.pendant && !a.rapl {
         return Err("--pendant needs --rapl".into());
@@ -216,6 +233,9 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     }
     if a.mars {
         return run_mars(&a);
+    }
+    if a.c500c {
+        return run_c500c(&a);
     }
     // A locations file that does not exist yet (its folder does) starts an empty table,
     // which TROLSaveLocations writes there (docs/teach.md).
@@ -496,6 +516,66 @@ fn run_mars(a: &SimArgs) -> Result<(), String> {
     }
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     trol_mars::mars8::serve(opened.port, unit, stop).map_err(|e| format!("the line failed: {e}"))
+}
+
+/// `trol sim --c500c`: the simulated C500C with an A465.
+fn run_c500c(a: &SimArgs) -> Result<(), String> {
+    use trol_c500c::c500c::{self, Return};
+    let variant = a.variant.as_deref().unwrap_or("default");
+    let sw = c500c::variant(variant).ok_or_else(|| format!("no variant {variant}"))?;
+    let profile = trol_c500c::Profile {
+        motion_return: Some(match sw.motion_return {
+            Return::AtStart => trol_c500c::profile::MotionReturn::Start,
+            Return::AtEnd => trol_c500c::profile::MotionReturn::End,
+        }),
+        ..trol_c500c::Profile::default()
+    };
+    if a.print_profile {
+        say!("{}", profile.to_toml().trim_end());
+        return Ok(());
+    }
+    let unit = trol_c500c::C500c::new(sw, a.r.homed, a.r.time_scale);
+    let opened = open_side(&a.port, profile.baud, Side::Application)?;
+    let name = opened.name.clone();
+    say!("trol sim: serving on {name}");
+    say!(
+        "  a C500C with an A465, {} baud, time scale {}, {}",
+        profile.baud,
+        a.r.time_scale,
+        if a.r.homed { "homed" } else { "not homed" }
+    );
+    let what = c500c::VARIANTS
+        .iter()
+        .find(|(n, _)| *n == variant)
+        .map(|(_, w)| *w)
+        .unwrap_or_default();
+    say!("  variant {variant}: {what}");
+    say!(
+        "  drive it with: port c500c:{name} in trol.cfg (c500c-profile: `trol sim --c500c          --print-profile` prints the one that matches)"
+    );
+    // Serve, and log every line the console took (what a person at the terminal would see
+    // typed).
+    let mut unit = unit;
+    let mut port = opened.port;
+    let mut buf = [0u8; 512];
+    let mut logged = 0;
+    loop {
+        let n = port
+            .recv(
+                &mut buf,
+                std::time::Instant::now() + Duration::from_millis(5),
+            )
+            .map_err(|e| format!("the line failed: {e}"))?;
+        let out = unit.feed(&buf[..n]);
+        if !out.is_empty() {
+            port.send(&out)
+                .map_err(|e| format!("the line failed: {e}"))?;
+        }
+        for line in &unit.received()[logged..] {
+            say!("  typed: {line}");
+        }
+        logged = unit.received().len();
+    }
 }
 
 /// One line of `trol sim --mars --console`.

@@ -60,6 +60,8 @@ pub struct Config {
     pub rapl_profile: Option<PathBuf>,
     /// The MARS 8 arm profile (port `mars:DEVICE`).
     pub mars_profile: Option<PathBuf>,
+    /// The C500C profile (port `c500c:DEVICE`).
+    pub c500c_profile: Option<PathBuf>,
     /// Object width between the fingers, mm.
     pub object: Option<f64>,
     /// Where the embedded simulator serves its live view (`host:port`).
@@ -88,6 +90,7 @@ impl Default for Config {
             object: None,
             rapl_profile: None,
             mars_profile: None,
+            c500c_profile: None,
             view: None,
         }
     }
@@ -212,6 +215,7 @@ impl Config {
             &mut cfg.objects,
             &mut cfg.rapl_profile,
             &mut cfg.mars_profile,
+            &mut cfg.c500c_profile,
         ]
         .into_iter()
         .flatten()
@@ -227,6 +231,7 @@ impl Config {
             ("objects", &cfg.objects),
             ("rapl-profile", &cfg.rapl_profile),
             ("mars-profile", &cfg.mars_profile),
+            ("c500c-profile", &cfg.c500c_profile),
         ] {
             let Some(file) = file else { continue };
             if file.is_file() {
@@ -387,6 +392,9 @@ impl Config {
                         "mars-profile" | "mars_profile" => {
                             cfg.mars_profile = Some(PathBuf::from(value))
                         }
+                        "c500c-profile" | "c500c_profile" => {
+                            cfg.c500c_profile = Some(PathBuf::from(value))
+                        }
                         "check" => {
                             cfg.check = Some(trol_proto::link::BlockCheck::from_word(value).ok_or(
                                 (n, format!("check: expected crc16 or lrc, found {value:?}")),
@@ -410,7 +418,7 @@ impl Config {
                             return Err((
                                 n,
                                 format!(
-                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile, mars-profile, view"
+                                    "unknown setting {key:?}; known: check, time_scale, locations, objects, table_z, homed, object, rapl-profile, mars-profile, c500c-profile, view"
                                 ),
                             ));
                         }

@@ -31,6 +31,7 @@
 //! | `sim` | yes | the embedded simulated A465: port `sim`, [`Connect::sim`] |
 //! | `rapl` | yes | a real C500 in RAPL-II: port `rapl:DEVICE`, `Connect::rapl_profile` |
 //! | `mars` | yes | an A465 on a MARS 8: port `mars:DEVICE`, `Connect::mars_profile` |
+//! | `c500c` | yes | an A465 on its C500C, through ash: port `c500c:DEVICE`, `Connect::c500c_profile` |
 //! | `view` | no | the live 3D view of the embedded simulator (`view =` in trol.cfg) |
 //!
 //! The manual's C API (`include/trol.h`, `libtrol.so`, `libtrol.a`) is the crate `trol-c`
@@ -45,10 +46,10 @@ mod robot;
 
 pub use config::{Config, ConfigError};
 pub use robot::{
-    Connect, ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK, KEEPALIVE_SILENCE,
-    MARS_PREFIX, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT, PosMode, Result, Robot,
-    SetupError, StatusRecord, Waited, prompt_policy, prompt_reply_timeout, timeout_policy,
-    wait_idle,
+    C500C_PREFIX, Connect, ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK,
+    KEEPALIVE_SILENCE, MARS_PREFIX, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT,
+    PosMode, Result, Robot, SetupError, StatusRecord, Waited, prompt_policy, prompt_reply_timeout,
+    timeout_policy, wait_idle,
 };
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;

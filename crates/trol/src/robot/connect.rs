@@ -33,6 +33,8 @@ pub struct Connect {
     rapl: Option<trol_rapl::Profile>,
     #[cfg(feature = "mars")]
     mars: Option<trol_mars::Profile>,
+    #[cfg(feature = "c500c")]
+    c500c: Option<trol_c500c::Profile>,
 }
 
 impl Connect {
@@ -50,13 +52,16 @@ impl Connect {
             rapl: None,
             #[cfg(feature = "mars")]
             mars: None,
+            #[cfg(feature = "c500c")]
+            c500c: None,
         }
     }
 
     /// A port as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`, `socket://host:port`,
     /// `listen://host:port`), `sim` (the embedded simulated A465), `rapl:DEVICE` (a C500 in
-    /// RAPL-II, default profile unless [`Connect::rapl_profile`]) or `mars:DEVICE` (a MARS 8:
-    /// give its arm profile with [`Connect::mars_profile`]); 9600 Bd unless [`Connect::baud`].
+    /// RAPL-II, default profile unless [`Connect::rapl_profile`]), `mars:DEVICE` (a MARS 8:
+    /// give its arm profile with [`Connect::mars_profile`]) or `c500c:DEVICE` (a C500C, its
+    /// profile with `Connect::c500c_profile`); 9600 Bd unless [`Connect::baud`].
     pub fn port(name: &str) -> Connect {
         Connect::from(Config {
             port: name.to_string(),
@@ -113,6 +118,13 @@ impl Connect {
     #[cfg(feature = "mars")]
     pub fn mars_profile(mut self, profile: trol_mars::Profile) -> Connect {
         self.mars = Some(profile);
+        self
+    }
+
+    /// The C500C profile of a `c500c:` port (docs/c500c.md).
+    #[cfg(feature = "c500c")]
+    pub fn c500c_profile(mut self, profile: trol_c500c::Profile) -> Connect {
+        self.c500c = Some(profile);
         self
     }
 
@@ -196,7 +208,7 @@ impl Connect {
     fn open(&self) -> Result<Robot> {
         let cfg = &self.cfg;
         #[cfg_attr(
-            not(any(feature = "sim", feature = "rapl", feature = "mars")),
+            not(any(feature = "sim", feature = "rapl", feature = "mars", feature = "c500c")),
             allow(unused_variables)
         )]
         let link = LinkConfig {
@@ -225,6 +237,21 @@ impl Connect {
                 let locations = crate::config_locations(cfg)?;
                 // TROLSaveLocations writes trol.cfg's locations file back (docs/teach.md).
                 return Robot::open_mars(device, profile, (locations, cfg.locations.clone()), link);
+            }
+        }
+        if let Some(device) = cfg.port.strip_prefix(C500C_PREFIX) {
+            #[cfg(not(feature = "c500c"))]
+            return Err(open::not_built(device, "c500c", "the C500C backend"));
+            #[cfg(feature = "c500c")]
+            {
+                let profile = match (&self.c500c, &cfg.c500c_profile) {
+                    (Some(p), _) => p.clone(),
+                    (None, Some(path)) => trol_c500c::Profile::from_file(path)
+                        .map_err(|e| SetupError::Config(e.to_string()))?,
+                    // Nothing settled: every motion is refused, naming the key.
+                    (None, None) => trol_c500c::Profile::default(),
+                };
+                return Robot::open_c500c(device, profile, link);
             }
         }
         if let Some(device) = cfg.port.strip_prefix(RAPL_PREFIX) {

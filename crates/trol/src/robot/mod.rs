@@ -351,6 +351,8 @@ pub const MANUAL_PEER_NOTICE: &str = "the controller speaks only the manual's pr
 pub const RAPL_PREFIX: &str = "rapl:";
 /// The port prefix that embeds the controller with the MARS 8 backend (`mars:/dev/ttyUSB0`).
 pub const MARS_PREFIX: &str = "mars:";
+/// The port prefix that embeds the controller with the C500C backend (`c500c:/dev/ttyUSB0`).
+pub const C500C_PREFIX: &str = "c500c:";
 
 impl Robot {
     /// The default ErrAppTimeOut's policy for this connection: the commands' descriptions

@@ -15,7 +15,7 @@ pub(super) fn not_built(port: &str, feature: &str, what: &str) -> Error {
 
 /// The link settings of an in-process line: `cfg`'s block check, every timeout at least
 /// [`IN_PROCESS_SLACK`].
-#[cfg(any(feature = "sim", feature = "rapl", feature = "mars"))]
+#[cfg(any(feature = "sim", feature = "rapl", feature = "mars", feature = "c500c"))]
 pub(super) fn in_process(cfg: LinkConfig) -> LinkConfig {
     let t = cfg.timeouts;
     let at_least = |d: Duration| d.max(IN_PROCESS_SLACK);
@@ -126,6 +126,38 @@ impl Robot {
         let mut robot = Robot::over(Box::new(line), link, Some(handle));
         robot.set_reply_time(reply_time);
         robot.codes = trol_rapl::RAPL_CODES;
+        Ok(robot)
+    }
+
+    #[cfg(feature = "c500c")]
+    /// Embed the controller with the C500C backend: open DEVICE (the front console, or
+    /// `socket://HOST:PORT`) at the profile's baud rate, open ash (only reads), and serve
+    /// TROL to this process over an in-memory line (docs/c500c.md).
+    pub(super) fn open_c500c(
+        device: &str,
+        profile: trol_c500c::Profile,
+        link: LinkConfig,
+    ) -> Result<Robot> {
+        let settings = PortSettings {
+            baud: profile.baud,
+            ..PortSettings::default()
+        };
+        let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let backend = trol_c500c::C500cBackend::connect(
+            port,
+            profile,
+            Some(Box::new(
+                |line: &str| tracing::info!(target: "trol::c500c", "c500c: {line}"),
+            )),
+        )
+        .map_err(|e| SetupError::NoServer(e.to_string()))?;
+        let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
+        robot.codes = trol_c500c::C500C_CODES;
         Ok(robot)
     }
 

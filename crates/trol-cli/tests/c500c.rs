@@ -1,0 +1,186 @@
+//! An A465 on its C500C: a 1998 TROL program (the position example), `trol interp` and the
+//! pick example against `trol sim --c500c` over a pty pair, in-process (`c500c:PTY` in
+//! trol.cfg, on every variant, with the matching profile and with none) and through `trol
+//! gateway --controller c500c:PTY`.
+
+#[path = "../../trol-c/tests/common/cbuild.rs"]
+mod cbuild;
+mod common;
+
+use std::path::Path;
+
+use common::{Background, scratch, text, trol};
+
+/// `trol sim --c500c --variant NAME` on a new pty, the profile that matches it in `dir`
+/// (c500c.toml), and a trol.cfg that drives it in-process through `c500c:`, with the profile
+/// when `settled`.
+fn c500c_sim(dir: &Path, variant: &str, settled: bool) -> Background {
+    let out = trol(
+        dir,
+        &["sim", "--c500c", "--variant", variant, "--print-profile"],
+        "",
+    );
+    assert!(out.status.success(), "{}", text(&out).1);
+    std::fs::write(dir.join("c500c.toml"), &out.stdout).unwrap();
+    let args = ["sim", "--c500c", "--variant", variant, "--time-scale", "10"];
+    let sim = Background::start(dir, &args, "serving on ");
+    let profile = if settled {
+        "c500c-profile = c500c.toml\n"
+    } else {
+        ""
+    };
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\nc500c:{}\n0 0 0 0 0 0\n{profile}", sim.name),
+    )
+    .unwrap();
+    sim
+}
+
+fn run_example(name: &str, dir: &Path) -> (bool, String, String) {
+    let exe = cbuild::compile(
+        &cbuild::root().join("examples").join(format!("{name}.c")),
+        &format!("{name}-c500c"),
+        cbuild::Link::Static,
+    );
+    let run = cbuild::program(&exe).current_dir(dir).output().unwrap();
+    (
+        run.status.success(),
+        String::from_utf8_lossy(&run.stdout).into_owned(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
+/// The position example (Home, a joint motion, the three position forms, a location it does
+/// not know) runs unchanged on every variant with the matching profile, but where the pendant
+/// holds the point of control: then it fails with that said.
+fn position_on_variant(variant: &str) {
+    let dir = scratch(&format!("c500c-{variant}"));
+    let sim = c500c_sim(&dir, variant, true);
+    let (ok, out, err) = run_example("position", &dir);
+    if variant == "pendant-holds" {
+        // Home refused (BIOS_NO_CONTROL), so the joint motion is refused unhomed: nothing
+        // moved, and the program says it failed.
+        assert!(!ok && out.contains("position: FAILED"), "{out}");
+        assert!(
+            !sim.output().iter().any(|l| l.contains("typed: joint")),
+            "{out}"
+        );
+        return;
+    }
+    assert!(
+        ok,
+        "{variant}:\n{out}\n{err}\nsimulated C500C:\n{}",
+        sim.output().join("\n")
+    );
+    assert!(out.contains("position: done"), "{out}");
+}
+
+macro_rules! position_on_variants {
+    ($($test:ident => $name:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                position_on_variant($name);
+            }
+        )*
+
+        #[test]
+        fn the_position_example_runs_on_every_variant() {
+            let tested = [$($name),*];
+            for (name, _) in trol_c500c::c500c::VARIANTS {
+                assert!(tested.contains(name), "variant {name} has no C example run");
+            }
+        }
+    };
+}
+
+position_on_variants! {
+    position_default => "default",
+    position_return_at_end => "return-at-end",
+    position_error_prefixed => "error-prefixed",
+    position_error_bracketed => "error-bracketed",
+    position_echo_off => "echo-off",
+    position_lf_only => "lf-only",
+    position_pendant_holds => "pendant-holds",
+    position_unstoppable => "unstoppable",
+    position_power_loss_silent => "power-loss-silent",
+}
+
+/// Without a profile nothing moves, and the interpreter says which key to set; the pick
+/// example (cartesian motions) stops at its first motion with the reason, the arm unmoved.
+#[test]
+fn unsettled_motions_are_refused_with_the_key_to_set() {
+    let dir = scratch("c500c-unsettled");
+    let sim = c500c_sim(&dir, "default", false);
+    let o = trol(&dir, &["interp", "-v"], "home 0\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(out.contains("BIOS_UNSETTLED"), "{out}\n{err}");
+    assert!(err.contains("motion-return"), "{err}");
+    let typed = sim.output();
+    assert!(
+        typed.iter().any(|l| l.contains("typed: armstat")),
+        "{typed:?}"
+    );
+    assert!(
+        !typed.iter().any(|l| l.contains("typed: home")),
+        "nothing moved: {typed:?}"
+    );
+    // With the profile: cartesian motions name what is not settled.
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\nlocations = {}\n",
+            sim.name,
+            cbuild::root().join("examples/locations.txt").display()
+        ),
+    )
+    .unwrap();
+    let (ok, out, err) = run_example("pick", &dir);
+    assert!(!ok, "{out}");
+    assert!(out.contains("-27") || err.contains("-27"), "{out}\n{err}");
+}
+
+#[test]
+fn the_interpreter_and_the_position_example_run_through_trol_gateway() {
+    let dir = scratch("c500c-gateway");
+    let sim = c500c_sim(&dir, "default", true);
+    let gw = Background::start(
+        &dir,
+        &[
+            "gateway",
+            "--controller",
+            &format!("c500c:{}", sim.name),
+            "--profile",
+            "c500c.toml",
+        ],
+        "serving on ",
+    );
+    let init = trol(&dir, &["init", "--port", &gw.name], "");
+    let (o, e) = text(&init);
+    assert!(init.status.success(), "{o}{e}");
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!("9600\n{}\n0 0 0 0 0 0\n", gw.name),
+    )
+    .unwrap();
+    let o = trol(
+        &dir,
+        &["interp"],
+        "home 0\nfinish\njoint 1 0.3\nfinish\ngetposition joint actual\n",
+    );
+    let (out, err) = text(&o);
+    assert!(
+        o.status.success(),
+        "{out}\n{err}\ngateway:\n{}",
+        gw.output().join("\n")
+    );
+    assert!(
+        out.contains("getposition joint actual  ->  j(0.3") || out.contains("j(0.299"),
+        "{out}"
+    );
+    let (ok, out, err) = run_example("position", &dir);
+    assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
+    assert!(out.contains("position: done"), "{out}");
+}

@@ -1,0 +1,61 @@
+"""TROL for Python driving an A465 on its C500C: `trol sim --c500c` over a pty, through
+`c500c:` in trol.cfg with the profile that matches it (docs/c500c.md)."""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+import trol
+
+from conftest import trol_binary
+
+
+@pytest.fixture
+def c500c_robot(tmp_path: Path) -> Iterator[trol.Robot]:
+    """`trol sim --c500c` as its own process, 10 times real time, driven through `c500c:`."""
+    profile = subprocess.run(
+        [str(trol_binary()), "sim", "--c500c", "--print-profile"],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    (tmp_path / "c500c.toml").write_text(profile)
+    proc = subprocess.Popen(
+        [str(trol_binary()), "sim", "--c500c", "--time-scale", "10"],
+        stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert "serving on " in line, line
+        port = line.split("serving on ", 1)[1].split()[0]
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
+        cfg = tmp_path / "trol.cfg"
+        cfg.write_text(f"9600\nc500c:{port}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n")
+        with trol.Robot.from_config(cfg) as robot:
+            yield robot
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.mark.timeout(120)
+def test_a_python_script_drives_the_arm_on_a_c500c(c500c_robot: trol.Robot) -> None:
+    assert c500c_robot.version()[1] == "C500C over ash"
+    # Nothing moves before Home: armstat says the arm is not homed.
+    with pytest.raises(trol.RefusedError) as e:
+        c500c_robot.joint(1, 0.3)
+    assert (e.value.code, e.value.name) == (-1, "BIOS_NOT_HOMED")
+    c500c_robot.home()
+    c500c_robot.finish()
+    c500c_robot.joint(1, 0.3)
+    c500c_robot.finish()
+    assert c500c_robot.joints(actual=True)[0] == pytest.approx(0.3, abs=1e-3)
+    # Several joints at once cannot go as one motion yet: refused, naming why, nothing sent.
+    with pytest.raises(trol.RefusedError) as e:
+        c500c_robot.ma([0.1, 0.1, 0.1, 0.0, 0.0, 0.0])
+    assert (e.value.code, e.value.name) == (-27, "BIOS_UNSETTLED")
+    assert c500c_robot.joints(actual=True)[0] == pytest.approx(0.3, abs=1e-3)

@@ -5,6 +5,7 @@
 //! - [`console`]: the console, sans-IO (lines, prompts, questions out of bytes);
 //! - [`reports`]: what ash prints (`w0`/`w2`, `armstat`, `robotver`, `speed`) and its error
 //!   texts;
+//! - [`probe`]: first contact that only reads, every byte recorded;
 //! - [`profile`]: what only the arm settles, one TOML file per controller;
 //! - [`backend`]: the robot backend behind the PCP server (`c500c:DEVICE`), on the shared
 //!   core for real controllers;
@@ -17,6 +18,7 @@
 pub mod backend;
 pub mod c500c;
 pub mod console;
+pub mod probe;
 pub mod profile;
 pub mod reports;
 

@@ -19,6 +19,7 @@ macro_rules! eprintln {
 }
 
 mod bench;
+mod c500c;
 mod demo;
 mod gateway;
 mod init;
@@ -77,6 +78,9 @@ enum Command {
     /// An A465 on a PiKRON MARS 8: first contact that only reads (docs/mars.md).
     #[command(subcommand)]
     Mars(mars::Mars),
+    /// An A465 on its C500C: first contact that only reads (docs/c500c.md).
+    #[command(subcommand)]
+    C500c(c500c::C500c),
     /// Relay between the controller's port and an application's (the manual's link.exe).
     Link(link::LinkArgs),
     /// Show the traffic layer by layer, live between two ports or from a capture.
@@ -220,6 +224,7 @@ fn main() -> ExitCode {
         Command::Gateway(a) => gateway::run(a).map(|()| ExitCode::SUCCESS),
         Command::Rapl(r) => rapl::run(r).map(|()| ExitCode::SUCCESS),
         Command::Mars(m) => mars::run(m).map(|()| ExitCode::SUCCESS),
+        Command::C500c(c) => c500c::run(c).map(|()| ExitCode::SUCCESS),
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports { config } => ports(config).map(|()| ExitCode::SUCCESS),
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),

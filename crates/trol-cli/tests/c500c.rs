@@ -184,3 +184,45 @@ fn the_interpreter_and_the_position_example_run_through_trol_gateway() {
     assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
     assert!(out.contains("position: done"), "{out}");
 }
+
+/// First contact reads only: the findings are said, every byte is in the transcript, and
+/// nothing that moves the arm or changes a setting was typed.
+#[test]
+fn the_probe_reads_only_and_records_every_byte() {
+    let dir = scratch("c500c-probe");
+    let sim = c500c_sim(&dir, "pendant-holds", true);
+    let o = trol(
+        &dir,
+        &[
+            "c500c",
+            "probe",
+            "--controller",
+            &format!("c500c:{}", sim.name),
+            "--out",
+            "first.txt",
+        ],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("an A465 arm, power on"), "{out}");
+    assert!(
+        out.contains("the pendant holds the point of control"),
+        "{out}"
+    );
+    let transcript = std::fs::read_to_string(dir.join("first.txt")).unwrap();
+    assert!(transcript.contains("> armstat\\x0d"), "{transcript}");
+    let typed: Vec<String> = sim
+        .output_until("typed: y", 1, 10)
+        .into_iter()
+        .filter_map(|l| l.split_once("typed: ").map(|(_, t)| t.trim().to_string()))
+        .filter(|t| !t.is_empty())
+        .collect();
+    assert_eq!(
+        typed,
+        [
+            "crosver", "ash test", "robotver", "armstat", "w0", "w2", "speed", "exit", "y"
+        ],
+        "{typed:?}"
+    );
+}

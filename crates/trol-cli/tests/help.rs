@@ -36,6 +36,7 @@ fn help_wraps_to_the_terminal() {
         &["interp", "--help"],
         &["rapl", "probe", "--help"],
         &["mars", "probe", "--help"],
+        &["c500c", "probe", "--help"],
     ] {
         let out = std::process::Command::new(common::TROL)
             .args(args)

@@ -988,7 +988,7 @@ impl C500cBackend {
     /// for later), so no name is known.
     fn named(&mut self, target: &Target) -> Result<(), BackendError> {
         match target {
-            Target::Name(name) => Err(BackendError::UnknownLocation(name.clone())),
+            Target::Name(name) => Err(BackendError::UnknownLocation(*name)),
             Target::Location(_) => Ok(()),
         }
     }

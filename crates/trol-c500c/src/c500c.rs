@@ -242,6 +242,11 @@ impl C500c {
         }
     }
 
+    /// Give the arm its power back (as `armpower on` or the panel's button).
+    pub fn set_power_on(&mut self) {
+        self.power = true;
+    }
+
     /// Print a line unasked (a fault the tests play).
     pub fn say(&mut self, text: &str) {
         self.line(text);

@@ -124,7 +124,9 @@ pub struct SimArgs {
     /// With --mars: faults on standard input, one per line, to try a program's handling:
     /// `power off`, `power on`, `stop on` (the motion stop), `stop off`, `silent on` (the unit
     /// stops answering), `silent off`, `say TEXT` (a line the unit prints unasked),
-    /// `object POS` (closing the gripper stops at axis position POS), `object none`.
+    /// `object POS` (closing the gripper stops at axis position POS), `object none`. With
+    /// --c500c: `power off` (mid-motion: the brakes, and ash's line where the variant prints
+    /// it), `power on`, `pendant on|off` (who holds the point of control), `say TEXT`.
     #[arg(long)]
     console: bool,
     /// With --rapl: a teach pendant on standard input. Each line `J1 J2 J3 J4 J5 J6`
@@ -228,8 +230,8 @@ pub fn run(a: SimArgs) -> Result<(), String> {
     if a.pendant && !a.rapl {
         return Err("--pendant needs --rapl".into());
     }
-    if a.console && !a.mars {
-        return Err("--console needs --mars".into());
+    if a.console && !(a.mars || a.c500c) {
+        return Err("--console needs --mars or --c500c".into());
     }
     if a.mars {
         return run_mars(&a);
@@ -553,9 +555,23 @@ fn run_c500c(a: &SimArgs) -> Result<(), String> {
     say!(
         "  drive it with: port c500c:{name} in trol.cfg (c500c-profile: `trol sim --c500c          --print-profile` prints the one that matches)"
     );
+    let unit = std::sync::Arc::new(std::sync::Mutex::new(unit));
+    if a.console {
+        say!("  console: power off|on, pendant on|off, say TEXT");
+        let unit = unit.clone();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::stdin().lock().lines().map_while(Result::ok) {
+                let mut u = unit.lock().unwrap_or_else(|e| e.into_inner());
+                match c500c_console(&mut u, line.trim()) {
+                    Ok(done) => say!("console: {done}"),
+                    Err(e) => say!("console: {e}"),
+                }
+            }
+        });
+    }
     // Serve, and log every line the console took (what a person at the terminal would see
     // typed).
-    let mut unit = unit;
     let mut port = opened.port;
     let mut buf = [0u8; 512];
     let mut logged = 0;
@@ -566,6 +582,7 @@ fn run_c500c(a: &SimArgs) -> Result<(), String> {
                 std::time::Instant::now() + Duration::from_millis(5),
             )
             .map_err(|e| format!("the line failed: {e}"))?;
+        let mut unit = unit.lock().unwrap_or_else(|e| e.into_inner());
         let out = unit.feed(&buf[..n]);
         if !out.is_empty() {
             port.send(&out)
@@ -575,6 +592,35 @@ fn run_c500c(a: &SimArgs) -> Result<(), String> {
             say!("  typed: {line}");
         }
         logged = unit.received().len();
+    }
+}
+
+/// One line of `trol sim --c500c --console`.
+fn c500c_console(u: &mut trol_c500c::C500c, line: &str) -> Result<String, String> {
+    let (word, rest) = line.split_once(' ').unwrap_or((line, ""));
+    match (word, rest.trim()) {
+        ("power", "off") => {
+            u.set_power_off();
+            Ok("arm power off".into())
+        }
+        ("power", "on") => {
+            u.set_power_on();
+            Ok("arm power on".into())
+        }
+        ("pendant", v @ ("on" | "off")) => {
+            u.set_pendant(v == "on");
+            Ok(format!(
+                "the pendant {} the point of control",
+                if v == "on" { "holds" } else { "gave back" }
+            ))
+        }
+        ("say", text) if !text.is_empty() => {
+            u.say(text);
+            Ok(format!("said `{text}`"))
+        }
+        _ => Err(format!(
+            "`{line}`: one of power off, power on, pendant on, pendant off, say TEXT"
+        )),
     }
 }
 

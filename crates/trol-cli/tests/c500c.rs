@@ -15,13 +15,26 @@ use common::{Background, scratch, text, trol};
 /// (c500c.toml), and a trol.cfg that drives it in-process through `c500c:`, with the profile
 /// when `settled`.
 fn c500c_sim(dir: &Path, variant: &str, settled: bool) -> Background {
+    c500c_sim_profiled(dir, variant, settled, false)
+}
+
+/// [`c500c_sim`], with the profile of the contrary motion return where `contrary`.
+fn c500c_sim_profiled(dir: &Path, variant: &str, settled: bool, contrary: bool) -> Background {
     let out = trol(
         dir,
         &["sim", "--c500c", "--variant", variant, "--print-profile"],
         "",
     );
     assert!(out.status.success(), "{}", text(&out).1);
-    std::fs::write(dir.join("c500c.toml"), &out.stdout).unwrap();
+    let mut profile = String::from_utf8(out.stdout).unwrap();
+    if contrary {
+        profile = if profile.contains("motion-return = \"start\"") {
+            profile.replace("motion-return = \"start\"", "motion-return = \"end\"")
+        } else {
+            profile.replace("motion-return = \"end\"", "motion-return = \"start\"")
+        };
+    }
+    std::fs::write(dir.join("c500c.toml"), profile).unwrap();
     let args = ["sim", "--c500c", "--variant", variant, "--time-scale", "10"];
     let sim = Background::start(dir, &args, "serving on ");
     let profile = if settled {
@@ -74,6 +87,21 @@ fn position_on_variant(variant: &str) {
         sim.output().join("\n")
     );
     assert!(out.contains("position: done"), "{out}");
+    drop(sim);
+    // The contrary profile: the example works, or fails with the arm where TROL said (the
+    // example checks the position it reads after a success).
+    let dir = scratch(&format!("c500c-{variant}-contrary"));
+    let sim = c500c_sim_profiled(&dir, variant, true, true);
+    let (ok, out, err) = run_example("position", &dir);
+    if ok {
+        assert!(out.contains("position: done"), "{out}");
+    } else {
+        assert!(
+            out.contains("position: FAILED") || err.contains("InitTROL"),
+            "{variant}, contrary:\n{out}\n{err}\n{}",
+            sim.output().join("\n")
+        );
+    }
 }
 
 macro_rules! position_on_variants {
@@ -224,5 +252,63 @@ fn the_probe_reads_only_and_records_every_byte() {
             "crosver", "ash test", "robotver", "armstat", "w0", "w2", "speed", "exit", "y"
         ],
         "{typed:?}"
+    );
+}
+
+/// A fault script (`trol sim --c500c --console`): the arm's power cut during a motion that
+/// `trol interp` waits for. Finish is never success, the interpreter says why, and the next
+/// motion is not sent.
+#[test]
+fn a_power_cut_during_a_motion_is_never_success() {
+    let dir = scratch("c500c-power-cut");
+    let out = trol(&dir, &["sim", "--c500c", "--print-profile"], "");
+    std::fs::write(dir.join("c500c.toml"), &out.stdout).unwrap();
+    let mut sim = Background::start(
+        &dir,
+        &["sim", "--c500c", "--console", "--homed"],
+        "serving on ",
+    );
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
+            sim.name
+        ),
+    )
+    .unwrap();
+    let interp = {
+        let dir = dir.clone();
+        // Joint 1 by 1 rad at 10 %: about 3 s in real time.
+        std::thread::spawn(move || {
+            trol(
+                &dir,
+                &["interp", "-k"],
+                "speed 10\njoint 1 1.0\nfinish\njoint 1 0.1\n",
+            )
+        })
+    };
+    let seen = sim.output_until("typed: joint 1,57.296", 1, 30);
+    assert!(
+        seen.iter().any(|l| l.contains("typed: joint 1,57.296")),
+        "{seen:?}"
+    );
+    sim.type_line("power off");
+    let o = interp.join().unwrap();
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    let finish = out
+        .lines()
+        .find(|l| l.starts_with("finish"))
+        .unwrap_or_else(|| panic!("{out}\n{err}"));
+    assert!(!finish.contains("0 (success)"), "{out}");
+    let later = out
+        .lines()
+        .find(|l| l.starts_with("joint 1 0.1"))
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(!later.contains("0 (success)"), "{out}");
+    let typed = sim.output();
+    assert!(
+        !typed.iter().any(|l| l.contains("typed: joint 1,5.730")),
+        "a motion went out after the power cut: {typed:?}"
     );
 }

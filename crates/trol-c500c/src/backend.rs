@@ -35,11 +35,11 @@ use crate::reports::{self, ArmStat, Homing, Known};
 
 pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
 /// The pendant holds the point of control (`Ash doesn't have control`).
-pub const NO_CONTROL: i16 = -26;
+pub const NO_CONTROL: i16 = -27;
 /// The profile has not settled what this call needs (the log names the key).
-pub const UNSETTLED: i16 = -27;
+pub const UNSETTLED: i16 = -28;
 /// An error of CRS's tables with no code of its own (a servo fault, a parse error).
-pub const C500C_ERROR: i16 = -28;
+pub const C500C_ERROR: i16 = -29;
 
 /// The BIOS codes of the C500C backend: the simulator's, and those of the controller.
 pub static C500C_CODES: &CodeTable = &{
@@ -1020,6 +1020,20 @@ impl C500cBackend {
                  C500C, which needs the A465's pulses per degree there (not settled); a series \
                  of `joint` commands would not be one motion",
             ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_is_named_once() {
+        for (i, a) in C500C_CODES.iter().enumerate() {
+            for b in &C500C_CODES[i + 1..] {
+                assert_ne!(a.value, b.value, "{} and {}", a.name, b.name);
+            }
         }
     }
 }

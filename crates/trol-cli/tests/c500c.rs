@@ -167,13 +167,24 @@ fn unsettled_motions_are_refused_with_the_key_to_set() {
     .unwrap();
     let (ok, out, err) = run_example("pick", &dir);
     assert!(!ok, "{out}");
-    assert!(out.contains("-27") || err.contains("-27"), "{out}\n{err}");
+    assert!(out.contains("-28") || err.contains("-28"), "{out}\n{err}");
 }
 
 #[test]
 fn the_interpreter_and_the_position_example_run_through_trol_gateway() {
-    let dir = scratch("c500c-gateway");
-    let sim = c500c_sim(&dir, "default", true);
+    let (dir, gw, _sim) = through_gateway("default");
+    let (ok, out, err) = run_example("position", &dir);
+    assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
+    assert!(out.contains("position: done"), "{out}");
+}
+
+/// `trol gateway --controller c500c:` in front of the simulated C500C playing `variant`,
+/// activated (`trol init`), and the interpreter through it: Home, a joint motion, where the
+/// arm is. Where the pendant holds the point of control, Home is refused with that code.
+/// Returns the folder, the gateway and the simulated controller, which must live as long.
+fn through_gateway(variant: &str) -> (std::path::PathBuf, Background, Background) {
+    let dir = scratch(&format!("c500c-gateway-{variant}"));
+    let sim = c500c_sim(&dir, variant, true);
     let gw = Background::start(
         &dir,
         &[
@@ -199,18 +210,52 @@ fn the_interpreter_and_the_position_example_run_through_trol_gateway() {
         "home 0\nfinish\njoint 1 0.3\nfinish\ngetposition joint actual\n",
     );
     let (out, err) = text(&o);
+    if variant == "pendant-holds" {
+        assert!(!o.status.success(), "{out}");
+        assert!(out.contains("BIOS_NO_CONTROL"), "{out}\n{err}");
+        return (dir, gw, sim);
+    }
     assert!(
         o.status.success(),
-        "{out}\n{err}\ngateway:\n{}",
+        "{variant}: {out}\n{err}\ngateway:\n{}",
         gw.output().join("\n")
     );
     assert!(
         out.contains("getposition joint actual  ->  j(0.3") || out.contains("j(0.299"),
         "{out}"
     );
-    let (ok, out, err) = run_example("position", &dir);
-    assert!(ok, "{out}\n{err}\ngateway:\n{}", gw.output().join("\n"));
-    assert!(out.contains("position: done"), "{out}");
+    (dir, gw, sim)
+}
+
+macro_rules! gateway_on_variants {
+    ($($test:ident => $name:literal),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                through_gateway($name);
+            }
+        )*
+
+        #[test]
+        fn the_gateway_runs_on_every_variant() {
+            let tested = [$($name),*];
+            for (name, _) in trol_c500c::c500c::VARIANTS {
+                assert!(tested.contains(name), "variant {name} has no gateway run");
+            }
+        }
+    };
+}
+
+gateway_on_variants! {
+    gateway_default => "default",
+    gateway_return_at_end => "return-at-end",
+    gateway_error_prefixed => "error-prefixed",
+    gateway_error_bracketed => "error-bracketed",
+    gateway_echo_off => "echo-off",
+    gateway_lf_only => "lf-only",
+    gateway_pendant_holds => "pendant-holds",
+    gateway_unstoppable => "unstoppable",
+    gateway_power_loss_silent => "power-loss-silent",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

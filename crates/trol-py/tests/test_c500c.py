@@ -57,5 +57,5 @@ def test_a_python_script_drives_the_arm_on_a_c500c(c500c_robot: trol.Robot) -> N
     # Several joints at once cannot go as one motion yet: refused, naming why, nothing sent.
     with pytest.raises(trol.RefusedError) as e:
         c500c_robot.ma([0.1, 0.1, 0.1, 0.0, 0.0, 0.0])
-    assert (e.value.code, e.value.name) == (-27, "BIOS_UNSETTLED")
+    assert (e.value.code, e.value.name) == (-28, "BIOS_UNSETTLED")
     assert c500c_robot.joints(actual=True)[0] == pytest.approx(0.3, abs=1e-3)

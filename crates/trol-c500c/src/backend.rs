@@ -94,6 +94,8 @@ pub const ACCEPT_WITHIN: Duration = Duration::from_millis(400);
 pub const STOP_WITHIN: Duration = Duration::from_millis(1500);
 /// The longest a Halt takes.
 pub const HALT_WITHIN: Duration = Duration::from_millis(2500);
+/// How long a reading of where the arm rests serves a motion computed from it.
+pub const FRESH_REST: Duration = Duration::from_millis(250);
 /// How far (degrees) the arm may stand from a motion's end and be at it.
 pub const ARRIVE_DEG: f64 = 0.05;
 
@@ -184,8 +186,9 @@ pub struct C500cBackend {
     version: String,
     stat: ArmStat,
     tool: [f64; 6],
-    /// Where the arm was last seen at rest, degrees.
+    /// Where the arm was last seen at rest, degrees, and when.
     rest: [f64; 6],
+    rest_at: Instant,
     speed: u8,
     unasked: Vec<String>,
     broken: Option<String>,
@@ -234,6 +237,7 @@ impl C500cBackend {
             },
             tool: [0.0; 6],
             rest: [0.0; 6],
+            rest_at: Instant::now(),
             speed: 0,
             unasked: Vec::new(),
             broken: None,
@@ -504,6 +508,11 @@ impl C500cBackend {
         };
         self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
         let ours = self.outstanding.is_some() || !self.queue.is_empty();
+        if !ours {
+            // Where the arm rests now: the pendant or another program may have moved it
+            // since TROL last looked, and the motion's end is computed from it.
+            self.fresh_rest()?;
+        }
         let homing = self
             .outstanding
             .as_ref()
@@ -699,6 +708,7 @@ impl C500cBackend {
         match o.watch.verdict(now, at_end, times) {
             real::End::Arrived => {
                 self.rest = p.joints_deg;
+                self.rest_at = Instant::now();
                 self.outstanding = None;
                 match self.queue.pop() {
                     Some(next) => {
@@ -712,6 +722,7 @@ impl C500cBackend {
             real::End::StoppedShort(at) => {
                 let line = o.motion.line.clone();
                 self.rest = at;
+                self.rest_at = Instant::now();
                 self.outstanding = None;
                 let n = self.queue.drop_all();
                 self.note(format!(
@@ -854,6 +865,7 @@ impl Backend for C500cBackend {
                 let n = self.queue.drop_all();
                 self.outstanding = None;
                 self.rest = at;
+                self.rest_at = Instant::now();
                 if let Some(note) = note {
                     self.note(note);
                 } else if n > 0 {
@@ -896,6 +908,7 @@ impl Backend for C500cBackend {
         if q.iter().any(|v| !v.is_finite()) {
             return Ok(code::BAD_ARGUMENT);
         }
+        self.clean()?;
         if self.outstanding.is_some() || !self.queue.is_empty() {
             // Computed from where the arm rests: not while a motion runs.
             self.note(
@@ -905,6 +918,8 @@ impl Backend for C500cBackend {
             );
             return Ok(BUSY);
         }
+        // Sent as one relative motion: from where the arm rests now, read, not remembered.
+        self.fresh_rest()?;
         let d: [f64; 6] = std::array::from_fn(|j| q[j].to_degrees() - self.rest[j]);
         self.relative(d)
     }
@@ -984,6 +999,15 @@ impl Backend for C500cBackend {
 }
 
 impl C500cBackend {
+    /// Read where the arm rests (`w2`), unless it was read a moment ago ([`FRESH_REST`]).
+    fn fresh_rest(&mut self) -> Result<(), BackendError> {
+        if self.rest_at.elapsed() > FRESH_REST {
+            self.rest = self.read_position(true)?.joints_deg;
+            self.rest_at = Instant::now();
+        }
+        Ok(())
+    }
+
     /// A location by name: TROL keeps no table of the C500C's yet (its ash variables are
     /// for later), so no name is known.
     fn named(&mut self, target: &Target) -> Result<(), BackendError> {

@@ -242,6 +242,12 @@ impl C500c {
         }
     }
 
+    /// Put the arm at `q` (radians) as an operator would with the pendant, whatever TROL
+    /// does.
+    pub fn move_by_hand(&mut self, q: [f64; 6]) {
+        self.arm.place(q);
+    }
+
     /// Give the arm its power back (as `armpower on` or the panel's button).
     pub fn set_power_on(&mut self) {
         self.power = true;

@@ -307,6 +307,25 @@ fn an_unasked_line_makes_the_next_call_unsure() {
     assert!(!r.moving());
 }
 
+/// MA after the arm was moved by hand: computed from where the arm is read, not from where
+/// TROL last left it, so it ends where it was asked to.
+#[test]
+fn ma_after_a_move_by_hand_ends_where_asked() {
+    let sw = Switches::default();
+    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    r.robot.speed(100).unwrap();
+    r.robot.joint(1, 0.2).unwrap();
+    r.robot.finish().unwrap();
+    r.unit
+        .lock()
+        .unwrap()
+        .move_by_hand([0.5, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    std::thread::sleep(Duration::from_millis(300));
+    r.robot.ma(&[0.1, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+    r.robot.finish().unwrap();
+    assert!(close(r.joints()[0], 0.1), "{:?}", r.joints());
+}
+
 /// MA of one joint goes as one `joint`; of several, refused before sending (never a
 /// series of `joint` commands); a cartesian motion names what is not settled.
 #[test]

@@ -408,7 +408,7 @@ impl C500cBackend {
     /// Before a call: what came unasked makes it UNSURE, as does an earlier call that could
     /// not tell; nothing is sent then.
     fn clean(&mut self) -> Result<(), BackendError> {
-        if self.outstanding.as_ref().is_none_or(|o| !o.prompt_due) {
+        if !self.console_busy() {
             // What the console printed since the last exchange.
             while let Some(s) = self
                 .next(Instant::now())
@@ -502,11 +502,15 @@ impl C500cBackend {
                  `motion-return` measures it)",
             );
         }
-        let lines = match self.exchange("armstat") {
-            Ok(l) => l,
-            Err(e) => return Err(self.fail(e)),
-        };
-        self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+        // While ash runs a motion of TROL's to its end it reads no command: the gate then
+        // takes the status read before that motion (a fault meanwhile ends it with a line).
+        if !self.console_busy() {
+            let lines = match self.exchange("armstat") {
+                Ok(l) => l,
+                Err(e) => return Err(self.fail(e)),
+            };
+            self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+        }
         let ours = self.outstanding.is_some() || !self.queue.is_empty();
         if !ours {
             // Where the arm rests now: the pendant or another program may have moved it
@@ -645,7 +649,16 @@ impl C500cBackend {
                     o.prompt_due = false;
                     o.done = true;
                 }
-                Ok(Some(lines)) => return Err(self.refusal(&line, &lines)),
+                Ok(Some(lines)) => {
+                    // The motion ended with an error of ash's: nothing more of it, and
+                    // nothing that waited behind it, is sent.
+                    self.outstanding = None;
+                    let n = self.queue.drop_all();
+                    if let Some(note) = real::MotionQueue::<Motion>::dropped_note(n, &line) {
+                        self.say(&note);
+                    }
+                    return Err(self.refusal(&line, &lines));
+                }
                 Ok(None) => {
                     let o = self.outstanding.as_ref().expect("a motion under way");
                     if o.watch.older_than(Instant::now(), give_up) {
@@ -945,6 +958,13 @@ impl Backend for C500cBackend {
         if !(1..=100).contains(&percent) {
             return Ok(code::BAD_ARGUMENT);
         }
+        if self.console_busy() {
+            self.note(
+                "refused: ash runs a motion to its end and reads no command until then: call                  TROLFinish(FINISH_WAIT) first"
+                    .into(),
+            );
+            return Ok(BUSY);
+        }
         let line = format!("speed {percent}");
         let lines = match self.exchange(&line) {
             Ok(l) => l,
@@ -968,7 +988,7 @@ impl Backend for C500cBackend {
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         self.clean()?;
-        if self.outstanding.as_ref().is_some_and(|o| o.prompt_due) {
+        if self.console_busy() {
             // ash runs the motion and reads no command until its end.
             return Err(BackendError::Refused(BUSY));
         }
@@ -984,7 +1004,7 @@ impl Backend for C500cBackend {
         self.note.take()
     }
     fn report(&mut self) -> Option<ArmReport> {
-        if self.broken.is_some() || self.outstanding.as_ref().is_some_and(|o| o.prompt_due) {
+        if self.broken.is_some() || self.console_busy() {
             return None;
         }
         let p = self.read_position(true).ok()?;
@@ -999,6 +1019,12 @@ impl Backend for C500cBackend {
 }
 
 impl C500cBackend {
+    /// ash runs a command of TROL's to its end (a motion with `motion-return = "end"`, or
+    /// `finish`) and reads no other until its prompt.
+    fn console_busy(&self) -> bool {
+        self.outstanding.as_ref().is_some_and(|o| o.prompt_due)
+    }
+
     /// Read where the arm rests (`w2`), unless it was read a moment ago ([`FRESH_REST`]).
     fn fresh_rest(&mut self) -> Result<(), BackendError> {
         if self.rest_at.elapsed() > FRESH_REST {

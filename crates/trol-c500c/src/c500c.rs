@@ -248,6 +248,14 @@ impl C500c {
         self.arm.place(q);
     }
 
+    /// A collision on `axis`: the arm stops where it is, and ash prints CRS's error (in the
+    /// variant's form) before the prompt of the command that waited.
+    pub fn collide(&mut self, axis: u8) {
+        let t = self.now();
+        self.arm.halt(t);
+        self.error(&format!("Collision error on axis {axis}"));
+    }
+
     /// Give the arm its power back (as `armpower on` or the panel's button).
     pub fn set_power_on(&mut self) {
         self.power = true;

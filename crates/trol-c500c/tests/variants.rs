@@ -307,6 +307,34 @@ fn an_unasked_line_makes_the_next_call_unsure() {
     assert!(!r.moving());
 }
 
+/// A collision during a motion: Finish answers with CRS's error as BIOS_C500C_ERROR, the
+/// motion queued behind it is dropped unsent, and the next motion works from where the arm
+/// stopped.
+#[test]
+fn a_collision_ends_the_motion_with_its_error_and_drops_the_queue() {
+    for name in ["default", "return-at-end", "error-bracketed"] {
+        let sw = c500c::variant(name).unwrap();
+        let mut r = rig_at(sw.clone(), true, profile(matching(&sw)), 1.0);
+        r.robot.speed(20).unwrap();
+        r.robot.joint(1, 1.0).unwrap();
+        r.robot.joint(1, 0.5).unwrap();
+        std::thread::sleep(Duration::from_millis(300));
+        r.unit.lock().unwrap().collide(2);
+        let e = r.robot.finish().unwrap_err();
+        assert_eq!(e.code().0, backend::C500C_ERROR, "{name}: {e}");
+        assert!(!r.moving(), "{name}");
+        let stopped = r.joints()[0];
+        assert!(stopped < 0.9, "{name}: stopped at {stopped}");
+        assert!(
+            !r.received().iter().any(|l| l == "joint 1,28.648"),
+            "{name}: the queued motion went out"
+        );
+        r.robot.joint(1, 0.1).unwrap();
+        r.robot.finish().unwrap();
+        assert!(close(r.joints()[0], stopped + 0.1), "{name}");
+    }
+}
+
 /// MA after the arm was moved by hand: computed from where the arm is read, not from where
 /// TROL last left it, so it ends where it was asked to.
 #[test]

@@ -34,6 +34,24 @@ pub(super) fn in_process(cfg: LinkConfig) -> LinkConfig {
 }
 
 impl Robot {
+    /// A real controller's backend embedded in this process: served over an in-memory line,
+    /// with its reply time and its codes.
+    #[cfg(any(feature = "rapl", feature = "mars", feature = "c500c"))]
+    fn embed<B: trol_controller::Backend + 'static>(
+        backend: B,
+        codes: &'static CodeTable,
+        link: LinkConfig,
+    ) -> Robot {
+        let reply_time = trol_controller::Backend::reply_time(&backend);
+        let link = in_process(link);
+        let (line, handle) =
+            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
+        let mut robot = Robot::over(Box::new(line), link, Some(handle));
+        robot.set_reply_time(reply_time);
+        robot.codes = codes;
+        robot
+    }
+
     /// Connect over a port name as layer 1 accepts it (`/dev/ttyUSB0`, `COM1`,
     /// `socket://host:port`, `listen://host:port`), or `sim` for the embedded controller
     /// with default settings, and check the controller: the short form of
@@ -119,14 +137,7 @@ impl Robot {
             None,
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
-        let reply_time = trol_controller::Backend::reply_time(&backend);
-        let link = in_process(link);
-        let (line, handle) =
-            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
-        let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time);
-        robot.codes = trol_rapl::RAPL_CODES;
-        Ok(robot)
+        Ok(Robot::embed(backend, trol_rapl::RAPL_CODES, link))
     }
 
     #[cfg(feature = "c500c")]
@@ -151,14 +162,7 @@ impl Robot {
             )),
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
-        let reply_time = trol_controller::Backend::reply_time(&backend);
-        let link = in_process(link);
-        let (line, handle) =
-            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
-        let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time);
-        robot.codes = trol_c500c::C500C_CODES;
-        Ok(robot)
+        Ok(Robot::embed(backend, trol_c500c::C500C_CODES, link))
     }
 
     #[cfg(feature = "mars")]
@@ -195,14 +199,7 @@ impl Robot {
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
         let mut backend = backend;
         backend.set_locations_file(file);
-        let reply_time = trol_controller::Backend::reply_time(&backend);
-        let link = in_process(link);
-        let (line, handle) =
-            trol_controller::embedded_with(trol_controller::Pcp::new(backend), link);
-        let mut robot = Robot::over(Box::new(line), link, Some(handle));
-        robot.set_reply_time(reply_time);
-        robot.codes = trol_mars::MARS_CODES;
-        Ok(robot)
+        Ok(Robot::embed(backend, trol_mars::MARS_CODES, link))
     }
 
     /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`

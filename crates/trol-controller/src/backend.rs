@@ -2,7 +2,7 @@
 //! "Erstellen von Kommando-Handlern"; "PCP\BIOSCALL.C", the C interface to the RAPL-BIOS).
 //!
 //! The manual's PCP ran on the C500 and called the RAPL-BIOS directly. Here the server runs on
-//! a PC, in front of a [`Backend`]: the simulated A465 ([`crate::SimBackend`]), or a backend
+//! a PC, in front of a [`Backend`]: the simulated A465 (`trol_sim::SimBackend`), or a backend
 //! that drives a real C500 over its own line. The contract is shaped for both:
 //!
 //! - every call can fail with a [`BackendError`] (the link to the robot can break), besides
@@ -279,8 +279,10 @@ pub trait Backend: Send {
     fn world(&mut self) -> Option<String> {
         None
     }
-    /// Called after each request the controller served and after its watchdog halted the
-    /// arm: a moment to share the arm's state (the simulator renews its live view's copy).
+    /// Called after each request the controller ran, before its reply leaves, and after its
+    /// watchdog halted the arm: a moment to share the arm's state (the simulator renews the
+    /// copy a test compares with, [`SimBackend::share`](../trol_sim/struct.SimBackend.html)),
+    /// so that whoever reads the arm after the reply sees what the call did.
     fn after_request(&mut self) {}
     /// Why the last request was refused, in words, where its code alone cannot say it (a
     /// straight line: which singular pose, where on the line, what to do), once: for the

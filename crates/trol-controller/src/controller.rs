@@ -440,7 +440,6 @@ impl<P: Port, B: Backend> Controller<P, B> {
                     self.refresh_report();
                 }
                 if !matches!(ev, ServerEvent::Idle | ServerEvent::Pending) {
-                    self.pcp.backend_mut().after_request();
                     let watched = self.reports.as_ref().is_some_and(|(s, _, _)| s.wanted());
                     if watched && self.pcp.backend().report_is_free() {
                         self.refresh_report_now();
@@ -473,7 +472,9 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 return Ok(None);
             };
             // The deferred reply goes out; serving below ends its transaction (a request
-            // that arrived meanwhile is run as any other, never answered blindly).
+            // that arrived meanwhile is run as any other, never answered blindly). What the
+            // call changed is shared first: whoever reads the arm after the reply sees it.
+            self.pcp.backend_mut().after_request();
             self.server.respond(&reply);
             self.last.1 = reply;
         }
@@ -487,7 +488,11 @@ impl<P: Port, B: Backend> Controller<P, B> {
                 last.1.clear();
                 *ran = true;
                 pcp.set_transaction(trol_proto::transaction::pci_number(pci));
-                match pcp.handle(req) {
+                let handled = pcp.handle(req);
+                // What the call changed is shared before its reply leaves: whoever reads the
+                // arm after the reply (a test, a view) sees it.
+                pcp.backend_mut().after_request();
+                match handled {
                     Handled::Reply(reply) => {
                         last.1 = reply.clone();
                         Some(reply)

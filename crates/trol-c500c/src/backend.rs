@@ -87,11 +87,14 @@ pub static C500C_CODES: &CodeTable = &{
 
 /// How long ash may take to give its prompt back after a command that does not move.
 pub const REPLY_LIMIT: Duration = Duration::from_secs(3);
-/// How long a motion command's refusal may take to show before the motion counts as
-/// started (with `motion-return = "end"`, the prompt is then due at its end).
+/// With `motion-return = "end"`: how long a motion command's refusal may take to show
+/// before the motion counts as started (its prompt is then due at its end).
 pub const ACCEPT_WITHIN: Duration = Duration::from_millis(400);
 /// How long one stop is given to show the arm standing (the A465 brakes within 0.4 s).
 pub const STOP_WITHIN: Duration = Duration::from_millis(1500);
+/// At connect: how long the console must stay quiet after a prompt before the last one is
+/// taken as the shell's (one prompt per CR sent).
+pub const CONNECT_QUIET: Duration = Duration::from_millis(500);
 /// The longest a Halt takes.
 pub const HALT_WITHIN: Duration = Duration::from_millis(2500);
 /// How long a reading of where the arm rests serves a motion computed from it.
@@ -253,7 +256,7 @@ impl C500cBackend {
         let deadline = Instant::now() + limit;
         loop {
             let quiet = if shell.is_some() {
-                Instant::now() + Duration::from_millis(200)
+                Instant::now() + CONNECT_QUIET
             } else {
                 deadline
             };
@@ -277,11 +280,24 @@ impl C500cBackend {
         };
         let app = b.profile.app.clone();
         if shell == "$" {
-            let lines = b
-                .exchange(&format!("ash {app}"))
-                .map_err(|e| C500cError::Unexpected(e.into_backend().to_string()))?;
-            for l in lines {
-                b.say(&format!("ash: {l}"));
+            // A prompt of the system shell still on its way (one per CR sent) comes before
+            // ash's: skipped here, where nothing but ash's can be the answer.
+            let cmd = format!("ash {app}");
+            b.send(format!("{cmd}\r").as_bytes())?;
+            let deadline = Instant::now() + REPLY_LIMIT;
+            loop {
+                match b.next(deadline)? {
+                    Some(Said::Prompt(p)) if p == "$" => continue,
+                    Some(Said::Prompt(p)) if p == app => break,
+                    Some(Said::Line(l)) if l.trim_end() == cmd || l.trim().is_empty() => {}
+                    Some(Said::Line(l)) => b.say(&format!("ash: {l}")),
+                    other => {
+                        return Err(C500cError::Unexpected(format!(
+                            "`{cmd}` did not start ash (the console said {other:?}): start it \
+                             at a terminal to see why"
+                        )));
+                    }
+                }
             }
         } else if shell != app {
             return Err(C500cError::Unexpected(format!(
@@ -580,7 +596,14 @@ impl C500cBackend {
             return Err(self.unsure(format!("`{}`: the console failed: {e}", m.line)));
         }
         let sent = Instant::now();
-        let got = match self.read_to_prompt(&m.line, sent + ACCEPT_WITHIN) {
+        // ash gives the prompt back as the motion starts (`start`): it is waited for as any
+        // reply; or once it ends (`end`): what comes within ACCEPT_WITHIN is a refusal, and
+        // silence is the motion running (a refusal printed later is read at its end).
+        let wait = match self.profile.motion_return {
+            Some(MotionReturn::End) => ACCEPT_WITHIN,
+            _ => REPLY_LIMIT,
+        };
+        let got = match self.read_to_prompt(&m.line, sent + wait) {
             Ok(g) => g,
             Err(e) => return Err(self.fail(e)),
         };
@@ -593,8 +616,8 @@ impl C500cBackend {
             None => {
                 let seen: Vec<String> = self.rx.drain(..).map(|s| format!("{s:?}")).collect();
                 return Err(self.unsure(format!(
-                    "`{}`: no prompt within {ACCEPT_WITHIN:?} ({}), and the profile says ash \
-                     gives it back as a motion starts: whether the motion runs is not known",
+                    "`{}`: no prompt within {wait:?} ({}), and the profile says ash gives it \
+                     back as a motion starts: whether the motion runs is not known",
                     m.line,
                     if seen.is_empty() {
                         "nothing printed".to_string()

@@ -69,7 +69,7 @@ impl Probe<'_> {
         loop {
             let until = match &last {
                 // A quiet console after its prompt: one per CR sent.
-                Some(_) if quiet_after_prompt => Instant::now() + Duration::from_millis(200),
+                Some(_) if quiet_after_prompt => Instant::now() + crate::backend::CONNECT_QUIET,
                 Some(_) => return Ok((lines, last)),
                 None => deadline,
             };
@@ -151,7 +151,13 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
                 p.contact.findings.push(l.clone());
             }
             let cmd = format!("ash {app}");
-            let (lines, end) = p.step(&cmd)?;
+            let (mut lines, mut end) = p.step(&cmd)?;
+            // A system shell's prompt still on its way (one per CR sent) comes before ash's.
+            while end == Some(Said::Prompt("$".into())) {
+                let (more, next) = p.read(false)?;
+                lines.extend(more);
+                end = next;
+            }
             p.record(&cmd, Ok(lines.clone()));
             if lines.iter().any(|l| l.contains("shut down the pendant")) {
                 p.contact.findings.push(

@@ -131,18 +131,8 @@ fn leading_prompt(text: &str) -> Option<(String, usize)> {
     prompt(&text[..end]).map(|app| (app, end))
 }
 
-/// Bytes as text: printable ASCII as is, anything else as `\xNN`.
-pub fn text(bytes: &[u8]) -> String {
-    let mut s = String::new();
-    for &b in bytes {
-        if (0x20..0x7f).contains(&b) {
-            s.push(b as char);
-        } else {
-            s.push_str(&format!("\\x{b:02x}"));
-        }
-    }
-    s
-}
+/// Bytes as text: printable ASCII as is, anything else as `\xNN` (the shared core's).
+pub use trol_controller::real::printable as text;
 
 /// An unasked line: `[<app>: <text>]` (ash's asynchronous lines, such as `[test: Lost robot
 /// power]`) or `[pendant done.]`.

@@ -8,28 +8,11 @@ use std::time::{Duration, Instant};
 
 use trol_port::Port;
 
-use crate::console::{self, Console, Said};
+use crate::console::{Console, Said};
 use crate::reports;
 
-/// Every byte both ways, in order.
-#[derive(Clone, Debug, Default)]
-pub struct Transcript {
-    /// `(sent, bytes)` in order.
-    pub chunks: Vec<(bool, Vec<u8>)>,
-}
-
-impl Transcript {
-    /// The transcript as text: `> ` for what TROL sent, `< ` for what it read.
-    pub fn text(&self) -> String {
-        let mut s = String::new();
-        for (sent, b) in &self.chunks {
-            s.push_str(if *sent { "> " } else { "< " });
-            s.push_str(&console::text(b));
-            s.push('\n');
-        }
-        s
-    }
-}
+/// Every byte both ways, in order (the shared core's).
+pub use trol_controller::real::Transcript;
 
 /// What first contact found.
 #[derive(Debug, Default)]

@@ -48,18 +48,8 @@ impl Lines {
     }
 }
 
-/// Bytes as text: printable ASCII as is, anything else as `\xNN`.
-pub fn text(bytes: &[u8]) -> String {
-    let mut s = String::new();
-    for &b in bytes {
-        if (0x20..0x7f).contains(&b) {
-            s.push(b as char);
-        } else {
-            s.push_str(&format!("\\x{b:02x}"));
-        }
-    }
-    s
-}
+/// Bytes as text: printable ASCII as is, anything else as `\xNN` (the shared core's).
+pub use trol_controller::real::printable as text;
 
 /// A line from the unit.
 #[derive(Clone, Debug, PartialEq)]

@@ -12,7 +12,8 @@
 //! - [`halt`]: Halt as the arm shows it. Each of the controller's stops in turn, mildest
 //!   first, until two readings [`STILL_GAP`] apart agree; success only then, and only
 //!   within the Halt's time. No profile key makes a stop count that was not seen.
-//! - [`seen_standing`]: the "standing" test Halt and the supervised steps use.
+//! - [`seen_standing`]: the "standing" test Halt and the supervised steps use;
+//! - [`Transcript`]: every byte of a session both ways, for a first contact's record.
 //!
 //! A backend supplies its line, its commands, its readings and its clock; the rules here
 //! never sleep or read a clock of their own, so their tests run in virtual time.
@@ -20,7 +21,9 @@
 mod finish;
 mod gate;
 mod halt;
+mod transcript;
 
 pub use finish::{End, EndTimes, EndWatch};
 pub use gate::{Gate, MotionQueue, Refusal, Snapshot, gate};
 pub use halt::{HaltTimes, Halted, STILL_DEG, STILL_GAP, Stopping, halt, seen_standing};
+pub use transcript::{Transcript, printable};

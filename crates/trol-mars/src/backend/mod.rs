@@ -125,25 +125,8 @@ pub enum MarsError {
     },
 }
 
-/// Every byte both ways, for a transcript.
-#[derive(Debug, Default)]
-pub struct Transcript {
-    /// `(sent, bytes)` in order.
-    pub chunks: Vec<(bool, Vec<u8>)>,
-}
-
-impl Transcript {
-    /// The transcript as text: `> ` for what TROL sent, `< ` for what it read.
-    pub fn text(&self) -> String {
-        let mut s = String::new();
-        for (sent, b) in &self.chunks {
-            s.push_str(if *sent { "> " } else { "< " });
-            s.push_str(&line::text(b));
-            s.push('\n');
-        }
-        s
-    }
-}
+/// Every byte both ways, for a transcript (the shared core's).
+pub use trol_controller::real::Transcript;
 
 /// A transcript shared with the caller.
 pub type Recorder = Arc<Mutex<Transcript>>;

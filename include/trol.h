@@ -116,7 +116,8 @@ typedef uint8_t  TUCCHAR;
 #define TROL_DEFINE 132
 #define TROL_DELETE_LOCATION 133
 #define TROL_SAVE_LOCATIONS 134
-#define LAST_CAT3_CODE 134
+#define TROL_TRAJECTORY 135
+#define LAST_CAT3_CODE 135
 #define TROL_TERMINATE_PCP 192
 #define TROL_GET_STATUS 193
 #define TROL_GET_VERSION 194
@@ -222,6 +223,18 @@ TINT TROLDefine(TLocName locName, SLocData *pLoc);
 TINT TROLDeleteLocation(TLocName locName);
 TINT TROLSaveLocations(void);
 TINT TROLListLocations(TLocName *names, SLocData *locs, TUINT max, TUINT *count);
+/* Added (docs/protocol.md "Trajectory"): one motion through count waypoints, each a time in
+ * seconds from the start (0 or more, increasing) and six joint angles in radians, as a
+ * planner's trajectory is run: the simulated A465 and a MARS 8 keep the times (refused with
+ * BIOS_TOO_FAST, before anything moves, where they ask more than the arm's limits at the
+ * speed setting); a controller that cannot returns TRAJECTORY_UNTIMED (1): one joint move to
+ * each waypoint, at the speed setting. Wait with TROLFinish(FINISH_WAIT). At most
+ * MAX_WAYPOINTS points; a NULL points, no points or times that do not increase are
+ * TROL_ERR_ARG_RANGE, and nothing is sent. */
+typedef struct { float time; float joints[6]; } STrajPoint;
+#define MAX_WAYPOINTS 500
+#define TRAJECTORY_UNTIMED 1
+TINT TROLTrajectory(const STrajPoint *points, TUINT count);
 
 /* Other functions */
 TUINT InitTROL(TUINT serOnly);
@@ -355,6 +368,7 @@ TINT trol_here(TROL *c, TLocName locName, TINT pos);
 TINT trol_define(TROL *c, TLocName locName, SLocData *pLoc);
 TINT trol_delete_location(TROL *c, TLocName locName);
 TINT trol_save_locations(TROL *c);
+TINT trol_trajectory(TROL *c, const STrajPoint *points, TUINT count);
 TINT trol_list_locations(TROL *c, TLocName *names, SLocData *locs, TUINT max, TUINT *count);
 TINT trol_set_watchdog(TROL *c, TUINT tenths);
 void trol_set_reply_timeout(TROL *c, TUINT tenths);   /* SetL3_TO_Intervall */

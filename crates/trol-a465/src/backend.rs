@@ -109,6 +109,12 @@ pub const A465_CODES: &CodeTable = &[
                   it was left as it was",
     },
     CodeInfo {
+        value: code::TOO_FAST,
+        name: "BIOS_TOO_FAST",
+        meaning: "the trajectory asks more speed or acceleration of a joint than it has at the \
+                  speed setting: nothing moved; give it more time",
+    },
+    CodeInfo {
         value: code::TABLE_FULL,
         name: "BIOS_TABLE_FULL",
         meaning: "the location table is full (1000 locations): delete one first",

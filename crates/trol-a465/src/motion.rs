@@ -272,6 +272,26 @@ impl Profile {
         }
     }
 
+    /// s = (t - start) / `duration`: the path at one speed from start to end (a timed
+    /// trajectory, whose path carries the times: it starts and ends at rest because its
+    /// tangents are 0 there, [`Path::timed`]). A stop decelerates at `brake` (s'').
+    pub fn steady(start: f64, duration: f64, brake: f64) -> Profile {
+        if !(duration.is_finite() && duration > 0.0) {
+            return Profile::still(start);
+        }
+        Profile {
+            phases: Arc::new(vec![Phase {
+                t: start,
+                s: 0.0,
+                v: 1.0 / duration,
+                a: 0.0,
+            }]),
+            end: start + duration,
+            s_end: 1.0,
+            brake: Brake::Rate(brake.max(1e-12)),
+        }
+    }
+
     /// A profile that stays at s = 0 (an empty motion).
     pub fn still(start: f64) -> Profile {
         Profile {
@@ -473,6 +493,23 @@ impl Path {
                 })
             })
             .collect();
+        Path::Spline { s, q, m }
+    }
+
+    /// A timed path through `q` at `s` (a trajectory's times over its duration, from 0 to
+    /// 1): tangents as [`Path::spline`] has them inside, 0 at both ends, so that a steady
+    /// profile over it ([`Profile::steady`]) starts and ends at rest and passes each point
+    /// at its time.
+    pub fn timed(s: Vec<f64>, q: Vec<Joints>) -> Path {
+        let Path::Spline { s, q, mut m } = Path::spline(s, q) else {
+            unreachable!("Path::spline makes a spline")
+        };
+        if let Some(first) = m.first_mut() {
+            *first = [0.0; 6];
+        }
+        if let Some(last) = m.last_mut() {
+            *last = [0.0; 6];
+        }
         Path::Spline { s, q, m }
     }
 

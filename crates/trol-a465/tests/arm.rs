@@ -790,3 +790,129 @@ fn a_tool_that_reaches_below_the_table_is_refused_and_changes_nothing() {
     assert_eq!(arm.position(t, Which::Commanded), before);
     assert_eq!(arm.set_tool([50.0, 0.0, 0.0, 0.0, 0.0, 0.0]), code::OK);
 }
+
+/// A trajectory (TROLTrajectory) passes each waypoint at its time, starts and ends at rest,
+/// and keeps every joint within its speed and acceleration limits all along (sampled every
+/// millisecond).
+#[test]
+fn a_trajectory_passes_each_waypoint_at_its_time_within_the_limits() {
+    let mut arm = homed_arm();
+    let points = [
+        (1.0, [0.3, 0.2, -0.2, 0.0, 0.1, 0.0]),
+        (2.0, [0.6, 0.3, -0.4, 0.2, 0.2, 0.1]),
+        (3.5, [0.2, 0.1, -0.1, 0.0, 0.0, 0.0]),
+    ];
+    let start = 10.0;
+    assert_eq!(arm.trajectory(&points, start), code::OK);
+    for (t, q) in points {
+        let at = arm.clone().commanded(start + t);
+        for i in 0..6 {
+            assert!((at[i] - q[i]).abs() < 1e-9, "{t} s: {at:?} against {q:?}");
+        }
+    }
+    assert_eq!(arm.clone().finish_status(start + 3.4), code::MOVING);
+    assert_eq!(arm.clone().finish_status(start + 3.6), code::OK);
+    let (v, a) = joint_limits(100.0);
+    let dt = 1e-3;
+    let q = |t: f64| arm.clone().commanded(t);
+    let mut prev_speed = [0.0; 6];
+    for k in 0..=3600 {
+        let t = start + k as f64 * dt;
+        let (q0, q1) = (q(t), q(t + dt));
+        for i in 0..6 {
+            let speed = (q1[i] - q0[i]) / dt;
+            assert!(
+                speed.abs() <= v[i] * 1.001,
+                "joint {} at {t}: {speed}",
+                i + 1
+            );
+            if k > 0 {
+                let accel = (speed - prev_speed[i]) / dt;
+                assert!(
+                    accel.abs() <= a[i] * 1.01,
+                    "joint {} at {t}: {accel}",
+                    i + 1
+                );
+            }
+            prev_speed[i] = speed;
+        }
+    }
+    // At rest at both ends: the first and last millisecond move almost nothing.
+    let (s0, s1) = (q(start), q(start + dt));
+    let (e0, e1) = (q(start + 3.5 - dt), q(start + 3.5));
+    for i in 0..6 {
+        assert!((s1[i] - s0[i]).abs() < 1e-4 && (e1[i] - e0[i]).abs() < 1e-4);
+    }
+}
+
+/// What the arm cannot do as asked is refused before anything moves, with the reason for the
+/// log: too fast (at 100 % and at a lower speed setting), a joint past its limit between the
+/// waypoints, a waypoint at time 0 that is not where it starts, an arm not homed.
+#[test]
+fn a_trajectory_the_arm_cannot_run_is_refused_and_nothing_moves() {
+    let mut arm = homed_arm();
+    let refused = |arm: &mut Arm, points: &[(f64, [f64; 6])], want: i16| {
+        assert_eq!(arm.trajectory(points, 0.0), want);
+        let why = arm.take_refusal().unwrap_or_default();
+        assert_eq!(arm.commanded(5.0), [0.0; 6], "nothing moved");
+        assert_eq!(arm.finish_status(5.0), code::OK);
+        why
+    };
+    let fast = [(0.1, [1.5, 0.0, 0.0, 0.0, 0.0, 0.0])];
+    let why = refused(&mut arm, &fast, code::TOO_FAST);
+    assert!(
+        why.contains("joint 1") && why.contains("more time"),
+        "{why}"
+    );
+    // Fine at 100 %, too fast at 10 %.
+    let gentle = [(2.0, [0.5, 0.0, 0.0, 0.0, 0.0, 0.0])];
+    arm.set_speed(10.0);
+    refused(&mut arm, &gentle, code::TOO_FAST);
+    arm.set_speed(100.0);
+    // Joint 2's limit is 90 degrees: a waypoint past it is snapped, but an overshoot of the
+    // spline between two waypoints near it is not.
+    let past = [
+        (1.0, [0.0, 1.55, 0.0, 0.0, 0.0, 0.0]),
+        (1.2, [0.0, 1.57, 0.0, 0.0, 0.0, 0.0]),
+        (1.3, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    ];
+    let code_past = arm.trajectory(&past, 0.0);
+    assert!(
+        [code::JOINT_LIMIT, code::TOO_FAST].contains(&code_past),
+        "{code_past}"
+    );
+    arm.take_refusal();
+    assert_eq!(arm.commanded(5.0), [0.0; 6]);
+    let far = [(2.0, [0.0, 2.0, 0.0, 0.0, 0.0, 0.0])];
+    refused(&mut arm, &far, code::JOINT_LIMIT);
+    let elsewhere = [(0.0, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0]), (2.0, [0.5; 6])];
+    let why = refused(&mut arm, &elsewhere, code::BAD_ARGUMENT);
+    assert!(why.contains("time 0"), "{why}");
+    // The same starting where the arm stands is taken, and the point at 0 is the start.
+    let here = [(0.0, [0.0; 6]), (2.0, [0.5, 0.0, 0.0, 0.0, 0.0, 0.0])];
+    assert_eq!(arm.trajectory(&here, 0.0), code::OK);
+    assert!((arm.commanded(2.0 + 1e-9)[0] - 0.5).abs() < 1e-12);
+    let mut cold = Arm::new(ArmSettings::default());
+    assert_eq!(cold.trajectory(&gentle, 0.0), code::NOT_HOMED);
+}
+
+/// A trajectory queues behind a motion under way and starts where it ends; a Halt brakes it
+/// along its path.
+#[test]
+fn a_trajectory_waits_for_the_motion_before_it_and_halts_along_its_path() {
+    let mut arm = homed_arm();
+    assert_eq!(arm.joint(1, 0.5, 0.0), code::OK);
+    // The first motion's commanded end (done_at counts the servo's lag after it).
+    let t1 = arm.done_at(0.0) - trol_a465::arm::SERVO_LAG;
+    let points = [(1.0, [0.5, 0.3, 0.0, 0.0, 0.0, 0.0])];
+    assert_eq!(arm.trajectory(&points, 0.0), code::OK);
+    assert_eq!(arm.clone().commanded(t1)[1], 0.0);
+    let at = arm.clone().commanded(t1 + 1.0);
+    assert!((at[1] - 0.3).abs() < 1e-9, "{at:?}");
+    // Halt half way: it stands before the end, short of the waypoint.
+    arm.halt(t1 + 0.5);
+    let stop = arm.done_at(t1 + 0.5);
+    assert!(stop < t1 + 1.0, "{stop}");
+    let rest = arm.commanded(stop + 1.0);
+    assert!(rest[1] > 0.0 && rest[1] < 0.3, "{rest:?}");
+}

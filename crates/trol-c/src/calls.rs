@@ -352,6 +352,34 @@ pub unsafe extern "C" fn TROLDeleteLocation(locName: *const TUCHAR) -> TINT {
     )
 }
 
+/// TROLTrajectory (added, docs/protocol.md "Trajectory"): one motion through `count`
+/// waypoints at their times. 0: it runs as timed; TRAJECTORY_UNTIMED (1): the controller
+/// runs it through the waypoints without their times. A NULL `points` (with a count), no
+/// points, more than MAX_WAYPOINTS, or times that do not increase are TROL_ERR_ARG_RANGE,
+/// and nothing is sent.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn TROLTrajectory(points: *const STrajPoint, count: TUINT) -> TINT {
+    run(
+        &table::TRAJECTORY,
+        || {
+            if points.is_null() || count == 0 {
+                return Err(ARG_RANGE);
+            }
+            // SAFETY: the caller hands `count` points at `points` (checked non-NULL).
+            let given = unsafe { std::slice::from_raw_parts(points, usize::from(count)) };
+            let path = given
+                .iter()
+                .map(|p| trol_proto::application::Waypoint {
+                    time: f64::from(p.time),
+                    joints: p.joints.map(f64::from),
+                })
+                .collect();
+            Ok(vec![Value::Path(path)])
+        },
+        drop,
+    )
+}
+
 /// TROLSaveLocations (added, docs/teach.md): keep the table across a restart.
 #[unsafe(no_mangle)]
 pub extern "C" fn TROLSaveLocations() -> TINT {

@@ -296,6 +296,7 @@ per_connection! {
     fn trol_define(locName: *const TUCHAR, pLoc: *const SLocData) -> TINT = TROLDefine else ARG_RANGE;
     fn trol_delete_location(locName: *const TUCHAR) -> TINT = TROLDeleteLocation else ARG_RANGE;
     fn trol_save_locations() -> TINT = TROLSaveLocations else ARG_RANGE;
+    fn trol_trajectory(points: *const STrajPoint, count: TUINT) -> TINT = TROLTrajectory else ARG_RANGE;
     fn trol_list_locations(names: *mut [TUCHAR; 8], locs: *mut SLocData, max: TUINT, count: *mut TUINT) -> TINT = TROLListLocations else ARG_RANGE;
     fn trol_get_gripper(openingMm: *mut f32, held: *mut TINT, name: *mut std::ffi::c_char, nameSize: TUINT) -> TINT = TROLGetGripper else ARG_RANGE;
     fn trol_set_reply_timeout(tenths: TUINT) -> () = SetL3_TO_Intervall else ();

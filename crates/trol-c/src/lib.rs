@@ -72,6 +72,17 @@ pub struct SLocData {
     pub data: [u32; 8],
 }
 
+/// STrajPoint (added, TROLTrajectory): when, in seconds from the trajectory's start, the
+/// arm is to be at these six joint angles (radians).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct STrajPoint {
+    /// Seconds after the start: 0 or more, increasing from point to point.
+    pub time: f32,
+    /// The joint angles, radians.
+    pub joints: [f32; 6],
+}
+
 /// A message handed to an error handler (the manual's SInData / SOutData).
 #[repr(C)]
 pub struct SInData {

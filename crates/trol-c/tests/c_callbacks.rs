@@ -524,6 +524,31 @@ fn teaching_from_c_stores_lists_deletes_and_saves() {
     }
 }
 
+/// A trajectory from C (TROLTrajectory, docs/protocol.md "Trajectory"): timed on the
+/// simulated A465 and the arm at its last waypoint; a NULL array, no points, times that go
+/// back and a call without a connection are TROL_ERR_ARG_RANGE; one faster than the arm is
+/// BIOS_TOO_FAST.
+#[test]
+fn a_trajectory_from_c_runs_timed_and_bad_ones_are_refused() {
+    let dir_files = [(
+        "trol.cfg",
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\nhomed = yes\n",
+    )];
+    let out = run_c("trajectory", Link::Shared, &dir_files, &[]);
+    for line in [
+        "trajectory -> 0",
+        "finish -> 0",
+        "at 0.500 0.250 0.750 0.000 0.000 0.000",
+        "NULL points -> -32003",
+        "no points -> -32003",
+        "times back -> -32003",
+        "too fast -> -30",
+        "no connection -> -32003",
+    ] {
+        assert!(out.contains(line), "{line:?} in {out}");
+    }
+}
+
 /// trol_strerror names a controller's own BIOS codes once InitTROL has read them
 /// (TROLGetCodes), whatever kind of controller it is.
 #[test]

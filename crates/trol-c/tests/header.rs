@@ -38,6 +38,11 @@ fn the_header_agrees_with_the_table() {
         ("FINISH_WAIT".into(), table::FINISH_WAIT.into()),
         ("POS_COMMANDED".into(), table::POS_COMMANDED.into()),
         ("POS_ACT".into(), table::POS_ACT.into()),
+        ("MAX_WAYPOINTS".into(), trol_client::MAX_WAYPOINTS.into()),
+        (
+            "TRAJECTORY_UNTIMED".into(),
+            table::TRAJECTORY_UNTIMED.into(),
+        ),
         ("POS_PREC".into(), trol_client::Tag::Prec as i64),
         ("POS_JOINT".into(), trol_client::Tag::Joint as i64),
         ("POS_CART".into(), trol_client::Tag::Cart as i64),
@@ -122,6 +127,10 @@ fn argument(a: &trol_client::Arg) -> String {
             };
             format!("an SLocData of tag {}, numDims {n}", tags(t))
         }
+        ArgKind::Path { max } => format!(
+            "1..{max} STrajPoint (a time in seconds from the start, increasing, and six joint \
+             angles in radians), with their count"
+        ),
     };
     format!("`{}`: {what}", a.name)
 }

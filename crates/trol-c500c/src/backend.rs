@@ -965,6 +965,22 @@ impl Backend for C500cBackend {
         }
         self.relative(dq.map(f64::to_degrees))
     }
+    /// Untimed, and one waypoint only: MA is sent relative to where the arm rests, so a
+    /// second joint move cannot wait behind the first (docs/c500c.md).
+    fn trajectory(&mut self, points: &[trol_proto::application::Waypoint]) -> BiosResult {
+        if points.len() > 1 {
+            return Err(BackendError::Explained(
+                trol_proto::application::code::TROL_ERR_ARG_RANGE.0,
+                format!(
+                    "{} waypoints: on a C500C a trajectory has one waypoint (each joint move \
+                     is sent from where the arm rests): send them one by one, with \
+                     TROLFinish(FINISH_WAIT) between",
+                    points.len()
+                ),
+            ));
+        }
+        trol_controller::untimed_trajectory(self, points)
+    }
     fn ready(&mut self) -> BiosResult {
         self.unsettled(
             "READY's joint values on an A465 with a C500C are not public, so its end could not \

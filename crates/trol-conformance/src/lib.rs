@@ -50,6 +50,9 @@ pub struct Differences {
     /// How far (radians, every joint) the arm may end from a motion's target and still be
     /// there: the controller's own arrival tolerance and its encoder resolution.
     pub arrive_rad: f64,
+    /// It runs a trajectory (TROLTrajectory) without its times, one joint move per
+    /// waypoint (a C500: RAPL-II has no timed path); the others keep the times.
+    pub untimed_trajectory: bool,
 }
 
 impl Default for Differences {
@@ -58,6 +61,7 @@ impl Default for Differences {
             starts_unhomed: false,
             unstoppable: false,
             arrive_rad: 2e-3,
+            untimed_trajectory: false,
         }
     }
 }
@@ -198,6 +202,58 @@ fn motion(s: &mut Subject, f: &mut Findings, what: &str, q: [f64; 6]) -> bool {
     done == 0
 }
 
+/// A trajectory (TROLTrajectory) from Q1 through Q2 back to Q1: timed or untimed as the
+/// controller says it runs it (and as its differences say it must), and after Finish the arm
+/// at the last waypoint. One the arm cannot run at its times is refused on a controller
+/// that keeps them, and moves nothing; too many waypoints for one that does not, the same.
+fn trajectory(s: &mut Subject, f: &mut Findings) {
+    let wp = |time: f64, joints: [f64; 6]| trol::Waypoint { time, joints };
+    let path = [wp(1.0, Q2), wp(2.0, Q1)];
+    let r = s.robot.trajectory(&path);
+    let done = match &r {
+        Ok(_) => code(s.robot.finish()),
+        Err(e) => e.code().0,
+    };
+    let at = s.twin.joints();
+    f.step(format!(
+        "Trajectory Q2 at 1 s, Q1 at 2 s -> {r:?}, Finish -> {done}, arm at {}",
+        fmt(&at)
+    ));
+    let want = if s.differences.untimed_trajectory {
+        trol::Timing::Untimed
+    } else {
+        trol::Timing::Timed
+    };
+    match r {
+        Ok(t) if t != want => f.broke(format!("the trajectory ran {t:?}, expected {want:?}")),
+        Ok(_) if done == 0 && !near(&at, &Q1, s.differences.arrive_rad) => f.broke(format!(
+            "the trajectory succeeded, but the arm is at {} for {}",
+            fmt(&at),
+            fmt(&Q1)
+        )),
+        Ok(_) if done != 0 => f.broke(format!("the trajectory's Finish failed ({done})")),
+        Ok(_) => {}
+        Err(e) => f.broke(format!("a trajectory within the arm's range failed: {e}")),
+    }
+    let before = s.twin.joints();
+    let (what, refused) = if s.differences.untimed_trajectory {
+        let many: Vec<trol::Waypoint> = (1..=trol_controller::UNTIMED_WAYPOINTS + 1)
+            .map(|k| wp(k as f64, if k % 2 == 0 { Q1 } else { Q2 }))
+            .collect();
+        ("too many waypoints", s.robot.trajectory(&many))
+    } else {
+        ("too fast", s.robot.trajectory(&[wp(0.05, FAR)]))
+    };
+    std::thread::sleep(Duration::from_millis(200));
+    f.step(format!("a trajectory {what} -> {refused:?}"));
+    if refused.is_ok() {
+        let cf = code(s.robot.finish());
+        f.broke(format!("a trajectory {what} was accepted (Finish {cf})"));
+    } else if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+        f.broke(format!("a refused trajectory ({what}) moved the arm: {e}"));
+    }
+}
+
 /// Run every check on `s`.
 pub fn run(s: &mut Subject) -> Findings {
     let mut f = Findings::default();
@@ -284,6 +340,8 @@ pub fn run(s: &mut Subject) -> Findings {
             fmt(&s.twin.joints())
         ));
     }
+
+    trajectory(s, &mut f);
 
     // A line nobody asked for: the next call is UNSURE and moves nothing; the one after works.
     if s.twin.say_unasked("OVERCURRENT B") {

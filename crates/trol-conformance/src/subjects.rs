@@ -180,6 +180,7 @@ pub fn c500(name: &str) -> Subject {
         differences: Differences {
             starts_unhomed: !homed,
             unstoppable: name == "unstoppable",
+            untimed_trajectory: true,
             ..Differences::default()
         },
     }

@@ -19,7 +19,7 @@
 use trol_proto::application::code::{
     Code, CodeTable, TROL_ERR_LOCATION, TROL_ERR_ROBOT, TROL_ERR_ROBOT_UNSURE,
 };
-use trol_proto::application::{Gripper, LocName, Location, Tag};
+use trol_proto::application::{Gripper, LocName, Location, Tag, Waypoint};
 
 /// The target of an absolute motion.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,6 +183,40 @@ impl From<BackendError> for Code {
     }
 }
 
+/// The most waypoints [`untimed_trajectory`] takes: one queued motion each, and the
+/// simulated A465's and a C500's motion queues hold 16.
+pub const UNTIMED_WAYPOINTS: usize = 16;
+
+/// A trajectory on a controller that cannot run a timed path: one MA to each waypoint at
+/// the speed setting (queued behind each other), and TRAJECTORY_UNTIMED. More than
+/// [`UNTIMED_WAYPOINTS`] is TROL_ERR_ARG_RANGE before anything is sent. A waypoint the
+/// controller refuses after others were accepted stops the arm (Halt, seen standing) so
+/// that no part of a refused trajectory runs on, and its code is the answer; a link that
+/// fails is the answer as it is (unsure: nothing more is sent).
+pub fn untimed_trajectory<B: Backend + ?Sized>(b: &mut B, points: &[Waypoint]) -> BiosResult {
+    if points.len() > UNTIMED_WAYPOINTS {
+        return Err(BackendError::Explained(
+            trol_proto::application::code::TROL_ERR_ARG_RANGE.0,
+            format!(
+                "{} waypoints: {} runs a trajectory as one joint move per waypoint, at most \
+                 {UNTIMED_WAYPOINTS}: send fewer (every few points of a dense plan)",
+                points.len(),
+                b.kind()
+            ),
+        ));
+    }
+    for (k, p) in points.iter().enumerate() {
+        let c = b.ma(p.joints)?;
+        if c != 0 {
+            if k > 0 {
+                b.halt()?;
+            }
+            return Ok(c);
+        }
+    }
+    Ok(trol_proto::application::table::TRAJECTORY_UNTIMED)
+}
+
 /// A BIOS call's result: its return value, or why it could not be made.
 pub type BiosResult = Result<i16, BackendError>;
 
@@ -273,6 +307,13 @@ pub trait Backend: Send {
     /// controller that keeps its own table answers 0).
     fn save_locations(&mut self) -> BiosResult {
         Err(BackendError::Unsupported("save locations"))
+    }
+    /// Trajectory: one motion through `points` at their times (TROLTrajectory; the server
+    /// checked their number, values and increasing times). 0: it runs as timed. By default,
+    /// for a controller that cannot run a timed path, [`untimed_trajectory`]: one MA to each
+    /// waypoint at the speed setting, and TRAJECTORY_UNTIMED.
+    fn trajectory(&mut self, points: &[Waypoint]) -> BiosResult {
+        untimed_trajectory(self, points)
     }
     /// Where the world's objects are, in words, for logs (a simulator knows; a real
     /// controller does not, and says nothing).

@@ -15,7 +15,7 @@ use trol_proto::application::code::{
 use trol_proto::application::record::Value;
 use trol_proto::application::table;
 use trol_proto::application::{
-    Catalog, CatalogError, Class, CommandDef, LocName, Location, Reply, Tag,
+    Catalog, CatalogError, Class, CommandDef, LocName, Location, Reply, Tag, Waypoint,
 };
 
 use crate::backend::{Backend, PosMode, Target};
@@ -566,6 +566,14 @@ impl Call<'_> {
         self.loc(i).map(Location::to_array6)
     }
 
+    /// Argument `i` as a trajectory's waypoints.
+    pub fn path(&self, i: usize) -> Result<&[Waypoint], Code> {
+        match self.args.get(i) {
+            Some(Value::Path(p)) => Ok(p),
+            _ => Err(TROL_ERR_ARG_RANGE),
+        }
+    }
+
     /// Argument `i` as a location name.
     pub fn name(&self, i: usize) -> Result<LocName, Code> {
         match self.args.get(i) {
@@ -594,8 +602,8 @@ fn precision_name_matches(name: LocName, tag: Tag) -> Result<(), Code> {
     }
 }
 
-/// Here, Define, DeleteLocation and SaveLocations (CAT3, docs/teach.md): the backend's
-/// value, or the code that kept the call from being made.
+/// Here, Define, DeleteLocation and SaveLocations (CAT3, docs/teach.md), and Trajectory:
+/// the backend's value, or the code that kept the call from being made.
 fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<crate::BiosResult, Code> {
     use table::*;
     Ok(match c.def.code {
@@ -616,6 +624,7 @@ fn teach<B: Backend>(b: &mut B, c: &Call<'_>) -> Result<crate::BiosResult, Code>
             b.define(name, loc)
         }
         TROL_DELETE_LOCATION => b.delete_location(c.name(0)?),
+        TROL_TRAJECTORY => b.trajectory(c.path(0)?),
         _ => b.save_locations(),
     })
 }
@@ -696,7 +705,7 @@ fn builtin_other<B: Backend>(ctx: &mut Context<'_, B>, c: &Call<'_>) -> Reply {
             protocol: PROTOCOL_VERSION,
             kind: ctx.backend.kind().into(),
         },
-        TROL_HERE | TROL_DEFINE | TROL_DELETE_LOCATION | TROL_SAVE_LOCATIONS => {
+        TROL_HERE | TROL_DEFINE | TROL_DELETE_LOCATION | TROL_SAVE_LOCATIONS | TROL_TRAJECTORY => {
             match teach(ctx.backend, c) {
                 Ok(Ok(v)) => Reply::Code(Code(v)),
                 Ok(Err(e)) => {

@@ -73,7 +73,71 @@ fn one_of_each() -> Vec<(&'static CommandDef, Vec<Value>)> {
         ),
         (&DELETE_LOCATION, vec![name("p1")]),
         (&SAVE_LOCATIONS, vec![]),
+        (
+            &TRAJECTORY,
+            vec![Path(vec![
+                Waypoint {
+                    time: 0.5,
+                    joints: [0.0, 0.25, 0.5, 0.0, 0.25, 0.0],
+                },
+                Waypoint {
+                    time: 1.5,
+                    joints: [0.5, 0.5, 1.0, 0.0, 0.5, -0.5],
+                },
+            ])],
+        ),
     ]
+}
+
+/// A trajectory's count and waypoints (docs/protocol.md, "Trajectory"): the size follows
+/// the count; no waypoints, times that do not increase, a time out of 0..3600 s or a value
+/// that is not finite is TROL_ERR_ARG_RANGE on both sides.
+#[test]
+fn a_trajectory_carries_its_count_and_increasing_times() {
+    let at = |time: f64| Waypoint {
+        time,
+        joints: [0.0, 0.125, 0.25, -0.5, 1.0, 2.0],
+    };
+    let ok = vec![Value::Path(vec![at(0.0), at(0.25), at(2.0)])];
+    let bytes = record::encode(&TRAJECTORY, &ok).unwrap();
+    // Code, count (2 bytes), a pad to an even offset, then 28 bytes per waypoint.
+    assert_eq!(&bytes[..4], &[TROL_TRAJECTORY, 3, 0, 0]);
+    assert_eq!(bytes.len(), 4 + 3 * 28);
+    assert_eq!(record::decode(&TRAJECTORY, &bytes).unwrap(), ok);
+    // One waypoint more or fewer than the count says: the size is wrong.
+    let mut long = bytes.clone();
+    long.extend_from_slice(&[0; 28]);
+    assert_eq!(
+        record::decode(&TRAJECTORY, &long).unwrap_err().code(),
+        TROL_ERR_BAD_CSIZE
+    );
+    assert_eq!(
+        record::decode(&TRAJECTORY, &bytes[..bytes.len() - 28])
+            .unwrap_err()
+            .code(),
+        TROL_ERR_BAD_CSIZE
+    );
+    let refused = |points: Vec<Waypoint>| {
+        let e = record::encode(&TRAJECTORY, &[Value::Path(points)]).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
+        e.to_string()
+    };
+    assert!(refused(vec![]).contains("0 waypoints"));
+    assert!(refused(vec![at(1.0), at(1.0)]).contains("times must increase"));
+    assert!(refused(vec![at(2.0), at(1.0)]).contains("times must increase"));
+    assert!(refused(vec![at(-0.5)]).contains("outside"));
+    assert!(refused(vec![at(3601.0)]).contains("outside"));
+    let mut nan = at(1.0);
+    nan.joints[3] = f64::NAN;
+    assert!(refused(vec![nan]).contains("finite"));
+    assert!(refused(vec![at(1.0); usize::from(MAX_WAYPOINTS) + 1]).contains("waypoints"));
+    // The controller checks the same: decreasing times put on the line by hand.
+    let mut back = record::encode(&TRAJECTORY, &[Value::Path(vec![at(1.0), at(2.0)])]).unwrap();
+    back[4..8].copy_from_slice(&3.0f32.to_le_bytes());
+    assert_eq!(
+        record::decode(&TRAJECTORY, &back).unwrap_err().code(),
+        TROL_ERR_ARG_RANGE
+    );
 }
 
 /// ListLocations' reply (docs/protocol.md, "Locations"): names with their locations
@@ -391,6 +455,21 @@ fn arb_request() -> impl Strategy<Value = (&'static CommandDef, Vec<Value>)> {
         (1u8..=150).prop_map(|p| (&SPEED, vec![Int(p)])),
         (0u8..=50).prop_map(|d| (&GRIP, vec![Int(d)])),
         (0u8..=6).prop_map(|a| (&HOME, vec![Int(a)])),
+        prop::collection::vec((0.001f32..10.0, prop::array::uniform6(-3.0f32..3.0)), 1..20)
+            .prop_map(|steps| {
+                let mut t = 0.0f32;
+                let path = steps
+                    .into_iter()
+                    .map(|(dt, q)| {
+                        t += dt;
+                        Waypoint {
+                            time: t.into(),
+                            joints: q.map(f64::from),
+                        }
+                    })
+                    .collect();
+                (&TRAJECTORY, vec![Path(path)])
+            }),
     ]
 }
 

@@ -290,6 +290,42 @@ fn gripper_object<'py>(py: Python<'py>, g: trol::Gripper) -> PyResult<Bound<'py,
     cls.call1((g.opening_mm, holding, known))
 }
 
+/// A trajectory's waypoints from Python: an iterable of `(time, joints)` pairs (seconds from
+/// the start; six joint angles in radians).
+fn waypoints(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<trol::Waypoint>> {
+    let bad = |k: usize, why: &str| {
+        argument_error(
+            py,
+            format!("{what}: waypoint {k}: {why} (a waypoint is (time_s, six joint angles))"),
+        )
+    };
+    if obj.is_instance_of::<pyo3::types::PyString>() {
+        return Err(argument_error(
+            py,
+            format!("{what}: expected (time, joints) pairs, got a string"),
+        ));
+    }
+    let mut out = Vec::new();
+    for (i, item) in obj.try_iter()?.enumerate() {
+        let k = i + 1;
+        let item = item?;
+        let (t, q): (Bound<'_, PyAny>, Bound<'_, PyAny>) =
+            item.extract().map_err(|_| bad(k, "not a pair"))?;
+        if t.is_instance_of::<pyo3::types::PyBool>() {
+            return Err(bad(k, "its time is a bool"));
+        }
+        let time = t
+            .extract::<f64>()
+            .map_err(|_| bad(k, "its time is not a number"))?;
+        let joints = floats(py, &q, &format!("{what}: waypoint {k}"))?;
+        let joints: [f64; 6] = joints
+            .try_into()
+            .map_err(|v: Vec<f64>| bad(k, &format!("{} joint angles, not 6", v.len())))?;
+        out.push(trol::Waypoint { time, joints });
+    }
+    Ok(out)
+}
+
 /// A Python argument for an argument of `kind`.
 fn arg_value(py: Python<'_>, name: &str, kind: ArgKind, obj: &Bound<'_, PyAny>) -> PyResult<Value> {
     let bad = |what: &str| argument_error(py, format!("`{name}`: expected {what}"));
@@ -328,6 +364,7 @@ fn arg_value(py: Python<'_>, name: &str, kind: ArgKind, obj: &Bound<'_, PyAny>) 
             return Err(bad("a number, not a bool"));
         }
         ArgKind::Real => Value::Real(obj.extract::<f64>().map_err(|_| bad("a number"))?),
+        ArgKind::Path { .. } => Value::Path(waypoints(py, obj, name)?),
         ArgKind::Loc { tags, .. } => {
             if tags.contains(&Tag::Prec) && is_precision(py, obj)? {
                 Value::Loc(Location::Prec(obj.extract::<Vec<i32>>()?))
@@ -546,6 +583,20 @@ impl Robot {
     fn ma(&self, py: Python<'_>, joints: &Bound<'_, PyAny>) -> PyResult<()> {
         let q = floats(py, joints, "joints")?;
         self.with(py, move |r| r.ma(&q))
+    }
+
+    /// TROLTrajectory: one motion through ``points``, each ``(time_s, joints)`` (seconds
+    /// from the start, increasing; six joint angles in radians). Returns ``"timed"`` (the
+    /// simulated A465, a MARS 8: at the given times; refused with BIOS_TOO_FAST before
+    /// anything moves where they ask more than the arm has) or ``"untimed"`` (one joint move
+    /// to each waypoint at the speed setting). Wait with ``finish()``.
+    fn trajectory(&self, py: Python<'_>, points: &Bound<'_, PyAny>) -> PyResult<&'static str> {
+        let path = waypoints(py, points, "points")?;
+        let timing = self.with(py, move |r| r.trajectory(&path))?;
+        Ok(match timing {
+            trol::Timing::Timed => "timed",
+            trol::Timing::Untimed => "untimed",
+        })
     }
 
     /// TROLMI: all joints by increments (radians).

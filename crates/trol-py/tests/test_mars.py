@@ -59,6 +59,12 @@ def test_a_python_script_drives_the_arm_on_a_mars8(mars_robot: trol.Robot) -> No
     assert (e.value.code, e.value.name) == (-3, "BIOS_JOINT_LIMIT")
     mars_robot.close_gripper(50)
     mars_robot.finish()
+    # A trajectory keeps its times on a MARS 8 (coordinated segments) and ends at its last
+    # waypoint, as seen on the unit's encoders.
+    end = [0.25, 0.15, 0.7, 0.1, 0.5, 0.0]
+    assert mars_robot.trajectory([(1.0, [0.2, 0.2, 0.7, 0.0, 0.6, 0.0]), (2.0, end)]) == "timed"
+    mars_robot.finish()
+    assert list(mars_robot.joints(actual=True)) == pytest.approx(end, abs=1e-3)
 
 
 @pytest.mark.timeout(120)

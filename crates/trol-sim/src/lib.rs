@@ -21,7 +21,7 @@ use trol_controller::{
 };
 use trol_port::memory::MemoryLine;
 use trol_proto::application::record::{MM_DECIMALS, format_fixed};
-use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag};
+use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag, Waypoint};
 use trol_proto::link::LinkConfig;
 
 /// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's.
@@ -228,6 +228,11 @@ impl Backend for SimBackend {
     fn mi(&mut self, dq: [f64; 6]) -> BiosResult {
         let now = self.now();
         Ok(self.arm.mi(dq, now))
+    }
+    fn trajectory(&mut self, points: &[Waypoint]) -> BiosResult {
+        let now = self.now();
+        let points: Vec<(f64, [f64; 6])> = points.iter().map(|p| (p.time, p.joints)).collect();
+        Ok(self.arm.trajectory(&points, now))
     }
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
         let t = self.target(target)?;

@@ -15,7 +15,8 @@
 //! ```
 //!
 //! Argument kinds: `int` (min, max), `real`, `name`, `straight`, `loc` (tags: any of
-//! "cart", "joint", "prec"; min, max), `choice` (choices: word, constant, value). Replies:
+//! "cart", "joint", "prec"; min, max), `path` (max waypoints, 255 at most here), `choice`
+//! (choices: word, constant, value). Replies:
 //! `code`, `reals` (min, max), `bytes`. `success` lists values besides 0 that count as
 //! success; `wait` is `"reply"` (default), `"unlimited"` or a number of seconds more.
 //! Descriptions live as long as the process.
@@ -130,6 +131,16 @@ fn arg(e: ArgEntry) -> Result<Arg, String> {
                 max,
             }
         }
+        "path" => {
+            // A trajectory: `max` waypoints at most (the table's MAX_WAYPOINTS without one).
+            let max = e
+                .max
+                .map_or(trol_proto::application::MAX_WAYPOINTS, u16::from);
+            if max == 0 {
+                return Err(format!("argument `{}`: a path needs max >= 1", e.name));
+            }
+            ArgKind::Path { max }
+        }
         "choice" => {
             if e.choices.is_empty() {
                 return Err(format!("argument `{}`: a choice needs choices", e.name));
@@ -147,7 +158,8 @@ fn arg(e: ArgEntry) -> Result<Arg, String> {
         }
         other => {
             return Err(format!(
-                "argument `{}`: kind `{other}` is none of int, real, name, straight, loc, choice",
+                "argument `{}`: kind `{other}` is none of int, real, name, straight, loc, path, \
+                 choice",
                 e.name
             ));
         }

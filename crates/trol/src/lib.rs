@@ -48,15 +48,15 @@ pub use config::{Config, ConfigError};
 pub use robot::{
     C500C_PREFIX, Connect, ControllerVersion, Error, FinishWait, IN_PROCESS_SLACK,
     KEEPALIVE_SILENCE, MARS_PREFIX, MAX_DELAY_MS, MAX_REPLY_TENTHS, POLL, POLL_REPLY_TIMEOUT,
-    PosMode, Result, Robot, SetupError, StatusRecord, Waited, prompt_policy, prompt_reply_timeout,
-    timeout_policy, wait_idle,
+    PosMode, Result, Robot, SetupError, StatusRecord, Timing, Waited, prompt_policy,
+    prompt_reply_timeout, timeout_policy, wait_idle,
 };
 pub use trol_proto::application::code::{self, Code, CodeInfo, CodeTable};
 pub use trol_proto::application::record::Value;
 pub use trol_proto::application::table;
 pub use trol_proto::application::{
-    Arg, ArgKind, Catalog, Choice, CodeEntry, CommandDef, Gripper, Held, LocName, Location, Reply,
-    ReplyKind, Tag, Wait,
+    Arg, ArgKind, Catalog, Choice, CodeEntry, CommandDef, Gripper, Held, LocName, Location,
+    MAX_WAYPOINTS, Reply, ReplyKind, Tag, Wait, Waypoint,
 };
 use trol_proto::link::BlockCheck;
 #[cfg(feature = "sim")]

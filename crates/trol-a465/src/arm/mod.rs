@@ -70,7 +70,18 @@ pub mod code {
     /// Save failed for another reason (the controller's log says which); the file is left
     /// as it was.
     pub const SAVE_FAILED: i16 = -26;
+    /// A trajectory (TROLTrajectory) whose times ask more speed or acceleration of a joint
+    /// than the arm has at the speed setting: nothing moves; give it more time (-27 to -29
+    /// are the C500C backend's).
+    pub const TOO_FAST: i16 = -30;
 }
+
+/// How far a trajectory's waypoint at time 0 may be from where the arm starts it, rad (it
+/// is that start; assumption: ten times the f32 rounding of an angle, and well inside what
+/// ROS 2's trajectory controllers accept as a start).
+pub const TRAJECTORY_START_TOLERANCE: f64 = 1e-3;
+/// Points checked along each segment of a trajectory for joint limits and the table.
+const TRAJECTORY_SAMPLES: usize = 16;
 
 /// The largest locations file read (bytes): a full table of [`MAX_TABLE`] lines with
 /// comments fits many times over; a larger file is refused, not read whole.
@@ -958,6 +969,98 @@ impl Arm {
         let mut to = self.planned_end();
         to[joint as usize - 1] += radians;
         self.move_joints(to, now)
+    }
+
+    /// Trajectory (TROLTrajectory): one motion through `points` (seconds from its start,
+    /// joints), at their times: a C1 cubic spline through the waypoints, at rest at both
+    /// ends ([`Path::timed`]), run at one path speed ([`Profile::steady`]), so the commanded
+    /// position is at each waypoint at its time. It starts where the arm will be once the
+    /// motions before it have ended; a waypoint at time 0 must be there (within
+    /// [`TRAJECTORY_START_TOLERANCE`]). Refused before anything moves: a joint beyond its
+    /// limit anywhere along it (`JOINT_LIMIT`), the tool below the table (`BELOW_TABLE`),
+    /// more speed or acceleration than the joints have at the speed setting (`TOO_FAST`),
+    /// times that do not increase or values that are not finite (`BAD_ARGUMENT`).
+    pub fn trajectory(&mut self, points: &[(f64, Joints)], now: f64) -> i16 {
+        if let Err(c) = self.need_homed(now) {
+            return c;
+        }
+        if points.is_empty()
+            || points
+                .iter()
+                .any(|(t, q)| !t.is_finite() || *t < 0.0 || q.iter().any(|x| !x.is_finite()))
+            || points.windows(2).any(|w| w[1].0 <= w[0].0)
+        {
+            return code::BAD_ARGUMENT;
+        }
+        let from = self.planned_end();
+        let (mut ts, mut qs) = (vec![0.0], vec![from]);
+        for (k, (t, q)) in points.iter().enumerate() {
+            if k == 0 && *t == 0.0 {
+                let off = max_step(q, &from);
+                if off > TRAJECTORY_START_TOLERANCE {
+                    self.refusal = Some(format!(
+                        "the trajectory's waypoint at time 0 is {off:.4} rad from where it \
+                         starts: make it the arm's position (or leave it out)"
+                    ));
+                    return code::BAD_ARGUMENT;
+                }
+                continue;
+            }
+            ts.push(*t);
+            qs.push(snap_to_limits(q));
+        }
+        let total = *ts.last().expect("the start");
+        if total <= 0.0 {
+            // Only the start: nothing to do.
+            return code::OK;
+        }
+        let s: Vec<f64> = ts.iter().map(|t| t / total).collect();
+        let path = Path::timed(s.clone(), qs);
+        for k in 0..s.len() - 1 {
+            for j in 0..=TRAJECTORY_SAMPLES {
+                let at = s[k] + (s[k + 1] - s[k]) * j as f64 / TRAJECTORY_SAMPLES as f64;
+                let q = path.at(at);
+                if let Some(i) = first_outside_limits(&q) {
+                    self.refusal = Some(format!(
+                        "joint {} would pass its limit at {:.3} s of the trajectory",
+                        i + 1,
+                        at * total
+                    ));
+                    return code::JOINT_LIMIT;
+                }
+                if self.lowest_z(&self.kin.fk(&q)) < self.settings.table_z - 1e-9 {
+                    self.refusal = Some(format!(
+                        "the tool would go below the table at {:.3} s of the trajectory",
+                        at * total
+                    ));
+                    return code::BELOW_TABLE;
+                }
+            }
+        }
+        let (speeds, accels) = self.joint_limits_at(self.speed);
+        let b = path.bounds();
+        let v = 1.0 / total;
+        for i in 0..6 {
+            let (speed, accel) = (b.d1[i] * v, b.d2[i] * v * v);
+            // A hair over the limit is the limit (the times travel as f32).
+            if speed > speeds[i] * (1.0 + 1e-6) || accel > accels[i] * (1.0 + 1e-6) {
+                self.refusal = Some(format!(
+                    "joint {} would need {:.3} rad/s and {:.3} rad/s² where it has {:.3} and \
+                     {:.3} at {}% speed: give the trajectory more time",
+                    i + 1,
+                    speed,
+                    accel,
+                    speeds[i],
+                    accels[i],
+                    self.speed
+                ));
+                return code::TOO_FAST;
+            }
+        }
+        let (_, brake) = b.limits(&speeds, &accels);
+        let start = self.planned_start_time(now);
+        self.push_timed(path, Profile::steady(start, total, brake));
+        code::OK
     }
 
     /// MA: all joints to absolute angles.

@@ -25,6 +25,7 @@ pub fn arg_usage(name: &str, kind: &ArgKind) -> String {
             format!("{name}:{}({n} values)", kinds.join("|"))
         }
         ArgKind::Straight => "[straight:0|1]".into(),
+        ArgKind::Path { max } => format!("{name}:w(t, 6 joints) ... (1..{max} waypoints)"),
         ArgKind::Choice(options) => {
             let words: Vec<&str> = options.iter().map(|c| c.word).collect();
             format!("[{name}:{}]", words.join("|"))
@@ -46,6 +47,7 @@ pub fn words_for(kind: &ArgKind) -> Vec<&'static str> {
                 Tag::Prec => "p(",
             })
             .collect(),
+        ArgKind::Path { .. } => vec!["w("],
         _ => Vec::new(),
     }
 }
@@ -329,6 +331,7 @@ impl<'a> Cursor<'a> {
                 let bare = tags.first().copied().unwrap_or(Tag::Cart);
                 self.location(name, tags, bare, min.into(), max.into(), command)
             }
+            ArgKind::Path { max } => self.path(name, usize::from(max), command),
             ArgKind::Straight => match self.peek() {
                 None => Ok(Value::Flag(false)),
                 Some(t) => {
@@ -385,6 +388,86 @@ impl<'a> Cursor<'a> {
                 }
             },
         }
+    }
+
+    /// A trajectory: one or more `w(t, q1, q2, q3, q4, q5, q6)`, up to the end of the line.
+    fn path(&mut self, name: &str, max: usize, command: &str) -> Result<Value, SyntaxError> {
+        let want = format!(
+            "`{name}`: waypoints w(t, q1, q2, q3, q4, q5, q6), seconds from the start and \
+             six joint angles in radians"
+        );
+        let mut points = Vec::new();
+        while let Some(start) = self.next() {
+            match &start.kind {
+                Kind::Word(w) if w.eq_ignore_ascii_case("w") => {}
+                _ => {
+                    return Err(SyntaxError::at(
+                        start,
+                        format!("expected {want}, found `{}`", start.text),
+                    ));
+                }
+            }
+            match self.next() {
+                Some(Token {
+                    kind: Kind::Open, ..
+                }) => {}
+                Some(t) => return Err(SyntaxError::at(t, "expected `(` after `w`")),
+                None => return Err(self.missing("expected `(` after `w`".into())),
+            }
+            let mut values = Vec::new();
+            let mut want_value = true;
+            loop {
+                let Some(t) = self.next() else {
+                    return Err(self.missing(format!(
+                        "expected `)` to close the waypoint begun at column {}",
+                        start.col
+                    )));
+                };
+                match &t.kind {
+                    Kind::Close => break,
+                    Kind::Comma if !want_value => want_value = true,
+                    Kind::Number(v) if want_value && values.len() < 7 => {
+                        values.push(*v);
+                        want_value = false;
+                    }
+                    Kind::Number(_) => {
+                        return Err(SyntaxError::at(
+                            t,
+                            "too many values: a waypoint is its time and six joint angles",
+                        ));
+                    }
+                    _ => {
+                        return Err(SyntaxError::at(
+                            t,
+                            format!("expected a number or `)`, found `{}`", t.text),
+                        ));
+                    }
+                }
+            }
+            if values.len() != 7 {
+                return Err(SyntaxError::at(
+                    start,
+                    format!(
+                        "a waypoint is its time and six joint angles: {} values given",
+                        values.len()
+                    ),
+                ));
+            }
+            if points.len() == max {
+                return Err(SyntaxError::at(
+                    start,
+                    format!("too many waypoints: `{name}` takes at most {max}"),
+                ));
+            }
+            points.push(trol_proto::application::Waypoint {
+                time: values[0],
+                joints: std::array::from_fn(|j| values[j + 1]),
+            });
+        }
+        if points.is_empty() {
+            return Err(self.missing(format!("expected {want} after `{command}`")));
+        }
+        Ok(Value::Path(points))
     }
 
     fn location(

@@ -817,6 +817,11 @@ fn next_step(failure: &str) -> Option<&'static str> {
             "the tool tip would go below the table: aim higher, or lower `table_z` in trol.cfg",
         ),
         (
+            "BIOS_TOO_FAST",
+            "the trajectory is faster than the arm: give its waypoints later times, or raise \
+             `speed` if it is below 100",
+        ),
+        (
             "BIOS_SINGULAR_PATH",
             "a straight line cannot pass there: leave out `straight`, or go through another point",
         ),

@@ -455,3 +455,43 @@ pub(super) fn interp_teaches_lists_deletes_and_saves_locations() {
     assert_eq!(names, ["#pp", "p1"], "{v}");
     assert_eq!(v["locations"][1]["form"], "cart");
 }
+
+/// A trajectory in the interpreter: `trajectory w(t, q1..q6) ...`, run timed on the embedded
+/// simulator; a waypoint of the wrong form is a syntax error at its column, and times that
+/// go back are TROL_ERR_ARG_RANGE before anything is sent.
+#[test]
+pub(super) fn interp_runs_a_trajectory_of_waypoints() {
+    let dir = scratch("trajectory");
+    std::fs::write(
+        dir.join("path.trol"),
+        "home 0\nfinish wait\ntrajectory w(1, 0.3, 0.2, 0.5, 0, 0.2, 0) w(2, 0.5, 0.3, 0.8, 0.1, 0.3, 0.2)\n\
+         finish wait\ngetposition joint\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("trol.cfg"),
+        "9600\nsim\n0 0 0 0 0 0\ntime_scale = 50\n",
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp", "path.trol"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.contains("trajectory w(1, 0.3, 0.2, 0.5, 0, 0.2, 0) w(2, 0.5, 0.3, 0.8, 0.1, 0.3, 0.2)  ->  0 (success)"),
+        "{out}"
+    );
+    assert!(out.contains("->  j(0.5, 0.3, 0.8, 0.1, 0.3, 0.2)"), "{out}");
+    std::fs::write(
+        dir.join("bad.trol"),
+        "trajectory w(1, 0.3, 0.2)\ntrajectory w(2, 0, 0, 0, 0, 0, 0) w(1, 0, 0, 0, 0, 0, 0)\n",
+    )
+    .unwrap();
+    let o = trol(&dir, &["interp", "-k", "bad.trol"], "");
+    let (out, err) = text(&o);
+    let all = format!("{out}\n{err}");
+    assert!(
+        all.contains("a waypoint is its time and six joint angles: 3 values given"),
+        "{all}"
+    );
+    assert!(all.contains("times must increase"), "{all}");
+}

@@ -196,6 +196,12 @@ impl Backend for MarsBackend {
     fn mi(&mut self, dq: [f64; 6]) -> BiosResult {
         self.motion(|a, now| a.mi(dq, now))
     }
+    /// Timed: the A465 model's spline through the waypoints, sent as coordinated segments
+    /// (COORDMVT) of the profile's segment time, as every planned path is.
+    fn trajectory(&mut self, points: &[trol_proto::application::Waypoint]) -> BiosResult {
+        let points: Vec<(f64, [f64; 6])> = points.iter().map(|p| (p.time, p.joints)).collect();
+        self.motion(|a, now| a.trajectory(&points, now))
+    }
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
         let t = self.target(target)?;
         self.motion(|a, now| a.move_to(t, straight, now))

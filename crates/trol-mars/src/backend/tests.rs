@@ -139,6 +139,57 @@ fn a_motion_goes_as_segments_confirmed_by_stamp_and_ends_at_its_target() {
     assert!((q[0] - 0.2).abs() < 1e-3, "{q:?}");
 }
 
+/// A trajectory keeps its times on a MARS 8: coordinated segments whose durations add up to
+/// the trajectory's, passing each waypoint (in the unit's IRC) at its time; Finish ends with
+/// the arm at the last one.
+#[test]
+fn a_trajectory_goes_as_segments_that_pass_each_waypoint_at_its_time() {
+    let (mut b, unit) = on("default", true);
+    let before = received(&unit).len();
+    let path = [
+        trol_proto::application::Waypoint {
+            time: 1.0,
+            joints: [0.2, 0.1, 0.0, 0.0, 0.0, 0.0],
+        },
+        trol_proto::application::Waypoint {
+            time: 2.0,
+            joints: [0.1, 0.2, 0.1, 0.0, 0.0, 0.0],
+        },
+    ];
+    assert_eq!(code(b.trajectory(&path)), 0);
+    let sent = received(&unit)[before..].to_vec();
+    let mut t_ms = 0i64;
+    let mut at: Vec<(i64, Vec<f64>)> = Vec::new();
+    for l in sent.iter().filter_map(|l| l.strip_prefix("COORDMVT:")) {
+        let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        t_ms += v[0] as i64;
+        at.push((t_ms, v[1..].to_vec()));
+    }
+    assert!(at.len() > 2, "sampled, not one segment: {sent:?}");
+    assert!((t_ms - 2000).abs() <= at.len() as i64, "{t_ms} ms");
+    let profile = fast();
+    for w in &path {
+        let want = profile.joints_to_irc(&w.joints);
+        let ms = (w.time * 1000.0) as i64;
+        let (_, irc) = at
+            .iter()
+            .min_by_key(|(t, _)| (t - ms).abs())
+            .expect("a segment");
+        for j in 0..6 {
+            assert!(
+                (irc[j] - want[j].round()).abs() <= 2.0,
+                "{irc:?} against {want:?}"
+            );
+        }
+    }
+    finish(&mut b);
+    let q = unit.lock().unwrap().joints();
+    assert!(
+        (q[1] - 0.2).abs() < 1e-3 && (q[2] - 0.1).abs() < 1e-3,
+        "{q:?}"
+    );
+}
+
 #[test]
 fn halt_is_success_only_when_the_unit_shows_the_arm_standing() {
     // STOP: works.

@@ -107,6 +107,13 @@ pub enum ArgKind {
         /// Most values.
         max: u8,
     },
+    /// A trajectory: `1..=max` waypoints, each a time and six joint angles (an addition,
+    /// TROLTrajectory): a count of two bytes, and the waypoints at the record's end, after
+    /// any location's values.
+    Path {
+        /// Most waypoints.
+        max: u16,
+    },
 }
 
 /// One argument of a command.

@@ -39,6 +39,24 @@ pub const MAX_DIMS: usize = 8;
 /// Coordinates of the A465's six axes: numDims may be 1..=6 on the wire.
 pub const ARM_DIMS: usize = 6;
 
+/// One point of a trajectory (TROLTrajectory, an addition: docs/protocol.md "Trajectory"):
+/// when, counted from the trajectory's start, the arm is to be at these joint angles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Waypoint {
+    /// Seconds after the trajectory's start: 0 or more, strictly increasing along a
+    /// trajectory (a point at 0 is where the arm stands when it starts).
+    pub time: f64,
+    /// The six joint angles, radians.
+    pub joints: [f64; 6],
+}
+
+/// The most waypoints one TROLTrajectory carries: 28 bytes each on the wire, 14 KB for
+/// all (about 15 s of line at 9600 Bd; assumption: enough for MoveIt's plans, which are
+/// tens of points).
+pub const MAX_WAYPOINTS: u16 = 500;
+/// The latest time a waypoint may have, s (an hour: longer is a mistake of units).
+pub const MAX_TRAJECTORY_S: f64 = 3600.0;
+
 /// A location: the manual's SLocData, with numDims = the number of values.
 ///
 /// Only the given values travel; the controller sets the rest to 0. Values are kept as f64

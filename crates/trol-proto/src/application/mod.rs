@@ -28,6 +28,6 @@ pub mod table;
 pub use catalog::{Catalog, CatalogError};
 pub use code::{Code, CodeInfo, CodeTable};
 pub use command::{Arg, ArgKind, Choice, Class, CommandDef, ReplyKind, Wait};
-pub use location::{LocName, Location, Tag};
+pub use location::{LocName, Location, MAX_WAYPOINTS, Tag, Waypoint};
 pub use record::{RequestError, Value};
 pub use reply::{CodeEntry, Gripper, Held, Reply, ReplyError};

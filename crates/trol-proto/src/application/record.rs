@@ -13,7 +13,9 @@
 //!    dims byte, as the manual packs numDims and straight into STROL_DEPART_DATA);
 //! 2. a zero byte if needed to reach an even offset, then 8 bytes for each
 //!    [`ArgKind::Name`] and 4 (an f32) for each [`ArgKind::Real`];
-//! 3. the values of each location, numDims of them, 4 bytes each (f32, or i32 counts).
+//! 3. the values of each location, numDims of them, 4 bytes each (f32, or i32 counts);
+//!    then a trajectory's waypoints ([`ArgKind::Path`]), each its time and six joint angles
+//!    (seven f32), whose count (two bytes, little-endian) is in the first part.
 //!
 //! A dims byte holds numDims in bits 7..4, 0 in bit 3, the tag in bits 2..1 and the straight
 //! flag (or 0) in bit 0. Fields are little-endian.
@@ -24,7 +26,7 @@
 
 use super::code::{Code, TROL_ERR_ARG_RANGE, TROL_ERR_BAD_CSIZE, TROL_ERR_UNKNOWN};
 use super::command::{Arg, ArgKind, CommandDef};
-use super::location::{LocName, Location, Tag};
+use super::location::{LocName, Location, MAX_TRAJECTORY_S, Tag, Waypoint};
 
 /// A decoded argument.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +41,8 @@ pub enum Value {
     Real(f64),
     /// An [`ArgKind::Loc`].
     Loc(Location),
+    /// An [`ArgKind::Path`]: f64 in memory, f32 on the wire.
+    Path(Vec<Waypoint>),
 }
 
 /// Why a request was refused, with the manual's code.
@@ -115,6 +119,8 @@ enum Place {
     Bit0(usize),
     /// A wide field of the second part, at this offset.
     Wide(usize),
+    /// A two-byte count of the first part, at this offset (a trajectory's waypoints).
+    Count(usize),
 }
 
 struct Layout {
@@ -142,6 +148,10 @@ fn layout(def: &CommandDef) -> Layout {
                 places[i] = Place::Byte(at);
                 at += 1;
             }
+            ArgKind::Path { .. } => {
+                places[i] = Place::Count(at);
+                at += 2;
+            }
             _ => {}
         }
     }
@@ -149,7 +159,11 @@ fn layout(def: &CommandDef) -> Layout {
         .args
         .iter()
         .any(|a| matches!(a.kind, ArgKind::Name | ArgKind::Real));
-    let has_loc = carrier.is_some();
+    let has_loc = carrier.is_some()
+        || def
+            .args
+            .iter()
+            .any(|a| matches!(a.kind, ArgKind::Path { .. }));
     let pad = (at % 2 == 1 && (has_wide || has_loc)).then_some(at);
     if pad.is_some() {
         at += 1;
@@ -264,12 +278,69 @@ fn check(def: &CommandDef, arg: &Arg, value: &Value) -> Result<(), RequestError>
             }
             Ok(())
         }
+        (ArgKind::Path { max }, Value::Path(points)) => check_path(def, arg, max, points),
         (kind, v) => Err(range(
             def,
             arg,
             format!("expects {}, got {v:?}", kind_word(kind)),
         )),
     }
+}
+
+/// A trajectory's checks: 1..=max waypoints, every value a finite f32, the times from 0 to
+/// [`MAX_TRAJECTORY_S`] and strictly increasing (as they travel: two times that round to
+/// the same f32 are one).
+fn check_path(
+    def: &CommandDef,
+    arg: &Arg,
+    max: u16,
+    points: &[Waypoint],
+) -> Result<(), RequestError> {
+    if points.is_empty() || points.len() > usize::from(max) {
+        return Err(range(
+            def,
+            arg,
+            format!("has {} waypoints, allowed 1..{max}", points.len()),
+        ));
+    }
+    let mut last: Option<f32> = None;
+    for (k, p) in points.iter().enumerate() {
+        let t = p.time as f32;
+        if !t.is_finite() || p.joints.iter().any(|q| !(*q as f32).is_finite()) {
+            return Err(range(
+                def,
+                arg,
+                format!("waypoint {}: a value is not a finite 32-bit number", k + 1),
+            ));
+        }
+        if !(0.0..=MAX_TRAJECTORY_S).contains(&f64::from(t)) {
+            return Err(range(
+                def,
+                arg,
+                format!(
+                    "waypoint {}: time {} s is outside 0..{MAX_TRAJECTORY_S} s",
+                    k + 1,
+                    p.time
+                ),
+            ));
+        }
+        if let Some(before) = last {
+            if t <= before {
+                return Err(range(
+                    def,
+                    arg,
+                    format!(
+                        "waypoint {}: time {} s does not come after {} s (times must increase)",
+                        k + 1,
+                        p.time,
+                        before
+                    ),
+                ));
+            }
+        }
+        last = Some(t);
+    }
+    Ok(())
 }
 
 fn kind_word(kind: ArgKind) -> &'static str {
@@ -280,6 +351,7 @@ fn kind_word(kind: ArgKind) -> &'static str {
         ArgKind::Name => "a location name",
         ArgKind::Real => "a number",
         ArgKind::Loc { .. } => "a location",
+        ArgKind::Path { .. } => "a trajectory (waypoints)",
     }
 }
 
@@ -314,12 +386,21 @@ pub fn encode(def: &CommandDef, values: &[Value]) -> Result<Vec<u8>, RequestErro
             (Value::Real(x), Place::Wide(o)) => {
                 out[o..o + 4].copy_from_slice(&(*x as f32).to_le_bytes())
             }
+            (Value::Path(points), Place::Count(o)) => {
+                let n = points.len() as u16;
+                out[o..o + 2].copy_from_slice(&n.to_le_bytes());
+            }
             _ => unreachable!("{} checked against {:?}", arg.name, arg.kind),
         }
     }
     for v in values {
         if let Value::Loc(l) = v {
             put_location(&mut out, l);
+        }
+    }
+    for v in values {
+        if let Value::Path(points) = v {
+            put_waypoints(&mut out, points);
         }
     }
     Ok(out)
@@ -335,6 +416,33 @@ pub fn put_location(out: &mut Vec<u8>, loc: &Location) {
             .iter()
             .for_each(|x| out.extend_from_slice(&(*x as f32).to_le_bytes())),
     }
+}
+
+/// Append a trajectory's waypoints: each its time and six joint angles, f32.
+pub fn put_waypoints(out: &mut Vec<u8>, points: &[Waypoint]) {
+    for p in points {
+        out.extend_from_slice(&(p.time as f32).to_le_bytes());
+        p.joints
+            .iter()
+            .for_each(|q| out.extend_from_slice(&(*q as f32).to_le_bytes()));
+    }
+}
+
+/// The bytes of one waypoint on the wire.
+pub const WAYPOINT_BYTES: usize = 28;
+
+/// Read waypoints from `bytes` ([`WAYPOINT_BYTES`] each); f32 widen exactly to f64.
+pub fn get_waypoints(bytes: &[u8]) -> Vec<Waypoint> {
+    bytes
+        .chunks_exact(WAYPOINT_BYTES)
+        .map(|c| {
+            let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]) as f64;
+            Waypoint {
+                time: f(0),
+                joints: std::array::from_fn(|j| f(4 + 4 * j)),
+            }
+        })
+        .collect()
 }
 
 /// Read `n` values of `tag` from `bytes` (4 each); f32 widen exactly to f64.
@@ -364,11 +472,16 @@ pub fn decode(def: &CommandDef, bytes: &[u8]) -> Result<Vec<Value>, RequestError
     if bytes.len() < lay.tail {
         return Err(bad_size(lay.tail));
     }
-    // The locations' sizes come from their dims bytes.
+    // The locations' sizes come from their dims bytes, a trajectory's from its count.
     let mut expected = lay.tail;
     for (arg, place) in def.args.iter().zip(&lay.places) {
-        if let (ArgKind::Loc { .. }, Place::Byte(o)) = (arg.kind, place) {
-            expected += 4 * usize::from(bytes[*o] >> 4);
+        match (arg.kind, place) {
+            (ArgKind::Loc { .. }, Place::Byte(o)) => expected += 4 * usize::from(bytes[*o] >> 4),
+            (ArgKind::Path { .. }, Place::Count(o)) => {
+                expected +=
+                    WAYPOINT_BYTES * usize::from(u16::from_le_bytes([bytes[*o], bytes[o + 1]]))
+            }
+            _ => {}
         }
     }
     if bytes.len() != expected {
@@ -386,6 +499,17 @@ pub fn decode(def: &CommandDef, bytes: &[u8]) -> Result<Vec<Value>, RequestError
     let straight_bit = def.args.iter().any(|a| a.kind == ArgKind::Straight);
     let mut values = Vec::with_capacity(def.args.len());
     let mut tail = lay.tail;
+    // A trajectory's waypoints follow every location's values.
+    let mut path_at = lay.tail
+        + def
+            .args
+            .iter()
+            .zip(&lay.places)
+            .filter_map(|(a, p)| match (a.kind, p) {
+                (ArgKind::Loc { .. }, Place::Byte(o)) => Some(4 * usize::from(bytes[*o] >> 4)),
+                _ => None,
+            })
+            .sum::<usize>();
     let mut first_loc = true;
     for (arg, place) in def.args.iter().zip(&lay.places) {
         let v = match (arg.kind, *place) {
@@ -430,6 +554,12 @@ pub fn decode(def: &CommandDef, bytes: &[u8]) -> Result<Vec<Value>, RequestError
                 let loc = get_location(tag, &bytes[tail..tail + 4 * n]);
                 tail += 4 * n;
                 Value::Loc(loc)
+            }
+            (ArgKind::Path { .. }, Place::Count(o)) => {
+                let n = usize::from(u16::from_le_bytes([bytes[o], bytes[o + 1]]));
+                let points = get_waypoints(&bytes[path_at..path_at + WAYPOINT_BYTES * n]);
+                path_at += WAYPOINT_BYTES * n;
+                Value::Path(points)
             }
             _ => unreachable!("the layout places every argument"),
         };
@@ -522,6 +652,20 @@ impl std::fmt::Display for Location {
     }
 }
 
+/// A trajectory as the interpreter reads it: one `w(time, q1, ..., q6)` per waypoint,
+/// seconds to 0.001 and radians to [`RAD_DECIMALS`]: `w(0.5, 0, 0.1, ...) w(1, ...)`.
+pub fn format_path(points: &[Waypoint]) -> String {
+    points
+        .iter()
+        .map(|p| {
+            let mut v = vec![format_fixed(p.time, MM_DECIMALS)];
+            v.extend(p.joints.iter().map(|q| format_fixed(*q, RAD_DECIMALS)));
+            format!("w({})", v.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// A call as the interpreter reads it: `TROLAppro test_001 c(-90) straight`.
 pub fn format_call(def: &CommandDef, values: &[Value]) -> String {
     let mut s = def.name.to_string();
@@ -538,6 +682,7 @@ pub fn format_call(def: &CommandDef, values: &[Value]) -> String {
             (_, Value::Name(n)) => n.to_string(),
             (_, Value::Real(x)) => format_number(*x),
             (_, Value::Loc(l)) => format_location(l),
+            (_, Value::Path(points)) => format_path(points),
         };
         s.push(' ');
         s.push_str(&text);

@@ -10,7 +10,7 @@
 //! class's base for an empty class, as CAT2 is: the manual's CAT2 has no commands).
 
 use super::command::{Arg, ArgKind, Choice, Class, CommandDef, ReplyKind, Wait};
-use super::location::Tag;
+use super::location::{MAX_WAYPOINTS, Tag};
 
 const CART_ONLY: &[Tag] = &[Tag::Cart];
 const JOINT_ONLY: &[Tag] = &[Tag::Joint];
@@ -65,6 +65,11 @@ const FORM: Arg = Arg {
 /// The most locations a controller's table holds (what TROLListLocations can carry in one
 /// reply, with room to spare; assumption for the simulator, docs/teach.md).
 pub const MAX_LOCATIONS: usize = 1000;
+
+/// TROLTrajectory's 1: the controller ran the trajectory through its waypoints, one joint
+/// move to each at the speed setting, without their times (a controller that cannot run a
+/// timed path; the arm went where it was asked, not when).
+pub const TRAJECTORY_UNTIMED: i16 = 1;
 
 /// FINISH_STATUS: Finish returns 1 while the arm moves, 0 when it is done.
 pub const FINISH_STATUS: u8 = 0;
@@ -282,6 +287,16 @@ commands! {
         reply: ReplyKind::Code, success: &[], wait: Wait::Reply,
         help: "keep the location table across a restart (the simulator writes its locations file)",
     }
+    /// TROLTrajectory(pPath): one motion through timed joint waypoints (added: a planner's
+    /// trajectory, as ROS 2's FollowJointTrajectory carries it, runs as one motion;
+    /// docs/protocol.md "Trajectory"). 1: the controller ran it through the waypoints
+    /// without their times (one joint move to each; docs per controller).
+    TROL_TRAJECTORY = 135 => TRAJECTORY {
+        name: "TROLTrajectory",
+        args: &[Arg { name: "pPath", kind: ArgKind::Path { max: MAX_WAYPOINTS } }],
+        reply: ReplyKind::Code, success: &[TRAJECTORY_UNTIMED], wait: Wait::Reply,
+        help: "one motion through joint waypoints at their times: w(t s, 6 joints rad) ...",
+    }
     /// TROLTerminatePCP().
     TROL_TERMINATE_PCP = 192 => TERMINATE_PCP {
         name: "TROLTerminatePCP",
@@ -345,6 +360,7 @@ pub const ADDED: &[u8] = &[
     TROL_DEFINE,
     TROL_DELETE_LOCATION,
     TROL_SAVE_LOCATIONS,
+    TROL_TRAJECTORY,
     TROL_GET_VERSION,
     TROL_SET_WATCHDOG,
     TROL_GET_CODES,
@@ -422,7 +438,7 @@ mod tests {
         }
         assert_eq!(LAST_CAT1_CODE, 17);
         assert_eq!(LAST_CAT2_CODE, 63);
-        assert_eq!(LAST_CAT3_CODE, 134);
+        assert_eq!(LAST_CAT3_CODE, 135);
         assert_eq!(LAST_CAT4_CODE, 197);
     }
 

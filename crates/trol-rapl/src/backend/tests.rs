@@ -170,6 +170,47 @@ fn a_motion_behind_a_home_waits_for_it_and_goes_once_the_arm_is_homed() {
     assert!(b.queue.is_empty() && b.outstanding.is_none());
 }
 
+/// A C500 has no timed path: a trajectory goes as one MA per waypoint, queued behind each
+/// other (one on the line at a time), answered TRAJECTORY_UNTIMED; more waypoints than the
+/// queue holds is refused before anything is typed.
+#[test]
+fn a_trajectory_goes_as_one_ma_per_waypoint_untimed() {
+    use trol_proto::application::Waypoint;
+    let (mut b, log) = on("default", true);
+    let path: Vec<Waypoint> = [0.2, -0.1, 0.3]
+        .iter()
+        .enumerate()
+        .map(|(k, q)| Waypoint {
+            time: (k + 1) as f64,
+            joints: [*q, 0.0, 0.0, 0.0, 0.0, 0.0],
+        })
+        .collect();
+    let before = ran(&log).len();
+    assert_eq!(
+        code(b.trajectory(&path)),
+        trol_proto::application::table::TRAJECTORY_UNTIMED
+    );
+    let mas = |l: &[String]| l.iter().filter(|l| l.starts_with("MA ")).count();
+    assert_eq!(mas(&ran(&log)[before..]), 1, "{:?}", ran(&log));
+    finish(&mut b).unwrap();
+    assert_eq!(mas(&ran(&log)[before..]), 3, "{:?}", ran(&log));
+    let many: Vec<Waypoint> = (0..=trol_controller::UNTIMED_WAYPOINTS)
+        .map(|k| Waypoint {
+            time: (k + 1) as f64,
+            joints: [0.01 * k as f64, 0.0, 0.0, 0.0, 0.0, 0.0],
+        })
+        .collect();
+    let before = ran(&log).len();
+    match b.trajectory(&many) {
+        Err(BackendError::Explained(c, why)) => {
+            assert_eq!(c, trol_proto::application::code::TROL_ERR_ARG_RANGE.0);
+            assert!(why.contains("at most 16"), "{why}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(mas(&ran(&log)[before..]), 0, "{:?}", ran(&log));
+}
+
 #[test]
 fn finish_ends_a_motion_only_with_the_arm_at_its_end() {
     let (mut b, log) = on("default", true);

@@ -226,6 +226,22 @@ impl Robot {
         self.cat1(&table::MA, &args).map(drop)
     }
 
+    /// TROLTrajectory: one motion through `points` (each a time in seconds from the start
+    /// and six joint angles), as a planner's trajectory runs (docs/protocol.md
+    /// "Trajectory"). Returns how the controller runs it: [`Timing::Timed`] (the simulated
+    /// A465, a MARS 8: at the given times, or refused with BIOS_TOO_FAST before anything
+    /// moves where they ask more than the arm's limits at the speed setting), or
+    /// [`Timing::Untimed`] (one joint move to each waypoint at the speed setting). Wait
+    /// for its end with [`Robot::finish`]. No points, more than [`crate::MAX_WAYPOINTS`], or
+    /// times that do not increase are TROL_ERR_ARG_RANGE, and nothing is sent.
+    pub fn trajectory(&mut self, points: &[Waypoint]) -> Result<Timing> {
+        let args = [Value::Path(points.to_vec())];
+        match self.cat1(&table::TRAJECTORY, &args)? {
+            table::TRAJECTORY_UNTIMED => Ok(Timing::Untimed),
+            _ => Ok(Timing::Timed),
+        }
+    }
+
     /// TROLMI: all joints by increments.
     pub fn mi(&mut self, joints: &[f64]) -> Result<()> {
         let args = [Value::Loc(Location::Joint(joints.to_vec()))];

@@ -14,7 +14,7 @@ use trol_proto::application::record::{self, RequestError, Value};
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
 use trol_proto::application::{
     Catalog, CatalogError, CodeEntry, CommandDef, Gripper, LocName, Location, Reply, ReplyError,
-    Tag,
+    Tag, Waypoint,
 };
 use trol_proto::link::{BlockCheck, LinkConfig, LinkError};
 #[cfg(feature = "sim")]
@@ -177,6 +177,16 @@ pub enum Waited {
     Idle,
     /// The wait was cancelled: Halt was sent and the arm has stopped.
     Halted,
+}
+
+/// How a controller runs a trajectory ([`Robot::trajectory`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Timing {
+    /// At the waypoints' times (the simulated A465, a MARS 8).
+    Timed,
+    /// Through the waypoints, one joint move to each at the speed setting, without their
+    /// times (a controller that cannot run a timed path: a C500, a C500C).
+    Untimed,
 }
 
 /// Results of the API.

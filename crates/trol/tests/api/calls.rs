@@ -368,3 +368,63 @@ pub(super) fn adding_a_command_keeps_the_handlers_the_application_installed() {
     assert!(r.status().is_err());
     assert!(told.load(Ordering::SeqCst) >= 1, "the handler was replaced");
 }
+
+/// TROLTrajectory through the whole stack: timed on the simulated A465 and the arm at the
+/// last waypoint after Finish; what the host can check is refused before anything is sent;
+/// what the arm cannot do is the controller's BIOS_TOO_FAST, with its name, and nothing
+/// moves.
+#[test]
+pub(super) fn a_trajectory_over_the_whole_stack() {
+    use trol::{Timing, Waypoint};
+    let mut rig = rig();
+    let r = &mut rig.robot;
+    r.home(0).unwrap();
+    r.finish().unwrap();
+    let start = joints(r);
+    let end = [0.5, 0.3, 0.8, 0.1, 0.3, 0.2];
+    let path = [
+        Waypoint {
+            time: 0.0,
+            joints: start,
+        },
+        Waypoint {
+            time: 1.0,
+            joints: [0.3, 0.2, 0.5, 0.0, 0.2, 0.0],
+        },
+        Waypoint {
+            time: 2.0,
+            joints: end,
+        },
+    ];
+    assert_eq!(r.trajectory(&path).unwrap(), Timing::Timed);
+    r.finish().unwrap();
+    let q = joints(r);
+    assert!((0..6).all(|i| (q[i] - end[i]).abs() < 1e-6), "{q:?}");
+    // Checked on the host: nothing goes out.
+    let sent = r.last_transaction();
+    for bad in [
+        Vec::new(),
+        vec![path[2], path[1]],
+        vec![Waypoint {
+            time: f64::NAN,
+            joints: end,
+        }],
+    ] {
+        let e = r.trajectory(&bad).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ARG_RANGE, "{e}");
+    }
+    assert_eq!(r.last_transaction(), sent, "nothing was sent");
+    // Faster than the arm: refused by the controller, named, and nothing moves.
+    let e = r
+        .trajectory(&[Waypoint {
+            time: 0.05,
+            joints: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        }])
+        .unwrap_err();
+    assert!(e.is_refusal());
+    assert_eq!(e.code(), Code(trol_a465::arm::code::TOO_FAST));
+    assert!(e.to_string().contains("BIOS_TOO_FAST"), "{e}");
+    r.finish().unwrap();
+    let q = joints(r);
+    assert!((0..6).all(|i| (q[i] - end[i]).abs() < 1e-6), "{q:?}");
+}

@@ -139,6 +139,15 @@ mujoco_urdf() {
 }
 stage "the URDF in MuJoCo and pybullet" mujoco_urdf
 
+# `trol ros2` against a real DDS peer: Eclipse Cyclone DDS, the DDS under ROS 2's
+# rmw_cyclonedds, from the package registry, on loopback only (tests/ros2, docs/ros2.md).
+ros2_dds() {
+  cargo build --quiet -p trol-ros2 -p trol-cli &&
+    "$PY" -m pip install --quiet cyclonedds==11.0.1 &&
+    TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q tests/ros2
+}
+stage "trol ros2 against Cyclone DDS" ros2_dds
+
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).
 stage "the README's walk-through" bash scripts/readme.sh

@@ -18,7 +18,7 @@ macro_rules! eprintln {
     };
 }
 
-mod bench;
+mod beside;
 mod c500c;
 mod demo;
 mod gateway;
@@ -104,6 +104,19 @@ enum Command {
     #[command(disable_help_flag = true)]
     Bench {
         /// The benchmark and its arguments, as `trol-bench` takes them.
+        #[arg(
+            trailing_var_arg = true,
+            allow_hyphen_values = true,
+            value_name = "ARGS"
+        )]
+        args: Vec<std::ffi::OsString>,
+    },
+    /// The arm as a ROS 2 node: joint_states, robot_description, the services home and halt
+    /// (runs the `trol-ros2` program beside this one; `trol ros2 --help` says more;
+    /// docs/ros2.md).
+    #[command(disable_help_flag = true)]
+    Ros2 {
+        /// Its arguments, as `trol-ros2` takes them.
         #[arg(
             trailing_var_arg = true,
             allow_hyphen_values = true,
@@ -228,7 +241,8 @@ fn main() -> ExitCode {
         Command::Trace(t) => trace::run(t).map(|()| ExitCode::SUCCESS),
         Command::Ports { config } => ports(config).map(|()| ExitCode::SUCCESS),
         Command::Config(c) => common::show_config(&c).map(|()| ExitCode::SUCCESS),
-        Command::Bench { args } => bench::run(&args),
+        Command::Bench { args } => beside::run("trol-bench", "the benchmarks", &args),
+        Command::Ros2 { args } => beside::run("trol-ros2", "the ROS 2 node", &args),
         Command::Demo(a) => demo::run(a),
         Command::Urdf { srdf } => {
             let text = if srdf {

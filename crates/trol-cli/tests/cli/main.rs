@@ -93,6 +93,35 @@ fn trol_bench_runs_the_benchmark_program() {
     assert!(text(&o).1.contains("many"), "{:?}", text(&o));
 }
 
+/// `trol ros2 ARGS` runs `trol-ros2` from beside `trol` with the same arguments: its help,
+/// and a namespace ROS 2 would refuse, refused before anything starts (tests/ros2 drives the
+/// node itself against Cyclone DDS).
+#[test]
+fn trol_ros2_runs_the_ros2_node_program() {
+    static BUILT: std::sync::Once = std::sync::Once::new();
+    BUILT.call_once(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml");
+        let status = std::process::Command::new(cargo)
+            .args(["build", "-p", "trol-ros2", "--manifest-path"])
+            .arg(manifest)
+            .status()
+            .expect("run cargo");
+        assert!(status.success(), "building trol-ros2 failed");
+    });
+    let dir = scratch("ros2");
+    let o = trol(&dir, &["ros2", "--help"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        out.contains("--namespace") && out.contains("joint_states"),
+        "{out}"
+    );
+    let o = trol(&dir, &["ros2", "--namespace", "1arm"], "");
+    assert!(!o.status.success());
+    assert!(text(&o).1.contains("--namespace `1arm`"), "{:?}", text(&o));
+}
+
 #[test]
 fn init_says_what_to_check_when_the_controller_does_not_answer() {
     let dir = scratch("silent");

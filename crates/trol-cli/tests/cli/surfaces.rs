@@ -40,7 +40,7 @@ pub(super) fn completions_and_man_pages_come_from_the_cli_definition() {
         let o = trol(&dir, &["completions", shell], "");
         let (out, err) = text(&o);
         assert!(o.status.success(), "{shell}: {err}");
-        for sub in ["interp", "gateway", "rapl", "bench"] {
+        for sub in ["interp", "gateway", "rapl", "bench", "ros2"] {
             assert!(out.contains(sub), "{shell} completion lacks {sub}");
         }
     }

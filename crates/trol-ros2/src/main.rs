@@ -1,0 +1,412 @@
+//! `trol-ros2` (also run as `trol ros2`): one A465 as a ROS 2 node, on any TROL port, without
+//! a ROS install (issue 41; docs/ros2.md).
+//!
+//! It speaks ROS 2's topics and services with their names, types and CDR encoding through
+//! ros2-client, on the pure-Rust DDS rustdds, so that neither libtrol nor the Python wheel
+//! carries DDS. Under the namespace given:
+//!
+//! - `joint_states` (sensor_msgs/JointState): the arm's actual joints (`joint_1` ..
+//!   `joint_6`, the URDF's names), with velocities from two readings, at `--rate` Hz;
+//!   reliable, keep last 10 (ROS 2's default for topics);
+//! - `robot_description` (std_msgs/String): the URDF of `trol urdf`, transient local, so a
+//!   subscriber that starts later still gets it;
+//! - the services `home` and `halt` (std_srvs/Trigger): TROLHome(0) until the arm is homed,
+//!   TROLHalt until it stands; `success` only as TROL saw it on the arm, and on failure the
+//!   TROL code's name and meaning in `message`.
+//!
+//! ROS 2's environment is honoured: `ROS_DOMAIN_ID`, and `ROS_LOCALHOST_ONLY=1` or
+//! `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` (or `--localhost-only`) keep every packet on
+//! 127.0.0.1.
+
+mod msgs;
+
+use std::net::{IpAddr, Ipv4Addr};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use ros2_client::{
+    Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceMapping,
+    ServiceTypeName,
+    qos::{Durability, History, WhenFull},
+};
+use rustdds::DomainParticipantBuilder;
+use trol::{PosMode, Robot, Tag};
+use trol_cli::common::Conn;
+
+use msgs::{Header, JointState, Time, TriggerRequest, TriggerResponse};
+
+/// The joints' names, as `trol urdf` names them.
+const JOINTS: [&str; 6] = [
+    "joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6",
+];
+/// The node's name (in its namespace).
+const NODE: &str = "trol_a465";
+/// The longest a Home may take before the service says it failed (six axes group by group
+/// at the homing speed take well under a minute on an A465; assumption with room).
+const HOME_LIMIT: Duration = Duration::from_secs(180);
+/// How often a wait asks whether the arm still moves (TROL's own poll).
+const POLL: Duration = trol::POLL;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "trol-ros2",
+    about = "One A465 as a ROS 2 node: joint_states, robot_description, and the services home \
+             and halt, on any TROL port, without a ROS install (docs/ros2.md)",
+    after_help = "Examples:\n  trol ros2                                   # the embedded simulator\n  \
+                  ROS_LOCALHOST_ONLY=1 trol ros2 --namespace arm1 --time-scale 5\n  \
+                  trol ros2 --config trol.cfg --domain 7     # the controller trol.cfg names"
+)]
+struct Args {
+    #[command(flatten)]
+    conn: Conn,
+    /// The node's namespace (`arm1`, or `/cell/arm1`); its topics and services live under it.
+    #[arg(long, default_value = "/")]
+    namespace: String,
+    /// The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(0..=232))]
+    domain: Option<u16>,
+    /// How often joint_states is published, Hz.
+    #[arg(long, default_value_t = 50.0, value_parser = rate)]
+    rate: f64,
+    /// Keep every packet on 127.0.0.1 (also: ROS_LOCALHOST_ONLY=1 or
+    /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).
+    #[arg(long)]
+    localhost_only: bool,
+}
+
+fn rate(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.1..=500.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a rate from 0.1 to 500 Hz")),
+    }
+}
+
+fn main() {
+    trol_cli::common::catch_interrupts();
+    let args = Args::parse();
+    if let Err(e) = run(args) {
+        trol_cli::tell!("trol-ros2: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// The namespace as ROS 2 writes it: a leading `/`, no trailing one (`/` for none).
+fn namespace(ns: &str) -> Result<String, String> {
+    let trimmed = ns.trim_matches('/');
+    let full = format!("/{trimmed}");
+    let ok = trimmed.is_empty()
+        || trimmed.split('/').all(|part| {
+            part.chars()
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                && part.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        });
+    if ok {
+        Ok(full)
+    } else {
+        Err(format!(
+            "--namespace `{ns}`: ROS 2 names are letters, digits and `_`, each part starting \
+             with a letter or `_`"
+        ))
+    }
+}
+
+fn localhost_only(flag: bool) -> bool {
+    flag || std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v.trim() == "1")
+        || std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
+            .is_ok_and(|v| v.trim().eq_ignore_ascii_case("LOCALHOST"))
+}
+
+fn domain(flag: Option<u16>) -> Result<u16, String> {
+    if let Some(d) = flag {
+        return Ok(d);
+    }
+    match std::env::var("ROS_DOMAIN_ID") {
+        Ok(v) if !v.trim().is_empty() => v
+            .trim()
+            .parse::<u16>()
+            .ok()
+            .filter(|d| *d <= 232)
+            .ok_or_else(|| format!("ROS_DOMAIN_ID `{v}` is not a domain from 0 to 232")),
+        _ => Ok(0),
+    }
+}
+
+/// The TROL error in words for a service's `message`: its code's name, and what TROL said.
+fn words(e: &trol::Error) -> String {
+    format!("{} ({}): {e}", e.code().0, e.code())
+}
+
+fn run(args: Args) -> Result<(), String> {
+    let ns = namespace(&args.namespace)?;
+    let domain = domain(args.domain)?;
+    let local = localhost_only(args.localhost_only);
+    let (robot, cfg) = args.conn.robot()?;
+    let robot = Arc::new(Mutex::new(robot));
+
+    let mut builder = DomainParticipantBuilder::new(domain);
+    if local {
+        builder = builder.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
+    }
+    let participant = builder
+        .build()
+        .map_err(|e| format!("cannot join ROS 2 domain {domain}: {e:?}"))?;
+    let context = Context::from_domain_participant(participant)
+        .map_err(|e| format!("cannot start ROS 2: {e:?}"))?;
+    let mut node = context
+        .new_node(
+            NodeName::new(&ns, NODE).map_err(|e| format!("node name: {e:?}"))?,
+            NodeOptions::new().enable_rosout(false),
+        )
+        .map_err(|e| format!("cannot create the node: {e:?}"))?;
+
+    let name = |base: &str| Name::new(&ns, base).map_err(|e| format!("{base}: {e:?}"));
+    let topic_qos = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::DEFAULT)
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 10 });
+    let latched_qos = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::DEFAULT)
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth: 1 });
+    let service_qos = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::DEFAULT)
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 10 });
+    let create = |e| format!("ROS 2: {e:?}");
+
+    let states_topic = node
+        .create_topic(
+            &name("joint_states")?,
+            MessageTypeName::new("sensor_msgs", "JointState"),
+            &topic_qos,
+        )
+        .map_err(create)?;
+    let states = node
+        .create_publisher::<JointState>(&states_topic, None)
+        .map_err(create)?;
+    let description_topic = node
+        .create_topic(
+            &name("robot_description")?,
+            MessageTypeName::new("std_msgs", "String"),
+            &latched_qos,
+        )
+        .map_err(create)?;
+    let description = node
+        .create_publisher::<String>(&description_topic, None)
+        .map_err(create)?;
+    description
+        .publish(trol_a465::urdf::urdf())
+        .map_err(|e| format!("robot_description: {e:?}"))?;
+    let trigger = ServiceTypeName::new("std_srvs", "Trigger");
+    let home = node
+        .create_server::<TriggerRequest, TriggerResponse>(
+            ServiceMapping::Cyclone,
+            &name("home")?,
+            &trigger,
+            service_qos.clone(),
+            service_qos.clone(),
+        )
+        .map_err(create)?;
+    let halt = node
+        .create_server::<TriggerRequest, TriggerResponse>(
+            ServiceMapping::Cyclone,
+            &name("halt")?,
+            &trigger,
+            service_qos.clone(),
+            service_qos,
+        )
+        .map_err(create)?;
+
+    let prefix = if ns == "/" { String::new() } else { ns.clone() };
+    trol_cli::say!(
+        "trol-ros2: node {prefix}/{NODE} on ROS 2 domain {domain}{}, arm on port {}: \
+         {prefix}/joint_states at {} Hz, {prefix}/robot_description, services {prefix}/home and \
+         {prefix}/halt",
+        if local { " (localhost only)" } else { "" },
+        cfg.port,
+        args.rate
+    );
+
+    let period = Duration::from_secs_f64(1.0 / args.rate);
+    let mut next = Instant::now();
+    let mut last: Option<([f64; 6], Instant)> = None;
+    // Halts served: a Home during which one came is not reported homed.
+    let halts = Arc::new(std::sync::atomic::AtomicU64::new(0));
+    // Homes under way: their answers come back on a channel, so joint_states keeps going.
+    let (done_tx, done_rx) =
+        mpsc::channel::<(ros2_client::service::RmwRequestId, TriggerResponse)>();
+    let mut reading_failed = false;
+    while !trol_cli::common::interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+        // joint_states.
+        let read = robot
+            .lock()
+            .map_err(|_| "the arm's connection was poisoned".to_string())?
+            .position(Tag::Joint, PosMode::Actual);
+        match read {
+            Ok(loc) => {
+                reading_failed = false;
+                let q = loc.to_array6();
+                let now = Instant::now();
+                let velocity = match last {
+                    Some((p, at)) if now > at => {
+                        let dt = (now - at).as_secs_f64();
+                        (0..6).map(|i| (q[i] - p[i]) / dt).collect()
+                    }
+                    _ => vec![0.0; 6],
+                };
+                last = Some((q, now));
+                let msg = JointState {
+                    header: Header {
+                        stamp: Time::now(),
+                        frame_id: String::new(),
+                    },
+                    name: JOINTS.iter().map(|s| s.to_string()).collect(),
+                    position: q.to_vec(),
+                    velocity,
+                    effort: Vec::new(),
+                };
+                if let Err(e) = states.publish(msg) {
+                    tracing::warn!("joint_states: {e:?}");
+                }
+            }
+            Err(e) => {
+                // Said once per run of failures; publishing resumes when readings do.
+                if !reading_failed {
+                    trol_cli::tell!("trol-ros2: cannot read the arm: {e}");
+                }
+                reading_failed = true;
+                last = None;
+            }
+        }
+        // Services.
+        while let Ok(Some((id, _))) = home.receive_request() {
+            let robot = robot.clone();
+            let done = done_tx.clone();
+            let halts = halts.clone();
+            std::thread::spawn(move || {
+                let _ = done.send((id, home_arm(&robot, &halts)));
+            });
+        }
+        while let Ok(Some((id, _))) = halt.receive_request() {
+            halts.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            let answer = match robot.lock() {
+                Ok(mut r) => match r.halt() {
+                    Ok(()) => TriggerResponse {
+                        success: true,
+                        message: "the arm stands".into(),
+                    },
+                    Err(e) => TriggerResponse {
+                        success: false,
+                        message: words(&e),
+                    },
+                },
+                Err(_) => TriggerResponse {
+                    success: false,
+                    message: "the arm's connection was poisoned".into(),
+                },
+            };
+            if let Err(e) = halt.send_response(id, answer) {
+                tracing::warn!("halt's response: {e:?}");
+            }
+        }
+        while let Ok((id, answer)) = done_rx.try_recv() {
+            if let Err(e) = home.send_response(id, answer) {
+                tracing::warn!("home's response: {e:?}");
+            }
+        }
+        next += period;
+        let now = Instant::now();
+        if next > now {
+            std::thread::sleep(next - now);
+        } else {
+            // Behind (a slow line): start again from now, not in a burst.
+            next = now;
+        }
+    }
+    // Leaving: an arm that still moves by this node's doing is stopped.
+    if let Ok(mut r) = robot.lock()
+        && r.is_moving().unwrap_or(false)
+    {
+        let _ = r.halt();
+    }
+    Ok(())
+}
+
+/// TROLHome(0), then wait until the arm is done with the connection free between polls (a
+/// halt gets through), as TROLHome does: success only once the controller's Finish saw it
+/// done (a real controller's backend ends a Home that left the arm unhomed with a code), and
+/// never when a halt came meanwhile (the axes after it may not be homed).
+fn home_arm(robot: &Mutex<Robot>, halts: &std::sync::atomic::AtomicU64) -> TriggerResponse {
+    let halts_before = halts.load(std::sync::atomic::Ordering::SeqCst);
+    let fail = |message: String| TriggerResponse {
+        success: false,
+        message,
+    };
+    let sent = match robot.lock() {
+        Ok(mut r) => r.call(&trol::table::HOME, &[trol::Value::Int(0)]),
+        Err(_) => return fail("the arm's connection was poisoned".into()),
+    };
+    if let Err(e) = sent {
+        return fail(words(&e));
+    }
+    let until = Instant::now() + HOME_LIMIT;
+    loop {
+        let moving = match robot.lock() {
+            Ok(mut r) => r.is_moving(),
+            Err(_) => return fail("the arm's connection was poisoned".into()),
+        };
+        match moving {
+            Ok(false) => break,
+            Ok(true) if Instant::now() < until => std::thread::sleep(POLL),
+            Ok(true) => {
+                return fail(format!(
+                    "the arm still moves after {} s: call halt",
+                    HOME_LIMIT.as_secs()
+                ));
+            }
+            Err(e) => return fail(words(&e)),
+        }
+    }
+    if halts.load(std::sync::atomic::Ordering::SeqCst) != halts_before {
+        return fail("halted during homing: the axes may not be homed; call home again".into());
+    }
+    TriggerResponse {
+        success: true,
+        message: "the arm is homed".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn namespaces_are_written_as_ros_2_writes_them_and_bad_ones_are_refused() {
+        assert_eq!(namespace("/").unwrap(), "/");
+        assert_eq!(namespace("").unwrap(), "/");
+        assert_eq!(namespace("arm1").unwrap(), "/arm1");
+        assert_eq!(namespace("/cell/arm_2/").unwrap(), "/cell/arm_2");
+        for bad in ["1arm", "arm-1", "a b", "cell//arm"] {
+            let e = namespace(bad).unwrap_err();
+            assert!(e.contains("--namespace"), "{e}");
+        }
+    }
+
+    #[test]
+    fn rates_outside_what_the_node_can_keep_are_refused() {
+        assert_eq!(rate("50").unwrap(), 50.0);
+        for bad in ["0", "-5", "nan", "1000", "fast"] {
+            assert!(rate(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_domain_flag_wins_and_is_bounded_as_ros_2_bounds_it() {
+        assert_eq!(domain(Some(7)).unwrap(), 7);
+        assert!(Args::try_parse_from(["trol-ros2", "--domain", "233"]).is_err());
+        assert!(Args::try_parse_from(["trol-ros2", "--domain", "232"]).is_ok());
+    }
+}

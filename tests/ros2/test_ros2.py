@@ -38,7 +38,7 @@ os.environ["CYCLONEDDS_URI"] = (
 from cyclonedds.core import Qos, Policy  # noqa: E402
 from cyclonedds.domain import DomainParticipant  # noqa: E402
 from cyclonedds.idl import IdlStruct  # noqa: E402
-from cyclonedds.idl.types import float64, int32, int64, sequence, uint8, uint32, uint64  # noqa: E402
+from cyclonedds.idl.types import array, float64, int8, int32, int64, sequence, uint8, uint16, uint32, uint64  # noqa: E402
 from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
@@ -86,6 +86,255 @@ class TriggerResponse(IdlStruct, typename="std_srvs::srv::dds_::Trigger_Response
     message: str
 
 
+# control_msgs/action/FollowJointTrajectory (Humble, Jazzy) and what it is made of, field for
+# field from trajectory_msgs, geometry_msgs, control_msgs, unique_identifier_msgs and
+# action_msgs; the action's services carry rmw_cyclonedds's request header like Trigger's.
+
+@dataclass
+class UUID(IdlStruct, typename="unique_identifier_msgs::msg::dds_::UUID_"):
+    uuid: array[uint8, 16]
+
+
+@dataclass
+class Duration(IdlStruct, typename="builtin_interfaces::msg::dds_::Duration_"):
+    sec: int32
+    nanosec: uint32
+
+
+@dataclass
+class JointTrajectoryPoint(IdlStruct, typename="trajectory_msgs::msg::dds_::JointTrajectoryPoint_"):
+    positions: sequence[float64]
+    velocities: sequence[float64]
+    accelerations: sequence[float64]
+    effort: sequence[float64]
+    time_from_start: Duration
+
+
+@dataclass
+class JointTrajectory(IdlStruct, typename="trajectory_msgs::msg::dds_::JointTrajectory_"):
+    header: Header
+    joint_names: sequence[str]
+    points: sequence[JointTrajectoryPoint]
+
+
+@dataclass
+class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x: float64
+    y: float64
+    z: float64
+
+
+@dataclass
+class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    x: float64
+    y: float64
+    z: float64
+    w: float64
+
+
+@dataclass
+class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
+    translation: Vector3
+    rotation: Quaternion
+
+
+@dataclass
+class Twist(IdlStruct, typename="geometry_msgs::msg::dds_::Twist_"):
+    linear: Vector3
+    angular: Vector3
+
+
+@dataclass
+class MultiDOFJointTrajectoryPoint(IdlStruct, typename="trajectory_msgs::msg::dds_::MultiDOFJointTrajectoryPoint_"):
+    transforms: sequence[Transform]
+    velocities: sequence[Twist]
+    accelerations: sequence[Twist]
+    time_from_start: Duration
+
+
+@dataclass
+class MultiDOFJointTrajectory(IdlStruct, typename="trajectory_msgs::msg::dds_::MultiDOFJointTrajectory_"):
+    header: Header
+    joint_names: sequence[str]
+    points: sequence[MultiDOFJointTrajectoryPoint]
+
+
+@dataclass
+class JointTolerance(IdlStruct, typename="control_msgs::msg::dds_::JointTolerance_"):
+    name: str
+    position: float64
+    velocity: float64
+    acceleration: float64
+
+
+@dataclass
+class JointComponentTolerance(IdlStruct, typename="control_msgs::msg::dds_::JointComponentTolerance_"):
+    joint_name: str
+    component: uint16
+    position: float64
+    velocity: float64
+    acceleration: float64
+
+
+FJT = "control_msgs::action::dds_::FollowJointTrajectory_"
+
+
+@dataclass
+class FollowGoal(IdlStruct, typename=FJT + "Goal_"):
+    trajectory: JointTrajectory
+    multi_dof_trajectory: MultiDOFJointTrajectory
+    path_tolerance: sequence[JointTolerance]
+    component_path_tolerance: sequence[JointComponentTolerance]
+    goal_tolerance: sequence[JointTolerance]
+    component_goal_tolerance: sequence[JointComponentTolerance]
+    goal_time_tolerance: Duration
+
+
+@dataclass
+class FollowResult(IdlStruct, typename=FJT + "Result_"):
+    error_code: int32
+    error_string: str
+
+
+@dataclass
+class FollowFeedback(IdlStruct, typename=FJT + "Feedback_"):
+    header: Header
+    joint_names: sequence[str]
+    desired: JointTrajectoryPoint
+    actual: JointTrajectoryPoint
+    error: JointTrajectoryPoint
+    multi_dof_joint_names: sequence[str]
+    multi_dof_desired: MultiDOFJointTrajectoryPoint
+    multi_dof_actual: MultiDOFJointTrajectoryPoint
+    multi_dof_error: MultiDOFJointTrajectoryPoint
+
+
+@dataclass
+class SendGoalRequest(IdlStruct, typename=FJT + "SendGoal_Request_"):
+    client_guid: uint64
+    sequence_number: int64
+    goal_id: UUID
+    goal: FollowGoal
+
+
+@dataclass
+class SendGoalResponse(IdlStruct, typename=FJT + "SendGoal_Response_"):
+    client_guid: uint64
+    sequence_number: int64
+    accepted: bool
+    stamp: Time
+
+
+@dataclass
+class GetResultRequest(IdlStruct, typename=FJT + "GetResult_Request_"):
+    client_guid: uint64
+    sequence_number: int64
+    goal_id: UUID
+
+
+@dataclass
+class GetResultResponse(IdlStruct, typename=FJT + "GetResult_Response_"):
+    client_guid: uint64
+    sequence_number: int64
+    status: int8
+    result: FollowResult
+
+
+@dataclass
+class FeedbackMessage(IdlStruct, typename=FJT + "FeedbackMessage_"):
+    goal_id: UUID
+    feedback: FollowFeedback
+
+
+@dataclass
+class GoalInfo(IdlStruct, typename="action_msgs::msg::dds_::GoalInfo_"):
+    goal_id: UUID
+    stamp: Time
+
+
+@dataclass
+class GoalStatus(IdlStruct, typename="action_msgs::msg::dds_::GoalStatus_"):
+    goal_info: GoalInfo
+    status: int8
+
+
+@dataclass
+class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArray_"):
+    status_list: sequence[GoalStatus]
+
+
+@dataclass
+class CancelGoalRequest(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Request_"):
+    client_guid: uint64
+    sequence_number: int64
+    goal_info: GoalInfo
+
+
+@dataclass
+class CancelGoalResponse(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Response_"):
+    client_guid: uint64
+    sequence_number: int64
+    return_code: int8
+    goals_canceling: sequence[GoalInfo]
+
+
+GC = "control_msgs::action::dds_::GripperCommand_"
+
+
+@dataclass
+class GripperCommand(IdlStruct, typename="control_msgs::msg::dds_::GripperCommand_"):
+    position: float64
+    max_effort: float64
+
+
+@dataclass
+class GripperGoal(IdlStruct, typename=GC + "Goal_"):
+    command: GripperCommand
+
+
+@dataclass
+class GripperResult(IdlStruct, typename=GC + "Result_"):
+    position: float64
+    effort: float64
+    stalled: bool
+    reached_goal: bool
+
+
+@dataclass
+class GripperSendGoalRequest(IdlStruct, typename=GC + "SendGoal_Request_"):
+    client_guid: uint64
+    sequence_number: int64
+    goal_id: UUID
+    goal: GripperGoal
+
+
+@dataclass
+class GripperSendGoalResponse(IdlStruct, typename=GC + "SendGoal_Response_"):
+    client_guid: uint64
+    sequence_number: int64
+    accepted: bool
+    stamp: Time
+
+
+@dataclass
+class GripperGetResultRequest(IdlStruct, typename=GC + "GetResult_Request_"):
+    client_guid: uint64
+    sequence_number: int64
+    goal_id: UUID
+
+
+@dataclass
+class GripperGetResultResponse(IdlStruct, typename=GC + "GetResult_Response_"):
+    client_guid: uint64
+    sequence_number: int64
+    status: int8
+    result: GripperResult
+
+
+# action_msgs/GoalStatus's values.
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+
+
 def node_binary() -> Path:
     """`trol-ros2`: $TROL_ROS2_BIN, else target/debug/trol-ros2."""
     given = os.environ.get("TROL_ROS2_BIN")
@@ -95,10 +344,10 @@ def node_binary() -> Path:
 class Node:
     """A `trol-ros2` process on the embedded simulator, on its own domain."""
 
-    def __init__(self, domain: int, namespace: str, *extra: str) -> None:
+    def __init__(self, domain: int, namespace: str, time_scale: float = 10) -> None:
         env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
         self.proc = subprocess.Popen(
-            [str(node_binary()), "--port", "sim", "--time-scale", "10", "--namespace", namespace, *extra],
+            [str(node_binary()), "--port", "sim", "--time-scale", str(time_scale), "--namespace", namespace],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True, env=env,
         )
         assert self.proc.stdout is not None
@@ -155,25 +404,40 @@ def wait_for(what: str, fn, limit: float = 30.0):  # type: ignore[no-untyped-def
     raise AssertionError(f"no {what} within {limit} s")
 
 
+class Service:
+    """A ROS 2 service client as rmw_cyclonedds makes one: requests with its header on
+    `rq/<name>Request`, replies with the same header on `rr/<name>Reply`."""
+
+    def __init__(self, dp: DomainParticipant, name: str, req: type, resp: type) -> None:
+        qos = Qos(RELIABLE, Policy.History.KeepLast(10))
+        self.name, self.resp = name, resp
+        self.writer = DataWriter(dp, Topic(dp, f"rq/{name}Request", req), qos=qos)
+        self.reader = DataReader(dp, Topic(dp, f"rr/{name}Reply", resp), qos=qos)
+        self.guid = random.getrandbits(63)
+        self.seq = 0
+        # Requests go once the service's reader and its reply writer are matched.
+        wait_for(f"{name}'s server", lambda: True if self.writer.get_matched_subscriptions() else None)
+        wait_for(f"{name}'s reply writer", lambda: True if self.reader.get_matched_publications() else None)
+
+    def call(self, make, limit: float = 60.0):  # type: ignore[no-untyped-def]
+        self.seq += 1
+        seq = self.seq
+        self.writer.write(make(self.guid, seq))
+
+        def answer():  # type: ignore[no-untyped-def]
+            for r in self.reader.take(N=10):
+                if isinstance(r, self.resp) and r.client_guid == self.guid and r.sequence_number == seq:
+                    return r
+            return None
+
+        return wait_for(f"{self.name}'s reply", answer, limit)
+
+
 def call_trigger(dp: DomainParticipant, ns: str, service: str, seq: int, limit: float = 60.0) -> TriggerResponse:
-    """A std_srvs/Trigger call as rmw_cyclonedds makes it: the request with its header on
-    `rq/<ns>/<service>Request`, the reply with the same header on `rr/<ns>/<service>Reply`."""
-    qos = Qos(RELIABLE, Policy.History.KeepLast(10))
-    writer = DataWriter(dp, Topic(dp, f"rq/{ns}/{service}Request", TriggerRequest), qos=qos)
-    reader = DataReader(dp, Topic(dp, f"rr/{ns}/{service}Reply", TriggerResponse), qos=qos)
-    guid = random.getrandbits(63)
-    # The request goes once the service's reader is matched (discovery takes a moment).
-    wait_for(f"{service}'s server", lambda: True if writer.get_matched_subscriptions() else None)
-    wait_for(f"{service}'s reply writer", lambda: True if reader.get_matched_publications() else None)
-    writer.write(TriggerRequest(client_guid=guid, sequence_number=seq, structure_needs_at_least_one_member=0))
-
-    def answer() -> TriggerResponse | None:
-        for r in reader.take(N=10):
-            if isinstance(r, TriggerResponse) and r.client_guid == guid and r.sequence_number == seq:
-                return r
-        return None
-
-    return wait_for(f"{service}'s reply", answer, limit)
+    """A std_srvs/Trigger call."""
+    s = Service(dp, f"{ns}/{service}", TriggerRequest, TriggerResponse)
+    s.seq = seq - 1
+    return s.call(lambda g, q: TriggerRequest(client_guid=g, sequence_number=q, structure_needs_at_least_one_member=0), limit)
 
 
 @pytest.mark.timeout(180)
@@ -245,3 +509,150 @@ def test_two_arms_in_two_namespaces_do_not_disturb_each_other(domain: int) -> No
     finally:
         one.stop()
         two.stop()
+
+
+JOINTS = [f"joint_{i}" for i in range(1, 7)]
+
+
+def trajectory_goal(names: list[str], points: list[tuple[float, list[float]]]) -> FollowGoal:
+    return FollowGoal(
+        trajectory=JointTrajectory(
+            header=Header(stamp=Time(0, 0), frame_id=""),
+            joint_names=names,
+            points=[JointTrajectoryPoint(positions=q, velocities=[], accelerations=[], effort=[],
+                                         time_from_start=Duration(int(t), int(round((t % 1) * 1e9))))
+                    for t, q in points],
+        ),
+        multi_dof_trajectory=MultiDOFJointTrajectory(header=Header(stamp=Time(0, 0), frame_id=""),
+                                                     joint_names=[], points=[]),
+        path_tolerance=[], component_path_tolerance=[], goal_tolerance=[], component_goal_tolerance=[],
+        goal_time_tolerance=Duration(0, 0),
+    )
+
+
+class Action:
+    """A FollowJointTrajectory client on `<ns>/follow_joint_trajectory`."""
+
+    def __init__(self, dp: DomainParticipant, ns: str) -> None:
+        base = f"{ns}/follow_joint_trajectory/_action"
+        self.send = Service(dp, f"{base}/send_goal", SendGoalRequest, SendGoalResponse)
+        self.result = Service(dp, f"{base}/get_result", GetResultRequest, GetResultResponse)
+        self.cancel = Service(dp, f"{base}/cancel_goal", CancelGoalRequest, CancelGoalResponse)
+        self.feedback = DataReader(dp, Topic(dp, f"rt/{base}/feedback", FeedbackMessage),
+                                   qos=Qos(RELIABLE, Policy.History.KeepLast(100)))
+        self.status = DataReader(dp, Topic(dp, f"rt/{base}/status", GoalStatusArray),
+                                 qos=Qos(RELIABLE, Policy.Durability.TransientLocal, Policy.History.KeepLast(1)))
+
+    def goal(self, goal: FollowGoal) -> UUID:
+        gid = UUID(uuid=list(random.randbytes(16)))
+        r = self.send.call(lambda g, q: SendGoalRequest(client_guid=g, sequence_number=q, goal_id=gid, goal=goal))
+        assert r.accepted
+        return gid
+
+    def outcome(self, gid: UUID, limit: float = 60.0) -> GetResultResponse:
+        return self.result.call(lambda g, q: GetResultRequest(client_guid=g, sequence_number=q, goal_id=gid), limit)
+
+
+@pytest.fixture
+def arm_at_1x(domain: int) -> Iterator[Node]:
+    """A node on the embedded simulator at real time (so a trajectory takes its own time)."""
+    node = Node(domain, "arm1", time_scale=1)
+    try:
+        assert "/arm1/follow_joint_trajectory and /arm1/gripper_cmd" in node.first, node.first
+        yield node
+    finally:
+        node.stop()
+
+
+@pytest.mark.timeout(240)
+def test_follow_joint_trajectory_runs_a_goal_with_feedback_and_its_result(arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    assert call_trigger(dp, "arm1", "home", 1).success
+    action = Action(dp, "arm1")
+    states = states_reader(dp, "arm1")
+    # The joints in another order than the URDF's: the goal's order is kept in the feedback.
+    names = list(reversed(JOINTS))
+    end = [0.2, 0.1, 0.3, 0.25, 0.2, 0.1]  # joint_6 .. joint_1
+    gid = action.goal(trajectory_goal(names, [(0.8, [0.1, 0.05, 0.15, 0.1, 0.1, 0.05]), (1.6, end)]))
+    r = action.outcome(gid)
+    assert (r.status, r.result.error_code) == (SUCCEEDED, 0), r.result.error_string
+    feedback = [m for m in action.feedback.take(N=100) if isinstance(m, FeedbackMessage) and list(m.goal_id.uuid) == list(gid.uuid)]
+    assert feedback, "no feedback"
+    f = feedback[-1].feedback
+    assert list(f.joint_names) == names and len(f.desired.positions) == 6 and len(f.actual.positions) == 6
+    # The arm is where the last point asked, as joint_states says.
+    time.sleep(0.5)
+    last = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    assert list(last.position) == pytest.approx(list(reversed(end)), abs=2e-3)
+    # The status says it too.
+    st = wait_for("the goal's status", lambda: next(
+        (g.status for a in action.status.take(N=5) if isinstance(a, GoalStatusArray)
+         for g in a.status_list if list(g.goal_info.goal_id.uuid) == list(gid.uuid)), None))
+    assert st == SUCCEEDED
+
+
+@pytest.mark.timeout(240)
+def test_follow_joint_trajectory_refuses_a_bad_goal_with_the_action_s_code_and_moves_nothing(
+        arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    assert call_trigger(dp, "arm1", "home", 1).success
+    action = Action(dp, "arm1")
+    # A joint missing.
+    r = action.outcome(action.goal(trajectory_goal(JOINTS[:5], [(1.0, [0.1] * 5)])))
+    assert (r.status, r.result.error_code) == (ABORTED, -2)
+    assert "joint_6" in r.result.error_string
+    # Faster than the arm: the controller's BIOS_TOO_FAST, with its name.
+    r = action.outcome(action.goal(trajectory_goal(JOINTS, [(0.05, [1.0, 0, 0, 0, 0, 0])])))
+    assert (r.status, r.result.error_code) == (ABORTED, -1)
+    assert "BIOS_TOO_FAST" in r.result.error_string
+    states = states_reader(dp, "arm1")
+    time.sleep(0.5)
+    last = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    assert list(last.position) == pytest.approx([0.0] * 6, abs=2e-3)
+
+
+@pytest.mark.timeout(240)
+def test_cancelling_a_trajectory_halts_the_arm(arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    assert call_trigger(dp, "arm1", "home", 1).success
+    action = Action(dp, "arm1")
+    target = [1.2, 0.6, 1.0, 1.0, 0.8, 1.0]
+    gid = action.goal(trajectory_goal(JOINTS, [(8.0, target)]))
+    wait_for("feedback", lambda: True if action.feedback.take(N=10) else None)
+    time.sleep(1.0)
+    r = action.cancel.call(lambda g, q: CancelGoalRequest(client_guid=g, sequence_number=q,
+                                                         goal_info=GoalInfo(goal_id=gid, stamp=Time(0, 0))))
+    assert r.return_code == 0 and [list(x.goal_id.uuid) for x in r.goals_canceling] == [list(gid.uuid)]
+    out = action.outcome(gid)
+    assert out.status == CANCELED, out.result.error_string
+    # The arm stands short of the target: two readings apart agree, and it is not there.
+    states = states_reader(dp, "arm1")
+    time.sleep(0.5)
+    a = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    time.sleep(0.5)
+    b = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    assert list(a.position) == pytest.approx(list(b.position), abs=1e-3)
+    assert abs(b.position[0] - target[0]) > 0.1
+
+
+@pytest.mark.timeout(240)
+def test_gripper_cmd_moves_the_fingers_and_says_whether_they_reached_the_gap(arm1: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    base = "arm1/gripper_cmd/_action"
+    send = Service(dp, f"{base}/send_goal", GripperSendGoalRequest, GripperSendGoalResponse)
+    result = Service(dp, f"{base}/get_result", GripperGetResultRequest, GripperGetResultResponse)
+
+    def grip(gap_m: float) -> GripperGetResultResponse:
+        gid = UUID(uuid=list(random.randbytes(16)))
+        goal = GripperGoal(command=GripperCommand(position=gap_m, max_effort=10.0))
+        r = send.call(lambda g, q: GripperSendGoalRequest(client_guid=g, sequence_number=q, goal_id=gid, goal=goal))
+        assert r.accepted
+        return result.call(lambda g, q: GripperGetResultRequest(client_guid=g, sequence_number=q, goal_id=gid))
+
+    r = grip(0.02)
+    assert r.status == SUCCEEDED
+    assert r.result.reached_goal and not r.result.stalled
+    assert r.result.position == pytest.approx(0.02, abs=1e-3)
+    # A gap the fingers cannot make: aborted, nothing reached.
+    r = grip(0.2)
+    assert r.status == ABORTED and not r.result.reached_goal

@@ -18,6 +18,8 @@
 //! `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` (or `--localhost-only`) keep every packet on
 //! 127.0.0.1.
 
+mod actions;
+mod follow;
 mod msgs;
 
 use std::net::{IpAddr, Ipv4Addr};
@@ -27,18 +29,21 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use ros2_client::{
-    Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceMapping,
-    ServiceTypeName,
+    ActionTypeName, Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile,
+    ServiceMapping, ServiceTypeName,
     qos::{Durability, History, WhenFull},
 };
 use rustdds::DomainParticipantBuilder;
 use trol::{PosMode, Robot, Tag};
 use trol_cli::common::Conn;
 
-use msgs::{Header, JointState, Time, TriggerRequest, TriggerResponse};
+use msgs::{
+    FollowFeedback, FollowGoal, FollowResult, GripperFeedback, GripperGoal, GripperResult, Header,
+    JointState, Time, TriggerRequest, TriggerResponse,
+};
 
 /// The joints' names, as `trol urdf` names them.
-const JOINTS: [&str; 6] = [
+pub(crate) const JOINTS: [&str; 6] = [
     "joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6",
 ];
 /// The node's name (in its namespace).
@@ -135,7 +140,7 @@ fn domain(flag: Option<u16>) -> Result<u16, String> {
 }
 
 /// The TROL error in words for a service's `message`: its code's name, and what TROL said.
-fn words(e: &trol::Error) -> String {
+pub(crate) fn words(e: &trol::Error) -> String {
     format!("{} ({}): {e}", e.code().0, e.code())
 }
 
@@ -220,16 +225,42 @@ fn run(args: Args) -> Result<(), String> {
         )
         .map_err(create)?;
 
+    let follow = node
+        .create_action_server::<FollowGoal, FollowResult, FollowFeedback>(
+            ServiceMapping::Cyclone,
+            &name("follow_joint_trajectory")?,
+            &ActionTypeName::new("control_msgs", "FollowJointTrajectory"),
+            actions::action_qos(),
+        )
+        .map_err(create)?;
+    let gripper = node
+        .create_action_server::<GripperGoal, GripperResult, GripperFeedback>(
+            ServiceMapping::Cyclone,
+            &name("gripper_cmd")?,
+            &ActionTypeName::new("control_msgs", "GripperCommand"),
+            actions::action_qos(),
+        )
+        .map_err(create)?;
+    // The embedded simulator runs its clock `time_scale` times faster: the desired path of a
+    // trajectory is read on the arm's clock.
+    let mut trajectories = actions::Follow::new(if cfg.port == "sim" {
+        cfg.time_scale
+    } else {
+        1.0
+    });
+
     let prefix = if ns == "/" { String::new() } else { ns.clone() };
     trol_cli::say!(
         "trol-ros2: node {prefix}/{NODE} on ROS 2 domain {domain}{}, arm on port {}: \
          {prefix}/joint_states at {} Hz, {prefix}/robot_description, services {prefix}/home and \
-         {prefix}/halt",
+         {prefix}/halt, actions {prefix}/follow_joint_trajectory and \
+         {prefix}/gripper_cmd",
         if local { " (localhost only)" } else { "" },
         cfg.port,
         args.rate
     );
 
+    let mut grips = actions::Gripper::new();
     let period = Duration::from_secs_f64(1.0 / args.rate);
     let mut next = Instant::now();
     let mut last: Option<([f64; 6], Instant)> = None;
@@ -312,6 +343,8 @@ fn run(args: Args) -> Result<(), String> {
                 tracing::warn!("halt's response: {e:?}");
             }
         }
+        trajectories.serve(&follow, &robot, last.map(|(q, _)| q), &halts);
+        grips.serve(&gripper, &robot, &halts);
         while let Ok((id, answer)) = done_rx.try_recv() {
             if let Err(e) = home.send_response(id, answer) {
                 tracing::warn!("home's response: {e:?}");

@@ -656,3 +656,70 @@ def test_gripper_cmd_moves_the_fingers_and_says_whether_they_reached_the_gap(arm
     # A gap the fingers cannot make: aborted, nothing reached.
     r = grip(0.2)
     assert r.status == ABORTED and not r.result.reached_goal
+
+
+def trol_binary() -> Path:
+    given = os.environ.get("TROL_BIN")
+    return Path(given) if given else ROOT / "target" / "debug" / "trol"
+
+
+class Controller:
+    """A simulated real controller as its own process (`trol sim --rapl` or `--mars`)."""
+
+    def __init__(self, kind: str, tmp: Path) -> None:
+        profile = subprocess.run([str(trol_binary()), "sim", kind, "--print-profile"],
+                                 check=True, capture_output=True, text=True).stdout
+        (tmp / "arm.toml").write_text(profile)
+        self.proc = subprocess.Popen([str(trol_binary()), "sim", kind, "--time-scale", "5"],
+                                     stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        assert "serving on " in line, line
+        self.port = line.split("serving on ", 1)[1].split()[0]
+        threading.Thread(target=self.proc.stdout.read, daemon=True).start()
+        prefix, key = ("rapl", "rapl-profile") if kind == "--rapl" else ("mars", "mars-profile")
+        (tmp / "trol.cfg").write_text(f"9600\n{prefix}:{self.port}\n0 0 0 0 0 0\n{key} = {tmp / 'arm.toml'}\n")
+        self.cfg = tmp / "trol.cfg"
+
+    def stop(self) -> None:
+        self.proc.kill()
+        self.proc.wait()
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("kind,timed", [("--mars", True), ("--rapl", False)])
+def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
+        kind: str, timed: bool, tmp_path: Path, domain: int) -> None:
+    controller = Controller(kind, tmp_path)
+    env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
+    node = subprocess.Popen([str(node_binary()), "--config", str(controller.cfg), "--namespace", "cell", "-v"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                            text=True, env=env)
+    log: list[str] = []
+    threading.Thread(target=lambda: log.extend(node.stderr), daemon=True).start()  # type: ignore[arg-type]
+    try:
+        assert node.stdout is not None
+        first = node.stdout.readline()
+        assert "node /cell/trol_a465" in first and controller.port in first, first
+        threading.Thread(target=node.stdout.read, daemon=True).start()
+        dp = DomainParticipant(domain)
+        r = call_trigger(dp, "cell", "home", 1, limit=120)
+        assert r.success, r.message
+        action = Action(dp, "cell")
+        end = [0.2, 0.1, 0.6, 0.1, 0.5, 0.1]
+        gid = action.goal(trajectory_goal(JOINTS, [(3.0, [0.1, 0.05, 0.4, 0.05, 0.3, 0.05]), (6.0, end)]))
+        out = action.outcome(gid, limit=120)
+        assert (out.status, out.result.error_code) == (SUCCEEDED, 0), out.result.error_string + "".join(log[-40:])
+        # A C500 has no timed path, and the result says so.
+        assert ("without its times" in out.result.error_string) == (not timed), out.result.error_string
+        states = states_reader(dp, "cell")
+        s = wait_for("joint states", lambda: next(
+            (x for x in reversed(states.take(N=50)) if isinstance(x, JointState)), None))
+        assert list(s.position) == pytest.approx(end, abs=3e-3)
+    finally:
+        node.terminate()
+        try:
+            node.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            node.kill()
+        controller.stop()

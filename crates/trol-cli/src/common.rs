@@ -195,15 +195,32 @@ pub fn embedded_viewed(
 
 /// Logs to stderr: `RUST_LOG` if set, else warnings, and more with each `-v`.
 pub fn init_logging(verbose: u8) {
+    init_logging_quieting(verbose, "");
+}
+
+/// [`init_logging`], with `quiet` (directives such as `rustdds=error`) added to what `-v`
+/// asks for: libraries whose own log would drown TROL's.
+pub fn init_logging_quieting(verbose: u8, quiet: &str) {
     use tracing_subscriber::EnvFilter;
     let filter = if verbose > 0 {
-        EnvFilter::new(match verbose {
+        let level = match verbose {
             1 => "info",
             2 => "debug",
             _ => "trace",
+        };
+        EnvFilter::new(if quiet.is_empty() {
+            level.to_string()
+        } else {
+            format!("{level},{quiet}")
         })
     } else {
-        EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"))
+        EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+            EnvFilter::new(if quiet.is_empty() {
+                "warn".to_string()
+            } else {
+                format!("warn,{quiet}")
+            })
+        })
     };
     // Colour only where a person reads it: a terminal.
     let _ = tracing_subscriber::fmt()

@@ -423,8 +423,30 @@ impl Follow {
         match robot.lock().map(|mut r| r.is_moving()) {
             Ok(Ok(true)) => {}
             Ok(Ok(false)) => {
-                let Some(q) = actual else {
-                    return;
+                // Where the arm stands now, read after its end was seen: the tick's reading
+                // may be older than the last motion (a C500 runs the next waypoint's MA
+                // between two looks).
+                let fresh = robot
+                    .lock()
+                    .map(|mut r| r.position(Tag::Joint, PosMode::Actual));
+                let q = match fresh {
+                    Ok(Ok(l)) => l.to_array6(),
+                    Ok(Err(e)) => {
+                        self.end(
+                            GoalStatusEnum::Aborted,
+                            follow_code::GOAL_TOLERANCE_VIOLATED,
+                            format!("the arm could not be read at the end: {}", words(&e)),
+                        );
+                        return;
+                    }
+                    Err(_) => {
+                        self.end(
+                            GoalStatusEnum::Aborted,
+                            follow_code::GOAL_TOLERANCE_VIOLATED,
+                            "the arm's connection was poisoned".into(),
+                        );
+                        return;
+                    }
                 };
                 let (code, why) = run.plan.result(&q, elapsed, run.timed);
                 let status = if code == follow_code::SUCCESSFUL {

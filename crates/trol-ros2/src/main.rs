@@ -79,6 +79,10 @@ struct Args {
     /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST).
     #[arg(long)]
     localhost_only: bool,
+    /// More log on stderr: -v what TROL does, -vv the controller's lines (else $RUST_LOG,
+    /// else warnings).
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    verbose: u8,
 }
 
 fn rate(s: &str) -> Result<f64, String> {
@@ -91,6 +95,8 @@ fn rate(s: &str) -> Result<f64, String> {
 fn main() {
     trol_cli::common::catch_interrupts();
     let args = Args::parse();
+    // The DDS's own log (discovery, locators) would drown what the arm does.
+    trol_cli::common::init_logging_quieting(args.verbose, "rustdds=error,ros2_client=error");
     if let Err(e) = run(args) {
         trol_cli::tell!("trol-ros2: {e}");
         std::process::exit(1);

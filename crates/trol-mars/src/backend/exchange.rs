@@ -205,15 +205,16 @@ impl MarsBackend {
         Ok(())
     }
 
-    /// Send queued segment lines while the unit's queue has room (`room`: the status word
-    /// was read a moment ago and showed room, so the first lines go without another look).
+    /// Send queued segment lines while the unit's queue has room, with a look at its
+    /// queue-full bit before every line (`room`: the status word was read a moment ago and
+    /// showed room, so the first line goes without another look). The bit says only "full",
+    /// not how much room is left: a batch sent on one look overflowed a queue with less room
+    /// than the batch (the unit refuses what does not fit), and a path longer than the queue
+    /// ended short of its end (a trajectory of 60 segments; issue 41).
     pub(super) fn pump_from(&mut self, room: bool) -> Result<(), Fail> {
         let mut sent = 0;
         while !self.pending.is_empty() {
-            if sent % CHECK_EVERY == 0
-                && !(room && sent == 0)
-                && self.status()? & st::QUEUE_FULL != 0
-            {
+            if !(room && sent == 0) && self.status()? & st::QUEUE_FULL != 0 {
                 break;
             }
             let l = self.pending.pop_front().expect("not empty");

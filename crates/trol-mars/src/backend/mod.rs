@@ -99,8 +99,6 @@ pub use trol_controller::real::{STILL_DEG, STILL_GAP};
 pub const HALT_WITHIN: Duration = Duration::from_millis(2100);
 /// The unit's parameter for how smoothly segments join (ctu-crs sends 5).
 pub const DISCONT: u32 = 5;
-/// Lines sent between two checks of the queue-full bit.
-const CHECK_EVERY: usize = 8;
 
 /// Why a session could not be opened.
 #[derive(Debug, thiserror::Error)]

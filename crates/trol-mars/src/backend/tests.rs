@@ -190,6 +190,40 @@ fn a_trajectory_goes_as_segments_that_pass_each_waypoint_at_its_time() {
     );
 }
 
+/// A trajectory longer than the unit's queue holds (more segments than QUEUE), at the arm's
+/// own pace: the segments are fed as the queue drains, and Finish ends with the arm at the
+/// last waypoint.
+#[test]
+fn a_trajectory_longer_than_the_unit_s_queue_is_fed_as_it_drains() {
+    let (mut b, unit) = on_paced("default", true, true);
+    let path = [
+        trol_proto::application::Waypoint {
+            time: 3.0,
+            joints: [0.1, 0.05, 0.4, 0.05, 0.3, 0.05],
+        },
+        trol_proto::application::Waypoint {
+            time: 6.0,
+            joints: [0.2, 0.1, 0.6, 0.1, 0.5, 0.1],
+        },
+    ];
+    assert_eq!(code(b.trajectory(&path)), 0);
+    let until = StdInstant::now() + Duration::from_secs(30);
+    loop {
+        match b.moving() {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => panic!("{e}"),
+        }
+        assert!(StdInstant::now() < until, "the motion did not end");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let q = unit.lock().unwrap().joints();
+    assert!(
+        (q[2] - 0.6).abs() < 1e-3 && (q[4] - 0.5).abs() < 1e-3,
+        "{q:?}"
+    );
+}
+
 #[test]
 fn halt_is_success_only_when_the_unit_shows_the_arm_standing() {
     // STOP: works.

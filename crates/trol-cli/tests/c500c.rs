@@ -146,7 +146,8 @@ fn unsettled_motions_are_refused_with_the_key_to_set() {
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("BIOS_UNSETTLED"), "{out}\n{err}");
     assert!(err.contains("motion-return"), "{err}");
-    let typed = sim.output();
+    // The simulator logs what was typed after it answered: read until armstat is there.
+    let typed = sim.output_until("typed: armstat", 1, 30);
     assert!(
         typed.iter().any(|l| l.contains("typed: armstat")),
         "{typed:?}"

@@ -138,8 +138,9 @@ fn the_guides_commands_work_in_process_across_processes_from_c_and_in_the_utilit
         text(&o)
     );
 
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    let traced = spy.output().join("\n");
+    // The spy and the controller log after they answered: read until the lines are there
+    // (a pause of 300 ms was a guess a loaded machine could outrun).
+    let traced = spy.output_until("TROLJointAbs 2 0.25", 1, 30).join("\n");
     assert!(
         traced.contains("REQUEST #") && traced.contains(": TROLForwardKin j(0, 0.5, 1)"),
         "{traced}"
@@ -149,7 +150,9 @@ fn the_guides_commands_work_in_process_across_processes_from_c_and_in_the_utilit
         "{traced}"
     );
     assert!(traced.contains("TROLJointAbs 2 0.25"), "{traced}");
-    let logged = ctl.output().join("\n");
+    let logged = ctl
+        .output_until("TROLJointAbs: `jointNum` 7 out of 1..6", 1, 30)
+        .join("\n");
     assert!(
         logged.contains("TROLForwardKin j(0, 0.5, 1) -> 0 (success), values (551.510864"),
         "{logged}"
@@ -204,6 +207,12 @@ fn call_rust(robot: &mut Robot, code: u8) -> trol::Result<()> {
             Err(e) if e.code().0 == trol_a465::arm::code::NO_FILE => Ok(()),
             other => other,
         },
+        TROL_TRAJECTORY => robot
+            .trajectory(&[trol::Waypoint {
+                time: 1.0,
+                joints: [0.1, 0.5, 1.0, 0.0, 0.0, 0.0],
+            }])
+            .map(drop),
         other => panic!("command {other} of the table has no method on Robot"),
     }
 }

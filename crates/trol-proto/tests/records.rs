@@ -131,6 +131,14 @@ fn a_trajectory_carries_its_count_and_increasing_times() {
     nan.joints[3] = f64::NAN;
     assert!(refused(vec![nan]).contains("finite"));
     assert!(refused(vec![at(1.0); usize::from(MAX_WAYPOINTS) + 1]).contains("waypoints"));
+    // Its 1 is named as the command means it, not as the BIOS table's 1 (moving).
+    let untimed = Reply::Code(Code(TRAJECTORY_UNTIMED));
+    assert!(
+        untimed
+            .text_for(&TRAJECTORY, &[])
+            .starts_with("1 (TRAJECTORY_UNTIMED")
+    );
+    assert_eq!(untimed.text_for(&FINISH, &[]), untimed.text(&[]));
     // The controller checks the same: decreasing times put on the line by hand.
     let mut back = record::encode(&TRAJECTORY, &[Value::Path(vec![at(1.0), at(2.0)])]).unwrap();
     back[4..8].copy_from_slice(&3.0f32.to_le_bytes());

@@ -93,7 +93,7 @@ fn reply_json(
         "command": def.name,
         "ok": true,
         "value": value.0,
-        "text": reply.text(codes),
+        "text": reply.text_for(def, codes),
     });
     // A return value's name; GetStatus's and the position's first word is no code.
     if matches!(
@@ -379,7 +379,7 @@ impl Session {
                 note_names(&self.names, def, args, r);
             }
             return match reply {
-                Ok(r) => Ok((r.text(codes), reply_json(def, &r, codes))),
+                Ok(r) => Ok((r.text_for(def, codes), reply_json(def, &r, codes))),
                 Err(e) => {
                     let code = e.code();
                     let text = match &e {
@@ -445,7 +445,7 @@ impl Session {
             robot.call(def, args)
         };
         match reply {
-            Ok(r) => Ok(r.text(robot.codes())),
+            Ok(r) => Ok(r.text_for(def, robot.codes())),
             Err(trol::Error::Refused { code, meaning, .. }) => {
                 let text = code.describe(robot.codes());
                 Err(match meaning {

@@ -369,6 +369,17 @@ impl Reply {
         }
     }
 
+    /// The reply in words, with the command's own meaning of a success value besides 0
+    /// (TROLTrajectory's 1: TRAJECTORY_UNTIMED), else as [`Reply::text`].
+    pub fn text_for(&self, def: &CommandDef, bios: &CodeTable) -> String {
+        match (self, super::table::success_meaning(def.code)) {
+            (Reply::Code(v), Some((value, meaning))) if v.0 == value => {
+                format!("{} ({meaning})", v.0)
+            }
+            _ => self.text(bios),
+        }
+    }
+
     /// The reply in words: `0 (success)`, `c(400, 0, ...)`, `BIOSCalled 1, lastErrorCode 0
     /// (success)`, `0 (success), 1.5 2`; BIOS codes named from `bios`.
     pub fn text(&self, bios: &CodeTable) -> String {

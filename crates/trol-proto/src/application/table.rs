@@ -71,6 +71,18 @@ pub const MAX_LOCATIONS: usize = 1000;
 /// timed path; the arm went where it was asked, not when).
 pub const TRAJECTORY_UNTIMED: i16 = 1;
 
+/// A command's own name for a success value besides 0, where the BIOS code table's name
+/// would mislead (TROLTrajectory's 1 is not "moving"): (value, words).
+pub const fn success_meaning(code: u8) -> Option<(i16, &'static str)> {
+    match code {
+        TROL_TRAJECTORY => Some((
+            TRAJECTORY_UNTIMED,
+            "TRAJECTORY_UNTIMED: run through the waypoints without their times",
+        )),
+        _ => None,
+    }
+}
+
 /// FINISH_STATUS: Finish returns 1 while the arm moves, 0 when it is done.
 pub const FINISH_STATUS: u8 = 0;
 /// FINISH_WAIT: Finish returns when the arm is done.

@@ -580,6 +580,10 @@ def test_follow_joint_trajectory_runs_a_goal_with_feedback_and_its_result(arm_at
     assert feedback, "no feedback"
     f = feedback[-1].feedback
     assert list(f.joint_names) == names and len(f.desired.positions) == 6 and len(f.actual.positions) == 6
+    # The arm tracked the trajectory: every feedback's error is the servo's lag and the
+    # encoders' dither, far inside what MoveIt's default tolerances allow.
+    worst = max(abs(e) for m in feedback for e in m.feedback.error.positions)
+    assert worst < 0.02, worst
     # The arm is where the last point asked, as joint_states says.
     time.sleep(0.5)
     last = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
@@ -723,3 +727,21 @@ def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
         except subprocess.TimeoutExpired:
             node.kill()
         controller.stop()
+
+
+@pytest.mark.timeout(240)
+def test_a_path_tolerance_the_arm_cannot_keep_aborts_the_goal_and_halts_the_arm(arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    assert call_trigger(dp, "arm1", "home", 1).success
+    action = Action(dp, "arm1")
+    target = [1.0, 0.5, 0.8, 0.8, 0.6, 0.8]
+    goal = trajectory_goal(JOINTS, [(6.0, target)])
+    # A micro-radian along the way: the servo's lag alone breaks it.
+    goal.path_tolerance = [JointTolerance(name="joint_1", position=1e-6, velocity=0.0, acceleration=0.0)]
+    out = action.outcome(action.goal(goal))
+    assert (out.status, out.result.error_code) == (ABORTED, -4), out.result.error_string
+    assert "joint_1" in out.result.error_string and "halted" in out.result.error_string
+    states = states_reader(dp, "arm1")
+    time.sleep(0.5)
+    last = [x for x in states.take(N=50) if isinstance(x, JointState)][-1]
+    assert abs(last.position[0] - target[0]) > 0.5, "the arm was stopped early"

@@ -414,36 +414,13 @@ impl<'a> Cursor<'a> {
                 Some(t) => return Err(SyntaxError::at(t, "expected `(` after `w`")),
                 None => return Err(self.missing("expected `(` after `w`".into())),
             }
-            let mut values = Vec::new();
-            let mut want_value = true;
-            loop {
-                let Some(t) = self.next() else {
-                    return Err(self.missing(format!(
-                        "expected `)` to close the waypoint begun at column {}",
-                        start.col
-                    )));
-                };
-                match &t.kind {
-                    Kind::Close => break,
-                    Kind::Comma if !want_value => want_value = true,
-                    Kind::Number(v) if want_value && values.len() < 7 => {
-                        values.push(*v);
-                        want_value = false;
-                    }
-                    Kind::Number(_) => {
-                        return Err(SyntaxError::at(
-                            t,
-                            "too many values: a waypoint is its time and six joint angles",
-                        ));
-                    }
-                    _ => {
-                        return Err(SyntaxError::at(
-                            t,
-                            format!("expected a number or `)`, found `{}`", t.text),
-                        ));
-                    }
-                }
-            }
+            let values = self.numbers(
+                start,
+                "waypoint",
+                7,
+                "too many values: a waypoint is its time and six joint angles",
+                |_| None,
+            )?;
             if values.len() != 7 {
                 return Err(SyntaxError::at(
                     start,
@@ -468,6 +445,49 @@ impl<'a> Cursor<'a> {
             return Err(self.missing(format!("expected {want} after `{command}`")));
         }
         Ok(Value::Path(points))
+    }
+
+    /// The numbers of a literal whose `(` has been read (at `start`), up to its `)`: at most
+    /// `max` (`too_many` says so at the first beyond), each checked by `bad` at its token;
+    /// `what` names the literal where its `)` is missing.
+    fn numbers(
+        &mut self,
+        start: &Token,
+        what: &str,
+        max: usize,
+        too_many: &str,
+        bad: impl Fn(f64) -> Option<&'static str>,
+    ) -> Result<Vec<f64>, SyntaxError> {
+        let mut values = Vec::new();
+        let mut want_value = true;
+        loop {
+            let Some(t) = self.next() else {
+                return Err(self.missing(format!(
+                    "expected `)` to close the {what} begun at column {}",
+                    start.col
+                )));
+            };
+            match &t.kind {
+                Kind::Close => return Ok(values),
+                Kind::Comma if !want_value => want_value = true,
+                Kind::Number(v) => {
+                    if values.len() == max {
+                        return Err(SyntaxError::at(t, too_many));
+                    }
+                    if let Some(why) = bad(*v) {
+                        return Err(SyntaxError::at(t, why));
+                    }
+                    values.push(*v);
+                    want_value = false;
+                }
+                _ => {
+                    return Err(SyntaxError::at(
+                        t,
+                        format!("expected a number or `)`, found `{}`", t.text),
+                    ));
+                }
+            }
+        }
     }
 
     fn location(
@@ -537,46 +557,11 @@ impl<'a> Cursor<'a> {
                 ));
             }
         };
-        let mut values = Vec::new();
-        let mut want_value = true;
-        loop {
-            let Some(t) = self.next() else {
-                return Err(SyntaxError {
-                    col: self.end_col,
-                    width: 1,
-                    message: format!(
-                        "expected `)` to close the location begun at column {}",
-                        start.col
-                    ),
-                });
-            };
-            match &t.kind {
-                Kind::Close => break,
-                Kind::Comma if !want_value => want_value = true,
-                Kind::Number(v) => {
-                    if values.len() == max {
-                        return Err(SyntaxError::at(
-                            t,
-                            format!("too many values: `{name}` takes at most {max}"),
-                        ));
-                    }
-                    if tag == Tag::Prec && v.fract() != 0.0 {
-                        return Err(SyntaxError::at(
-                            t,
-                            "a precision point holds whole encoder counts",
-                        ));
-                    }
-                    values.push(*v);
-                    want_value = false;
-                }
-                _ => {
-                    return Err(SyntaxError::at(
-                        t,
-                        format!("expected a number or `)`, found `{}`", t.text),
-                    ));
-                }
-            }
-        }
+        let too_many = format!("too many values: `{name}` takes at most {max}");
+        let values = self.numbers(start, "location", max, &too_many, |v| {
+            (tag == Tag::Prec && v.fract() != 0.0)
+                .then_some("a precision point holds whole encoder counts")
+        })?;
         if values.len() < min {
             let last = &self.tokens[self.pos - 1];
             return Err(SyntaxError::at(

@@ -62,21 +62,27 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
     );
 }
 
+/// Build `package`'s program (once per test binary, `once`), so that `trol` finds it beside
+/// itself.
+fn build_once(once: &'static std::sync::Once, package: &str) {
+    once.call_once(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml");
+        let status = std::process::Command::new(cargo)
+            .args(["build", "-p", package, "--manifest-path"])
+            .arg(manifest)
+            .status()
+            .expect("run cargo");
+        assert!(status.success(), "building {package} failed");
+    });
+}
+
 /// `trol bench ARGS` runs `trol-bench` from beside `trol`, with the same arguments, and ends
 /// as it ends.
 #[test]
 fn trol_bench_runs_the_benchmark_program() {
     static BUILT: std::sync::Once = std::sync::Once::new();
-    BUILT.call_once(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml");
-        let status = std::process::Command::new(cargo)
-            .args(["build", "-p", "trol-bench", "--manifest-path"])
-            .arg(manifest)
-            .status()
-            .expect("run cargo");
-        assert!(status.success(), "building trol-bench failed");
-    });
+    build_once(&BUILT, "trol-bench");
     let dir = scratch("bench");
     let o = trol(&dir, &["bench", "--help"], "");
     let (out, err) = text(&o);
@@ -99,16 +105,7 @@ fn trol_bench_runs_the_benchmark_program() {
 #[test]
 fn trol_ros2_runs_the_ros2_node_program() {
     static BUILT: std::sync::Once = std::sync::Once::new();
-    BUILT.call_once(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml");
-        let status = std::process::Command::new(cargo)
-            .args(["build", "-p", "trol-ros2", "--manifest-path"])
-            .arg(manifest)
-            .status()
-            .expect("run cargo");
-        assert!(status.success(), "building trol-ros2 failed");
-    });
+    build_once(&BUILT, "trol-ros2");
     let dir = scratch("ros2");
     let o = trol(&dir, &["ros2", "--help"], "");
     let (out, err) = text(&o);

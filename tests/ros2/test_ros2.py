@@ -393,6 +393,10 @@ def states_reader(dp: DomainParticipant, ns: str) -> DataReader:
     return DataReader(dp, topic, qos=Qos(RELIABLE, Policy.History.KeepLast(50)))
 
 
+# How often a wait looks again, s (tests/ros2/bench_ros2.py looks every millisecond).
+POLL = 0.05
+
+
 def wait_for(what: str, fn, limit: float = 30.0):  # type: ignore[no-untyped-def]
     """Call `fn` until it returns something other than None, within `limit` seconds."""
     until = time.monotonic() + limit
@@ -400,7 +404,7 @@ def wait_for(what: str, fn, limit: float = 30.0):  # type: ignore[no-untyped-def
         got = fn()
         if got is not None:
             return got
-        time.sleep(0.05)
+        time.sleep(POLL)
     raise AssertionError(f"no {what} within {limit} s")
 
 

@@ -293,13 +293,15 @@ impl Follow {
         }
     }
 
-    /// One turn: new goals, cancels, the one under way, results, the status.
+    /// One turn: new goals, cancels, results, the status; and at a `tick` (the arm just
+    /// read, `actual`), the one under way.
     pub fn serve(
         &mut self,
         server: &FollowServer,
         robot: &Mutex<Robot>,
         actual: Option<[f64; 6]>,
         halts: &AtomicU64,
+        tick: bool,
     ) {
         while let Ok(Some((req_id, req))) = server.receive_goal() {
             if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
@@ -321,7 +323,9 @@ impl Follow {
         if run_before && self.book.running.is_none() {
             self.run = None;
         }
-        self.progress(server, robot, actual);
+        if tick {
+            self.progress(server, robot, actual);
+        }
         self.book.results_and_status(server);
     }
 
@@ -494,8 +498,15 @@ impl Gripper {
         }
     }
 
-    /// One turn: new goals, cancels, the one under way, results, the status.
-    pub fn serve(&mut self, server: &GripperServer, robot: &Mutex<Robot>, halts: &AtomicU64) {
+    /// One turn: new goals, cancels, results, the status; and at a `tick`, the one under
+    /// way.
+    pub fn serve(
+        &mut self,
+        server: &GripperServer,
+        robot: &Mutex<Robot>,
+        halts: &AtomicU64,
+        tick: bool,
+    ) {
         while let Ok(Some((req_id, req))) = server.receive_goal() {
             if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
                 self.start(robot, info, &req.goal);
@@ -511,7 +522,9 @@ impl Gripper {
         if run_before && self.book.running.is_none() {
             self.run = None;
         }
-        self.progress(server, robot);
+        if tick {
+            self.progress(server, robot);
+        }
         self.book.results_and_status(server);
     }
 

@@ -51,6 +51,8 @@ const NODE: &str = "trol_a465";
 /// The longest a Home may take before the service says it failed (six axes group by group
 /// at the homing speed take well under a minute on an A465; assumption with room).
 const HOME_LIMIT: Duration = Duration::from_secs(180);
+/// How often requests (goals, cancels, halts) are taken between two readings of the arm.
+const SERVE_EVERY: Duration = Duration::from_millis(2);
 /// How often a wait asks whether the arm still moves (TROL's own poll).
 const POLL: Duration = trol::POLL;
 
@@ -277,45 +279,55 @@ fn run(args: Args) -> Result<(), String> {
         mpsc::channel::<(ros2_client::service::RmwRequestId, TriggerResponse)>();
     let mut reading_failed = false;
     while !trol_cli::common::interrupted().load(std::sync::atomic::Ordering::SeqCst) {
-        // joint_states.
-        let read = robot
-            .lock()
-            .map_err(|_| "the arm's connection was poisoned".to_string())?
-            .position(Tag::Joint, PosMode::Actual);
-        match read {
-            Ok(loc) => {
-                reading_failed = false;
-                let q = loc.to_array6();
-                let now = Instant::now();
-                let velocity = match last {
-                    Some((p, at)) if now > at => {
-                        let dt = (now - at).as_secs_f64();
-                        (0..6).map(|i| (q[i] - p[i]) / dt).collect()
-                    }
-                    _ => vec![0.0; 6],
-                };
-                last = Some((q, now));
-                let msg = JointState {
-                    header: Header {
-                        stamp: Time::now(),
-                        frame_id: String::new(),
-                    },
-                    name: JOINTS.iter().map(|s| s.to_string()).collect(),
-                    position: q.to_vec(),
-                    velocity,
-                    effort: Vec::new(),
-                };
-                if let Err(e) = states.publish(msg) {
-                    tracing::warn!("joint_states: {e:?}");
-                }
+        // The arm is read, and the actions follow it, once a period; requests are taken
+        // every SERVE_EVERY between, so a goal or a halt waits for no period.
+        let tick = Instant::now() >= next;
+        if tick {
+            next += period;
+            let now = Instant::now();
+            if next <= now {
+                // Behind (a slow line): start again from now, not in a burst.
+                next = now + period;
             }
-            Err(e) => {
-                // Said once per run of failures; publishing resumes when readings do.
-                if !reading_failed {
-                    trol_cli::tell!("trol-ros2: cannot read the arm: {e}");
+            let read = robot
+                .lock()
+                .map_err(|_| "the arm's connection was poisoned".to_string())?
+                .position(Tag::Joint, PosMode::Actual);
+            match read {
+                Ok(loc) => {
+                    reading_failed = false;
+                    let q = loc.to_array6();
+                    let now = Instant::now();
+                    let velocity = match last {
+                        Some((p, at)) if now > at => {
+                            let dt = (now - at).as_secs_f64();
+                            (0..6).map(|i| (q[i] - p[i]) / dt).collect()
+                        }
+                        _ => vec![0.0; 6],
+                    };
+                    last = Some((q, now));
+                    let msg = JointState {
+                        header: Header {
+                            stamp: Time::now(),
+                            frame_id: String::new(),
+                        },
+                        name: JOINTS.iter().map(|s| s.to_string()).collect(),
+                        position: q.to_vec(),
+                        velocity,
+                        effort: Vec::new(),
+                    };
+                    if let Err(e) = states.publish(msg) {
+                        tracing::warn!("joint_states: {e:?}");
+                    }
                 }
-                reading_failed = true;
-                last = None;
+                Err(e) => {
+                    // Said once per run of failures; publishing resumes when readings do.
+                    if !reading_failed {
+                        trol_cli::tell!("trol-ros2: cannot read the arm: {e}");
+                    }
+                    reading_failed = true;
+                    last = None;
+                }
             }
         }
         // Services.
@@ -349,21 +361,16 @@ fn run(args: Args) -> Result<(), String> {
                 tracing::warn!("halt's response: {e:?}");
             }
         }
-        trajectories.serve(&follow, &robot, last.map(|(q, _)| q), &halts);
-        grips.serve(&gripper, &robot, &halts);
+        let actual = if tick { last.map(|(q, _)| q) } else { None };
+        trajectories.serve(&follow, &robot, actual, &halts, tick);
+        grips.serve(&gripper, &robot, &halts, tick);
         while let Ok((id, answer)) = done_rx.try_recv() {
             if let Err(e) = home.send_response(id, answer) {
                 tracing::warn!("home's response: {e:?}");
             }
         }
-        next += period;
         let now = Instant::now();
-        if next > now {
-            std::thread::sleep(next - now);
-        } else {
-            // Behind (a slow line): start again from now, not in a burst.
-            next = now;
-        }
+        std::thread::sleep(next.saturating_duration_since(now).min(SERVE_EVERY));
     }
     // Leaving: an arm that still moves by this node's doing is stopped.
     if let Ok(mut r) = robot.lock()

@@ -749,3 +749,37 @@ def test_a_path_tolerance_the_arm_cannot_keep_aborts_the_goal_and_halts_the_arm(
     time.sleep(0.5)
     last = [x for x in states.take(N=50) if isinstance(x, JointState)][-1]
     assert abs(last.position[0] - target[0]) > 0.5, "the arm was stopped early"
+
+
+@pytest.mark.timeout(240)
+def test_gripper_cmd_says_stalled_when_the_fingers_close_on_an_object(tmp_path: Path, domain: int) -> None:
+    # trol.cfg's `object = 30`: a 30 mm object between the fingers at start.
+    (tmp_path / "trol.cfg").write_text("9600\nsim\n0 0 0 0 0 0\ntime_scale = 10\nobject = 30\n")
+    env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
+    node = subprocess.Popen([str(node_binary()), "--config", str(tmp_path / "trol.cfg"), "--namespace", "hand"],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                            text=True, env=env)
+    try:
+        assert node.stdout is not None
+        first = node.stdout.readline()
+        assert "/hand/gripper_cmd" in first, first
+        threading.Thread(target=node.stdout.read, daemon=True).start()
+        dp = DomainParticipant(domain)
+        base = "hand/gripper_cmd/_action"
+        send = Service(dp, f"{base}/send_goal", GripperSendGoalRequest, GripperSendGoalResponse)
+        result = Service(dp, f"{base}/get_result", GripperGetResultRequest, GripperGetResultResponse)
+        gid = UUID(uuid=list(random.randbytes(16)))
+        goal = GripperGoal(command=GripperCommand(position=0.01, max_effort=10.0))
+        r = send.call(lambda g, q: GripperSendGoalRequest(client_guid=g, sequence_number=q, goal_id=gid, goal=goal))
+        assert r.accepted
+        out = result.call(lambda g, q: GripperGetResultRequest(client_guid=g, sequence_number=q, goal_id=gid))
+        # Closed on the object: stalled at its width, short of the asked gap; a grasp.
+        assert out.status == SUCCEEDED
+        assert out.result.stalled and not out.result.reached_goal
+        assert out.result.position == pytest.approx(0.03, abs=1e-3)
+    finally:
+        node.terminate()
+        try:
+            node.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            node.kill()

@@ -278,7 +278,9 @@ pub struct Profile {
     /// HELP mode (keyword completion) on at the start of a session (the simulated C500's
     /// power-up state).
     pub help_at_start: bool,
-    /// How long the echo of one byte may take, ms.
+    /// How long the echo of one byte may take, ms (2000 by default: a C500 echoes within a
+    /// character time, but the host that reads it may be held back on a busy machine; a
+    /// line that echoes nothing is still given up within seconds).
     pub echo_timeout_ms: u64,
     /// How long the answer to a command that does not move may take, ms.
     pub reply_timeout_ms: u64,
@@ -534,7 +536,7 @@ impl Default for Profile {
             motion_ack: MotionAck::Start,
             prompt: ">>".into(),
             help_at_start: true,
-            echo_timeout_ms: 500,
+            echo_timeout_ms: 2000,
             reply_timeout_ms: 3000,
             motion_timeout_s: 120,
             poll_ms: 50,

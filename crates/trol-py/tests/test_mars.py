@@ -61,8 +61,13 @@ def test_a_python_script_drives_the_arm_on_a_mars8(mars_robot: trol.Robot) -> No
     mars_robot.finish()
     # A trajectory keeps its times on a MARS 8 (coordinated segments) and ends at its last
     # waypoint, as seen on the unit's encoders.
+    # The unit's own speeds (CRS93's REGMS) are a few times below the A465's published ones:
+    # seconds per tenth of a radian; faster is BIOS_TOO_FAST, refused before anything moves.
     end = [0.25, 0.15, 0.7, 0.1, 0.5, 0.0]
-    assert mars_robot.trajectory([(1.0, [0.2, 0.2, 0.7, 0.0, 0.6, 0.0]), (2.0, end)]) == "timed"
+    with pytest.raises(trol.RefusedError) as e:
+        mars_robot.trajectory([(0.1, end)])
+    assert (e.value.code, e.value.name) == (-30, "BIOS_TOO_FAST")
+    assert mars_robot.trajectory([(8.0, [0.2, 0.2, 0.7, 0.0, 0.6, 0.0]), (16.0, end)]) == "timed"
     mars_robot.finish()
     assert list(mars_robot.joints(actual=True)) == pytest.approx(end, abs=1e-3)
 

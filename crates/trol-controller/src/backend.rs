@@ -187,6 +187,21 @@ impl From<BackendError> for Code {
 /// simulated A465's and a C500's motion queues hold 16.
 pub const UNTIMED_WAYPOINTS: usize = 16;
 
+/// Whether `kind`, running a trajectory as one joint move per waypoint, takes `n`
+/// waypoints: at most [`UNTIMED_WAYPOINTS`], else TROL_ERR_ARG_RANGE with what to do.
+pub fn untimed_count(kind: &str, n: usize) -> Result<(), BackendError> {
+    if n > UNTIMED_WAYPOINTS {
+        return Err(BackendError::Explained(
+            trol_proto::application::code::TROL_ERR_ARG_RANGE.0,
+            format!(
+                "{n} waypoints: {kind} runs a trajectory as one joint move per waypoint, at \
+                 most {UNTIMED_WAYPOINTS}: send fewer (every few points of a dense plan)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A trajectory on a controller that cannot run a timed path: one MA to each waypoint at
 /// the speed setting (queued behind each other), and TRAJECTORY_UNTIMED. More than
 /// [`UNTIMED_WAYPOINTS`] is TROL_ERR_ARG_RANGE before anything is sent. A waypoint the
@@ -194,17 +209,7 @@ pub const UNTIMED_WAYPOINTS: usize = 16;
 /// that no part of a refused trajectory runs on, and its code is the answer; a link that
 /// fails is the answer as it is (unsure: nothing more is sent).
 pub fn untimed_trajectory<B: Backend + ?Sized>(b: &mut B, points: &[Waypoint]) -> BiosResult {
-    if points.len() > UNTIMED_WAYPOINTS {
-        return Err(BackendError::Explained(
-            trol_proto::application::code::TROL_ERR_ARG_RANGE.0,
-            format!(
-                "{} waypoints: {} runs a trajectory as one joint move per waypoint, at most \
-                 {UNTIMED_WAYPOINTS}: send fewer (every few points of a dense plan)",
-                points.len(),
-                b.kind()
-            ),
-        ));
-    }
+    untimed_count(b.kind(), points.len())?;
     for (k, p) in points.iter().enumerate() {
         let c = b.ma(p.joints)?;
         if c != 0 {

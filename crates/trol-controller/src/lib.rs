@@ -24,7 +24,7 @@ pub mod terminal;
 
 pub use backend::{
     ArmReport, Backend, BackendError, BiosResult, PosMode, ReportedObject, SharedReport, Target,
-    UNTIMED_WAYPOINTS, untimed_trajectory,
+    UNTIMED_WAYPOINTS, untimed_count, untimed_trajectory,
 };
 pub use controller::{
     Controller, Embedded, FollowUp, LogEntry, LogFn, Mode, Pendant, PendantError, PendantInbox,

@@ -12,6 +12,8 @@
 //! - [`halt`]: Halt as the arm shows it. Each of the controller's stops in turn, mildest
 //!   first, until two readings [`STILL_GAP`] apart agree; success only then, and only
 //!   within the Halt's time. No profile key makes a stop count that was not seen.
+//! - [`pace`]: the speed setting of each joint move of a trajectory on a controller with no
+//!   timed path, from its waypoints' times, never above the user's setting;
 //! - [`seen_standing`]: the "standing" test Halt and the supervised steps use;
 //! - [`Transcript`]: every byte of a session both ways, for a first contact's record.
 //!
@@ -21,9 +23,11 @@
 mod finish;
 mod gate;
 mod halt;
+mod pace;
 mod transcript;
 
 pub use finish::{End, EndTimes, EndWatch};
 pub use gate::{Gate, MotionQueue, Refusal, Snapshot, gate};
 pub use halt::{HaltTimes, Halted, STILL_DEG, STILL_GAP, Stopping, halt, seen_standing};
+pub use pace::{Pace, pace};
 pub use transcript::{Transcript, printable};

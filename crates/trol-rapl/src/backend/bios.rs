@@ -386,7 +386,15 @@ impl Backend for RaplBackend {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
         self.report_unasked()?;
-        self.command(&format!("SPEED {percent}"))
+        let r = self.command(&format!("SPEED {percent}"))?;
+        if r == 0 {
+            self.speed_setting = Some(percent);
+            self.paced = false;
+        }
+        Ok(r)
+    }
+    fn trajectory(&mut self, points: &[trol_proto::application::Waypoint]) -> BiosResult {
+        self.trajectory_paced(points)
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
         let p = self.read_position(mode)?;

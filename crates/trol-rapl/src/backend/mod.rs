@@ -363,6 +363,15 @@ pub struct RaplBackend {
     /// Where W2 last saw the arm at rest (a motion's confirmed end, a Halt's stop).
     rest: Option<[f64; 6]>,
     queue: real::MotionQueue<Queued>,
+    /// The speed setting the next motion is typed at: a trajectory's waypoint's own
+    /// ([`RaplBackend::trajectory_paced`]), taken by [`RaplBackend::launch`].
+    pacing: Option<u8>,
+    /// The controller's SPEED is a waypoint's, not the user's: the next other motion types
+    /// the user's back first.
+    paced: bool,
+    /// The user's speed setting as TROL knows it: set by Speed, else STATUS's while no
+    /// waypoint's is in force.
+    speed_setting: Option<u8>,
     deferred: Option<BackendError>,
     /// A motion line whose answer comes at the motion's end is being read (`motion_ack =
     /// "end"`): the controller's interpreter is busy until then.
@@ -453,6 +462,9 @@ impl RaplBackend {
             outstanding: None,
             rest: None,
             queue: real::MotionQueue::new(QUEUE),
+            pacing: None,
+            paced: false,
+            speed_setting: None,
             deferred: None,
             awaiting: None,
             finishing: false,

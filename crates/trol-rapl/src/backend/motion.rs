@@ -145,6 +145,10 @@ impl RaplBackend {
     /// Type a motion line; on the success form it is under way.
     pub(super) fn launch(&mut self, m: Motion) -> BiosResult {
         self.last_poll = None;
+        match self.pace_for(&m.line)? {
+            0 => {}
+            c => return Ok(c),
+        }
         if self.profile.motion_ack == MotionAck::End {
             return self.launch_answered_at_end(m);
         }
@@ -260,6 +264,149 @@ impl RaplBackend {
     }
 
     /// The gate, then `f` with whether the arm is busy.
+    /// The speed setting for the motion about to be typed (the arm stands: nothing of
+    /// TROL's is under way): a waypoint's own ([`RaplBackend::pacing`]), else the user's
+    /// typed back after a waypoint's. A refused or failed SPEED drops the queue.
+    fn pace_for(&mut self, line: &str) -> BiosResult {
+        let want = match self.pacing.take() {
+            Some(p) => Some(p),
+            None if self.paced => self.speed_setting,
+            None => return Ok(0),
+        };
+        let Some(p) = want else {
+            self.paced = false;
+            return Ok(0);
+        };
+        match self.command(&format!("SPEED {p}")) {
+            Ok(0) => {
+                self.paced = want != self.speed_setting;
+                Ok(0)
+            }
+            other => {
+                self.drop_queue(&format!("`SPEED {p}` before `{line}` failed"));
+                other
+            }
+        }
+    }
+
+    /// TROLTrajectory on a C500 (issue 41). RAPL-II has no timed path: each waypoint is an
+    /// MA, queued behind the one before and typed once that has ended, at the speed setting
+    /// its time implies ([`real::pace`]: the move from the waypoint before, at the joints'
+    /// top speeds scaled so, never above the user's setting; the first from where the arm
+    /// stands when its turn comes). SPEED is typed only to a standing arm, so whether a C500
+    /// applies it to a motion under way does not matter; the user's setting is typed back
+    /// before the next motion that is not a waypoint. A waypoint too fast for the user's
+    /// setting is BIOS_TOO_FAST, and a first waypoint at time 0 away from the arm
+    /// BIOS_BAD_ARGUMENT, before anything of the trajectory is typed.
+    pub(super) fn trajectory_paced(
+        &mut self,
+        points: &[trol_proto::application::Waypoint],
+    ) -> BiosResult {
+        trol_controller::untimed_count(self.kind(), points.len())?;
+        if points.is_empty() {
+            return Ok(code_of("BIOS_BAD_ARGUMENT"));
+        }
+        let mut lines = Vec::with_capacity(points.len());
+        for p in points {
+            match self.ma_line(p.joints) {
+                Ok(l) => lines.push(l),
+                Err(c) => return Ok(c),
+            }
+        }
+        let top = trol_a465::model::max_speeds();
+        let points = points.to_vec();
+        self.motion_with(false, move |b, busy| {
+            if !b.paced {
+                if let Some(s) = b.status.as_ref().map(|s| s.speed.round()) {
+                    if (1.0..=100.0).contains(&s) {
+                        b.speed_setting = Some(s as u8);
+                    }
+                }
+            }
+            let Some(ceiling) = b.speed_setting else {
+                b.note(
+                    "STATUS shows no speed setting: the trajectory's waypoints go at the \
+                     controller's speed setting, not at the speeds their times imply"
+                        .into(),
+                );
+                return trol_controller::untimed_trajectory(b, &points);
+            };
+            let free = b.queue.cap() - b.queue.len();
+            if free + usize::from(!busy) < points.len() {
+                b.note(format!(
+                    "a trajectory of {} waypoints refused: {} motion(s) wait already",
+                    points.len(),
+                    b.queue.len()
+                ));
+                return Ok(sim_code::QUEUE_FULL);
+            }
+            let mut paces = vec![None; points.len()];
+            for k in 1..points.len() {
+                let (a, z) = (&points[k - 1], &points[k]);
+                match real::pace(&a.joints, &z.joints, z.time - a.time, &top, ceiling) {
+                    real::Pace::Still => {}
+                    real::Pace::Percent(p) => paces[k] = Some(p),
+                    real::Pace::TooFast(needed) => {
+                        b.note(too_fast(k + 1, needed, ceiling));
+                        return Ok(code_of("BIOS_TOO_FAST"));
+                    }
+                }
+            }
+            let (t0, q0) = (points[0].time, points[0].joints);
+            for (k, line) in lines.into_iter().enumerate() {
+                let deg = points[k].joints.map(f64::to_degrees);
+                let pace = paces[k];
+                let what = format!("trajectory waypoint {}: `{line}`", k + 1);
+                let r = b.relative(
+                    what,
+                    busy || k > 0,
+                    Box::new(move |b| {
+                        let pace = if k > 0 {
+                            pace
+                        } else {
+                            let q = match b.standing_joints()? {
+                                Ok(q) => q.map(f64::to_radians),
+                                Err(c) => return Ok(c),
+                            };
+                            match real::pace(&q, &q0, t0, &top, ceiling) {
+                                real::Pace::Still => None,
+                                real::Pace::Percent(p) => Some(p),
+                                real::Pace::TooFast(_) if t0 == 0.0 => {
+                                    b.note(
+                                        "the trajectory's waypoint at time 0 is not where the \
+                                         arm stands: make it the arm's position (or leave it \
+                                         out)"
+                                            .into(),
+                                    );
+                                    return Ok(code_of("BIOS_BAD_ARGUMENT"));
+                                }
+                                real::Pace::TooFast(needed) => {
+                                    b.note(too_fast(1, needed, ceiling));
+                                    return Ok(code_of("BIOS_TOO_FAST"));
+                                }
+                            }
+                        };
+                        b.pacing = pace;
+                        b.submit(
+                            Motion {
+                                line,
+                                expect: Expect::Joints(deg),
+                            },
+                            false,
+                        )
+                    }),
+                )?;
+                if r != 0 {
+                    if k > 0 {
+                        b.halt()?;
+                    }
+                    return Ok(r);
+                }
+            }
+            Ok(trol_proto::application::table::TRAJECTORY_UNTIMED)
+        })
+    }
+
     pub(super) fn motion_with(
         &mut self,
         homing: bool,
@@ -283,11 +430,7 @@ impl RaplBackend {
         if q.iter().any(|x| !x.is_finite()) {
             return Ok(code_of("BIOS_BAD_ARGUMENT"));
         }
-        let v = match units {
-            JointUnits::Degrees => q.map(f64::to_degrees),
-            JointUnits::Radians => q,
-        };
-        let line = format!("{cmd} {}", join(&v));
+        let line = format!("{cmd} {}", join(&Self::in_units(units, q)));
         let deg = q.map(f64::to_degrees);
         self.motion_with(false, |b, busy| {
             if !relative {
@@ -297,4 +440,35 @@ impl RaplBackend {
             b.relative_joints(line, busy, move |q| std::array::from_fn(|i| q[i] + deg[i]))
         })
     }
+
+    fn in_units(units: JointUnits, q: [f64; 6]) -> [f64; 6] {
+        match units {
+            JointUnits::Degrees => q.map(f64::to_degrees),
+            JointUnits::Radians => q,
+        }
+    }
+
+    /// An MA line to joints `q` (radians), or why it cannot be typed.
+    fn ma_line(&mut self, q: [f64; 6]) -> Result<String, i16> {
+        let Some(units) = self.joint_units else {
+            self.note(
+                "refused a trajectory before sending: its units are not known; set \
+                 joint_units in the RAPL-II profile (docs/c500.md, Settle the conventions)"
+                    .into(),
+            );
+            return Err(NO_JOINT_UNITS);
+        };
+        if q.iter().any(|x| !x.is_finite()) {
+            return Err(code_of("BIOS_BAD_ARGUMENT"));
+        }
+        Ok(format!("MA {}", join(&Self::in_units(units, q))))
+    }
+}
+
+/// The log's words for a waypoint too fast for the user's speed setting.
+fn too_fast(waypoint: usize, needed: f64, ceiling: u8) -> String {
+    format!(
+        "the trajectory's waypoint {waypoint} would need {needed:.0}% speed where the speed \
+         setting is {ceiling}%: give the trajectory more time (or raise the speed setting)"
+    )
 }

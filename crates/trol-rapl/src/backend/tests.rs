@@ -211,6 +211,127 @@ fn a_trajectory_goes_as_one_ma_per_waypoint_untimed() {
     assert_eq!(mas(&ran(&log)[before..]), 0, "{:?}", ran(&log));
 }
 
+/// The speeds a trajectory's times imply (issue 41): SPEED before each waypoint's MA, typed
+/// while the arm stands, never above the user's setting; the user's setting typed back
+/// before the next motion; a waypoint too fast for the setting, or one at time 0 away from
+/// the arm, refused before anything is typed.
+#[test]
+fn a_trajectory_goes_at_the_speeds_its_times_imply_and_the_setting_comes_back() {
+    use trol_proto::application::Waypoint;
+    let (mut b, log) = on("default", true);
+    assert_eq!(code(b.speed(50)), 0);
+    let from = b.standing_joints().unwrap().unwrap().map(f64::to_radians);
+    let top = trol_a465::model::max_speeds();
+    let by = |q: [f64; 6], j: usize, f: f64| {
+        let mut q = q;
+        q[j] += f * top[j];
+        q
+    };
+    // 20 % (joint 1 at a fifth of its top speed for 0.5 s), 30 %, then 5 %.
+    let q1 = by(from, 0, 0.1);
+    let q2 = by(q1, 2, 0.15);
+    let q3 = by(q2, 0, -0.05);
+    let path = [
+        Waypoint {
+            time: 0.5,
+            joints: q1,
+        },
+        Waypoint {
+            time: 1.0,
+            joints: q2,
+        },
+        Waypoint {
+            time: 2.0,
+            joints: q3,
+        },
+    ];
+    let typed = |l: &[String]| -> Vec<String> {
+        l.iter()
+            .filter(|l| l.starts_with("SPEED") || l.starts_with("MA "))
+            .map(|l| {
+                l.split(' ').next().unwrap().to_string() + " " + l.split(' ').nth(1).unwrap_or("")
+            })
+            .collect()
+    };
+    let before = ran(&log).len();
+    assert_eq!(
+        code(b.trajectory(&path)),
+        trol_proto::application::table::TRAJECTORY_UNTIMED
+    );
+    finish(&mut b).unwrap();
+    let at = b.standing_joints().unwrap().unwrap().map(f64::to_radians);
+    assert!(
+        at.iter().zip(&q3).all(|(a, z)| (a - z).abs() < 1e-3),
+        "{at:?}"
+    );
+    assert_eq!(code(b.ma(from)), 0);
+    finish(&mut b).unwrap();
+    let seen = typed(&ran(&log)[before..]);
+    let speeds: Vec<&str> = seen
+        .iter()
+        .filter(|l| l.starts_with("SPEED"))
+        .map(|l| &l[6..])
+        .collect();
+    assert_eq!(speeds, ["20", "30", "5", "50"], "{seen:?}");
+    // Each SPEED right before its MA.
+    assert_eq!(seen.len(), 8, "{seen:?}");
+    assert!(
+        seen.chunks(2)
+            .all(|c| c[0].starts_with("SPEED") && c[1].starts_with("MA ")),
+        "{seen:?}"
+    );
+
+    // 60 % for 0.5 s where the setting is 50 %: too fast, nothing typed.
+    let before = ran(&log).len();
+    let fast = [Waypoint {
+        time: 0.5,
+        joints: by(from, 0, 0.3),
+    }];
+    assert_eq!(code(b.trajectory(&fast)), code_of("BIOS_TOO_FAST"));
+    let far_later = [
+        Waypoint {
+            time: 1.0,
+            joints: by(from, 0, 0.1),
+        },
+        Waypoint {
+            time: 1.1,
+            joints: by(from, 0, 0.2),
+        },
+    ];
+    assert_eq!(code(b.trajectory(&far_later)), code_of("BIOS_TOO_FAST"));
+    let away_at_0 = [Waypoint {
+        time: 0.0,
+        joints: by(from, 0, 0.1),
+    }];
+    assert_eq!(code(b.trajectory(&away_at_0)), code_of("BIOS_BAD_ARGUMENT"));
+    assert!(typed(&ran(&log)[before..]).is_empty(), "{:?}", ran(&log));
+
+    // Behind a motion under way: the first waypoint's pace is taken from where that one
+    // ends, when its turn comes (15 % for 0.15 of joint 3's top speed in 1 s).
+    let before = ran(&log).len();
+    assert_eq!(code(b.ma(q1)), 0);
+    let behind = [Waypoint {
+        time: 1.0,
+        joints: q2,
+    }];
+    assert_eq!(
+        code(b.trajectory(&behind)),
+        trol_proto::application::table::TRAJECTORY_UNTIMED
+    );
+    finish(&mut b).unwrap();
+    let seen = typed(&ran(&log)[before..]);
+    assert_eq!(
+        seen.iter().filter(|l| l.starts_with("MA ")).count(),
+        2,
+        "{seen:?}"
+    );
+    assert_eq!(
+        seen.iter().filter(|l| *l == "SPEED 15").count(),
+        1,
+        "{seen:?}"
+    );
+}
+
 #[test]
 fn finish_ends_a_motion_only_with_the_arm_at_its_end() {
     let (mut b, log) = on("default", true);

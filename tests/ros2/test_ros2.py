@@ -644,6 +644,27 @@ def test_cancelling_a_trajectory_halts_the_arm(arm_at_1x: Node, domain: int) -> 
 
 
 @pytest.mark.timeout(240)
+def test_the_halt_service_during_a_trajectory_stops_the_arm_and_aborts_the_goal(arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    assert call_trigger(dp, "arm1", "home", 1).success
+    action = Action(dp, "arm1")
+    target = [1.2, 0.6, 1.0, 1.0, 0.8, 1.0]
+    gid = action.goal(trajectory_goal(JOINTS, [(8.0, target)]))
+    wait_for("feedback", lambda: True if action.feedback.take(N=10) else None)
+    time.sleep(1.0)
+    r = call_trigger(dp, "arm1", "halt", 1)
+    assert r.success, r.message
+    # Not a success, not a cancel the client never sent: aborted, and it says why.
+    out = action.outcome(gid)
+    assert (out.status, out.result.error_code) == (ABORTED, -5), out.result.error_string
+    assert "halted" in out.result.error_string, out.result.error_string
+    states = states_reader(dp, "arm1")
+    time.sleep(0.5)
+    last = [x for x in states.take(N=50) if isinstance(x, JointState)][-1]
+    assert abs(last.position[0] - target[0]) > 0.1, "the arm went on to the target"
+
+
+@pytest.mark.timeout(240)
 def test_gripper_cmd_moves_the_fingers_and_says_whether_they_reached_the_gap(arm1: Node, domain: int) -> None:
     dp = DomainParticipant(domain)
     base = "arm1/gripper_cmd/_action"

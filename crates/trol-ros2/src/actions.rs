@@ -259,6 +259,9 @@ struct FollowRun {
     plan: follow::Plan,
     started: Instant,
     timed: bool,
+    /// The count of halts (the `halt` service, a gripper's cancel) when it started: one
+    /// since stopped it short.
+    halts: u64,
 }
 
 /// FollowJointTrajectory's goals.
@@ -305,7 +308,7 @@ impl Follow {
     ) {
         while let Ok(Some((req_id, req))) = server.receive_goal() {
             if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
-                self.start(robot, info, &req.goal);
+                self.start(robot, info, &req.goal, halts.load(Ordering::SeqCst));
             }
         }
         let run_before = self.run.is_some();
@@ -324,12 +327,12 @@ impl Follow {
             self.run = None;
         }
         if tick {
-            self.progress(server, robot, actual);
+            self.progress(server, robot, actual, halts);
         }
         self.book.results_and_status(server);
     }
 
-    fn start(&mut self, robot: &Mutex<Robot>, info: GoalInfo, goal: &FollowGoal) {
+    fn start(&mut self, robot: &Mutex<Robot>, info: GoalInfo, goal: &FollowGoal, halts: u64) {
         let refuse = |book: &mut Book<FollowResult>, info: GoalInfo, code: i32, why: String| {
             book.end(info, GoalStatusEnum::Aborted, follow_result(code, why));
         };
@@ -368,6 +371,7 @@ impl Follow {
                     plan,
                     started: Instant::now(),
                     timed: timing == trol::Timing::Timed,
+                    halts,
                 });
             }
             Err(e) => refuse(
@@ -380,10 +384,28 @@ impl Follow {
     }
 
     /// The one under way: feedback, the path tolerance, and its end.
-    fn progress(&mut self, server: &FollowServer, robot: &Mutex<Robot>, actual: Option<[f64; 6]>) {
+    fn progress(
+        &mut self,
+        server: &FollowServer,
+        robot: &Mutex<Robot>,
+        actual: Option<[f64; 6]>,
+        halts: &AtomicU64,
+    ) {
         let Some(run) = &self.run else {
             return;
         };
+        if halts.load(Ordering::SeqCst) != run.halts {
+            // Halted from outside the goal (the `halt` service): it ends here, whatever the
+            // arm does next, and not as a success even if the arm stood at the end.
+            self.end(
+                GoalStatusEnum::Aborted,
+                follow_code::GOAL_TOLERANCE_VIOLATED,
+                "halted: a halt (the halt service, or a gripper goal's cancel) stopped the \
+                 arm during the trajectory; send the goal again from where the arm stands"
+                    .into(),
+            );
+            return;
+        }
         let elapsed = run.started.elapsed().as_secs_f64() * self.clock;
         if let Some(q) = actual {
             let desired = run.plan.desired(elapsed);

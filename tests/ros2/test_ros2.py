@@ -619,49 +619,53 @@ def test_follow_joint_trajectory_refuses_a_bad_goal_with_the_action_s_code_and_m
     assert list(last.position) == pytest.approx([0.0] * 6, abs=2e-3)
 
 
-@pytest.mark.timeout(240)
-def test_cancelling_a_trajectory_halts_the_arm(arm_at_1x: Node, domain: int) -> None:
-    dp = DomainParticipant(domain)
+FAR_TARGET = [1.2, 0.6, 1.0, 1.0, 0.8, 1.0]
+
+
+def a_long_goal_under_way(dp: DomainParticipant) -> tuple[Action, UUID]:
+    """The arm homed, and an 8 s trajectory goal to FAR_TARGET a second into its run."""
     assert call_trigger(dp, "arm1", "home", 1).success
     action = Action(dp, "arm1")
-    target = [1.2, 0.6, 1.0, 1.0, 0.8, 1.0]
-    gid = action.goal(trajectory_goal(JOINTS, [(8.0, target)]))
+    gid = action.goal(trajectory_goal(JOINTS, [(8.0, FAR_TARGET)]))
     wait_for("feedback", lambda: True if action.feedback.take(N=10) else None)
     time.sleep(1.0)
-    r = action.cancel.call(lambda g, q: CancelGoalRequest(client_guid=g, sequence_number=q,
-                                                         goal_info=GoalInfo(goal_id=gid, stamp=Time(0, 0))))
-    assert r.return_code == 0 and [list(x.goal_id.uuid) for x in r.goals_canceling] == [list(gid.uuid)]
-    out = action.outcome(gid)
-    assert out.status == CANCELED, out.result.error_string
-    # The arm stands short of the target: two readings apart agree, and it is not there.
+    return action, gid
+
+
+def standing_short_of_far_target(dp: DomainParticipant) -> None:
+    """Two readings half a second apart agree, and the arm is not at FAR_TARGET."""
     states = states_reader(dp, "arm1")
     time.sleep(0.5)
     a = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
     time.sleep(0.5)
     b = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
     assert list(a.position) == pytest.approx(list(b.position), abs=1e-3)
-    assert abs(b.position[0] - target[0]) > 0.1
+    assert abs(b.position[0] - FAR_TARGET[0]) > 0.1, "the arm went on to the target"
+
+
+@pytest.mark.timeout(240)
+def test_cancelling_a_trajectory_halts_the_arm(arm_at_1x: Node, domain: int) -> None:
+    dp = DomainParticipant(domain)
+    action, gid = a_long_goal_under_way(dp)
+    r = action.cancel.call(lambda g, q: CancelGoalRequest(client_guid=g, sequence_number=q,
+                                                         goal_info=GoalInfo(goal_id=gid, stamp=Time(0, 0))))
+    assert r.return_code == 0 and [list(x.goal_id.uuid) for x in r.goals_canceling] == [list(gid.uuid)]
+    out = action.outcome(gid)
+    assert out.status == CANCELED, out.result.error_string
+    standing_short_of_far_target(dp)
 
 
 @pytest.mark.timeout(240)
 def test_the_halt_service_during_a_trajectory_stops_the_arm_and_aborts_the_goal(arm_at_1x: Node, domain: int) -> None:
     dp = DomainParticipant(domain)
-    assert call_trigger(dp, "arm1", "home", 1).success
-    action = Action(dp, "arm1")
-    target = [1.2, 0.6, 1.0, 1.0, 0.8, 1.0]
-    gid = action.goal(trajectory_goal(JOINTS, [(8.0, target)]))
-    wait_for("feedback", lambda: True if action.feedback.take(N=10) else None)
-    time.sleep(1.0)
+    action, gid = a_long_goal_under_way(dp)
     r = call_trigger(dp, "arm1", "halt", 1)
     assert r.success, r.message
     # Not a success, not a cancel the client never sent: aborted, and it says why.
     out = action.outcome(gid)
     assert (out.status, out.result.error_code) == (ABORTED, -5), out.result.error_string
     assert "halted" in out.result.error_string, out.result.error_string
-    states = states_reader(dp, "arm1")
-    time.sleep(0.5)
-    last = [x for x in states.take(N=50) if isinstance(x, JointState)][-1]
-    assert abs(last.position[0] - target[0]) > 0.1, "the arm went on to the target"
+    standing_short_of_far_target(dp)
 
 
 @pytest.mark.timeout(240)

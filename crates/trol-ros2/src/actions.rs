@@ -8,7 +8,8 @@
 //!   from TROLGetGripper: `reached_goal` when the fingers stand at the gap, `stalled` when they
 //!   stopped on an object.
 //!
-//! What every action shares is in [`Book`]: one goal at a time (a goal while one runs is
+//! Each action's goals are a [`Goals`] (start, progress, the result of a cancel); what every
+//! action shares is [`Served`] and its [`Book`]: one goal at a time (a goal while one runs is
 //! rejected), a goal refused after acceptance so that its error code reaches the client, the
 //! ended goals' results for a late `get_result`, result requests that wait for their goal,
 //! the status array, and cancel: a cancel halts the arm, and is a success only with the arm
@@ -251,11 +252,100 @@ fn halt_for_cancel(robot: &Mutex<Robot>, halts: &AtomicU64) -> Result<(), String
     }
 }
 
-/// The FollowJointTrajectory server.
-pub type FollowServer = ActionServer<FollowGoal, FollowResult, FollowFeedback>;
+/// What the arm is, for an action's goals at one turn.
+pub struct Arm<'a> {
+    pub robot: &'a Mutex<Robot>,
+    /// The joints as read at this tick (`None`: not read).
+    pub actual: Option<[f64; 6]>,
+    /// Halts served so far (the `halt` service, cancels).
+    pub halts: &'a AtomicU64,
+}
 
-struct FollowRun {
-    info: GoalInfo,
+/// What one action's goals do; [`Served`] turns them with what every action shares
+/// ([`Book`]: one goal at a time, cancel, results, status).
+pub trait Goals {
+    type Goal: Message + Clone + 'static;
+    type Result: Message + Clone + Default + 'static;
+    type Feedback: Message + std::fmt::Debug + 'static;
+    /// A goal under way.
+    type Run;
+    /// Start a goal: its run, or the result of a goal refused (it ends aborted).
+    fn start(&mut self, arm: &Arm<'_>, goal: &Self::Goal) -> Result<Self::Run, Self::Result>;
+    /// At a tick, the goal under way: its feedback (`send`), and its end once it has ended.
+    fn progress(
+        &mut self,
+        arm: &Arm<'_>,
+        run: &Self::Run,
+        send: &mut dyn FnMut(Self::Feedback),
+    ) -> Option<(GoalStatusEnum, Self::Result)>;
+    /// The result of a goal cancelled with the arm halted (`None`), or whose halt failed.
+    fn canceled(&self, failed: Option<String>) -> Self::Result;
+}
+
+/// One action's server side: its goals and their bookkeeping.
+pub struct Served<A: Goals> {
+    goals: A,
+    book: Book<A::Result>,
+    run: Option<(GoalInfo, A::Run)>,
+}
+
+impl<A: Goals> Served<A> {
+    /// No goal yet.
+    pub fn new(goals: A) -> Served<A> {
+        Served {
+            goals,
+            book: Book::new(),
+            run: None,
+        }
+    }
+
+    /// One turn: new goals, cancels, results, the status; and at a `tick` (the arm just
+    /// read), the goal under way.
+    pub fn serve(
+        &mut self,
+        server: &ActionServer<A::Goal, A::Result, A::Feedback>,
+        arm: &Arm<'_>,
+        tick: bool,
+    ) {
+        while let Ok(Some((req_id, req))) = server.receive_goal() {
+            if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
+                match self.goals.start(arm, &req.goal) {
+                    Ok(run) => {
+                        self.book.start(info.clone());
+                        self.run = Some((info, run));
+                    }
+                    Err(result) => self.book.end(info, GoalStatusEnum::Aborted, result),
+                }
+            }
+        }
+        let goals = &self.goals;
+        self.book.cancels(
+            server,
+            &mut || halt_for_cancel(arm.robot, arm.halts),
+            &|| goals.canceled(None),
+            &|why| goals.canceled(Some(why)),
+        );
+        if self.book.running.is_none() {
+            self.run = None;
+        }
+        if tick && let Some((info, run)) = &self.run {
+            let id = info.goal_id;
+            let mut send = |f: A::Feedback| {
+                if let Err(e) = server.send_feedback(id, f) {
+                    tracing::warn!("feedback of {}: {e:?}", server.name());
+                }
+            };
+            if let Some((status, result)) = self.goals.progress(arm, run, &mut send) {
+                let (info, _) = self.run.take().expect("the goal under way");
+                self.book.end(info, status, result);
+            }
+        }
+        self.book.results_and_status(server);
+    }
+}
+
+/// A trajectory goal under way.
+pub struct FollowRun {
     plan: follow::Plan,
     started: Instant,
     timed: bool,
@@ -266,8 +356,6 @@ struct FollowRun {
 
 /// FollowJointTrajectory's goals.
 pub struct Follow {
-    book: Book<FollowResult>,
-    run: Option<FollowRun>,
     /// How much faster than real time the arm's clock runs (the embedded simulator's time
     /// scale; 1 for a real arm).
     clock: f64,
@@ -280,134 +368,68 @@ fn follow_result(code: i32, why: impl Into<String>) -> FollowResult {
     }
 }
 
-impl Follow {
-    /// No goal yet; the arm's clock runs `clock` times real time.
-    pub fn new(clock: f64) -> Follow {
-        Follow {
-            book: Book::new(),
-            run: None,
-            clock,
-        }
-    }
+fn aborted(code: i32, why: impl Into<String>) -> Option<(GoalStatusEnum, FollowResult)> {
+    Some((GoalStatusEnum::Aborted, follow_result(code, why)))
+}
 
-    fn end(&mut self, status: GoalStatusEnum, code: i32, why: String) {
-        if let Some(run) = self.run.take() {
-            self.book.end(run.info, status, follow_result(code, why));
-        }
+impl Served<Follow> {
+    /// FollowJointTrajectory, no goal yet; the arm's clock runs `clock` times real time.
+    pub fn follow(clock: f64) -> Self {
+        Served::new(Follow { clock })
     }
+}
 
-    /// One turn: new goals, cancels, results, the status; and at a `tick` (the arm just
-    /// read, `actual`), the one under way.
-    pub fn serve(
-        &mut self,
-        server: &FollowServer,
-        robot: &Mutex<Robot>,
-        actual: Option<[f64; 6]>,
-        halts: &AtomicU64,
-        tick: bool,
-    ) {
-        while let Ok(Some((req_id, req))) = server.receive_goal() {
-            if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
-                self.start(robot, info, &req.goal, halts.load(Ordering::SeqCst));
-            }
-        }
-        let run_before = self.run.is_some();
-        self.book.cancels(
-            server,
-            &mut || halt_for_cancel(robot, halts),
-            &|| {
-                follow_result(
-                    follow_code::SUCCESSFUL,
-                    "canceled: the arm was halted and stands",
-                )
-            },
-            &|why| follow_result(follow_code::PATH_TOLERANCE_VIOLATED, why),
-        );
-        if run_before && self.book.running.is_none() {
-            self.run = None;
-        }
-        if tick {
-            self.progress(server, robot, actual, halts);
-        }
-        self.book.results_and_status(server);
-    }
+impl Goals for Follow {
+    type Goal = FollowGoal;
+    type Result = FollowResult;
+    type Feedback = FollowFeedback;
+    type Run = FollowRun;
 
-    fn start(&mut self, robot: &Mutex<Robot>, info: GoalInfo, goal: &FollowGoal, halts: u64) {
-        let refuse = |book: &mut Book<FollowResult>, info: GoalInfo, code: i32, why: String| {
-            book.end(info, GoalStatusEnum::Aborted, follow_result(code, why));
-        };
-        let Ok(mut r) = robot.lock() else {
-            refuse(
-                &mut self.book,
-                info,
+    fn start(&mut self, arm: &Arm<'_>, goal: &FollowGoal) -> Result<FollowRun, FollowResult> {
+        let poisoned = || {
+            follow_result(
                 follow_code::INVALID_GOAL,
-                "the arm's connection was poisoned".into(),
-            );
-            return;
+                "the arm's connection was poisoned",
+            )
         };
-        let start = match r.position(Tag::Joint, PosMode::Commanded) {
-            Ok(l) => l.to_array6(),
-            Err(e) => {
-                drop(r);
-                refuse(&mut self.book, info, follow_code::INVALID_GOAL, words(&e));
-                return;
-            }
-        };
-        let plan = match follow::plan(goal, start) {
-            Ok(p) => p,
-            Err(no) => {
-                drop(r);
-                refuse(&mut self.book, info, no.code, no.why);
-                return;
-            }
-        };
-        let sent = r.trajectory(&plan.waypoints);
-        drop(r);
-        match sent {
-            Ok(timing) => {
-                self.book.start(info.clone());
-                self.run = Some(FollowRun {
-                    info,
-                    plan,
-                    started: Instant::now(),
-                    timed: timing == trol::Timing::Timed,
-                    halts,
-                });
-            }
-            Err(e) => refuse(
-                &mut self.book,
-                info,
+        let halts = arm.halts.load(Ordering::SeqCst);
+        let mut r = arm.robot.lock().map_err(|_| poisoned())?;
+        let start = r
+            .position(Tag::Joint, PosMode::Commanded)
+            .map_err(|e| follow_result(follow_code::INVALID_GOAL, words(&e)))?
+            .to_array6();
+        let plan = follow::plan(goal, start).map_err(|no| follow_result(no.code, no.why))?;
+        match r.trajectory(&plan.waypoints) {
+            Ok(timing) => Ok(FollowRun {
+                plan,
+                started: Instant::now(),
+                timed: timing == trol::Timing::Timed,
+                halts,
+            }),
+            Err(e) => Err(follow_result(
                 follow_code::INVALID_GOAL,
                 format!("the controller refused the trajectory: {}", words(&e)),
-            ),
+            )),
         }
     }
 
-    /// The one under way: feedback, the path tolerance, and its end.
     fn progress(
         &mut self,
-        server: &FollowServer,
-        robot: &Mutex<Robot>,
-        actual: Option<[f64; 6]>,
-        halts: &AtomicU64,
-    ) {
-        let Some(run) = &self.run else {
-            return;
-        };
-        if halts.load(Ordering::SeqCst) != run.halts {
+        arm: &Arm<'_>,
+        run: &FollowRun,
+        send: &mut dyn FnMut(FollowFeedback),
+    ) -> Option<(GoalStatusEnum, FollowResult)> {
+        if arm.halts.load(Ordering::SeqCst) != run.halts {
             // Halted from outside the goal (the `halt` service): it ends here, whatever the
             // arm does next, and not as a success even if the arm stood at the end.
-            self.end(
-                GoalStatusEnum::Aborted,
+            return aborted(
                 follow_code::GOAL_TOLERANCE_VIOLATED,
                 "halted: a halt (the halt service, or a gripper goal's cancel) stopped the \
-                 arm during the trajectory; send the goal again from where the arm stands"
-                    .into(),
+                 arm during the trajectory; send the goal again from where the arm stands",
             );
-            return;
         }
         let elapsed = run.started.elapsed().as_secs_f64() * self.clock;
-        if let Some(q) = actual {
+        if let Some(q) = arm.actual {
             let desired = run.plan.desired(elapsed);
             let point = |v: &[f64; 6]| JointTrajectoryPoint {
                 positions: run.plan.in_goal_order(v),
@@ -415,7 +437,7 @@ impl Follow {
                 ..Default::default()
             };
             let error: [f64; 6] = std::array::from_fn(|i| q[i] - desired[i]);
-            let feedback = FollowFeedback {
+            send(FollowFeedback {
                 header: Header {
                     stamp: Time::now(),
                     frame_id: String::new(),
@@ -425,54 +447,42 @@ impl Follow {
                 actual: point(&q),
                 error: point(&error),
                 ..Default::default()
-            };
-            if let Err(e) = server.send_feedback(run.info.goal_id, feedback) {
-                tracing::warn!("feedback: {e:?}");
-            }
+            });
             if let Some((j, e)) = run.plan.off_path(elapsed, &q).filter(|_| run.timed) {
-                let how = match robot.lock().map(|mut r| r.halt()) {
+                let how = match arm.robot.lock().map(|mut r| r.halt()) {
                     Ok(Ok(())) => "halted, the arm stands".to_string(),
                     Ok(Err(e)) => format!("the halt failed: {}", words(&e)),
                     Err(_) => "the arm's connection was poisoned".into(),
                 };
-                self.end(
-                    GoalStatusEnum::Aborted,
+                return aborted(
                     follow_code::PATH_TOLERANCE_VIOLATED,
                     format!(
                         "{} was {e:.4} rad off the path at {elapsed:.3} s: {how}",
                         JOINTS[j]
                     ),
                 );
-                return;
             }
         }
-        match robot.lock().map(|mut r| r.is_moving()) {
-            Ok(Ok(true)) => {}
+        let poisoned = "the arm's connection was poisoned";
+        match arm.robot.lock().map(|mut r| r.is_moving()) {
+            Ok(Ok(true)) => None,
             Ok(Ok(false)) => {
                 // Where the arm stands now, read after its end was seen: the tick's reading
                 // may be older than the last motion (a C500 runs the next waypoint's MA
                 // between two looks).
-                let fresh = robot
+                let fresh = arm
+                    .robot
                     .lock()
                     .map(|mut r| r.position(Tag::Joint, PosMode::Actual));
                 let q = match fresh {
                     Ok(Ok(l)) => l.to_array6(),
                     Ok(Err(e)) => {
-                        self.end(
-                            GoalStatusEnum::Aborted,
+                        return aborted(
                             follow_code::GOAL_TOLERANCE_VIOLATED,
                             format!("the arm could not be read at the end: {}", words(&e)),
                         );
-                        return;
                     }
-                    Err(_) => {
-                        self.end(
-                            GoalStatusEnum::Aborted,
-                            follow_code::GOAL_TOLERANCE_VIOLATED,
-                            "the arm's connection was poisoned".into(),
-                        );
-                        return;
-                    }
+                    Err(_) => return aborted(follow_code::GOAL_TOLERANCE_VIOLATED, poisoned),
                 };
                 let (code, why) = run.plan.result(&q, elapsed, run.timed);
                 let status = if code == follow_code::SUCCESSFUL {
@@ -480,24 +490,26 @@ impl Follow {
                 } else {
                     GoalStatusEnum::Aborted
                 };
-                self.end(status, code, why);
+                Some((status, follow_result(code, why)))
             }
-            Ok(Err(e)) => self.end(
-                GoalStatusEnum::Aborted,
+            Ok(Err(e)) => aborted(
                 follow_code::GOAL_TOLERANCE_VIOLATED,
                 format!("the motion failed: {}", words(&e)),
             ),
-            Err(_) => self.end(
-                GoalStatusEnum::Aborted,
-                follow_code::GOAL_TOLERANCE_VIOLATED,
-                "the arm's connection was poisoned".into(),
+            Err(_) => aborted(follow_code::GOAL_TOLERANCE_VIOLATED, poisoned),
+        }
+    }
+
+    fn canceled(&self, failed: Option<String>) -> FollowResult {
+        match failed {
+            None => follow_result(
+                follow_code::SUCCESSFUL,
+                "canceled: the arm was halted and stands",
             ),
+            Some(why) => follow_result(follow_code::PATH_TOLERANCE_VIOLATED, why),
         }
     }
 }
-
-/// The GripperCommand server.
-pub type GripperServer = ActionServer<GripperGoal, GripperResult, GripperFeedback>;
 
 /// How close (mm) the fingers must stand to the asked gap for `reached_goal` (assumption: the
 /// gripper's own resolution is not public; 1 mm).
@@ -505,52 +517,23 @@ pub const GRIP_REACHED_MM: f64 = 1.0;
 /// The widest gap TROLGrip takes, mm (the table's range of `dist`).
 pub const GRIP_MAX_MM: f64 = 50.0;
 
-/// GripperCommand's goals.
-pub struct Gripper {
-    book: Book<GripperResult>,
-    run: Option<(GoalInfo, f64)>,
+/// GripperCommand's goals; a run is the asked gap, mm.
+pub struct Gripper;
+
+impl Served<Gripper> {
+    /// GripperCommand, no goal yet.
+    pub fn gripper() -> Self {
+        Served::new(Gripper)
+    }
 }
 
-impl Gripper {
-    /// No goal yet.
-    pub fn new() -> Gripper {
-        Gripper {
-            book: Book::new(),
-            run: None,
-        }
-    }
+impl Goals for Gripper {
+    type Goal = GripperGoal;
+    type Result = GripperResult;
+    type Feedback = GripperFeedback;
+    type Run = f64;
 
-    /// One turn: new goals, cancels, results, the status; and at a `tick`, the one under
-    /// way.
-    pub fn serve(
-        &mut self,
-        server: &GripperServer,
-        robot: &Mutex<Robot>,
-        halts: &AtomicU64,
-        tick: bool,
-    ) {
-        while let Ok(Some((req_id, req))) = server.receive_goal() {
-            if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
-                self.start(robot, info, &req.goal);
-            }
-        }
-        let run_before = self.run.is_some();
-        self.book.cancels(
-            server,
-            &mut || halt_for_cancel(robot, halts),
-            &GripperResult::default,
-            &|_| GripperResult::default(),
-        );
-        if run_before && self.book.running.is_none() {
-            self.run = None;
-        }
-        if tick {
-            self.progress(server, robot);
-        }
-        self.book.results_and_status(server);
-    }
-
-    fn start(&mut self, robot: &Mutex<Robot>, info: GoalInfo, goal: &GripperGoal) {
+    fn start(&mut self, arm: &Arm<'_>, goal: &GripperGoal) -> Result<f64, GripperResult> {
         let mm = goal.command.position * 1000.0;
         if !(mm.is_finite() && (0.0..=GRIP_MAX_MM + 0.5).contains(&mm)) {
             trol_cli::tell!(
@@ -558,54 +541,38 @@ impl Gripper {
                 goal.command.position,
                 GRIP_MAX_MM / 1000.0
             );
-            self.book
-                .end(info, GoalStatusEnum::Aborted, GripperResult::default());
-            return;
+            return Err(GripperResult::default());
         }
         let target = mm.round().min(GRIP_MAX_MM);
-        let sent = robot.lock().map(|mut r| r.grip(target as u16));
-        match sent {
-            Ok(Ok(())) => {
-                self.book.start(info.clone());
-                self.run = Some((info, target));
-            }
+        match arm.robot.lock().map(|mut r| r.grip(target as u16)) {
+            Ok(Ok(())) => Ok(target),
             Ok(Err(e)) => {
                 trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
-                self.book
-                    .end(info, GoalStatusEnum::Aborted, GripperResult::default());
+                Err(GripperResult::default())
             }
-            Err(_) => self
-                .book
-                .end(info, GoalStatusEnum::Aborted, GripperResult::default()),
+            Err(_) => Err(GripperResult::default()),
         }
     }
 
-    /// The one under way: feedback of the fingers, and once they stand, the result.
-    fn progress(&mut self, server: &GripperServer, robot: &Mutex<Robot>) {
-        let Some((info, target)) = self.run.clone() else {
-            return;
-        };
-        let read = robot.lock().map(|mut r| {
+    /// Feedback of the fingers, and once they stand, the result.
+    fn progress(
+        &mut self,
+        arm: &Arm<'_>,
+        target: &f64,
+        send: &mut dyn FnMut(GripperFeedback),
+    ) -> Option<(GoalStatusEnum, GripperResult)> {
+        let failed = Some((GoalStatusEnum::Aborted, GripperResult::default()));
+        let Ok((moving, gripper)) = arm.robot.lock().map(|mut r| {
             let moving = r.is_moving();
             (moving, r.gripper())
-        });
-        let (moving, gripper) = match read {
-            Ok(pair) => pair,
-            Err(_) => {
-                self.run = None;
-                self.book
-                    .end(info, GoalStatusEnum::Aborted, GripperResult::default());
-                return;
-            }
+        }) else {
+            return failed;
         };
         let g = match gripper {
             Ok(g) => g,
             Err(e) => {
                 trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
-                self.run = None;
-                self.book
-                    .end(info, GoalStatusEnum::Aborted, GripperResult::default());
-                return;
+                return failed;
             }
         };
         let reached = (g.opening_mm - target).abs() <= GRIP_REACHED_MM;
@@ -616,28 +583,22 @@ impl Gripper {
             stalled,
             reached_goal: reached,
         };
-        if let Err(e) = server.send_feedback(info.goal_id, state) {
-            tracing::warn!("gripper feedback: {e:?}");
-        }
+        send(state);
         match moving {
-            Ok(true) => {}
-            Ok(false) => {
-                // Done: at the gap, or closed on an object (the grasp a close is for; as
-                // ros2_controllers' gripper controller with stalling allowed). Anything
-                // else did not do what was asked.
-                let status = if reached || stalled {
-                    GoalStatusEnum::Succeeded
-                } else {
-                    GoalStatusEnum::Aborted
-                };
-                self.run = None;
-                self.book.end(info, status, state);
-            }
+            Ok(true) => None,
+            // Done: at the gap, or closed on an object (the grasp a close is for; as
+            // ros2_controllers' gripper controller with stalling allowed). Anything else
+            // did not do what was asked.
+            Ok(false) if reached || stalled => Some((GoalStatusEnum::Succeeded, state)),
+            Ok(false) => Some((GoalStatusEnum::Aborted, state)),
             Err(e) => {
                 trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
-                self.run = None;
-                self.book.end(info, GoalStatusEnum::Aborted, state);
+                Some((GoalStatusEnum::Aborted, state))
             }
         }
+    }
+
+    fn canceled(&self, _failed: Option<String>) -> GripperResult {
+        GripperResult::default()
     }
 }

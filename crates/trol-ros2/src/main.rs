@@ -251,7 +251,7 @@ fn run(args: Args) -> Result<(), String> {
         .map_err(create)?;
     // The embedded simulator runs its clock `time_scale` times faster: the desired path of a
     // trajectory is read on the arm's clock.
-    let mut trajectories = actions::Follow::new(if cfg.port == "sim" {
+    let mut trajectories = actions::Served::follow(if cfg.port == "sim" {
         cfg.time_scale
     } else {
         1.0
@@ -268,7 +268,7 @@ fn run(args: Args) -> Result<(), String> {
         args.rate
     );
 
-    let mut grips = actions::Gripper::new();
+    let mut grips = actions::Served::gripper();
     let period = Duration::from_secs_f64(1.0 / args.rate);
     let mut next = Instant::now();
     let mut last: Option<([f64; 6], Instant)> = None;
@@ -362,8 +362,13 @@ fn run(args: Args) -> Result<(), String> {
             }
         }
         let actual = if tick { last.map(|(q, _)| q) } else { None };
-        trajectories.serve(&follow, &robot, actual, &halts, tick);
-        grips.serve(&gripper, &robot, &halts, tick);
+        let arm = actions::Arm {
+            robot: &robot,
+            actual,
+            halts: &halts,
+        };
+        trajectories.serve(&follow, &arm, tick);
+        grips.serve(&gripper, &arm, tick);
         while let Ok((id, answer)) = done_rx.try_recv() {
             if let Err(e) = home.send_response(id, answer) {
                 tracing::warn!("home's response: {e:?}");

@@ -224,6 +224,10 @@ fn halt_reaches_the_arm_while_the_application_waits_for_the_motion() {
         .rapl_profile(profile)
         .connect()
         .unwrap();
+    // At 10 %: about 8 s, so that the Halt half a second in lands on the way even where a
+    // loaded machine holds it back for seconds (at the twin's 100 % the move took under a
+    // second, and a loaded run's Halt came after its end).
+    robot.speed(10).unwrap();
     robot.joint(1, 2.5).unwrap();
     let halt = AtomicBool::new(false);
     let waited = std::thread::scope(|s| {

@@ -263,7 +263,6 @@ impl RaplBackend {
         }
     }
 
-    /// The gate, then `f` with whether the arm is busy.
     /// The speed setting for the motion about to be typed (the arm stands: nothing of
     /// TROL's is under way): a waypoint's own ([`RaplBackend::pacing`]), else the user's
     /// typed back after a waypoint's. A refused or failed SPEED drops the queue.
@@ -368,7 +367,15 @@ impl RaplBackend {
                                 Ok(q) => q.map(f64::to_radians),
                                 Err(c) => return Ok(c),
                             };
+                            let off = (0..6).map(|j| (q[j] - q0[j]).abs()).fold(0.0, f64::max);
                             match real::pace(&q, &q0, t0, &top, ceiling) {
+                                // At time 0 where the arm stands, as the simulated A465
+                                // takes it (its readings travel as f32).
+                                _ if t0 == 0.0
+                                    && off <= trol_a465::arm::TRAJECTORY_START_TOLERANCE =>
+                                {
+                                    None
+                                }
                                 real::Pace::Still => None,
                                 real::Pace::Percent(p) => Some(p),
                                 real::Pace::TooFast(_) if t0 == 0.0 => {
@@ -407,6 +414,7 @@ impl RaplBackend {
         })
     }
 
+    /// The gate, then `f` with whether the arm is busy.
     pub(super) fn motion_with(
         &mut self,
         homing: bool,

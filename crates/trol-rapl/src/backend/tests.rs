@@ -299,6 +299,18 @@ fn a_trajectory_goes_at_the_speeds_its_times_imply_and_the_setting_comes_back() 
         },
     ];
     assert_eq!(code(b.trajectory(&far_later)), code_of("BIOS_TOO_FAST"));
+    assert!(typed(&ran(&log)[before..]).is_empty(), "{:?}", ran(&log));
+    // At time 0 where the arm stands, as its readings give it (f32): taken, nothing to do.
+    let here = from.map(|x| f64::from(x as f32) + 1e-6);
+    assert_eq!(
+        code(b.trajectory(&[Waypoint {
+            time: 0.0,
+            joints: here
+        }])),
+        trol_proto::application::table::TRAJECTORY_UNTIMED
+    );
+    finish(&mut b).unwrap();
+    let before = ran(&log).len();
     let away_at_0 = [Waypoint {
         time: 0.0,
         joints: by(from, 0, 0.1),

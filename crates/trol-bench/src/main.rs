@@ -9,6 +9,7 @@ extern crate trol_cli;
 mod faults;
 mod lines;
 mod pty;
+mod relay;
 mod view;
 
 mod gateway;
@@ -208,6 +209,19 @@ enum Bench {
     ///
     /// Example: trol bench pty --count 2000 --rounds 3 --json
     Pty(pty::PtyArgs),
+    /// The paced line between two processes: a relay process hands each byte from one
+    /// pseudo-terminal pair to another at the end of its tenth bit time, as a UART does;
+    /// `trol sim` serves on one end, the application asks on the other (TROLSpeed), and the
+    /// libmodbus anchor (a register written, 8 bytes each way) runs through a second relay
+    /// of the same program in the same run. Reports each one's share of the line's limit
+    /// and what each turn of the half-duplex line costs beyond its bytes.
+    ///
+    /// Example: trol bench relay --baud 38400 --count 200 --rounds 3 --json
+    Relay(relay::RelayArgs),
+    /// The relay process of `trol bench relay` (prints its two ends, relays until its input
+    /// ends).
+    #[command(hide = true)]
+    PacedRelay(relay::PacedRelayArgs),
     /// What the live view (`trol sim --view`) costs the controller: its CPU while an
     /// application drives the arm through whole motions, with nobody watching, with event
     /// streams open as a page holds one, and with a browser showing the page (--browser);
@@ -337,6 +351,27 @@ fn all() -> Result<(), String> {
                 f(&v, "us_per_transaction") / 1000.0,
                 f(&v, "bytes_per_transaction"),
                 f(&v, "share_of_line_limit") * 100.0
+            ),
+        ));
+    }
+    for (baud, count) in [("38400", "200"), ("9600", "60")] {
+        let args = ["relay", "--baud", baud, "--count", count, "--rounds", "3"];
+        let v = run(&args)?;
+        rows.push((
+            format!("the line between two processes through a relay paced at {baud} baud"),
+            format!("trol bench {}", args.join(" ")),
+            format!(
+                "TROL {:.1} % of the line's limit ({:.0} us a turn beyond the bytes); {}",
+                f(&v, "trol_share_of_line_limit") * 100.0,
+                f(&v, "trol_us_per_turn_beyond_line"),
+                match v["no_anchor"].as_str() {
+                    Some(why) => format!("no libmodbus anchor: {why}"),
+                    None => format!(
+                        "libmodbus in the same run {:.1} % ({:.0} us a turn)",
+                        f(&v, "libmodbus_share_of_line_limit") * 100.0,
+                        f(&v, "libmodbus_us_per_turn_beyond_line")
+                    ),
+                }
             ),
         ));
     }
@@ -646,6 +681,8 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
         Bench::Pty(a) => pty::pty(a),
+        Bench::Relay(a) => relay::relay(a),
+        Bench::PacedRelay(a) => relay::paced_relay(a),
         Bench::View(a) => view::view(a),
         Bench::All => all(),
     }

@@ -56,7 +56,7 @@ fn start_sim() -> Result<(super::SimProcess, String), String> {
 }
 
 /// A folder of this run's own, removed when dropped.
-struct Scratch(std::path::PathBuf);
+pub(super) struct Scratch(std::path::PathBuf);
 
 impl Drop for Scratch {
     fn drop(&mut self) {
@@ -65,7 +65,7 @@ impl Drop for Scratch {
 }
 
 /// Build the anchor in a fresh temporary folder; the error says what is missing.
-fn build_anchor(cc: &str) -> Result<(Scratch, std::path::PathBuf), String> {
+pub(super) fn build_anchor(cc: &str) -> Result<(Scratch, std::path::PathBuf), String> {
     let dir = Scratch(std::env::temp_dir().join(format!("trol-bench-pty-{}", std::process::id())));
     std::fs::create_dir_all(&dir.0).map_err(|e| format!("no temporary folder: {e}"))?;
     let src = dir.0.join("modbus_rtu.c");
@@ -97,9 +97,10 @@ fn build_anchor(cc: &str) -> Result<(Scratch, std::path::PathBuf), String> {
     Ok((dir, exe))
 }
 
-fn anchor_round(exe: &std::path::Path, count: u32) -> Result<f64, String> {
+/// Run the anchor with `args` (`COUNT [SERVER_DEV CLIENT_DEV]`): microseconds a round trip.
+pub(super) fn anchor_run(exe: &std::path::Path, args: &[&str]) -> Result<f64, String> {
     let out = Command::new(exe)
-        .arg(count.to_string())
+        .args(args)
         .output()
         .map_err(|e| format!("cannot run the libmodbus anchor: {e}"))?;
     let text = String::from_utf8_lossy(&out.stdout);
@@ -134,7 +135,7 @@ fn trol_round(port: &str, count: u32) -> Result<f64, String> {
     Ok(started.elapsed().as_secs_f64() * 1e6 / f64::from(count))
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(super) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     if n % 2 == 1 {
@@ -150,7 +151,7 @@ pub fn pty(a: PtyArgs) -> Result<(), String> {
     let mut rounds = Vec::new();
     for _ in 0..a.rounds {
         let trol_us = trol_round(&port, a.count)?;
-        let libmodbus_us = anchor_round(&exe, a.count)?;
+        let libmodbus_us = anchor_run(&exe, &[&a.count.to_string()])?;
         rounds.push(Round {
             trol_us,
             libmodbus_us,

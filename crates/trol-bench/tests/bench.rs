@@ -127,6 +127,42 @@ fn the_pty_bench_has_its_libmodbus_anchor() {
     }
 }
 
+/// The paced relay between two processes: it carries exactly the bytes and turns of the
+/// manual's transaction (ENQ, ACK, 10-byte header, ACK, EOT each way: 28 bytes, 10 turns) and
+/// of a Modbus register write (8 bytes each way, 2 turns), and a line paced at the baud rate
+/// is never beaten (the share stays under 100 %). Without libmodbus, TROL's figures and the
+/// reason.
+#[test]
+fn the_relay_carries_the_protocols_bytes_and_turns_at_the_line_rate() {
+    let dir = scratch("bench-relay");
+    let o = bench(
+        &dir,
+        &[
+            "relay", "--baud", "115200", "--count", "20", "--rounds", "1", "--json",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let round = &v["rounds"][0];
+    assert_eq!(round["trol"]["bytes_each"], 28.0, "{out}");
+    assert_eq!(round["trol"]["turns_each"], 10.0, "{out}");
+    let share = v["trol_share_of_line_limit"].as_f64().unwrap();
+    assert!(share > 0.0 && share < 1.0, "{out}");
+    if std::path::Path::new("/usr/include/modbus/modbus.h").is_file() {
+        assert_eq!(round["libmodbus"]["bytes_each"], 16.0, "{out}");
+        assert_eq!(round["libmodbus"]["turns_each"], 2.0, "{out}");
+        let share = v["libmodbus_share_of_line_limit"].as_f64().unwrap();
+        assert!(share > 0.0 && share < 1.0, "{out}");
+    } else {
+        assert!(round["libmodbus"].is_null(), "{out}");
+        assert!(
+            v["no_anchor"].as_str().unwrap().contains("libmodbus-dev"),
+            "{out}"
+        );
+    }
+}
+
 /// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
 /// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
 #[test]

@@ -6,15 +6,21 @@
  * the master end. libmodbus does its own I/O on the descriptors (modbus_set_socket: no
  * device path to open, no termios of its own). Prints the microseconds per round trip.
  *
+ * With two device paths (`trol bench relay`: the two ends of a paced relay process), the
+ * child serves on SERVER_DEV and the parent asks on CLIENT_DEV instead of a pty pair of its
+ * own.
+ *
  * Build: cc -O2 -o modbus_rtu modbus_rtu.c $(pkg-config --cflags --libs libmodbus) -lutil
- * Run:   ./modbus_rtu COUNT
+ * Run:   ./modbus_rtu COUNT [SERVER_DEV CLIENT_DEV]
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <modbus.h>
 #include <pty.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 #include <termios.h>
 #include <time.h>
@@ -55,19 +61,34 @@ static void serve(int fd) {
 
 int main(int argc, char **argv) {
     long count = argc > 1 ? atol(argv[1]) : 1000;
-    int master, slave;
-    if (count < 1 || openpty(&master, &slave, NULL, NULL, NULL) != 0 || raw(slave) != 0) {
-        fprintf(stderr, "modbus_rtu: usage: modbus_rtu COUNT (and a pty pair)\n");
+    int master = -1, slave = -1;
+    if (argc == 4) {
+        /* The relay's ends: opened here (the client's) and in the child (the server's). */
+        master = open(argv[3], O_RDWR | O_NOCTTY);
+        if (master < 0 || raw(master) != 0) {
+            fprintf(stderr, "modbus_rtu: cannot open %s: %s\n", argv[3], strerror(errno));
+            return 2;
+        }
+    } else if (count < 1 || openpty(&master, &slave, NULL, NULL, NULL) != 0 || raw(slave) != 0) {
+        fprintf(stderr, "modbus_rtu: usage: modbus_rtu COUNT [SERVER_DEV CLIENT_DEV]\n");
         return 2;
     }
+    if (count < 1)
+        return 2;
     pid_t child = fork();
     if (child < 0)
         return 2;
     if (child == 0) {
         close(master);
+        if (argc == 4) {
+            slave = open(argv[2], O_RDWR | O_NOCTTY);
+            if (slave < 0 || raw(slave) != 0)
+                _exit(2);
+        }
         serve(slave);
     }
-    close(slave);
+    if (slave >= 0)
+        close(slave);
     modbus_t *ctx = rtu(master);
     if (ctx == NULL)
         return 2;

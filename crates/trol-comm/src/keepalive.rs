@@ -23,6 +23,8 @@ struct State {
     /// When the next SYN is due.
     due: Option<Instant>,
     quit: bool,
+    /// The thread waits with no time set (nothing due): only a notify wakes it.
+    idle: bool,
     /// SYNs sent so far.
     sent: u64,
 }
@@ -67,18 +69,22 @@ impl Keepalive {
         let mut s = lock(m);
         s.beacon = Some(beacon);
         s.due = Some(Instant::now() + self.interval);
-        cv.notify_all();
-    }
-
-    /// Stop; no SYN goes out after this returns.
-    pub fn stop(&self) {
-        let (m, cv) = &*self.shared;
-        let mut s = lock(m);
-        if s.beacon.is_some() {
-            s.beacon = None;
-            s.due = None;
+        // A thread already waiting for an earlier time wakes by itself and waits again for
+        // this one; only an idle thread needs waking. So back-to-back short requests cost
+        // the line no wake-up of another thread before their replies.
+        if s.idle {
             cv.notify_all();
         }
+    }
+
+    /// Stop; no SYN goes out after this returns (the thread writes only under the lock and
+    /// only when something is due). The thread is not woken: it finds nothing due when its
+    /// time comes.
+    pub fn stop(&self) {
+        let (m, _) = &*self.shared;
+        let mut s = lock(m);
+        s.beacon = None;
+        s.due = None;
     }
 
     /// SYNs sent so far (for tests and traces).
@@ -95,7 +101,9 @@ fn run(shared: &Shared, interval: Duration) {
             return;
         }
         let Some(due) = s.due else {
+            s.idle = true;
             s = cv.wait(s).unwrap_or_else(|e| e.into_inner());
+            s.idle = false;
             continue;
         };
         let now = Instant::now();
@@ -168,6 +176,33 @@ mod tests {
         assert!(got.lock().unwrap().iter().all(|b| *b == SYN));
         std::thread::sleep(Duration::from_millis(50));
         assert_eq!(got.lock().unwrap().len(), after_stop, "a SYN after stop");
+    }
+
+    /// Start and stop wake the thread only when it waits with nothing due: a start right
+    /// after a stop (the thread still waiting for the stopped one's time) and a start long
+    /// after (the thread idle) both get their SYNs.
+    #[test]
+    fn a_start_after_a_stop_sends_whether_the_thread_waits_or_idles() {
+        let k = Keepalive::new(Duration::from_millis(20)).unwrap();
+        let beacon = || -> Beacon { Box::new(|_: &[u8]| Ok(())) };
+        for round in 0..4 {
+            k.start(beacon());
+            k.stop();
+            let before = k.sent();
+            k.start(beacon());
+            let deadline = Instant::now() + Duration::from_secs(30);
+            while k.sent() == before && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            k.stop();
+            assert!(k.sent() > before, "round {round}: no SYN after a start");
+            let stopped = k.sent();
+            if round % 2 == 1 {
+                // Long enough for the thread to find nothing due and idle.
+                std::thread::sleep(Duration::from_millis(60));
+            }
+            assert_eq!(k.sent(), stopped, "round {round}: a SYN after stop");
+        }
     }
 
     #[test]

@@ -21,6 +21,8 @@ pub struct SerialLine {
     /// The device's descriptor, written directly (Unix; `None` for a port opened elsewhere).
     fd: Option<RawFd>,
     name: String,
+    /// The second handle the keep-alive writes through ([`Port::beacon`]), made once.
+    second: Option<std::sync::Arc<std::sync::Mutex<Box<dyn SerialPort>>>>,
 }
 
 #[cfg(unix)]
@@ -63,6 +65,7 @@ impl SerialLine {
                 port: Box::new(port),
                 fd,
                 name: path.to_string(),
+                second: None,
             })
         }
         #[cfg(not(unix))]
@@ -70,6 +73,7 @@ impl SerialLine {
             port: builder.open().map_err(open_error)?,
             fd: None,
             name: path.to_string(),
+            second: None,
         })
     }
 
@@ -80,6 +84,7 @@ impl SerialLine {
             port,
             fd: None,
             name,
+            second: None,
         }
     }
 
@@ -98,11 +103,13 @@ impl SerialLine {
                 port: Box::new(master),
                 fd: Some(master_fd),
                 name: "pty-master".into(),
+                second: None,
             },
             SerialLine {
                 port: Box::new(slave),
                 fd: Some(slave_fd),
                 name: path.clone(),
+                second: None,
             },
             path,
         ))
@@ -193,8 +200,16 @@ impl Port for SerialLine {
     }
 
     fn beacon(&mut self) -> Option<crate::Beacon> {
-        let mut device = self.port.try_clone().ok()?;
+        // One second handle for the line's life, shared by every beacon: a request's
+        // keep-alive then costs no system call before the request runs (a handle made per
+        // request cost three: dup, TIOCNXCL, close).
+        if self.second.is_none() {
+            let device = self.port.try_clone().ok()?;
+            self.second = Some(std::sync::Arc::new(std::sync::Mutex::new(device)));
+        }
+        let device = self.second.clone()?;
         Some(Box::new(move |bytes: &[u8]| {
+            let mut device = device.lock().unwrap_or_else(|e| e.into_inner());
             match device.write(bytes) {
                 Ok(_) => Ok(()),
                 // A full buffer (a pty nobody reads): this keep-alive is not needed either.

@@ -8,6 +8,7 @@ extern crate trol_cli;
 
 mod faults;
 mod lines;
+mod pick;
 mod pty;
 mod relay;
 mod view;
@@ -201,6 +202,13 @@ enum Bench {
     ///
     /// Example: trol bench gateway --count 50 --moves 20 --json
     Gateway(GatewayArgs),
+    /// The manual's pick example (examples/pick.py: two approaches and a move back to back,
+    /// the gripper, the depart, each followed by Finish) through a line paced at a baud rate,
+    /// the simulated A465 in real time, against the arm's own limit (the same calls on the
+    /// arm model, each motion starting the instant the one before ended).
+    ///
+    /// Example: trol bench pick --baud 38400 --cycles 5 --json
+    Pick(pick::PickArgs),
     /// A small CAT1 transaction (TROLSpeed) between two processes over a pty pair, against
     /// `trol sim` on the other end, and the anchor in the same run: a libmodbus RTU round trip
     /// (a register written, 8 bytes each way) over a pty pair between two processes, built
@@ -375,6 +383,18 @@ fn all() -> Result<(), String> {
             ),
         ));
     }
+    let args = ["pick", "--baud", "38400", "--cycles", "5"];
+    let v = run(&args)?;
+    rows.push((
+        "the pick example's cycle at 38400 baud".into(),
+        format!("trol bench {}", args.join(" ")),
+        format!(
+            "{:.1} % over the arm's own limit of {:.3} s ({} transactions a cycle)",
+            f(&v, "over_limit") * 100.0,
+            f(&v, "arm_limit_s"),
+            v["transactions_per_cycle"]
+        ),
+    ));
     let v = run(&["moves"])?;
     let moves = v.as_array().cloned().unwrap_or_default();
     let within = moves
@@ -680,6 +700,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Lines(a) => lines::run(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
+        Bench::Pick(a) => pick::pick(a),
         Bench::Pty(a) => pty::pty(a),
         Bench::Relay(a) => relay::relay(a),
         Bench::PacedRelay(a) => relay::paced_relay(a),

@@ -52,13 +52,21 @@ impl<P: trol_port::Port> trol_port::Port for Counted<P> {
 pub(super) fn paced_robot(
     baud: u32,
 ) -> Result<(trol::Robot, std::sync::Arc<std::sync::atomic::AtomicU64>), String> {
+    paced_robot_with(baud, trol_sim::SimSettings::default())
+}
+
+/// [`paced_robot`] with the simulator's `settings`.
+pub(super) fn paced_robot_with(
+    baud: u32,
+    settings: trol_sim::SimSettings,
+) -> Result<(trol::Robot, std::sync::Arc<std::sync::atomic::AtomicU64>), String> {
     use trol_controller::{Controller, Embedded, Mode, Pcp};
     let (host, ctl) = memory::pair(Some(baud));
     let cfg = LinkConfig::for_line(baud, Duration::ZERO);
     let controller = Controller::new(
         ctl,
         cfg,
-        Pcp::new(trol_sim::SimBackend::new(trol_sim::SimSettings::default())),
+        Pcp::new(trol_sim::SimBackend::new(settings)),
         Mode::Server,
     );
     let handle = Embedded::spawn(controller);

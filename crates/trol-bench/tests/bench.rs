@@ -163,6 +163,35 @@ fn the_relay_carries_the_protocols_bytes_and_turns_at_the_line_rate() {
     }
 }
 
+/// The pick example's cycle through a paced line, against the arm's own limit: the
+/// simulated arm in real time never beats the arm model's time for the same calls (they
+/// would disagree if a queued motion started early or the sim skipped one), and the cycle
+/// is the example's calls and Finish's polls.
+#[test]
+fn the_pick_cycle_is_never_faster_than_the_arm_allows() {
+    let dir = scratch("bench-pick");
+    let o = bench(
+        &dir,
+        &["pick", "--baud", "115200", "--cycles", "2", "--json"],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let limit = v["arm_limit_s"].as_f64().unwrap();
+    assert!(limit > 1.0, "{out}");
+    let cycles = v["cycles_s"].as_array().unwrap();
+    assert_eq!(cycles.len(), 2, "{out}");
+    for c in cycles {
+        assert!(
+            c.as_f64().unwrap() >= limit,
+            "a cycle beat the arm's limit: {out}"
+        );
+    }
+    assert!(v["over_limit"].as_f64().unwrap() >= 0.0, "{out}");
+    // Seven calls and at least one Finish poll each for the three Finishes.
+    assert!(v["transactions_per_cycle"].as_u64().unwrap() >= 8, "{out}");
+}
+
 /// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
 /// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
 #[test]

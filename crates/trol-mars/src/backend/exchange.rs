@@ -23,6 +23,17 @@ impl MarsBackend {
     }
 
     pub(super) fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        // Anything but a read (a query, a STAMP exchange) may change what the arm does:
+        // what was seen of it no longer stands in for a read.
+        let read = bytes.ends_with(b"?\n") || bytes.starts_with(b"STAMP:");
+        if !read {
+            self.seen = None;
+        }
+        if bytes.starts_with(b"COORDISCONT:") {
+            self.discont_set = true;
+        } else if !(read || bytes.starts_with(b"COORDMV")) {
+            self.discont_set = false;
+        }
         self.note(true, bytes);
         self.port.send(bytes)
     }
@@ -114,6 +125,8 @@ impl MarsBackend {
         if self.unasked.is_empty() {
             return Ok(());
         }
+        self.seen = None;
+        self.discont_set = false;
         let text = std::mem::take(&mut self.unasked).join(" | ");
         self.pending.clear();
         Err(BackendError::Unsure(format!(
@@ -205,21 +218,29 @@ impl MarsBackend {
         Ok(())
     }
 
-    /// Send queued segment lines while the unit's queue has room, with a look at its
-    /// queue-full bit before every line (`room`: the status word was read a moment ago and
-    /// showed room, so the first line goes without another look). The bit says only "full",
-    /// not how much room is left: a batch sent on one look overflowed a queue with less room
-    /// than the batch (the unit refuses what does not fit), and a path longer than the queue
-    /// ended short of its end (a trajectory of 60 segments; issue 41).
+    /// Send queued lines while the unit's queue has room, with a look at its queue-full bit
+    /// before every segment (`room`: the status word was read a moment ago and showed room
+    /// with nothing of TROL's queued, so the first segment goes without another look). The
+    /// bit says only "full", not how much room is left: a batch sent on one look overflowed
+    /// a queue with less room than the batch (the unit refuses what does not fit), and a
+    /// path longer than the queue ended short of its end (a trajectory of 60 segments; issue
+    /// 41). `COORDISCONT:` is a setting, not a segment (CTU's client sends it before every
+    /// segment and looks at the bit once in 20 segments), so no look goes before it, nor
+    /// between it and the first segment (issue 43: that look delayed every motion's start).
     pub(super) fn pump_from(&mut self, room: bool) -> Result<(), Fail> {
         let mut sent = 0;
-        while !self.pending.is_empty() {
-            if !(room && sent == 0) && self.status()? & st::QUEUE_FULL != 0 {
+        let mut segments = 0;
+        while let Some(next) = self.pending.front() {
+            let segment = next.starts_with("COORDMV");
+            if segment && !(room && segments == 0) && self.status()? & st::QUEUE_FULL != 0 {
                 break;
             }
             let l = self.pending.pop_front().expect("not empty");
             self.send(&line::command(&l)).map_err(Fail::Io)?;
             sent += 1;
+            if segment {
+                segments += 1;
+            }
         }
         if sent > 0 {
             self.sync()?;

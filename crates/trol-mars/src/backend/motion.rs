@@ -7,7 +7,17 @@ impl MarsBackend {
     /// Gate, plan with the planner, check the plan against the profile, send it, confirm.
     pub(super) fn motion(&mut self, f: impl FnOnce(&mut Arm, f64) -> i16) -> BiosResult {
         self.take_unasked()?;
-        let s = self.status().map_err(|f| f.not_run())?;
+        let busy_before = self.motion.is_some() || !self.pending.is_empty();
+        // The arm seen standing at the last motion's end, a moment ago, with nothing but
+        // reads since: it stands in for ST? and COORDAP? (SEEN_FOR).
+        let seen = self
+            .seen
+            .take()
+            .filter(|x| !busy_before && self.gripper.is_none() && x.at.elapsed() <= self.seen_for);
+        let s = match seen {
+            Some(x) => x.status,
+            None => self.status().map_err(|f| f.not_run())?,
+        };
         let powered = s & st::POWER_OFF == 0;
         if powered {
             // The unit's own faults, which the shared gate has no word for: the motion stop,
@@ -16,7 +26,6 @@ impl MarsBackend {
                 return Ok(c);
             }
         }
-        let busy_before = self.motion.is_some() || !self.pending.is_empty();
         let snapshot = real::Snapshot {
             powered,
             homed: self.homed.iter().all(|h| *h),
@@ -42,7 +51,10 @@ impl MarsBackend {
         self.planner.set_homed(self.homed);
         let now = self.now();
         if !busy_before {
-            let q = self.actual().map_err(|f| f.not_run())?;
+            let q = match seen {
+                Some(x) => self.profile.irc_to_joints(&x.counters),
+                None => self.actual().map_err(|f| f.not_run())?,
+            };
             self.planner.place(q);
         }
         let before = self.planner.clone();
@@ -64,7 +76,13 @@ impl MarsBackend {
         } else {
             ((t1 - t0) / seg).ceil().max(1.0) as usize
         };
-        let mut lines = vec![format!("COORDISCONT:{DISCONT}")];
+        // The discontinuity once per run of segments: the unit keeps it (CTU's client sends
+        // it before every segment; 14 bytes, 7 ms at 19200 Bd, before the arm can start).
+        let mut lines = if self.discont_set {
+            Vec::new()
+        } else {
+            vec![format!("COORDISCONT:{DISCONT}")]
+        };
         let mut prev = t0;
         let mut last = [0.0; 6];
         for k in 1..=n {

@@ -249,3 +249,80 @@ fn halt_is_success_only_when_the_unit_shows_the_arm_standing() {
     assert_eq!(code(b.joint(1, 1.5)), 0);
     assert!(matches!(b.halt(), Err(BackendError::NotStopped(_))));
 }
+
+/// The lines sent from `before` on, up to the first motion line: the reads a motion made
+/// before it went.
+fn reads_before_motion(unit: &Arc<Mutex<Mars8>>, before: usize) -> Vec<String> {
+    received(unit)[before..]
+        .iter()
+        .take_while(|l| !l.starts_with("COORDISCONT") && !l.starts_with("COORDMVT"))
+        .cloned()
+        .collect()
+}
+
+/// Issue 43: the arm seen standing at a motion's end stands in for the next motion's ST?
+/// and COORDAP?, so its lines go first; the motion still ends where it should. Past
+/// SEEN_FOR, or after a line that is not a read, the reads come first again.
+#[test]
+fn a_motion_right_after_a_finish_goes_without_reads_first() {
+    let (mut b, unit) = on("default", true);
+    assert_eq!(code(b.joint(1, 0.2)), 0);
+    finish(&mut b);
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, -0.3)), 0);
+    assert_eq!(reads_before_motion(&unit, before), Vec::<String>::new());
+    // The segment first: the discontinuity the unit has from the motion before.
+    let sent = received(&unit)[before..].to_vec();
+    assert!(sent[0].starts_with("COORDMVT:"), "{sent:?}");
+    finish(&mut b);
+    let q = unit.lock().unwrap().joints();
+    assert!((q[0] + 0.1).abs() < 1e-3, "{q:?}");
+
+    // A read between (GetPosition) keeps it.
+    b.position(Tag::Joint, PosMode::Actual).unwrap();
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, 0.1)), 0);
+    assert_eq!(reads_before_motion(&unit, before), Vec::<String>::new());
+    finish(&mut b);
+
+    // Too old: read again.
+    b.seen_for = Duration::from_millis(1);
+    std::thread::sleep(Duration::from_millis(5));
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, 0.1)), 0);
+    let reads = reads_before_motion(&unit, before);
+    assert!(reads.iter().any(|l| l == "ST?"), "{reads:?}");
+    assert!(reads.iter().any(|l| l == "COORDAP?"), "{reads:?}");
+    finish(&mut b);
+
+    // A line that is not a read (a Halt's STOP:) forgets it.
+    b.seen_for = SEEN_FOR;
+    assert_eq!(code(b.joint(1, -0.1)), 0);
+    finish(&mut b);
+    assert_eq!(code(b.halt()), 0);
+    let before = received(&unit).len();
+    assert_eq!(code(b.joint(1, 0.1)), 0);
+    let reads = reads_before_motion(&unit, before);
+    assert!(reads.iter().any(|l| l == "COORDAP?"), "{reads:?}");
+    // And the discontinuity goes again, before the segment, with no look between.
+    let sent = received(&unit)[before + reads.len()..].to_vec();
+    assert!(sent[0].starts_with("COORDISCONT:"), "{sent:?}");
+    assert!(sent[1].starts_with("COORDMVT:"), "{sent:?}");
+    finish(&mut b);
+}
+
+/// The rule for real controllers with the reads left out: the arm's power lost after the
+/// Finish that saw it standing, the motion sent on what was seen is refused by the ST? read
+/// right after its lines (BIOS_ARM_POWER), never a success, and the arm does not move.
+#[test]
+fn a_fault_after_the_finish_is_caught_by_the_read_after_the_lines() {
+    let (mut b, unit) = on("default", true);
+    assert_eq!(code(b.joint(1, 0.2)), 0);
+    finish(&mut b);
+    let q0 = unit.lock().unwrap().joints();
+    unit.lock().unwrap().set_power_off(true);
+    assert_eq!(code(b.joint(1, 0.3)), ARM_POWER);
+    std::thread::sleep(Duration::from_millis(50));
+    let q1 = unit.lock().unwrap().joints();
+    assert!((q1[0] - q0[0]).abs() < 1e-6, "{q0:?} -> {q1:?}");
+}

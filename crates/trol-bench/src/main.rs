@@ -8,6 +8,7 @@ extern crate trol_cli;
 
 mod faults;
 mod lines;
+mod mars;
 mod pick;
 mod pty;
 mod relay;
@@ -202,6 +203,13 @@ enum Bench {
     ///
     /// Example: trol bench gateway --count 50 --moves 20 --json
     Gateway(GatewayArgs),
+    /// A simulated MARS 8 (CTU's CRS93) through a relay paced at 19200 baud: from the call to
+    /// the arm's start and from its stand to the wait's return, for TROL (TROLMA, Finish)
+    /// and, in the same run on the same unit, for CTU Prague's own client (ctu-crs:
+    /// move_to_q, wait_for_motion_stop), in a Python that has it (--python).
+    ///
+    /// Example: trol bench mars --moves 10 --python target/py/bin/python --json
+    Mars(mars::MarsArgs),
     /// The manual's pick example (examples/pick.py: two approaches and a move back to back,
     /// the gripper, the depart, each followed by Finish) through a line paced at a baud rate,
     /// the simulated A465 in real time, against the arm's own limit (the same calls on the
@@ -383,6 +391,29 @@ fn all() -> Result<(), String> {
             ),
         ));
     }
+    let args = ["mars", "--moves", "10", "--python", python.as_str()];
+    let v = run(&args)?;
+    let client = |c: &serde_json::Value| {
+        format!(
+            "call to start {:.1} ms, end to return {:.1} ms",
+            f(&c["call_to_start"], "median_ms"),
+            f(&c["end_to_return"], "median_ms")
+        )
+    };
+    rows.push((
+        "a MARS 8 at 19200 baud through a relay".into(),
+        format!("trol bench {}", args.join(" ")),
+        match v["no_anchor"].as_str() {
+            Some(why) => format!("TROL {}; no ctu-crs anchor: {why}", client(&v["trol"])),
+            None => format!(
+                "TROL {}; CTU's ctu-crs in the same run {}: {:.2} and {:.2} times",
+                client(&v["trol"]),
+                client(&v["ctu_crs"]),
+                f(&v, "start_ratio"),
+                f(&v, "end_ratio")
+            ),
+        },
+    ));
     let args = ["pick", "--baud", "38400", "--cycles", "5"];
     let v = run(&args)?;
     rows.push((
@@ -700,6 +731,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Lines(a) => lines::run(a),
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
+        Bench::Mars(a) => mars::mars(a),
         Bench::Pick(a) => pick::pick(a),
         Bench::Pty(a) => pty::pty(a),
         Bench::Relay(a) => relay::relay(a),

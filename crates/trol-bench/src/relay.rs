@@ -147,16 +147,17 @@ fn wait_until(due: Instant) {
     }
 }
 
-/// A relay process, killed when dropped; asks it what it carried.
-struct Relay {
+/// A relay process, killed when dropped; asks it what it carried. Its `ends`: the two
+/// devices a process on either side opens.
+pub(super) struct Relay {
     child: std::process::Child,
     ask: std::process::ChildStdin,
     answers: std::io::Lines<std::io::BufReader<std::process::ChildStdout>>,
-    ends: (String, String),
+    pub(super) ends: (String, String),
 }
 
 impl Relay {
-    fn start(baud: u32) -> Result<Relay, String> {
+    pub(super) fn start(baud: u32) -> Result<Relay, String> {
         let me = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
         let mut child = std::process::Command::new(me)
             .args(["paced-relay", "--baud", &baud.to_string()])

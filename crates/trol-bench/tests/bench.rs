@@ -192,6 +192,37 @@ fn the_pick_cycle_is_never_faster_than_the_arm_allows() {
     assert!(v["transactions_per_cycle"].as_u64().unwrap() >= 8, "{out}");
 }
 
+/// A MARS 8 from the call to the arm's start and from its stand to the return: TROL's
+/// figures from the simulated unit's own arm (the start after the call, the return after
+/// the stand), and, with no Python that has ctu-crs, the reason instead of the anchor.
+#[test]
+fn the_mars_bench_times_trol_and_says_what_its_anchor_needs() {
+    let dir = scratch("bench-mars");
+    let o = bench(
+        &dir,
+        &[
+            "mars",
+            "--moves",
+            "2",
+            "--python",
+            "/nonexistent/python",
+            "--json",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in ["call_to_start", "end_to_return"] {
+        let ms = v["trol"][key]["median_ms"].as_f64().unwrap();
+        assert!((0.0..10_000.0).contains(&ms), "{key}: {out}");
+    }
+    assert!(v["ctu_crs"].is_null(), "{out}");
+    assert!(
+        v["no_anchor"].as_str().unwrap().contains("ctu-crs"),
+        "{out}"
+    );
+}
+
 /// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
 /// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
 #[test]

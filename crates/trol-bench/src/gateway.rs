@@ -6,6 +6,9 @@ use super::*;
 #[derive(Serialize)]
 pub(super) struct GatewayReport {
     pub(super) baud: u32,
+    /// `trol gateway` as a process between two relay processes (`--processes`), not all in
+    /// one process over paced in-memory lines.
+    pub(super) through_processes: bool,
     /// RobWork's way, on the RAPL-II line alone: the same absolute motion sent again, its
     /// answer held by the controller until the first ended; from the stand to that answer.
     pub(super) robwork_second_motion: Spread,
@@ -19,6 +22,26 @@ pub(super) struct GatewayReport {
 pub(super) struct GatewayPath {
     pub(super) robot: trol::Robot,
     pub(super) twin: C500Twin,
+    /// With `--processes`: the two relays, the `trol gateway` process and its profile
+    /// file, kept for as long as the path is used.
+    _processes: Option<Processes>,
+}
+
+/// The processes of the path through real processes, ended when dropped (the gateway
+/// first: it holds both lines).
+struct Processes {
+    gateway: SimProcess,
+    _trol_line: super::relay::Relay,
+    _rapl_line: super::relay::Relay,
+    profile: std::path::PathBuf,
+}
+
+impl Drop for Processes {
+    fn drop(&mut self) {
+        let _ = self.gateway.0.kill();
+        let _ = self.gateway.0.wait();
+        let _ = std::fs::remove_file(&self.profile);
+    }
 }
 
 /// The simulated C500 (time scale 1) serving a line paced at the profile's baud rate; its
@@ -46,9 +69,18 @@ impl Drop for C500Twin {
 pub(super) fn c500_line(
     profile: trol_rapl::Profile,
 ) -> Result<(trol_rapl::RaplBackend, C500Twin), String> {
+    let (rapl_host, rapl_ctl) = memory::pair(Some(profile.baud));
+    let twin = c500_twin(profile.clone(), Box::new(rapl_ctl));
+    let backend = trol_rapl::RaplBackend::connect(Box::new(rapl_host), profile)
+        .map_err(|e| format!("the gateway could not open the simulated C500: {e}"))?;
+    Ok((backend, twin))
+}
+
+/// The simulated C500 (time scale 1) serving `port`, on a thread of its own; its loop
+/// notes when the arm starts, when it stands and when a held command goes on.
+fn c500_twin(profile: trol_rapl::Profile, mut rapl_ctl: Box<dyn trol_port::Port>) -> C500Twin {
     use std::sync::atomic::AtomicBool;
     use std::sync::{Arc, Mutex};
-    let (rapl_host, mut rapl_ctl) = memory::pair(Some(profile.baud));
     let stop = Arc::new(AtomicBool::new(false));
     let stopped_at = Arc::new(Mutex::new(None));
     let started_at = Arc::new(Mutex::new(None));
@@ -65,7 +97,7 @@ pub(super) fn c500_line(
         let mut was_moving = false;
         let mut was_waiting = false;
         let _ = trol_rapl::c500::serve_with(
-            &mut rapl_ctl,
+            &mut *rapl_ctl,
             &mut c,
             1.0,
             &flag,
@@ -87,18 +119,13 @@ pub(super) fn c500_line(
             },
         );
     });
-    let backend = trol_rapl::RaplBackend::connect(Box::new(rapl_host), profile)
-        .map_err(|e| format!("the gateway could not open the simulated C500: {e}"))?;
-    Ok((
-        backend,
-        C500Twin {
-            stopped_at,
-            started_at,
-            released_at,
-            stop,
-            c500: Some(c500),
-        },
-    ))
+    C500Twin {
+        stopped_at,
+        started_at,
+        released_at,
+        stop,
+        c500: Some(c500),
+    }
 }
 
 /// The completions `trol bench gateway` compares: the profile's name for each and the
@@ -167,7 +194,71 @@ pub(super) fn robwork_anchor(baud: u32, moves: u32) -> Result<Spread, String> {
     Ok(Spread::of(after))
 }
 
-pub(super) fn gateway_path(profile: trol_rapl::Profile) -> Result<GatewayPath, String> {
+/// The whole path through real processes: the simulated C500 here, on one end of a relay
+/// paced at the baud rate (the RAPL-II line); `trol gateway` as a process of its own between
+/// that relay's other end and a second relay (TROL's line); the application's `Robot` here,
+/// on the second relay's other end.
+fn gateway_processes(profile: trol_rapl::Profile) -> Result<GatewayPath, String> {
+    let baud = profile.baud;
+    let rapl_line = super::relay::Relay::start(baud)?;
+    let trol_line = super::relay::Relay::start(baud)?;
+    let port = trol_port::serial::SerialLine::open(&rapl_line.ends.0, baud)
+        .map_err(|e| format!("the C500's end {}: {e}", rapl_line.ends.0))?;
+    let twin = c500_twin(profile.clone(), Box::new(port));
+    let file = std::env::temp_dir().join(format!(
+        "trol-bench-gateway-{}-{}.toml",
+        std::process::id(),
+        rapl_line.ends.1.replace('/', "_")
+    ));
+    std::fs::write(&file, profile.to_toml())
+        .map_err(|e| format!("cannot write the profile for trol gateway: {e}"))?;
+    let baud_text = baud.to_string();
+    let started = start_trol_sim(
+        &[
+            "gateway",
+            "--controller",
+            &rapl_line.ends.1,
+            "--port",
+            &trol_line.ends.0,
+            "--baud",
+            &baud_text,
+            "--profile",
+            &file.to_string_lossy(),
+            "--server",
+        ],
+        &["serving on "],
+    );
+    let gateway = match started {
+        Ok((g, _)) => g,
+        Err(e) => {
+            let _ = std::fs::remove_file(&file);
+            return Err(e);
+        }
+    };
+    let processes = Processes {
+        gateway,
+        _trol_line: trol_line,
+        _rapl_line: rapl_line,
+        profile: file,
+    };
+    let robot = trol::Connect::port(&processes._trol_line.ends.1)
+        .baud(baud)
+        .connect()
+        .map_err(|e| format!("TROL through trol gateway: {e}"))?;
+    Ok(GatewayPath {
+        robot,
+        twin,
+        _processes: Some(processes),
+    })
+}
+
+pub(super) fn gateway_path(
+    profile: trol_rapl::Profile,
+    processes: bool,
+) -> Result<GatewayPath, String> {
+    if processes {
+        return gateway_processes(profile);
+    }
     let baud = profile.baud;
     let (backend, twin) = c500_line(profile)?;
     let (trol_host, trol_ctl) = memory::pair(Some(baud));
@@ -181,7 +272,11 @@ pub(super) fn gateway_path(profile: trol_rapl::Profile) -> Result<GatewayPath, S
     let handle = trol_controller::Embedded::spawn(controller);
     let mut robot = trol::Robot::over(Box::new(trol_host), cfg, Some(handle));
     robot.set_codes(trol_rapl::RAPL_CODES);
-    Ok(GatewayPath { robot, twin })
+    Ok(GatewayPath {
+        robot,
+        twin,
+        _processes: None,
+    })
 }
 
 pub(super) fn gateway(a: GatewayArgs) -> Result<(), String> {
@@ -190,7 +285,7 @@ pub(super) fn gateway(a: GatewayArgs) -> Result<(), String> {
         baud: a.baud,
         ..trol_rapl::Profile::simulator()
     };
-    let mut path = gateway_path(base)?;
+    let mut path = gateway_path(base, a.processes)?;
     let robot = &mut path.robot;
     robot.speed(100).map_err(err)?;
     let mut speed = Vec::new();
@@ -209,10 +304,13 @@ pub(super) fn gateway(a: GatewayArgs) -> Result<(), String> {
 
     let mut finish = Vec::new();
     for (completion, profile) in completions() {
-        let mut path = gateway_path(trol_rapl::Profile {
-            baud: a.baud,
-            ..profile
-        })?;
+        let mut path = gateway_path(
+            trol_rapl::Profile {
+                baud: a.baud,
+                ..profile
+            },
+            a.processes,
+        )?;
         let mut after = Vec::new();
         let (mut joint_start, mut ma_start) = (Vec::new(), Vec::new());
         for i in 0..a.moves {
@@ -257,6 +355,7 @@ pub(super) fn gateway(a: GatewayArgs) -> Result<(), String> {
     let robwork = robwork_anchor(a.baud, a.moves)?;
     let r = GatewayReport {
         baud: a.baud,
+        through_processes: a.processes,
         robwork_second_motion: robwork,
         speed_round_trip: Spread::of(speed),
         get_position_cart_actual: Spread::of(position),
@@ -270,8 +369,13 @@ pub(super) fn gateway(a: GatewayArgs) -> Result<(), String> {
             )
         };
         let mut t = format!(
-            "the whole path to a simulated C500, both lines at {} baud:\n",
-            r.baud
+            "the whole path to a simulated C500, both lines at {} baud{}:\n",
+            r.baud,
+            if r.through_processes {
+                ", through trol gateway and two relays, each a process of its own"
+            } else {
+                ", in one process"
+            }
         );
         t += &line("TROLSpeed round trip", &r.speed_round_trip);
         t += &line(

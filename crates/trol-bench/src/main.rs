@@ -466,6 +466,34 @@ fn all() -> Result<(), String> {
             f(&v["robwork_second_motion"], "median_ms"),
         ),
     ));
+    let args = ["gateway", "--count", "20", "--moves", "10", "--processes"];
+    let v = run(&args)?;
+    let cell = |x: &serde_json::Value| {
+        format!(
+            "{}: Finish {:.0} ms after the end, TROLJoint starts {:.1} ms and TROLMA {:.1} ms \
+             after the call",
+            x["completion"].as_str().unwrap_or("?"),
+            f(&x["after_motion_end"], "median_ms"),
+            f(&x["joint_call_to_start"], "median_ms"),
+            f(&x["ma_call_to_start"], "median_ms")
+        )
+    };
+    rows.push((
+        "the whole path to a C500 at 38400 baud through real processes".into(),
+        format!("trol bench {}", args.join(" ")),
+        format!(
+            "{}; RobWork's way {:.1} ms (anchor)",
+            v["finish"]
+                .as_array()
+                .cloned()
+                .unwrap_or_default()
+                .iter()
+                .map(cell)
+                .collect::<Vec<_>>()
+                .join("; "),
+            f(&v["robwork_second_motion"], "median_ms"),
+        ),
+    ));
     let v = run(&["view", "--seconds", "5"])?;
     let cpu: Vec<String> = v["measurements"]
         .as_array()
@@ -509,6 +537,11 @@ pub struct GatewayArgs {
     /// Motions whose Finish to time, for each completion.
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     moves: u32,
+    /// Through real processes: `trol gateway` as a process of its own, both lines through
+    /// relays paced at the baud rate (`trol bench relay`'s), the simulated C500 and the
+    /// application here. Without it, all in this process over paced in-memory lines.
+    #[arg(long)]
+    processes: bool,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,

@@ -966,8 +966,42 @@ impl Backend for C500cBackend {
         self.relative(dq.map(f64::to_degrees))
     }
     /// Untimed, and one waypoint only: MA is sent relative to where the arm rests, so a
-    /// second joint move cannot wait behind the first (docs/c500c.md).
+    /// second joint move cannot wait behind the first (docs/c500c.md). The waypoint goes at
+    /// the speed setting, so one whose time is shorter than the move takes there is
+    /// BIOS_TOO_FAST (one at time 0 away from the arm BIOS_BAD_ARGUMENT), before anything
+    /// is sent: the arm never goes faster than the user set it to.
     fn trajectory(&mut self, points: &[trol_proto::application::Waypoint]) -> BiosResult {
+        if let ([p], false) = (points, self.outstanding.is_some() || !self.queue.is_empty()) {
+            self.clean()?;
+            if p.joints.iter().all(|v| v.is_finite()) && p.time.is_finite() {
+                self.fresh_rest()?;
+                let from = self.rest.map(f64::to_radians);
+                let top = trol_a465::model::max_speeds();
+                if let real::Pace::TooFast(needed) =
+                    real::pace(&from, &p.joints, p.time, &top, self.speed)
+                {
+                    let (c, why) = if p.time <= 0.0 {
+                        (
+                            code::BAD_ARGUMENT,
+                            "at time 0 away from where the arm rests".into(),
+                        )
+                    } else {
+                        (
+                            code::TOO_FAST,
+                            format!(
+                                "needs {needed:.0} % of the joints' top speed in its {} s; the \
+                                 speed setting is {} % (TROLSpeed)",
+                                p.time, self.speed
+                            ),
+                        )
+                    };
+                    self.note(format!(
+                        "trajectory refused before sending: its waypoint {why}"
+                    ));
+                    return Ok(c);
+                }
+            }
+        }
         if points.len() > 1 {
             return Err(BackendError::Explained(
                 trol_proto::application::code::TROL_ERR_ARG_RANGE.0,

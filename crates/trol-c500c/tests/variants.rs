@@ -379,3 +379,42 @@ fn several_joints_never_go_as_a_series() {
     assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
     assert!(!r.received()[sent..].iter().any(|l| l.starts_with("joint")));
 }
+
+/// A trajectory's one waypoint goes at the speed setting: one whose time is shorter than
+/// the move takes there is BIOS_TOO_FAST, one at time 0 away from the arm
+/// BIOS_BAD_ARGUMENT, both before anything is sent; one with time enough runs (untimed) and
+/// ends at the waypoint. (Found by the conformance suite: a 0.05 s waypoint 1.5 rad away ran
+/// at full speed and Finish said success.)
+#[test]
+fn a_trajectory_faster_than_the_speed_setting_is_refused_unsent() {
+    let sw = Switches::default();
+    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    r.robot.speed(20).unwrap();
+    let q0 = r.joints();
+    let mut far = q0;
+    far[0] += 1.0;
+    let sent = r.received().len();
+    for (time, want) in [
+        (0.05, trol_a465::arm::code::TOO_FAST),
+        (0.0, trol_a465::arm::code::BAD_ARGUMENT),
+    ] {
+        let e = r
+            .robot
+            .trajectory(&[trol::Waypoint { time, joints: far }])
+            .unwrap_err();
+        assert_eq!(e.code().0, want, "{time} s: {e}");
+    }
+    assert!(!r.received()[sent..].iter().any(|l| l.starts_with("joint")));
+    assert!(close(r.joints()[0], q0[0]));
+    // Time enough at 20 % (the A465's joint 1 does 180 deg/s at 100 %: 1 rad takes 1.6 s).
+    let t = r
+        .robot
+        .trajectory(&[trol::Waypoint {
+            time: 5.0,
+            joints: far,
+        }])
+        .unwrap();
+    assert_eq!(t, trol::Timing::Untimed);
+    r.robot.finish().unwrap();
+    assert!(close(r.joints()[0], far[0]), "{:?}", r.joints());
+}

@@ -1,5 +1,6 @@
 //! One conformance suite for every simulated controller (issue 39, item 2): the simulated
-//! A465, every simulated C500 variant (RAPL-II) and every simulated MARS 8 variant, each
+//! A465, every simulated C500 variant (RAPL-II), every simulated MARS 8 variant and every
+//! simulated C500C variant (RAPL-3), each
 //! driven through TROL's API ([`trol::Robot`]) and checked against the twin's own arm, not
 //! against what TROL says.
 //!
@@ -53,6 +54,23 @@ pub struct Differences {
     /// It runs a trajectory (TROLTrajectory) without its times, one joint move per
     /// waypoint (a C500: RAPL-II has no timed path); the others keep the times.
     pub untimed_trajectory: bool,
+    /// A motion of several joints at once is refused as unsettled (a C500C: it needs a
+    /// joint-space location, which needs the A465's pulses per degree there, not public;
+    /// a series of `joint` commands would not be one motion). The suite's motions then
+    /// move joint 1 alone, from where TROLHome left the arm.
+    pub one_joint_at_a_time: bool,
+    /// A motion sent while one runs is refused (BIOS_BUSY), not queued (a C500C: MA goes as
+    /// a motion relative to where the arm rests, which is known only once it rests). A 1998
+    /// program's back-to-back motions then need TROLFinish between them; the second is
+    /// refused and moves nothing.
+    pub one_motion_at_a_time: bool,
+    /// A trajectory has one waypoint at most (a C500C, for the same reason).
+    pub one_waypoint: bool,
+    /// After a call it answered UNSURE (a line the controller printed unasked, say), it
+    /// sends nothing further until the application connects again, and every call is UNSURE
+    /// until then (a C500C: its console may be mid-question or mid-motion, which TROL cannot
+    /// tell; docs/c500c.md). Elsewhere the call after the UNSURE one works.
+    pub unsure_until_reconnect: bool,
 }
 
 impl Default for Differences {
@@ -62,6 +80,46 @@ impl Default for Differences {
             unstoppable: false,
             arrive_rad: 2e-3,
             untimed_trajectory: false,
+            one_joint_at_a_time: false,
+            one_motion_at_a_time: false,
+            one_waypoint: false,
+            unsure_until_reconnect: false,
+        }
+    }
+}
+
+/// The positions the suite moves to on one subject: [`Q1`], [`Q2`], [`FAR`] and
+/// [`OUT_OF_RANGE`], or, where only one joint may move at a time, the same moves of joint 1
+/// alone from where TROLHome left the arm.
+#[derive(Clone, Copy, Debug)]
+struct Targets {
+    q1: [f64; 6],
+    q2: [f64; 6],
+    far: [f64; 6],
+    out_of_range: [f64; 6],
+}
+
+impl Targets {
+    fn for_subject(s: &Subject) -> Targets {
+        if !s.differences.one_joint_at_a_time {
+            return Targets {
+                q1: Q1,
+                q2: Q2,
+                far: FAR,
+                out_of_range: OUT_OF_RANGE,
+            };
+        }
+        let home = s.twin.joints();
+        let j1 = |v: f64| {
+            let mut q = home;
+            q[0] = v;
+            q
+        };
+        Targets {
+            q1: j1(Q1[0]),
+            q2: j1(Q2[0]),
+            far: j1(FAR[0]),
+            out_of_range: j1(OUT_OF_RANGE[0]),
         }
     }
 }
@@ -206,17 +264,31 @@ fn motion(s: &mut Subject, f: &mut Findings, what: &str, q: [f64; 6]) -> bool {
 /// controller says it runs it (and as its differences say it must), and after Finish the arm
 /// at the last waypoint. One too fast for the speed setting is refused and moves nothing;
 /// so is one of too many waypoints for a controller that runs them untimed.
-fn trajectory(s: &mut Subject, f: &mut Findings) {
+fn trajectory(s: &mut Subject, f: &mut Findings, t: &Targets) {
     let wp = |time: f64, joints: [f64; 6]| trol::Waypoint { time, joints };
-    let path = [wp(1.0, Q2), wp(2.0, Q1)];
-    let r = s.robot.trajectory(&path);
-    let done = match &r {
-        Ok(_) => code(s.robot.finish()),
-        Err(e) => e.code().0,
+    // From Q1 (where the motions before left the arm) through Q2 back to Q1; where a
+    // trajectory has one waypoint, to Q2 and back in two.
+    let paths: Vec<Vec<trol::Waypoint>> = if s.differences.one_waypoint {
+        vec![vec![wp(1.0, t.q2)], vec![wp(1.0, t.q1)]]
+    } else {
+        vec![vec![wp(1.0, t.q2), wp(2.0, t.q1)]]
     };
+    let mut r = Ok(trol::Timing::Timed);
+    let mut done = 0;
+    for path in &paths {
+        r = s.robot.trajectory(path);
+        done = match &r {
+            Ok(_) => code(s.robot.finish()),
+            Err(e) => e.code().0,
+        };
+        if done != 0 {
+            break;
+        }
+    }
     let at = s.twin.joints();
     f.step(format!(
-        "Trajectory Q2 at 1 s, Q1 at 2 s -> {r:?}, Finish -> {done}, arm at {}",
+        "Trajectory Q2 at 1 s, Q1 at 2 s ({} call(s)) -> {r:?}, Finish -> {done}, arm at {}",
+        paths.len(),
         fmt(&at)
     ));
     let want = if s.differences.untimed_trajectory {
@@ -226,10 +298,10 @@ fn trajectory(s: &mut Subject, f: &mut Findings) {
     };
     match r {
         Ok(t) if t != want => f.broke(format!("the trajectory ran {t:?}, expected {want:?}")),
-        Ok(_) if done == 0 && !near(&at, &Q1, s.differences.arrive_rad) => f.broke(format!(
+        Ok(_) if done == 0 && !near(&at, &t.q1, s.differences.arrive_rad) => f.broke(format!(
             "the trajectory succeeded, but the arm is at {} for {}",
             fmt(&at),
-            fmt(&Q1)
+            fmt(&t.q1)
         )),
         Ok(_) if done != 0 => f.broke(format!("the trajectory's Finish failed ({done})")),
         Ok(_) => {}
@@ -237,10 +309,15 @@ fn trajectory(s: &mut Subject, f: &mut Findings) {
     }
     // Too fast for the speed setting: refused by every controller (a timed one cannot keep
     // the times; an untimed one would need more than the user's speed setting).
-    let mut refusals: Vec<(&str, Vec<trol::Waypoint>)> = vec![("too fast", vec![wp(0.05, FAR)])];
+    let mut refusals: Vec<(&str, Vec<trol::Waypoint>)> = vec![("too fast", vec![wp(0.05, t.far)])];
     if s.differences.untimed_trajectory {
-        let many = (1..=trol_controller::UNTIMED_WAYPOINTS + 1)
-            .map(|k| wp(k as f64, if k % 2 == 0 { Q1 } else { Q2 }))
+        let most = if s.differences.one_waypoint {
+            1
+        } else {
+            trol_controller::UNTIMED_WAYPOINTS
+        };
+        let many = (1..=most + 1)
+            .map(|k| wp(k as f64, if k % 2 == 0 { t.q1 } else { t.q2 }))
             .collect();
         refusals.push(("too many waypoints", many));
     }
@@ -262,11 +339,14 @@ fn trajectory(s: &mut Subject, f: &mut Findings) {
 pub fn run(s: &mut Subject) -> Findings {
     let mut f = Findings::default();
     let label = s.label.clone();
+    // Before TROLHome only a refusal is checked; the positions come from where it leaves
+    // the arm.
+    let t0 = Targets::for_subject(s);
 
     // Before TROLHome: a real controller's arm refuses every motion, and nothing moves.
     if s.differences.starts_unhomed {
         let before = s.twin.joints();
-        let c = code(s.robot.ma(&Q1));
+        let c = code(s.robot.ma(&t0.q1));
         std::thread::sleep(Duration::from_millis(200));
         f.step(format!("MA before TROLHome -> {c}"));
         if c == 0 {
@@ -290,9 +370,11 @@ pub fn run(s: &mut Subject) -> Findings {
             "TROLHome and Finish succeeded with the arm still moving: {e}"
         ));
     }
+    let t = Targets::for_subject(s);
+    let (q1, q2) = (t.q1, t.q2);
 
     // A motion arrives, and GetPosition says where.
-    if !motion(s, &mut f, "a joint motion", Q1) {
+    if !motion(s, &mut f, "a joint motion", q1) {
         f.broke("a joint motion within range failed".into());
     }
     match s.robot.position(Tag::Joint, PosMode::Actual) {
@@ -309,20 +391,37 @@ pub fn run(s: &mut Subject) -> Findings {
         Err(e) => f.broke(format!("TROLGetPosition failed: {e}")),
     }
 
-    // Back to back, without a Finish between (a 1998 program): one after the other.
-    let a = code(s.robot.ma(&Q2));
-    let b = code(s.robot.ma(&Q1));
+    // Back to back, without a Finish between (a 1998 program): one after the other; where
+    // one motion runs at a time, the second is refused and the first ends where it should.
+    let a = code(s.robot.ma(&q2));
+    let b = code(s.robot.ma(&q1));
     let c = code(s.robot.finish());
     let at = s.twin.joints();
     f.step(format!(
         "MA Q2 -> {a}, MA Q1 -> {b} (no Finish between), Finish -> {c}, arm at {}",
         fmt(&at)
     ));
-    if a != 0 || b != 0 || c != 0 {
+    if s.differences.one_motion_at_a_time {
+        if a != 0 || c != 0 {
+            f.broke(format!("a motion and its Finish failed: {a}, Finish {c}"));
+        } else if b == 0 {
+            f.broke("a second motion while one ran was accepted".into());
+        } else if !near(&at, &q2, s.differences.arrive_rad) {
+            f.broke(format!(
+                "the second motion was refused, but the arm is at {} for the first's {}",
+                fmt(&at),
+                fmt(&q2)
+            ));
+        }
+        // Then the second, after the Finish, as such a controller needs it.
+        if !motion(s, &mut f, "the second motion after Finish", q1) {
+            f.broke("the second motion after Finish failed".into());
+        }
+    } else if a != 0 || b != 0 || c != 0 {
         f.broke(format!(
             "two motions back to back failed: {a}, {b}, Finish {c}"
         ));
-    } else if !near(&at, &Q1, s.differences.arrive_rad) {
+    } else if !near(&at, &q1, s.differences.arrive_rad) {
         f.broke(format!(
             "two motions back to back succeeded, but the arm is at {}",
             fmt(&at)
@@ -331,7 +430,7 @@ pub fn run(s: &mut Subject) -> Findings {
 
     // Out of range: refused, nothing moves.
     let before = s.twin.joints();
-    let c = code(s.robot.ma(&OUT_OF_RANGE));
+    let c = code(s.robot.ma(&t.out_of_range));
     let cf = code(s.robot.finish());
     f.step(format!("MA out of range -> {c}, Finish -> {cf}"));
     if c == 0 && cf == 0 {
@@ -345,37 +444,11 @@ pub fn run(s: &mut Subject) -> Findings {
         ));
     }
 
-    trajectory(s, &mut f);
-
-    // A line nobody asked for: the next call is UNSURE and moves nothing; the one after works.
-    if s.twin.say_unasked("OVERCURRENT B") {
-        std::thread::sleep(Duration::from_millis(100));
-        let before = s.twin.joints();
-        let c = code(s.robot.ma(&Q2));
-        std::thread::sleep(Duration::from_millis(200));
-        f.step(format!("MA after an unasked line -> {c}"));
-        if c == 0 {
-            let cf = code(s.robot.finish());
-            f.broke(format!(
-                "a motion after an unasked line was reported sent (Finish {cf})"
-            ));
-        } else if c != TROL_ERR_ROBOT_UNSURE.0 {
-            f.step(format!(
-                "(not UNSURE but {c}: a refusal; allowed, as nothing moved)"
-            ));
-        }
-        if c != 0 {
-            if let Err(e) = unmoved(s.twin.as_ref(), &before) {
-                f.broke(format!("the arm moved after an unasked line: {e}"));
-            }
-        }
-        if !motion(s, &mut f, "the call after UNSURE", Q1) {
-            f.broke("the call after an unasked line did not work".into());
-        }
-    }
+    trajectory(s, &mut f, &t);
 
     // Halt while a motion runs: success only with the arm standing.
-    let c = code(s.robot.ma(&FAR));
+    let far = t.far;
+    let c = code(s.robot.ma(&far));
     if c != 0 {
         f.broke(format!("a far motion within range was refused ({c})"));
     } else if !wait_moving(s.twin.as_ref(), STEP) {
@@ -397,7 +470,7 @@ pub fn run(s: &mut Subject) -> Findings {
             // was seen standing, at its target): no stop is claimed then.
             let ran_out = h == 0
                 && standing.is_ok()
-                && near(&s.twin.joints(), &FAR, s.differences.arrive_rad);
+                && near(&s.twin.joints(), &far, s.differences.arrive_rad);
             if h != TROL_ERR_NOT_STOPPED.0 && !ran_out {
                 f.broke(format!("nothing stops this arm, but Halt answered {h}"));
             }
@@ -411,12 +484,12 @@ pub fn run(s: &mut Subject) -> Findings {
         }
         let cf = code(s.robot.finish());
         f.step(format!("Finish after the Halt -> {cf}"));
-        if cf == 0 && h == 0 && !near(&s.twin.joints(), &FAR, s.differences.arrive_rad) {
+        if cf == 0 && h == 0 && !near(&s.twin.joints(), &far, s.differences.arrive_rad) {
             // A halted motion ends short; a Finish may say so, or say nothing of a motion
             // it no longer follows. It must not say the arm reached FAR.
             let got = s.robot.position(Tag::Joint, PosMode::Actual);
             if let Ok(loc) = got {
-                if near(&loc.to_array6(), &FAR, s.differences.arrive_rad) {
+                if near(&loc.to_array6(), &far, s.differences.arrive_rad) {
                     f.broke("after a Halt, GetPosition says the arm reached its target".into());
                 }
             }
@@ -429,10 +502,57 @@ pub fn run(s: &mut Subject) -> Findings {
         if hf != 0 {
             f.step(format!("TROLHome after the Halt -> {hf}"));
         }
-        if !motion(s, &mut f, "the motion after the Halt", Q2) {
+        // From where TROLHome leaves the arm, as the first motion went.
+        let q2 = Targets::for_subject(s).q2;
+        if !motion(s, &mut f, "the motion after the Halt", q2) {
             f.broke("the motion after a Halt did not work".into());
         }
     }
+    // A line nobody asked for (last: a controller may send nothing further after it): the
+    // next call is UNSURE and moves nothing; the one after works, or is UNSURE too where the
+    // controller waits for a new connection.
+    if s.twin.say_unasked("OVERCURRENT B") {
+        std::thread::sleep(Duration::from_millis(100));
+        let before = s.twin.joints();
+        let c = code(s.robot.ma(&q2));
+        std::thread::sleep(Duration::from_millis(200));
+        f.step(format!("MA after an unasked line -> {c}"));
+        if c == 0 {
+            let cf = code(s.robot.finish());
+            f.broke(format!(
+                "a motion after an unasked line was reported sent (Finish {cf})"
+            ));
+        } else if c != TROL_ERR_ROBOT_UNSURE.0 {
+            f.step(format!(
+                "(not UNSURE but {c}: a refusal; allowed, as nothing moved)"
+            ));
+        }
+        if c != 0 {
+            if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+                f.broke(format!("the arm moved after an unasked line: {e}"));
+            }
+        }
+        if s.differences.unsure_until_reconnect {
+            // Nothing further until a new connection: the next call is UNSURE too, and
+            // nothing moves.
+            let before = s.twin.joints();
+            let c2 = code(s.robot.ma(&q1));
+            std::thread::sleep(Duration::from_millis(200));
+            f.step(format!("the call after UNSURE -> {c2} (until reconnect)"));
+            if c2 != TROL_ERR_ROBOT_UNSURE.0 {
+                f.broke(format!(
+                    "after UNSURE, a controller that sends nothing further until reconnect \
+                     answered {c2}"
+                ));
+            }
+            if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+                f.broke(format!("the arm moved after UNSURE: {e}"));
+            }
+        } else if !motion(s, &mut f, "the call after UNSURE", q1) {
+            f.broke("the call after an unasked line did not work".into());
+        }
+    }
+
     f.steps.insert(0, format!("{label}:"));
     f
 }

@@ -245,3 +245,85 @@ pub fn mars(name: &str) -> Subject {
         },
     }
 }
+
+// ---- a C500C (`c500c:`) ----
+
+struct C500cTwin {
+    unit: trol_c500c::c500c::Shared,
+    _runs: Runs,
+}
+
+impl Twin for C500cTwin {
+    fn joints(&self) -> [f64; 6] {
+        self.unit.lock().unwrap().joints()
+    }
+    fn moving(&self) -> bool {
+        self.unit.lock().unwrap().is_moving()
+    }
+    fn say_unasked(&self, text: &str) -> bool {
+        self.unit.lock().unwrap().say(text);
+        true
+    }
+}
+
+/// C500C variants the suite does not drive, each with its reason; crates/trol-c500c's own
+/// variant tests check that TROL fails safe there (every motion refused, nothing moved).
+pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
+    (
+        "echo-off",
+        "a console that echoes nothing cannot be typed to: every call is UNSURE",
+    ),
+    (
+        "pendant-holds",
+        "the pendant holds the point of control: every motion is refused until it hands it \
+         back",
+    ),
+];
+
+/// A simulated C500C of variant `name` (`trol_c500c::c500c::VARIANTS`) in real time (its
+/// motions are joint moves at the A465's speeds: faster than real time, a far one ends
+/// before a Halt could be tried), driven with the profile that matches it. Differences:
+/// one joint at a time, one motion at a time, a trajectory of one waypoint, nothing sent
+/// after UNSURE until reconnect (docs/c500c.md); on `unstoppable` no stop stops the arm.
+pub fn c500c(name: &str) -> Subject {
+    use trol_c500c::c500c::{self, Return};
+    use trol_c500c::profile::MotionReturn;
+    let sw = c500c::variant(name).expect("a C500C variant");
+    let profile = trol_c500c::Profile {
+        motion_return: Some(match sw.motion_return {
+            Return::AtStart => MotionReturn::Start,
+            Return::AtEnd => MotionReturn::End,
+        }),
+        ..trol_c500c::Profile::default()
+    };
+    let (host, ctl) = memory::pair(Some(profile.baud));
+    let unit = Arc::new(Mutex::new(trol_c500c::C500c::new(sw, false, 1.0)));
+    let stop = Arc::new(AtomicBool::new(false));
+    let thread = {
+        let (unit, stop) = (unit.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let _ = c500c::serve(Box::new(ctl), unit, stop);
+        })
+    };
+    let runs = Runs {
+        stop,
+        thread: Some(thread),
+    };
+    let backend = trol_c500c::C500cBackend::connect(Box::new(host), profile, None)
+        .unwrap_or_else(|e| panic!("C500C {name}: the session opens: {e}"));
+    Subject {
+        label: format!("C500C {name}"),
+        robot: robot_over(backend, trol_c500c::C500C_CODES),
+        twin: Box::new(C500cTwin { unit, _runs: runs }),
+        differences: Differences {
+            starts_unhomed: true,
+            unstoppable: name == "unstoppable",
+            untimed_trajectory: true,
+            one_joint_at_a_time: true,
+            one_motion_at_a_time: true,
+            one_waypoint: true,
+            unsure_until_reconnect: true,
+            ..Differences::default()
+        },
+    }
+}

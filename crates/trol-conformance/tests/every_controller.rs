@@ -1,6 +1,6 @@
 //! The conformance suite (`trol_conformance::run`) against every simulated controller: the
-//! simulated A465, every simulated C500 variant the matching profile can drive, every
-//! simulated MARS 8 variant. One test each, so that a failure names its controller.
+//! simulated A465, every simulated C500 and C500C variant the matching profile can drive,
+//! every simulated MARS 8 variant. One test each, so that a failure names its controller.
 
 use trol_conformance::{Subject, run, subjects};
 
@@ -90,4 +90,15 @@ each! {
     stop_ignored => "stop-ignored",
     homing_silent => "homing-silent",
     unstoppable => "unstoppable",
+}
+
+each! {
+    c500c, subjects::c500c, trol_c500c::c500c::VARIANTS, subjects::C500C_FAIL_SAFE;
+    default => "default",
+    return_at_end => "return-at-end",
+    error_prefixed => "error-prefixed",
+    error_bracketed => "error-bracketed",
+    lf_only => "lf-only",
+    unstoppable => "unstoppable",
+    power_loss_silent => "power-loss-silent",
 }

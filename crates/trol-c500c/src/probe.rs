@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use trol_port::Port;
 
 use crate::console::{Console, Said};
+use crate::profile::MotionReturn;
 use crate::reports;
 
 /// Every byte both ways, in order (the shared core's).
@@ -89,21 +90,14 @@ impl Probe<'_> {
     fn record(&mut self, cmd: &str, r: Result<Vec<String>, String>) {
         self.contact.steps.push((cmd.to_string(), r));
     }
-}
 
-/// First contact: read the controller, move nothing, change nothing. `app` is the ash
-/// application to read through (`test`, the factory one); `wait` bounds each answer.
-pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact {
-    let mut p = Probe {
-        port,
-        console: Console::default(),
-        contact: Contact::default(),
-        wait,
-    };
-    let found = (|| -> Result<(), String> {
-        p.send(b"\x05\r\r")?;
-        let (before, end) = p.read(true)?;
-        let shell = match end {
+    /// Ctrl-E (ends a continuous report) and two CR, then the prompt: the shell the console
+    /// runs (`$`, or ash's application).
+    fn attach(&mut self) -> Result<String, String> {
+        let wait = self.wait;
+        self.send(b"\x05\r\r")?;
+        let (before, end) = self.read(true)?;
+        Ok(match end {
             Some(Said::Prompt(s)) => s,
             Some(Said::Question(q)) => {
                 return Err(format!(
@@ -122,35 +116,50 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
                     }
                 ));
             }
-        };
-        p.contact
-            .findings
-            .push(format!("at first contact the console runs `{shell}`"));
-        let mut started = false;
+        })
+    }
+
+    /// Leave ash with `exit`, answering its question `y` (only where this started it).
+    fn leave_ash(&mut self) -> Result<(), String> {
+        let (lines, end) = self.step("exit")?;
+        match end {
+            Some(Said::Question(q)) if q.contains("exit") => {
+                let (more, _) = self.step("y")?;
+                self.record("exit", Ok([lines, vec![q], more].concat()));
+            }
+            other => self.record("exit", Err(format!("no question after exit: {other:?}"))),
+        }
+        Ok(())
+    }
+
+    /// Where the console runs the system shell (`shell` is its prompt), start ash with `app`
+    /// (noting a pendant that holds control); where ash runs `app` already, nothing. Whether
+    /// this started ash (and should leave it again with `exit`).
+    fn enter_ash(&mut self, shell: &str, app: &str) -> Result<bool, String> {
         if shell == "$" {
-            let (lines, _) = p.step("crosver")?;
-            p.record("crosver", Ok(lines.clone()));
+            let (lines, _) = self.step("crosver")?;
+            self.record("crosver", Ok(lines.clone()));
             if let Some(l) = lines.iter().find(|l| l.starts_with("System type:")) {
-                p.contact.findings.push(l.clone());
+                self.contact.findings.push(l.clone());
             }
             let cmd = format!("ash {app}");
-            let (mut lines, mut end) = p.step(&cmd)?;
+            let (mut lines, mut end) = self.step(&cmd)?;
             // A system shell's prompt still on its way (one per CR sent) comes before ash's.
             while end == Some(Said::Prompt("$".into())) {
-                let (more, next) = p.read(false)?;
+                let (more, next) = self.read(false)?;
                 lines.extend(more);
                 end = next;
             }
-            p.record(&cmd, Ok(lines.clone()));
+            self.record(&cmd, Ok(lines.clone()));
             if lines.iter().any(|l| l.contains("shut down the pendant")) {
-                p.contact.findings.push(
+                self.contact.findings.push(
                     "the pendant holds the point of control: press <SHIFT><ESC> on the pendant \
                      keyboard before the first motion"
                         .into(),
                 );
             }
             match end {
-                Some(Said::Prompt(a)) if a == app => started = true,
+                Some(Said::Prompt(a)) if a == app => return Ok(true),
                 other => return Err(format!("`{cmd}` did not give ash's prompt: {other:?}")),
             }
         } else if shell != app {
@@ -158,6 +167,25 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
                 "ash runs the application `{shell}`, not `{app}`: give --app {shell}"
             ));
         }
+        Ok(false)
+    }
+}
+
+/// First contact: read the controller, move nothing, change nothing. `app` is the ash
+/// application to read through (`test`, the factory one); `wait` bounds each answer.
+pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact {
+    let mut p = Probe {
+        port,
+        console: Console::default(),
+        contact: Contact::default(),
+        wait,
+    };
+    let found = (|| -> Result<(), String> {
+        let shell = p.attach()?;
+        p.contact
+            .findings
+            .push(format!("at first contact the console runs `{shell}`"));
+        let started = p.enter_ash(&shell, app)?;
         for cmd in READS {
             let r = p.step(cmd).and_then(|(lines, end)| match end {
                 Some(Said::Prompt(a)) if a == app => Ok(lines),
@@ -195,14 +223,7 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
         }
         if started {
             // Leave the controller as it was found: back to the system shell.
-            let (lines, end) = p.step("exit")?;
-            match end {
-                Some(Said::Question(q)) if q.contains("exit") => {
-                    let (more, _) = p.step("y")?;
-                    p.record("exit", Ok([lines, vec![q], more].concat()));
-                }
-                other => p.record("exit", Err(format!("no question after exit: {other:?}"))),
-            }
+            p.leave_ash()?;
         }
         Ok(())
     })();
@@ -210,6 +231,199 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
         p.contact.findings.push(format!("stopped: {e}"));
     }
     p.contact
+}
+
+/// What the supervised step `motion-return` saw (`trol c500c step motion-return`).
+#[derive(Debug, Default)]
+pub struct Supervised {
+    /// The commands, the transcript and the findings, as first contact's.
+    pub contact: Contact,
+    /// When ash gave its prompt back after a motion command, where the step could tell.
+    pub motion_return: Option<MotionReturn>,
+}
+
+/// The supervised step's speed setting, percent.
+pub const STEP_SPEED: u8 = 5;
+/// The joint it moves (the wrist's last, the least in anyone's way).
+pub const STEP_JOINT: usize = 6;
+/// How far, degrees (and back).
+pub const STEP_DEG: f64 = 3.0;
+/// How close to where it was sent the arm must end, degrees.
+const STEP_TOL_DEG: f64 = 0.05;
+
+/// The supervised step `motion-return`: after the person at the arm has confirmed it is
+/// clear, with the arm powered and homed (armstat), joint 6 goes by +3 degrees at 5 % speed
+/// (`speed 5`, `joint 6,3`), and back; the speed setting is typed back as it was found.
+/// When ash's prompt came back after `joint` is told by where `w2` puts the arm right then:
+/// short of the end, the prompt came as the motion started; at the end, after at least the
+/// motion's least time, once it had ended. Anything else (a refusal, the arm not ending
+/// where sent, a prompt too soon with the arm already there) settles nothing: the step
+/// says what it saw and writes nothing. The caller has the confirmation; this sends.
+pub fn motion_return_step(port: &mut dyn Port, app: &str, wait: Duration) -> Supervised {
+    let mut p = Probe {
+        port,
+        console: Console::default(),
+        contact: Contact::default(),
+        wait,
+    };
+    let mut settled = None;
+    let r = (|| -> Result<(), String> {
+        let shell = p.attach()?;
+        let started = p.enter_ash(&shell, app)?;
+        let r = supervised_motion(&mut p, app);
+        if started {
+            p.leave_ash()?;
+        }
+        settled = r?;
+        Ok(())
+    })();
+    if let Err(e) = r {
+        p.contact.findings.push(format!("stopped: {e}"));
+    }
+    Supervised {
+        contact: p.contact,
+        motion_return: settled,
+    }
+}
+
+/// A command at ash's prompt that must print nothing (a setting, a motion): its lines, or
+/// the refusal.
+fn quiet(p: &mut Probe, app: &str, cmd: &str) -> Result<(), String> {
+    let (lines, end) = p.step(cmd)?;
+    p.record(cmd, Ok(lines.clone()));
+    match end {
+        Some(Said::Prompt(a)) if a == app && lines.iter().all(|l| l.trim().is_empty()) => Ok(()),
+        Some(Said::Question(q)) => {
+            // A question nobody meant to answer: Ctrl-C, never `y`.
+            p.send(b"\x03")?;
+            Err(format!(
+                "`{cmd}` asked `{q}`: answered with Ctrl-C; nothing settled"
+            ))
+        }
+        other => Err(format!(
+            "`{cmd}` printed {lines:?} ({other:?}): nothing settled"
+        )),
+    }
+}
+
+fn read_at(p: &mut Probe, app: &str, cmd: &str) -> Result<Vec<String>, String> {
+    let (lines, end) = p.step(cmd)?;
+    p.record(cmd, Ok(lines.clone()));
+    match end {
+        Some(Said::Prompt(a)) if a == app => Ok(lines),
+        other => Err(format!("no prompt after `{cmd}`: {other:?} ({lines:?})")),
+    }
+}
+
+fn w2(p: &mut Probe, app: &str) -> Result<[f64; 6], String> {
+    let lines = read_at(p, app, "w2")?;
+    reports::position(&lines, true)
+        .map(|x| x.joints_deg)
+        .map_err(|e| e.to_string())
+}
+
+/// The motion of the supervised step and what it tells; the speed setting typed back
+/// whatever happened once it was changed.
+fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, String> {
+    let stat = reports::armstat(&read_at(p, app, "armstat")?).map_err(|e| e.to_string())?;
+    if !stat.power {
+        return Err(
+            "arm power is off: switch it on at the controller, then run the step again".into(),
+        );
+    }
+    if stat.homing != reports::Homing::Homed {
+        return Err(format!(
+            "the arm is not homed ({:?}): home it first (at the pendant, or `home` in ash)",
+            stat.homing
+        ));
+    }
+    let speed = reports::speed(&read_at(p, app, "speed")?).map_err(|e| e.to_string())?;
+    let q0 = w2(p, app)?;
+    quiet(p, app, &format!("speed {STEP_SPEED}"))?;
+    let r = (|| {
+        let now = reports::speed(&read_at(p, app, "speed")?).map_err(|e| e.to_string())?;
+        if now != STEP_SPEED {
+            return Err(format!(
+                "`speed {STEP_SPEED}` taken, and `speed` then says {now}: nothing moved"
+            ));
+        }
+        let j = STEP_JOINT - 1;
+        let cmd = format!("joint {STEP_JOINT},{STEP_DEG}");
+        let sent = Instant::now();
+        quiet(p, app, &cmd)?;
+        let prompt_after = sent.elapsed();
+        let at = w2(p, app)?;
+        read_at(p, app, "finish")?;
+        let end = w2(p, app)?;
+        let target = q0[j] + STEP_DEG;
+        let arrived = (end[j] - target).abs() <= STEP_TOL_DEG
+            && (0..6).all(|k| k == j || (end[k] - q0[k]).abs() <= STEP_TOL_DEG);
+        // Back where it was, whatever was seen.
+        quiet(p, app, &format!("joint {STEP_JOINT},{}", -STEP_DEG))?;
+        read_at(p, app, "finish")?;
+        let back = w2(p, app)?;
+        if (back[j] - q0[j]).abs() > STEP_TOL_DEG {
+            p.contact.findings.push(format!(
+                "the arm did not come back: joint {STEP_JOINT} at {:.3} degrees, it started at \
+                 {:.3}",
+                back[j], q0[j]
+            ));
+        }
+        if !arrived {
+            return Err(format!(
+                "after `{cmd}` and `finish` the arm is at {end:?} degrees, not at joint \
+                 {STEP_JOINT} {target:.3}: nothing settled"
+            ));
+        }
+        // The least time of the motion: the joint's top speed at the step's setting (the
+        // ramps make it longer).
+        let top = trol_a465::model::MAX_SPEED_DEG[j] * f64::from(STEP_SPEED) / 100.0;
+        let least = Duration::from_secs_f64(STEP_DEG / top);
+        let short = target - at[j] > STEP_TOL_DEG;
+        p.contact.findings.push(format!(
+            "`{cmd}` at {STEP_SPEED} %: the prompt came back after {} ms (the motion takes at \
+             least {} ms); w2 right then put joint {STEP_JOINT} {:.3} degrees short of its end",
+            prompt_after.as_millis(),
+            least.as_millis(),
+            (target - at[j]).max(0.0)
+        ));
+        Ok(if short {
+            Some(MotionReturn::Start)
+        } else if prompt_after >= least {
+            Some(MotionReturn::End)
+        } else {
+            p.contact.findings.push(
+                "the prompt came sooner than the motion can take, and the arm was already at \
+                 its end: this cannot be told apart; nothing settled (tell TROL's maintainers; \
+                 the transcript has it)"
+                    .into(),
+            );
+            None
+        })
+    })();
+    // The speed setting as it was found.
+    let restored = quiet(p, app, &format!("speed {speed}"));
+    if let Err(e) = &restored {
+        p.contact.findings.push(format!(
+            "the speed setting ({speed} %) could not be typed back: {e}"
+        ));
+    }
+    let found = r?;
+    restored?;
+    if let Some(m) = found {
+        p.contact.findings.push(format!(
+            "motion-return = \"{}\": ash gives its prompt back {}",
+            match m {
+                MotionReturn::Start => "start",
+                MotionReturn::End => "end",
+            },
+            match m {
+                MotionReturn::Start => "as a motion starts",
+                MotionReturn::End => "once a motion has ended",
+            }
+        ));
+    }
+    Ok(found)
 }
 
 #[cfg(test)]
@@ -251,6 +465,77 @@ mod tests {
             c.transcript.text()
         );
         assert!(!f.contains("stopped"), "{f}");
+    }
+
+    /// The simulated C500C of `sw` in real time (the step compares the prompt's time with
+    /// the motion's), its arm homed or not, and the step run on it.
+    fn step_on(sw: Switches, homed: bool) -> (Supervised, Vec<String>, [f64; 6], [f64; 6]) {
+        let (mut host, ctl) = trol_port::memory::pair(None);
+        let unit = Arc::new(Mutex::new(C500c::new(sw, homed, 1.0)));
+        let before = unit.lock().unwrap().joints();
+        let stop = Arc::new(AtomicBool::new(false));
+        let t = {
+            let (unit, stop) = (unit.clone(), stop.clone());
+            std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
+        };
+        let s = motion_return_step(&mut host, "test", Duration::from_secs(10));
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let _ = t.join();
+        let mut u = unit.lock().unwrap();
+        let after = u.joints();
+        (s, u.received().to_vec(), before, after)
+    }
+
+    #[test]
+    fn the_motion_return_step_measures_each_variant_and_leaves_things_as_found() {
+        for (name, want) in [
+            ("default", MotionReturn::Start),
+            ("return-at-end", MotionReturn::End),
+        ] {
+            let sw = crate::c500c::variant(name).unwrap();
+            let (s, typed, before, after) = step_on(sw, true);
+            let f = s.contact.findings.join("\n");
+            assert_eq!(s.motion_return, Some(want), "{name}: {f}");
+            // The arm back where it was, the speed setting typed back (the twin's was 100),
+            // ash left with `exit` as found.
+            for k in 0..6 {
+                assert!(
+                    (after[k] - before[k]).abs() < 1e-3,
+                    "{name}: {before:?} -> {after:?}"
+                );
+            }
+            let joints: Vec<&String> = typed.iter().filter(|l| l.starts_with("joint")).collect();
+            assert_eq!(joints, ["joint 6,3", "joint 6,-3"], "{name}");
+            let speeds: Vec<&String> = typed.iter().filter(|l| l.starts_with("speed ")).collect();
+            assert_eq!(speeds, ["speed 5", "speed 100"], "{name}");
+            assert_eq!(
+                typed.last().map(String::as_str),
+                Some("y"),
+                "{name}: {typed:?}"
+            );
+            assert!(
+                s.contact.transcript.text().contains("> joint 6,3"),
+                "{name}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_motion_return_step_moves_nothing_on_an_arm_not_homed() {
+        let (s, typed, before, after) = step_on(Switches::default(), false);
+        assert_eq!(s.motion_return, None);
+        let f = s.contact.findings.join("\n");
+        assert!(f.contains("not homed"), "{f}");
+        assert!(
+            !typed
+                .iter()
+                .any(|l| l.starts_with("joint") || l.starts_with("speed "))
+        );
+        // (The encoders dither by a few microradians.)
+        assert!(
+            (0..6).all(|k| (after[k] - before[k]).abs() < 1e-3),
+            "{before:?} -> {after:?}"
+        );
     }
 
     #[test]

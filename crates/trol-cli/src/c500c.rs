@@ -1,4 +1,5 @@
-//! `trol c500c`: an A465 on its C500C (docs/c500c.md): first contact that only reads.
+//! `trol c500c`: an A465 on its C500C (docs/c500c.md): first contact that only reads, and
+//! the supervised steps that settle the profile's open points on the arm.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -18,6 +19,54 @@ Examples:
   trol sim --c500c &    # a simulated C500C; then:
   trol c500c probe --controller /dev/pts/4 --out first.txt")]
     Probe(ProbeArgs),
+    /// A supervised step that settles one open point of the profile on the arm, and writes
+    /// only what it saw into --profile. `motion-return` (the only step so far): with the arm
+    /// powered and homed, joint 6 goes by +3 degrees at 5 % speed and back, and the speed
+    /// setting is typed back; when ash's prompt came back (as the motion started, or once it
+    /// had ended) is read from where w2 puts the arm right then. The arm moves: the step asks
+    /// for `yes` first (--yes: already confirmed). Every byte goes to --out.
+    #[command(after_help = "\
+Examples:
+  trol c500c step motion-return --controller /dev/ttyUSB0 --profile c500c.toml --out step.txt
+  trol sim --c500c --homed &    # a simulated C500C; then:
+  trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
+    Step(StepArgs),
+}
+
+/// The supervised steps.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum StepName {
+    /// When ash gives its prompt back after a motion command (`motion-return`).
+    MotionReturn,
+}
+
+#[derive(Args, Debug)]
+pub struct StepArgs {
+    /// The step.
+    #[arg(value_enum)]
+    step: StepName,
+    /// The front console's serial device, or socket://HOST:PORT (c500c: may lead).
+    #[arg(long, value_name = "DEVICE")]
+    controller: String,
+    /// The C500C profile to settle the point in: read where it exists (its other keys kept),
+    /// written with what the step saw; left alone where the step saw nothing it could tell.
+    #[arg(long, value_name = "FILE")]
+    profile: PathBuf,
+    /// Where the transcript goes (`> ` sent, `< ` read).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// The person at the arm has confirmed that it is clear to move (no question asked).
+    #[arg(long)]
+    yes: bool,
+    /// Baud rate (the console's: 57600).
+    #[arg(long, default_value_t = 57600)]
+    baud: u32,
+    /// The ash application to move through (the factory one: test).
+    #[arg(long, default_value = "test")]
+    app: String,
+    /// How long to wait for each answer, ms.
+    #[arg(long, default_value_t = 10000)]
+    wait_ms: u64,
 }
 
 #[derive(Args, Debug)]
@@ -43,7 +92,65 @@ pub struct ProbeArgs {
 pub fn run(c: C500c) -> Result<(), String> {
     match c {
         C500c::Probe(a) => probe(a),
+        C500c::Step(a) => step(a),
     }
+}
+
+fn step(a: StepArgs) -> Result<(), String> {
+    let StepName::MotionReturn = a.step;
+    // The profile first: a file that cannot be used stops the step before anything moves.
+    let mut profile = if a.profile.exists() {
+        trol_c500c::Profile::from_file(&a.profile).map_err(|e| e.to_string())?
+    } else {
+        trol_c500c::Profile::default()
+    };
+    let device = a
+        .controller
+        .strip_prefix(trol_c500c::PREFIX)
+        .unwrap_or(&a.controller)
+        .to_string();
+    if !a.yes {
+        say!(
+            "trol c500c step motion-return moves the arm: joint 6 by +{} degrees at {} % speed, \
+             then back, on the C500C at {device}. Make sure nobody and nothing is within its \
+             reach and a hand is on the emergency stop. Type yes to go on:",
+            trol_c500c::probe::STEP_DEG,
+            trol_c500c::probe::STEP_SPEED
+        );
+        let mut answer = String::new();
+        let _ = std::io::stdin().read_line(&mut answer);
+        if answer.trim() != "yes" {
+            return Err("not confirmed: nothing was sent (type yes, or give --yes)".into());
+        }
+    }
+    let settings = trol_port::PortSettings {
+        baud: a.baud,
+        ..Default::default()
+    };
+    let mut port = trol_port::open(&device, &settings).map_err(|e| e.to_string())?;
+    say!("trol c500c step motion-return: on the C500C at {device}");
+    let s = trol_c500c::probe::motion_return_step(
+        port.as_mut(),
+        &a.app,
+        Duration::from_millis(a.wait_ms),
+    );
+    std::fs::write(&a.out, s.contact.transcript.text())
+        .map_err(|e| format!("cannot write {}: {e}", a.out.display()))?;
+    for f in &s.contact.findings {
+        say!("  {f}");
+    }
+    say!("  every byte: {}", a.out.display());
+    let Some(m) = s.motion_return else {
+        return Err(format!(
+            "nothing settled; {} left as it was",
+            a.profile.display()
+        ));
+    };
+    profile.motion_return = Some(m);
+    std::fs::write(&a.profile, profile.to_toml())
+        .map_err(|e| format!("cannot write {}: {e}", a.profile.display()))?;
+    say!("  written to {}", a.profile.display());
+    Ok(())
 }
 
 fn probe(a: ProbeArgs) -> Result<(), String> {

@@ -301,6 +301,71 @@ fn the_probe_reads_only_and_records_every_byte() {
     );
 }
 
+/// The supervised step `motion-return` (`trol c500c step`): not confirmed, nothing is
+/// typed; confirmed, it moves joint 6 and back at 5 % and writes what it saw into the
+/// profile, keeping its other keys: `end` on a controller whose prompt returns at a
+/// motion's end.
+#[test]
+fn the_motion_return_step_asks_first_and_writes_only_what_it_saw() {
+    let dir = scratch("c500c-step");
+    let args = [
+        "sim",
+        "--c500c",
+        "--variant",
+        "return-at-end",
+        "--homed",
+        "--time-scale",
+        "1",
+    ];
+    let sim = Background::start(&dir, &args, "serving on ");
+    std::fs::write(dir.join("c500c.toml"), "settle-ms = 400\n").unwrap();
+    let step = |extra: &[&str], input: &str| {
+        let mut a = vec![
+            "c500c",
+            "step",
+            "motion-return",
+            "--controller",
+            sim.name.as_str(),
+            "--profile",
+            "c500c.toml",
+            "--out",
+            "step.txt",
+        ];
+        a.extend_from_slice(extra);
+        trol(&dir, &a, input)
+    };
+    let o = step(&[], "no\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("not confirmed: nothing was sent"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("c500c.toml")).unwrap(),
+        "settle-ms = 400\n"
+    );
+
+    let o = step(&["--yes"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("motion-return = \"end\""), "{out}");
+    let profile = std::fs::read_to_string(dir.join("c500c.toml")).unwrap();
+    assert!(profile.contains("motion-return = \"end\""), "{profile}");
+    assert!(profile.contains("settle-ms = 400"), "{profile}");
+    let transcript = std::fs::read_to_string(dir.join("step.txt")).unwrap();
+    assert!(transcript.contains("> joint 6,3\\x0d"), "{transcript}");
+    // Only the confirmed run typed a motion.
+    let typed: Vec<String> = sim
+        .output_until("typed: y", 1, 30)
+        .into_iter()
+        .filter_map(|l| l.split_once("typed: ").map(|(_, t)| t.trim().to_string()))
+        .filter(|t| t.starts_with("joint") || t.starts_with("speed "))
+        .collect();
+    assert_eq!(
+        typed,
+        ["speed 5", "joint 6,3", "joint 6,-3", "speed 100"],
+        "{typed:?}"
+    );
+}
+
 /// A fault script (`trol sim --c500c --console`): the arm's power cut during a motion that
 /// `trol interp` waits for. Finish is never success, the interpreter says why, and the next
 /// motion is not sent.

@@ -186,14 +186,70 @@ pub fn c500(name: &str) -> Subject {
     }
 }
 
-// ---- a MARS 8 (`mars:`) ----
+// ---- the units served on a line of their own: a MARS 8, a C500C ----
 
-struct MarsTwin {
-    unit: trol_mars::mars8::Shared,
+/// A simulated controller that serves its line on a thread (a MARS 8, a C500C), as its twin
+/// reads it.
+trait Unit: Send + 'static {
+    fn joints(&mut self) -> [f64; 6];
+    fn is_moving(&mut self) -> bool;
+    fn say(&mut self, text: &str);
+}
+
+impl Unit for trol_mars::Mars8 {
+    fn joints(&mut self) -> [f64; 6] {
+        trol_mars::Mars8::joints(self)
+    }
+    fn is_moving(&mut self) -> bool {
+        trol_mars::Mars8::is_moving(self)
+    }
+    fn say(&mut self, text: &str) {
+        trol_mars::Mars8::say(self, text)
+    }
+}
+
+impl Unit for trol_c500c::C500c {
+    fn joints(&mut self) -> [f64; 6] {
+        trol_c500c::C500c::joints(self)
+    }
+    fn is_moving(&mut self) -> bool {
+        trol_c500c::C500c::is_moving(self)
+    }
+    fn say(&mut self, text: &str) {
+        trol_c500c::C500c::say(self, text)
+    }
+}
+
+/// How a unit serves its line until told to stop.
+type Serve<U> = fn(Box<dyn trol_port::Port>, Arc<Mutex<U>>, Arc<AtomicBool>) -> std::io::Result<()>;
+
+struct UnitTwin<U> {
+    unit: Arc<Mutex<U>>,
     _runs: Runs,
 }
 
-impl Twin for MarsTwin {
+impl<U: Unit> UnitTwin<U> {
+    /// `unit` serving `port` with `serve` on a thread of its own.
+    fn serving(unit: U, port: Box<dyn trol_port::Port>, serve: Serve<U>) -> UnitTwin<U> {
+        let unit = Arc::new(Mutex::new(unit));
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let (unit, stop) = (unit.clone(), stop.clone());
+            std::thread::spawn(move || {
+                let _ = serve(port, unit, stop);
+            })
+        };
+        UnitTwin {
+            unit,
+            _runs: Runs {
+                stop,
+                thread: Some(thread),
+            },
+        }
+    }
+}
+
+impl<U: Unit> Twin for UnitTwin<U> {
     fn joints(&self) -> [f64; 6] {
         self.unit.lock().unwrap().joints()
     }
@@ -205,6 +261,8 @@ impl Twin for MarsTwin {
         true
     }
 }
+
+// ---- a MARS 8 (`mars:`) ----
 
 /// A simulated MARS 8 of variant `name` (`trol_mars::mars8::VARIANTS`), CTU's CRS93 profile
 /// with every axis' speed ten times as fast and the unit at ten times real time. Differences:
@@ -215,29 +273,17 @@ pub fn mars(name: &str) -> Subject {
     let mut fast = trol_mars::Profile::crs93();
     fast.speed = fast.speed.map(|v| v * 10);
     let (host, unit_side) = memory::pair(Some(BAUD));
-    let unit = Arc::new(Mutex::new(trol_mars::Mars8::new(
-        trol_mars::Profile::crs93(),
-        sw,
-        false,
-        10.0,
-    )));
-    let stop = Arc::new(AtomicBool::new(false));
-    let thread = {
-        let (unit, stop) = (unit.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let _ = trol_mars::mars8::serve(Box::new(unit_side), unit, stop);
-        })
-    };
-    let runs = Runs {
-        stop,
-        thread: Some(thread),
-    };
+    let twin = UnitTwin::serving(
+        trol_mars::Mars8::new(trol_mars::Profile::crs93(), sw, false, 10.0),
+        Box::new(unit_side),
+        trol_mars::mars8::serve,
+    );
     let backend = trol_mars::MarsBackend::connect(Box::new(host), fast, None, None, Vec::new())
         .unwrap_or_else(|e| panic!("MARS 8 {name}: the session opens: {e}"));
     Subject {
         label: format!("MARS 8 {name}"),
         robot: robot_over(backend, trol_mars::MARS_CODES),
-        twin: Box::new(MarsTwin { unit, _runs: runs }),
+        twin: Box::new(twin),
         differences: Differences {
             starts_unhomed: true,
             unstoppable: name == "unstoppable",
@@ -247,24 +293,6 @@ pub fn mars(name: &str) -> Subject {
 }
 
 // ---- a C500C (`c500c:`) ----
-
-struct C500cTwin {
-    unit: trol_c500c::c500c::Shared,
-    _runs: Runs,
-}
-
-impl Twin for C500cTwin {
-    fn joints(&self) -> [f64; 6] {
-        self.unit.lock().unwrap().joints()
-    }
-    fn moving(&self) -> bool {
-        self.unit.lock().unwrap().is_moving()
-    }
-    fn say_unasked(&self, text: &str) -> bool {
-        self.unit.lock().unwrap().say(text);
-        true
-    }
-}
 
 /// C500C variants the suite does not drive, each with its reason; crates/trol-c500c's own
 /// variant tests check that TROL fails safe there (every motion refused, nothing moved).
@@ -297,24 +325,17 @@ pub fn c500c(name: &str) -> Subject {
         ..trol_c500c::Profile::default()
     };
     let (host, ctl) = memory::pair(Some(profile.baud));
-    let unit = Arc::new(Mutex::new(trol_c500c::C500c::new(sw, false, 1.0)));
-    let stop = Arc::new(AtomicBool::new(false));
-    let thread = {
-        let (unit, stop) = (unit.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let _ = c500c::serve(Box::new(ctl), unit, stop);
-        })
-    };
-    let runs = Runs {
-        stop,
-        thread: Some(thread),
-    };
+    let twin = UnitTwin::serving(
+        trol_c500c::C500c::new(sw, false, 1.0),
+        Box::new(ctl),
+        c500c::serve,
+    );
     let backend = trol_c500c::C500cBackend::connect(Box::new(host), profile, None)
         .unwrap_or_else(|e| panic!("C500C {name}: the session opens: {e}"));
     Subject {
         label: format!("C500C {name}"),
         robot: robot_over(backend, trol_c500c::C500C_CODES),
-        twin: Box::new(C500cTwin { unit, _runs: runs }),
+        twin: Box::new(twin),
         differences: Differences {
             starts_unhomed: true,
             unstoppable: name == "unstoppable",

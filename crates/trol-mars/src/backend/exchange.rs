@@ -91,13 +91,21 @@ impl MarsBackend {
     }
 
     pub(super) fn query(&mut self, q: &str) -> Result<String, Fail> {
-        self.send(&line::query(q)).map_err(Fail::Io)?;
-        match self.await_reply(
-            &format!("{q}?"),
-            |r| matches!(r, Reply::Value { name, .. } if name == q),
-        )? {
-            Reply::Value { value, .. } => Ok(value),
-            _ => unreachable!("await_reply returns what it wants"),
+        let r = self.send(&line::query(q)).map_err(Fail::Io).and_then(|()| {
+            self.await_reply(
+                &format!("{q}?"),
+                |r| matches!(r, Reply::Value { name, .. } if name == q),
+            )
+        });
+        match r {
+            Ok(Reply::Value { value, .. }) => Ok(value),
+            Ok(_) => unreachable!("await_reply returns what it wants"),
+            Err(e) => {
+                // A unit that did not answer a read as asked: what was seen of it a moment
+                // ago no longer stands in for the next motion's reads.
+                self.seen = None;
+                Err(e)
+            }
         }
     }
 

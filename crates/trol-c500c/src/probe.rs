@@ -258,7 +258,9 @@ const STEP_TOL_DEG: f64 = 0.05;
 /// short of the end, the prompt came as the motion started; at the end, after at least the
 /// motion's least time, once it had ended. Anything else (a refusal, the arm not ending
 /// where sent, a prompt too soon with the arm already there) settles nothing: the step
-/// says what it saw and writes nothing. The caller has the confirmation; this sends.
+/// says what it saw and writes nothing; where the arm did not end where it was sent, or a
+/// reading after the motion failed, nothing further moves it. The caller has the
+/// confirmation; this sends.
 pub fn motion_return_step(port: &mut dyn Port, app: &str, wait: Duration) -> Supervised {
     let mut p = Probe {
         port,
@@ -352,27 +354,38 @@ fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, S
         let sent = Instant::now();
         quiet(p, app, &cmd)?;
         let prompt_after = sent.elapsed();
-        let at = w2(p, app)?;
-        read_at(p, app, "finish")?;
-        let end = w2(p, app)?;
+        // From here on the arm may stand off where it started: a failure says so, and
+        // nothing further moves it.
+        let moved = |e: String| {
+            format!(
+                "{e} (after `{cmd}`: joint {STEP_JOINT} may stand up to {STEP_DEG} degrees from \
+                 where it started; nothing further was sent to move it)"
+            )
+        };
+        let at = w2(p, app).map_err(moved)?;
+        read_at(p, app, "finish").map_err(moved)?;
+        let end = w2(p, app).map_err(moved)?;
         let target = q0[j] + STEP_DEG;
         let arrived = (end[j] - target).abs() <= STEP_TOL_DEG
             && (0..6).all(|k| k == j || (end[k] - q0[k]).abs() <= STEP_TOL_DEG);
-        // Back where it was, whatever was seen.
-        quiet(p, app, &format!("joint {STEP_JOINT},{}", -STEP_DEG))?;
-        read_at(p, app, "finish")?;
-        let back = w2(p, app)?;
+        if !arrived {
+            // Not where it was sent: what a move back would do is not known either.
+            return Err(format!(
+                "after `{cmd}` and `finish` the arm is at {end:?} degrees, not at joint \
+                 {STEP_JOINT} {target:.3}: nothing settled, and nothing further was sent \
+                 (check the arm)"
+            ));
+        }
+        // Back where it was.
+        let back_cmd = format!("joint {STEP_JOINT},{}", -STEP_DEG);
+        quiet(p, app, &back_cmd).map_err(moved)?;
+        read_at(p, app, "finish").map_err(moved)?;
+        let back = w2(p, app).map_err(moved)?;
         if (back[j] - q0[j]).abs() > STEP_TOL_DEG {
             p.contact.findings.push(format!(
                 "the arm did not come back: joint {STEP_JOINT} at {:.3} degrees, it started at \
                  {:.3}",
                 back[j], q0[j]
-            ));
-        }
-        if !arrived {
-            return Err(format!(
-                "after `{cmd}` and `finish` the arm is at {end:?} degrees, not at joint \
-                 {STEP_JOINT} {target:.3}: nothing settled"
             ));
         }
         // The least time of the motion: the joint's top speed at the step's setting (the

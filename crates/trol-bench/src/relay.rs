@@ -120,14 +120,17 @@ fn carry(dir: u8, mut from: TTYPort, mut to: TTYPort, byte: Duration, carried: &
         for &b in &buf[..n] {
             let due = arrived.max(free_at) + byte;
             wait_until(due);
-            if to.write_all(&[b]).is_err() {
-                break;
-            }
-            free_at = due;
+            // Counted before it is written: once written, the other end may answer, and the
+            // other direction's thread count its byte, before this thread runs again (a
+            // loaded machine lost turns so).
             carried.bytes.fetch_add(1, Ordering::SeqCst);
             if carried.last.swap(dir, Ordering::SeqCst) != dir {
                 carried.turns.fetch_add(1, Ordering::SeqCst);
             }
+            if to.write_all(&[b]).is_err() {
+                break;
+            }
+            free_at = due;
         }
     }
 }

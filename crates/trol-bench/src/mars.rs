@@ -64,21 +64,24 @@ struct Seen {
 }
 
 impl Seen {
-    /// The first start after `call`, and the last stand before `returned`.
-    fn around(&self, call: Instant, returned: Instant) -> Result<(Instant, Instant), String> {
+    /// The first start after `call`, and the first stand after that. (The watcher notes
+    /// each when it sees it: on a loaded machine it may see a stand after the wait has
+    /// returned; the wait cannot have returned before the arm stood, as the unit answers
+    /// from its arm, so that is the watcher's lateness, and the time after the end counts
+    /// as 0.)
+    fn around(&self, call: Instant) -> Result<(Instant, Instant), String> {
         let start = self
             .changes
             .iter()
             .find(|(t, moving)| *moving && *t >= call)
             .map(|(t, _)| *t)
-            .ok_or("the arm never started after the call")?;
+            .ok_or("the arm was never seen moving after the call")?;
         let stood = self
             .changes
             .iter()
-            .rev()
-            .find(|(t, moving)| !*moving && *t <= returned && *t >= start)
+            .find(|(t, moving)| !*moving && *t >= start)
             .map(|(t, _)| *t)
-            .ok_or("the wait returned before the arm stood")?;
+            .ok_or("the arm was never seen standing after the motion")?;
         Ok((start, stood))
     }
 }
@@ -130,12 +133,14 @@ impl Unit {
 
     /// Call-to-start and end-to-return, ms, of each (call, return) pair.
     fn timings(&self, pairs: &[(Instant, Instant)]) -> Result<Client, String> {
+        // The watcher's last look after the last return.
+        std::thread::sleep(Duration::from_millis(100));
         let seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
         let (mut to_start, mut after) = (Vec::new(), Vec::new());
         for &(call, returned) in pairs {
-            let (start, stood) = seen.around(call, returned)?;
+            let (start, stood) = seen.around(call)?;
             to_start.push(start.duration_since(call).as_secs_f64() * 1e3);
-            after.push(returned.duration_since(stood).as_secs_f64() * 1e3);
+            after.push(returned.saturating_duration_since(stood).as_secs_f64() * 1e3);
         }
         Ok(Client {
             call_to_start: Spread::of(to_start),

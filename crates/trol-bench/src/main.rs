@@ -86,7 +86,7 @@ fn start_trol_sim(args: &[&str], markers: &[&str]) -> Result<(SimProcess, Vec<St
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .map_err(|e| format!("cannot start trol sim: {e}"))?;
+        .map_err(|e| format!("cannot start trol {}: {e}", args.join(" ")))?;
     let out = child.stdout.take().expect("piped");
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -104,7 +104,7 @@ fn start_trol_sim(args: &[&str], markers: &[&str]) -> Result<(SimProcess, Vec<St
         let left = deadline.saturating_duration_since(Instant::now());
         let Ok(line) = rx.recv_timeout(left) else {
             return Err(format!(
-                "trol sim {} did not say where it serves within 20 s",
+                "trol {} did not say where it serves within 20 s",
                 args.join(" ")
             ));
         };

@@ -15,6 +15,8 @@
 //! - [`pace`]: the speed setting of each joint move of a trajectory on a controller with no
 //!   timed path, from its waypoints' times, never above the user's setting;
 //! - [`seen_standing`]: the "standing" test Halt and the supervised steps use;
+//! - [`Recent`]: what was seen of the arm a moment ago, standing in for the same read
+//!   before the next motion for [`SEEN_FOR`], forgotten on any line that is not a read;
 //! - [`Transcript`]: every byte of a session both ways, for a first contact's record.
 //!
 //! A backend supplies its line, its commands, its readings and its clock; the rules here
@@ -24,10 +26,12 @@ mod finish;
 mod gate;
 mod halt;
 mod pace;
+mod recent;
 mod transcript;
 
 pub use finish::{End, EndTimes, EndWatch};
 pub use gate::{Gate, MotionQueue, Refusal, Snapshot, gate};
 pub use halt::{HaltTimes, Halted, STILL_DEG, STILL_GAP, Stopping, halt, seen_standing};
 pub use pace::{Pace, pace};
+pub use recent::{Recent, SEEN_FOR};
 pub use transcript::{Transcript, printable};

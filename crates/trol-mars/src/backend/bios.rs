@@ -83,11 +83,13 @@ impl Backend for MarsBackend {
                 self.planner.place(q);
                 // Standing at its end, the unit idle and without fault: what the next
                 // motion's reads would show, for SEEN_FOR.
-                self.seen = (Self::fault(s).is_none() && self.gripper.is_none()).then_some(Seen {
-                    at: now,
-                    status: s,
-                    counters: c,
-                });
+                self.seen.saw(
+                    now,
+                    (Self::fault(s).is_none() && self.gripper.is_none()).then_some(AtEnd {
+                        status: s,
+                        counters: c,
+                    }),
+                );
                 Ok(grip)
             }
             real::End::Running => Ok(true),

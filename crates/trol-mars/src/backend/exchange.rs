@@ -27,7 +27,7 @@ impl MarsBackend {
         // what was seen of it no longer stands in for a read.
         let read = bytes.ends_with(b"?\n") || bytes.starts_with(b"STAMP:");
         if !read {
-            self.seen = None;
+            self.seen.forget();
         }
         if bytes.starts_with(b"COORDISCONT:") {
             self.discont_set = true;
@@ -103,7 +103,7 @@ impl MarsBackend {
             Err(e) => {
                 // A unit that did not answer a read as asked: what was seen of it a moment
                 // ago no longer stands in for the next motion's reads.
-                self.seen = None;
+                self.seen.forget();
                 Err(e)
             }
         }
@@ -133,7 +133,7 @@ impl MarsBackend {
         if self.unasked.is_empty() {
             return Ok(());
         }
-        self.seen = None;
+        self.seen.forget();
         self.discont_set = false;
         let text = std::mem::take(&mut self.unasked).join(" | ");
         self.pending.clear();

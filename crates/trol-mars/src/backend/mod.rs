@@ -211,10 +211,8 @@ pub struct MarsBackend {
     /// The locations file TROLSaveLocations writes (docs/teach.md).
     locations_file: Option<std::path::PathBuf>,
     /// The arm seen standing at its last motion's end, which may stand in for the reads
-    /// before the next motion ([`SEEN_FOR`]).
-    seen: Option<Seen>,
-    /// How long it may ([`SEEN_FOR`]; shorter in tests).
-    seen_for: Duration,
+    /// before the next motion ([`SEEN_FOR`]; shorter in tests).
+    seen: real::Recent<AtEnd>,
     /// `COORDISCONT:` was sent, and since then only segments and reads: the unit still has
     /// it, and the next motion does not send it again (issue 43). Any other line (a stop,
     /// a purge, a home, the set-up, the gripper) and anything unasked make it go again.
@@ -222,19 +220,17 @@ pub struct MarsBackend {
 }
 
 /// How long the arm seen standing at its motion's end stands in for the reads before the
-/// next motion (issue 43): the status word (its moving bit clear, no fault) and COORDAP?
-/// (where the planner starts). Only while nothing but reads went to the unit since and it
-/// printed nothing unasked: any other line forgets it. A motion sent on it to a unit that
-/// lost power or had its motion stop pressed meanwhile is caught by the `ST?` read right
-/// after the motion's lines, as every motion's is: refused with the fault's code, never a
-/// success. 250 ms, as on a C500: a program's next motion after Finish comes within a few
-/// milliseconds; a read before the motion is about as old by the time its lines are sent.
-pub const SEEN_FOR: Duration = Duration::from_millis(250);
+/// next motion (issue 43; the rule is [`real::Recent`]'s, shared by every real controller).
+/// On a MARS 8 it stands in for the status word (its moving bit clear, no fault) and
+/// COORDAP? (where the planner starts). Only queries and STAMP exchanges are reads: any other
+/// line and anything printed unasked forget it. A motion sent on it to a unit that lost power
+/// or had its motion stop pressed meanwhile is caught by the `ST?` read right after the
+/// motion's lines, as every motion's is: refused with the fault's code, never a success.
+pub use trol_controller::real::SEEN_FOR;
 
 /// What was seen at a motion's end ([`SEEN_FOR`]).
 #[derive(Clone, Copy, Debug)]
-struct Seen {
-    at: Instant,
+struct AtEnd {
     /// The status word, moving bit clear and no fault.
     status: u32,
     /// COORDAP?: the counters, IRC.
@@ -290,8 +286,7 @@ impl MarsBackend {
             log,
             record,
             locations_file: None,
-            seen: None,
-            seen_for: SEEN_FOR,
+            seen: real::Recent::new(),
             discont_set: false,
         };
         // Power-up noise: read and drop what is there.

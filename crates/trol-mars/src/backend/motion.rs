@@ -12,8 +12,8 @@ impl MarsBackend {
         // reads since: it stands in for ST? and COORDAP? (SEEN_FOR).
         let seen = self
             .seen
-            .take()
-            .filter(|x| !busy_before && self.gripper.is_none() && x.at.elapsed() <= self.seen_for);
+            .take(Instant::now())
+            .filter(|_| !busy_before && self.gripper.is_none());
         let s = match seen {
             Some(x) => x.status,
             None => self.status().map_err(|f| f.not_run())?,

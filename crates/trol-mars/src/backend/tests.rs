@@ -285,9 +285,8 @@ fn a_motion_right_after_a_finish_goes_without_reads_first() {
     assert_eq!(reads_before_motion(&unit, before), Vec::<String>::new());
     finish(&mut b);
 
-    // Too old: read again.
-    b.seen_for = Duration::from_millis(1);
-    std::thread::sleep(Duration::from_millis(5));
+    // Too old (a window of zero: every reading is): read again.
+    b.seen.set_window(Duration::ZERO);
     let before = received(&unit).len();
     assert_eq!(code(b.joint(1, 0.1)), 0);
     let reads = reads_before_motion(&unit, before);
@@ -296,7 +295,7 @@ fn a_motion_right_after_a_finish_goes_without_reads_first() {
     finish(&mut b);
 
     // A line that is not a read (a Halt's STOP:) forgets it.
-    b.seen_for = SEEN_FOR;
+    b.seen.set_window(SEEN_FOR);
     assert_eq!(code(b.joint(1, -0.1)), 0);
     finish(&mut b);
     assert_eq!(code(b.halt()), 0);

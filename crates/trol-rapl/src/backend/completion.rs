@@ -404,15 +404,19 @@ impl RaplBackend {
     /// last STATUS said (the motion ran), as of now ([`SEEN_FOR`]).
     pub(super) fn seen_at_end(&mut self, expect: &Expect) {
         let now = std::time::Instant::now();
-        self.seen.end = match expect {
-            Expect::Joints(q) => Some((now, *q)),
-            _ => None,
-        };
-        self.seen.idle = self
-            .status
-            .clone()
-            .filter(|s| s.homed.iter().all(|h| *h) && !s.limp.iter().any(|l| *l))
-            .map(|s| (now, s));
+        self.seen.end.saw(
+            now,
+            match expect {
+                Expect::Joints(q) => Some(*q),
+                _ => None,
+            },
+        );
+        self.seen.idle.saw(
+            now,
+            self.status
+                .clone()
+                .filter(|s| s.homed.iter().all(|h| *h) && !s.limp.iter().any(|l| *l)),
+        );
     }
 
     /// Whether two WORLD rows are the same pose within the profile's tolerance (the angles

@@ -8,7 +8,8 @@ impl RaplBackend {
     /// Forget what was seen of the arm: a line that is not a read went out, something came
     /// unasked, or something failed.
     pub(super) fn forget(&mut self) {
-        self.seen = Seen::default();
+        self.seen.idle.forget();
+        self.seen.end.forget();
     }
 
     /// Whether `line` only reads (cannot move the arm or change what it does).
@@ -56,7 +57,8 @@ impl RaplBackend {
     /// by default; zero: a read before every motion). For tests, and for a cautious
     /// application.
     pub fn set_seen_for(&mut self, d: Duration) {
-        self.seen_for = d;
+        self.seen.idle.set_window(d);
+        self.seen.end.set_window(d);
     }
 
     /// Type a line that cannot move the arm (its keyword is one of
@@ -533,7 +535,9 @@ impl RaplBackend {
         self.status = Some(s.clone());
         let idle =
             s.done.iter().all(|d| *d) && s.homed.iter().all(|h| *h) && !s.limp.iter().any(|l| *l);
-        self.seen.idle = idle.then(|| (std::time::Instant::now(), s.clone()));
+        self.seen
+            .idle
+            .saw(std::time::Instant::now(), idle.then(|| s.clone()));
         Ok(s)
     }
 }

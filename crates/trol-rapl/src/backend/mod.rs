@@ -388,46 +388,26 @@ pub struct RaplBackend {
     status: Option<text::Status>,
     /// What was seen of the arm and may stand in for a read (issue 43).
     seen: Seen,
-    /// How long it may ([`SEEN_FOR`]).
-    seen_for: Duration,
     closed: bool,
 }
 
-/// How long what was seen of the arm stands in for a read before a motion (issue 43): a
-/// STATUS that showed it idle, and where the motion before ended. Only while nothing but
-/// reads (STATUS, W0, W2, ...) went to the controller since, and nothing came unasked: any
-/// other line, any byte unasked, Ctrl-C or a failure forgets it. A motion sent on it that
-/// the controller refuses (arm power lost meanwhile, the pendant holding control) is
-/// refused by its own reply, read as every motion's is. 250 ms: about as old as a STATUS
-/// read before the motion is by the time the motion is typed (its 638 bytes take 166 ms at
-/// 38400 Bd), so the arm's state is not trusted for longer than before; a program's next
-/// motion after Finish comes within a few milliseconds.
-pub const SEEN_FOR: Duration = Duration::from_millis(250);
+/// How long what was seen of the arm stands in for a read before a motion (issue 43; the rule
+/// is [`real::Recent`]'s, shared by every real controller). On a C500: a STATUS that showed it
+/// idle, and where the motion before ended. Reads are STATUS, W0, W2 and the other lines of
+/// [`crate::probe::READ_ONLY`]; any other line, any byte unasked, Ctrl-C or a failure forgets
+/// it. A motion sent on it that the controller refuses (arm power lost meanwhile, the pendant
+/// holding control) is refused by its own reply, read as every motion's is.
+pub use trol_controller::real::SEEN_FOR;
 
-/// What the backend saw of the arm, each with when (see [`SEEN_FOR`]).
+/// What the backend saw of the arm (see [`SEEN_FOR`]).
 #[derive(Clone, Debug, Default)]
 struct Seen {
     /// A STATUS that showed every axis DONE, powered and homed, with no motion of ours
     /// under way (its end confirmed).
-    idle: Option<(std::time::Instant, text::Status)>,
+    idle: real::Recent<text::Status>,
     /// Where the last motion ended as commanded (its joints, degrees), its arrival confirmed
     /// by W2: what W0 would read.
-    end: Option<(std::time::Instant, [f64; 6])>,
-}
-
-impl Seen {
-    fn idle(&self, within: Duration) -> Option<&text::Status> {
-        self.idle
-            .as_ref()
-            .filter(|(t, _)| t.elapsed() <= within)
-            .map(|(_, s)| s)
-    }
-
-    fn end(&self, within: Duration) -> Option<[f64; 6]> {
-        self.end
-            .filter(|(t, _)| t.elapsed() <= within)
-            .map(|(_, q)| q)
-    }
+    end: real::Recent<[f64; 6]>,
 }
 
 const LOG_KEEP: usize = 200;
@@ -476,7 +456,6 @@ impl RaplBackend {
             transcript: record,
             status: None,
             seen: Seen::default(),
-            seen_for: SEEN_FOR,
             closed: false,
         };
         if let Err(e) = b.open() {

@@ -25,7 +25,7 @@ impl RaplBackend {
             && self.queue.is_empty()
             && self.awaiting.is_none()
             && !self.finishing)
-            .then(|| self.seen.idle(self.seen_for).cloned())
+            .then(|| self.seen.idle.get(std::time::Instant::now()).cloned())
             .flatten();
         let (moving, st) = match seen {
             Some(st) => (false, st),

@@ -67,8 +67,8 @@ impl RaplBackend {
     /// [`RaplBackend::standing`] reads it.
     pub(super) fn standing_joints(&mut self) -> Result<Result<[f64; 6], i16>, BackendError> {
         if self.outstanding.is_none() && self.queue.is_empty() {
-            if let Some(q) = self.seen.end(self.seen_for) {
-                return Ok(Ok(q));
+            if let Some(q) = self.seen.end.get(std::time::Instant::now()) {
+                return Ok(Ok(*q));
             }
         }
         Ok(self.standing()?.map(|p| p.joints))

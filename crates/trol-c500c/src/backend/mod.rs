@@ -1,0 +1,543 @@
+//! The robot backend for an A465 on a C500C (port `c500c:DEVICE`; docs/c500c.md): TROL's
+//! calls as ash commands on the front console, under the rule for real controllers and on
+//! the shared core ([`trol_controller::real`]):
+//!
+//! - success only in ash's exact success form (the echo, no line, the prompt); a known error
+//!   text of CRS's tables is a refusal with its code and text; any other line, a question
+//!   TROL did not ask, a silence where the prompt was due: TROL_ERR_ROBOT_UNSURE, and
+//!   nothing further is sent;
+//! - a line nobody asked for (`[test: Lost robot power]`) makes the next call UNSURE;
+//! - before a motion, the gate on a fresh `armstat` (power, homed), the point of control
+//!   from ash's own refusal; a motion behind one of TROL's waits in the bounded queue;
+//! - a motion has ended when ash says so (its prompt, or `finish`'s) *and* `w2` reads the arm
+//!   at its end; standing short of it is BIOS_NOT_AT_TARGET; neither within the planned time
+//!   and a margin: UNSURE;
+//! - Halt is Ctrl-C, and success only once `w2` shows the arm standing;
+//! - what the profile has not settled is refused before sending, naming the key: motions
+//!   need `motion-return`; cartesian motions need the WORLD row's angle order and MA of
+//!   several joints the A465's pulses per degree on a C500C, which no key settles yet.
+
+use std::collections::VecDeque;
+use std::io;
+use std::time::{Duration, Instant};
+
+use trol_a465::arm::{Arm, ArmSettings, code};
+use trol_a465::backend::A465_CODES;
+use trol_a465::kinematics::Kinematics;
+use trol_controller::real;
+use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
+use trol_port::Port;
+use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
+
+use crate::console::{self, Console, Said};
+use crate::profile::{MotionReturn, Profile};
+use crate::reports::{self, ArmStat, Homing, Known};
+
+mod bios;
+mod motion;
+
+pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
+/// The pendant holds the point of control (`Ash doesn't have control`).
+pub const NO_CONTROL: i16 = -27;
+/// The profile has not settled what this call needs (the log names the key).
+pub const UNSETTLED: i16 = -28;
+/// An error of CRS's tables with no code of its own (a servo fault, a parse error).
+pub const C500C_ERROR: i16 = -29;
+
+/// The BIOS codes of the C500C backend: the simulator's, and those of the controller.
+pub static C500C_CODES: &CodeTable = &{
+    const EXTRA: [CodeInfo; 7] = [
+        CodeInfo {
+            value: ARM_POWER,
+            name: "BIOS_ARM_POWER",
+            meaning: "arm power is off: switch it on at the controller, then TROLHome",
+        },
+        CodeInfo {
+            value: UNSUPPORTED,
+            name: "BIOS_UNSUPPORTED",
+            meaning: "this call has no ash form TROL knows on a C500C",
+        },
+        CodeInfo {
+            value: BUSY,
+            name: "BIOS_BUSY",
+            meaning: "a motion has not ended: call TROLFinish(FINISH_WAIT) first",
+        },
+        CodeInfo {
+            value: NOT_AT_TARGET,
+            name: "BIOS_NOT_AT_TARGET",
+            meaning: "ash said done with the arm short of the motion's end",
+        },
+        CodeInfo {
+            value: NO_CONTROL,
+            name: "BIOS_NO_CONTROL",
+            meaning: "the pendant holds the point of control: press <SHIFT><ESC> on the \
+                      pendant keyboard to give it to the console",
+        },
+        CodeInfo {
+            value: UNSETTLED,
+            name: "BIOS_UNSETTLED",
+            meaning: "the C500C profile has not settled what this call needs: the log names \
+                      the key (docs/c500c.md, The profile)",
+        },
+        CodeInfo {
+            value: C500C_ERROR,
+            name: "BIOS_C500C_ERROR",
+            meaning: "ash printed an error with no code of its own: the log has its text",
+        },
+    ];
+    trol_a465::backend::with_a465_codes::<{ A465_CODES.len() + EXTRA.len() }>(&EXTRA)
+};
+
+/// How long ash may take to give its prompt back after a command that does not move.
+pub const REPLY_LIMIT: Duration = Duration::from_secs(3);
+/// With `motion-return = "end"`: how long a motion command's refusal may take to show
+/// before the motion counts as started (its prompt is then due at its end).
+pub const ACCEPT_WITHIN: Duration = Duration::from_millis(400);
+/// How long one stop is given to show the arm standing (the A465 brakes within 0.4 s).
+pub const STOP_WITHIN: Duration = Duration::from_millis(1500);
+/// At connect: how long the console must stay quiet after a prompt before the last one is
+/// taken as the shell's (one prompt per CR sent).
+pub const CONNECT_QUIET: Duration = Duration::from_millis(500);
+/// The longest a Halt takes.
+pub const HALT_WITHIN: Duration = Duration::from_millis(2500);
+/// How long a reading of where the arm rests serves a motion computed from it, with nothing
+/// but reads ([`crate::probe::READS`]) typed since: the rule of [`real::Recent`], shared by
+/// every real controller. Any other line (a motion, `speed p`, `finish`, Ctrl-C) forgets it.
+pub use trol_controller::real::SEEN_FOR as FRESH_REST;
+/// How far (degrees) the arm may stand from a motion's end and be at it.
+pub const ARRIVE_DEG: f64 = 0.05;
+
+/// Why a session could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum C500cError {
+    /// The line failed.
+    #[error("the line to the C500C failed: {0}")]
+    Io(#[from] io::Error),
+    /// Nothing answered with a prompt.
+    #[error(
+        "no C500C answers on {port}: Ctrl-E and two CR got no prompt within {limit:?}. Check \
+         the cable (the front console), the baud rate ({baud}, 8N1) and that the controller \
+         has booted"
+    )]
+    Silent {
+        /// The port.
+        port: String,
+        /// The baud rate.
+        baud: u32,
+        /// How long it waited.
+        limit: Duration,
+    },
+    /// Something answered that is not what TROL expects; nothing was moved.
+    #[error("{0}")]
+    Unexpected(String),
+}
+
+/// A log of what the controller said (`-v` in the utilities).
+pub type Log = Box<dyn FnMut(&str) + Send>;
+
+/// Why an exchange failed.
+enum Fail {
+    Io(io::Error),
+    /// No prompt in time after the command was sent.
+    Silent(String),
+    /// A line or question TROL cannot place.
+    Unsure(String),
+}
+
+impl Fail {
+    fn into_backend(self) -> BackendError {
+        match self {
+            Fail::Io(e) => BackendError::Unsure(format!("the console failed: {e}")),
+            Fail::Silent(s) | Fail::Unsure(s) => BackendError::Unsure(s),
+        }
+    }
+}
+
+/// A motion TROL sends, or keeps until the one before has ended.
+#[derive(Clone, Debug)]
+struct Motion {
+    /// The ash line.
+    line: String,
+    /// What it changes: a joint by degrees, or a home.
+    kind: Kind,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Joint(u8, f64),
+    Home,
+}
+
+struct Outstanding {
+    motion: Motion,
+    /// Where the motion ends, degrees (a home: where the arm is read once homed).
+    target: Option<[f64; 6]>,
+    watch: real::EndWatch,
+    /// The motion's planned time.
+    planned: Duration,
+    /// ash runs a command whose prompt is still due (the motion with `motion-return =
+    /// "end"`, or `finish`).
+    prompt_due: bool,
+    /// That command, as typed (its echo comes first).
+    due: String,
+    /// ash has said the motion is done (its prompt came back at its end).
+    done: bool,
+}
+
+/// The C500C backend.
+pub struct C500cBackend {
+    port: Box<dyn Port>,
+    profile: Profile,
+    console: Console,
+    rx: VecDeque<Said>,
+    log: Option<Log>,
+    version: String,
+    stat: ArmStat,
+    tool: [f64; 6],
+    /// Where the arm was last seen at rest, degrees.
+    rest: [f64; 6],
+    /// The same, while it may stand in for a `w2` before a motion ([`FRESH_REST`]).
+    rest_seen: real::Recent<[f64; 6]>,
+    speed: u8,
+    unasked: Vec<String>,
+    broken: Option<String>,
+    outstanding: Option<Outstanding>,
+    queue: real::MotionQueue<Motion>,
+    note: Option<String>,
+}
+
+impl std::fmt::Debug for C500cBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("C500cBackend")
+            .field("version", &self.version)
+            .field("profile", &self.profile)
+            .finish_non_exhaustive()
+    }
+}
+
+fn join(q: &[f64; 6]) -> String {
+    q.iter()
+        .map(|v| format!("{v:.3}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl C500cBackend {
+    /// Open the session: Ctrl-E and two CR, the prompt, `ash <app>` from the system shell
+    /// where needed, then only reads (`robotver`, `armstat`, `speed`, `w2`). Nothing moves.
+    pub fn connect(
+        port: Box<dyn Port>,
+        profile: Profile,
+        log: Option<Log>,
+    ) -> Result<C500cBackend, C500cError> {
+        let name = port.name();
+        let mut b = C500cBackend {
+            port,
+            console: Console::default(),
+            rx: VecDeque::new(),
+            log,
+            version: String::new(),
+            stat: ArmStat {
+                arm: String::new(),
+                power: false,
+                homing: Homing::NotHomed,
+                metric: true,
+                online: false,
+            },
+            tool: [0.0; 6],
+            rest: [0.0; 6],
+            rest_seen: real::Recent::new(),
+            speed: 0,
+            unasked: Vec::new(),
+            broken: None,
+            outstanding: None,
+            queue: real::MotionQueue::new(trol_a465::arm::MOTION_QUEUE),
+            note: None,
+            profile,
+        };
+        b.send(b"\x05\r\r")?;
+        // The last prompt of a quiet console (one per CR).
+        let mut shell = None;
+        let limit = REPLY_LIMIT;
+        let deadline = Instant::now() + limit;
+        loop {
+            let quiet = if shell.is_some() {
+                Instant::now() + CONNECT_QUIET
+            } else {
+                deadline
+            };
+            match b.next(quiet.min(deadline).max(Instant::now()))? {
+                Some(Said::Prompt(p)) => shell = Some(p),
+                Some(Said::Question(q)) => {
+                    return Err(C500cError::Unexpected(format!(
+                        "the console asks `{q}`: answer it at a terminal, then connect again"
+                    )));
+                }
+                Some(Said::Line(l)) => b.say(&format!("at connect: {l}")),
+                None => break,
+            }
+        }
+        let Some(shell) = shell else {
+            return Err(C500cError::Silent {
+                port: name,
+                baud: b.profile.baud,
+                limit,
+            });
+        };
+        let app = b.profile.app.clone();
+        if shell == "$" {
+            // A prompt of the system shell still on its way (one per CR sent) comes before
+            // ash's: skipped here, where nothing but ash's can be the answer.
+            let cmd = format!("ash {app}");
+            b.send(format!("{cmd}\r").as_bytes())?;
+            let deadline = Instant::now() + REPLY_LIMIT;
+            loop {
+                match b.next(deadline)? {
+                    Some(Said::Prompt(p)) if p == "$" => continue,
+                    Some(Said::Prompt(p)) if p == app => break,
+                    Some(Said::Line(l)) if l.trim_end() == cmd || l.trim().is_empty() => {}
+                    Some(Said::Line(l)) => b.say(&format!("ash: {l}")),
+                    other => {
+                        return Err(C500cError::Unexpected(format!(
+                            "`{cmd}` did not start ash (the console said {other:?}): start it \
+                             at a terminal to see why"
+                        )));
+                    }
+                }
+            }
+        } else if shell != app {
+            return Err(C500cError::Unexpected(format!(
+                "the console runs ash with the application `{shell}`, and the profile names \
+                 `{app}`: exit it (`exit`, then y) or name it in the profile (`app = \"{shell}\"`)"
+            )));
+        }
+        let read = |b: &mut C500cBackend, cmd: &str| {
+            b.exchange(cmd)
+                .map_err(|e| C500cError::Unexpected(e.into_backend().to_string()))
+        };
+        let lines = read(&mut b, "robotver")?;
+        b.version = reports::robotver(&lines).map_err(|e| C500cError::Unexpected(e.to_string()))?;
+        let lines = read(&mut b, "armstat")?;
+        b.stat = reports::armstat(&lines).map_err(|e| C500cError::Unexpected(e.to_string()))?;
+        if b.stat.arm != "A465" {
+            return Err(C500cError::Unexpected(format!(
+                "armstat says the arm is an {}: TROL drives an A465",
+                b.stat.arm
+            )));
+        }
+        let lines = read(&mut b, "speed")?;
+        b.speed = reports::speed(&lines).map_err(|e| C500cError::Unexpected(e.to_string()))?;
+        let lines = read(&mut b, "w2")?;
+        let rest = reports::position(&lines, true)
+            .map_err(|e| C500cError::Unexpected(e.to_string()))?
+            .joints_deg;
+        b.rests_at(rest);
+        Ok(b)
+    }
+
+    /// What `robotver` said.
+    pub fn version(&self) -> &str {
+        &self.version
+    }
+
+    fn say(&mut self, text: &str) {
+        if let Some(l) = &mut self.log {
+            l(text);
+        }
+    }
+
+    fn note(&mut self, text: String) {
+        self.say(&text);
+        self.note = Some(text);
+    }
+
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        // Anything but a read may change what the arm does: where it was seen to rest no
+        // longer stands in for a `w2`.
+        let line = std::str::from_utf8(bytes).unwrap_or("").trim_end();
+        if !crate::probe::READS.contains(&line) {
+            self.rest_seen.forget();
+        }
+        self.port.send(bytes)
+    }
+
+    /// The arm seen at rest at `at` (degrees), now.
+    fn rests_at(&mut self, at: [f64; 6]) {
+        self.rest = at;
+        self.rest_seen.saw(Instant::now(), Some(at));
+    }
+
+    /// The next thing the console said, waiting until `deadline`.
+    fn next(&mut self, deadline: Instant) -> io::Result<Option<Said>> {
+        loop {
+            if let Some(s) = self.rx.pop_front() {
+                return Ok(Some(s));
+            }
+            let mut buf = [0u8; 512];
+            let n = self.port.recv(&mut buf, deadline)?;
+            if n == 0 {
+                return Ok(None);
+            }
+            let said = self.console.feed(&buf[..n]);
+            self.rx.extend(said);
+        }
+    }
+
+    /// Send `cmd` and read to ash's prompt: the lines between (the echo taken off).
+    fn exchange(&mut self, cmd: &str) -> Result<Vec<String>, Fail> {
+        self.send(format!("{cmd}\r").as_bytes()).map_err(Fail::Io)?;
+        self.read_to_prompt(cmd, Instant::now() + REPLY_LIMIT)
+            .and_then(|got| {
+                got.ok_or_else(|| {
+                    Fail::Silent(format!("`{cmd}`: no prompt within {REPLY_LIMIT:?}"))
+                })
+            })
+    }
+
+    /// The lines up to ash's prompt (`None`: no prompt by `deadline`).
+    fn read_to_prompt(
+        &mut self,
+        cmd: &str,
+        deadline: Instant,
+    ) -> Result<Option<Vec<String>>, Fail> {
+        let app = self.profile.app.clone();
+        let mut lines = Vec::new();
+        let mut echo_seen = false;
+        loop {
+            match self.next(deadline).map_err(Fail::Io)? {
+                None => {
+                    self.rx.extend(lines.into_iter().map(Said::Line));
+                    return Ok(None);
+                }
+                Some(Said::Prompt(p)) if p == app => return Ok(Some(lines)),
+                Some(Said::Prompt(p)) => {
+                    return Err(Fail::Unsure(format!(
+                        "after `{cmd}` the console gave the prompt of `{p}`, not ash's: ash \
+                         ended"
+                    )));
+                }
+                Some(Said::Question(q)) => {
+                    // Never answered unasked: out of it, and the call cannot tell.
+                    let _ = self.send(b"\x03");
+                    return Err(Fail::Unsure(format!(
+                        "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
+                    )));
+                }
+                Some(Said::Line(l)) if !echo_seen && l.trim_end() == cmd => echo_seen = true,
+                // A bracketed line with an error of CRS's tables is the command's (ash may
+                // print a robot error so); any other is unasked.
+                Some(Said::Line(l))
+                    if console::bracketed(&l).is_some() && reports::known_error(&l).is_none() =>
+                {
+                    self.say(&format!("unasked: {l}"));
+                    self.unasked.push(l);
+                }
+                Some(Said::Line(l)) => {
+                    echo_seen = true;
+                    lines.push(l);
+                }
+            }
+        }
+    }
+
+    /// Before a call: what came unasked makes it UNSURE, as does an earlier call that could
+    /// not tell; nothing is sent then.
+    fn clean(&mut self) -> Result<(), BackendError> {
+        if !self.console_busy() {
+            // What the console printed since the last exchange.
+            while let Some(s) = self
+                .next(Instant::now())
+                .map_err(|e| BackendError::Unsure(format!("the console failed: {e}")))?
+            {
+                match s {
+                    Said::Line(l) if !l.trim().is_empty() => {
+                        self.say(&format!("unasked: {l}"));
+                        self.unasked.push(l);
+                    }
+                    Said::Line(_) => {}
+                    other => self.unasked.push(format!("{other:?}")),
+                }
+            }
+        }
+        if !self.unasked.is_empty() && self.broken.is_none() {
+            let lines = std::mem::take(&mut self.unasked).join(" | ");
+            self.queue.drop_all();
+            self.outstanding = None;
+            self.broken = Some(format!(
+                "the C500C said, unasked: {lines}; TROL sends nothing further (check the arm, \
+                 then reconnect)"
+            ));
+        }
+        match &self.broken {
+            Some(why) => Err(BackendError::Unsure(why.clone())),
+            None => Ok(()),
+        }
+    }
+
+    /// Give up: UNSURE with `why`, and nothing further is sent.
+    fn unsure(&mut self, why: String) -> BackendError {
+        self.queue.drop_all();
+        self.outstanding = None;
+        self.note(why.clone());
+        self.broken = Some(why.clone());
+        BackendError::Unsure(why)
+    }
+
+    fn read_position(&mut self, actual: bool) -> Result<reports::Position, BackendError> {
+        let cmd = if actual { "w2" } else { "w0" };
+        let lines = match self.exchange(cmd) {
+            Ok(l) => l,
+            Err(e) => return Err(self.fail(e)),
+        };
+        reports::position(&lines, actual).map_err(|e| self.unsure(e.to_string()))
+    }
+
+    fn fail(&mut self, e: Fail) -> BackendError {
+        match e.into_backend() {
+            BackendError::Unsure(why) => self.unsure(why),
+            other => other,
+        }
+    }
+
+    /// A known error text: its code; anything else: UNSURE.
+    fn refusal(&mut self, line: &str, lines: &[String]) -> BackendError {
+        let Some(known) = lines.iter().find_map(|l| reports::known_error(l)) else {
+            return self.unsure(format!(
+                "`{line}`: ash printed `{}`, not a form TROL knows: whether it ran is not known",
+                lines.join(" | ")
+            ));
+        };
+        let code = match known {
+            Known::NoPower => ARM_POWER,
+            Known::NotHomed => code::NOT_HOMED,
+            Known::JointLimit => code::JOINT_LIMIT,
+            Known::OutOfReach => code::OUT_OF_REACH,
+            Known::Limp => ARM_POWER,
+            Known::NoControl => NO_CONTROL,
+            Known::Halted | Known::Parse | Known::Servo => C500C_ERROR,
+        };
+        self.note(format!("`{line}` refused: {}", lines.join(" | ")));
+        BackendError::Refused(code)
+    }
+
+    fn unsettled(&mut self, what: &str) -> BiosResult {
+        self.note(format!(
+            "refused before sending: {what} (docs/c500c.md, The profile)"
+        ));
+        Ok(UNSETTLED)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_is_named_once() {
+        for (i, a) in C500C_CODES.iter().enumerate() {
+            for b in &C500C_CODES[i + 1..] {
+                assert_ne!(a.value, b.value, "{} and {}", a.name, b.name);
+            }
+        }
+    }
+}

@@ -21,9 +21,12 @@ use crate::model::{
 use crate::motion::{Path, Profile, Stretch};
 
 mod files;
+mod gripper;
 mod line;
 
 pub use files::{parse_locations, parse_objects, read_locations};
+pub use gripper::WorldObject;
+use gripper::{Fingers, Held};
 pub use line::{LINE_MAX_FACTOR, LINE_SLACK, LineOutcome};
 
 /// The simulated BIOS's return values (ours; the real ones are in CRS's technical manual,
@@ -97,29 +100,6 @@ pub const MOTION_QUEUE: usize = 16;
 /// How close an object's position must be to the tool centre point for the closing fingers
 /// to take it, mm (assumption).
 pub const GRASP_DISTANCE: f64 = 10.0;
-
-/// An object of the simulated world: a point with a width, on the table or in the gripper.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WorldObject {
-    /// Its name (from the objects file).
-    pub name: String,
-    /// Where it is: x y z, mm (its reference point: the middle of its base).
-    pub pos: [f64; 3],
-    /// Its width between the fingers, mm.
-    pub width: f64,
-}
-
-/// An object in the gripper: which one, and where its centre sits in the tool frame.
-#[derive(Clone, Copy, Debug)]
-struct Held {
-    index: usize,
-    in_tool: glam::DVec3,
-}
-
-/// The centre of an object whose base's middle is at `pos` (where the fingers take it).
-fn centre_of(o: &WorldObject) -> glam::DVec3 {
-    glam::DVec3::from_array(o.pos) + glam::DVec3::Z * (o.width / 2.0)
-}
 
 /// A location in the controller's table.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -253,30 +233,6 @@ const STRETCHED_ELBOW: f64 = 0.05;
 
 fn max_step(a: &Joints, b: &Joints) -> f64 {
     (0..6).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max)
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Fingers {
-    from: f64,
-    to: f64,
-    start: f64,
-}
-
-impl Fingers {
-    fn at(&self, t: f64) -> f64 {
-        let d = self.to - self.from;
-        let dt = (t - self.start).max(0.0);
-        // At done_at exactly the end, whatever the rounding of start + d / speed.
-        if t >= self.done_at() || d.abs() <= FINGER_SPEED * dt {
-            self.to
-        } else {
-            self.from + d.signum() * FINGER_SPEED * dt
-        }
-    }
-
-    fn done_at(&self) -> f64 {
-        self.start + (self.to - self.from).abs() / FINGER_SPEED
-    }
 }
 
 /// The joints' speed and acceleration limits at `percent`: the published maxima scaled by the
@@ -561,11 +517,6 @@ impl Arm {
         }
     }
 
-    /// The finger distance at `now`, mm.
-    pub fn fingers(&self, now: f64) -> f64 {
-        self.fingers.at(now)
-    }
-
     /// Whether the arm or the gripper moves at `now` (Finish(FINISH_STATUS)).
     pub fn is_moving(&mut self, now: f64) -> bool {
         self.done_at(now) > now
@@ -677,102 +628,6 @@ impl Arm {
             });
         }
         code::OK
-    }
-
-    /// The fingers to `dist` mm (Grip; full force). Closing stops at an object.
-    pub fn grip(&mut self, dist: f64, now: f64) -> i16 {
-        self.fingers_to(dist.clamp(0.0, FINGER_MAX), now)
-    }
-
-    /// Open the gripper.
-    pub fn open(&mut self, _force: f64, now: f64) -> i16 {
-        self.fingers_to(FINGER_MAX, now)
-    }
-
-    /// Close the gripper (on an object, if there is one).
-    pub fn close(&mut self, _force: f64, now: f64) -> i16 {
-        self.fingers_to(0.0, now)
-    }
-
-    fn fingers_to(&mut self, target: f64, now: f64) -> i16 {
-        let from = self.fingers.at(now);
-        let q = self.commanded(now);
-        let tcp = self.kin.fk(&q);
-        // Opening past a held object's width lets it go: it drops onto the table.
-        if let Some(h) = self.held {
-            let width = self.objects[h.index].width;
-            if target >= width {
-                let at = tcp.pos + tcp.rot * h.in_tool;
-                self.objects[h.index].pos = [at.x, at.y, self.settings.table_z];
-                self.held = None;
-            }
-        }
-        // Closing on an object at the tool centre point that is wider than the opening: the
-        // fingers are not around it, and they cannot pass through it.
-        if self.held.is_none() && target < from {
-            let blocked = self
-                .objects
-                .iter()
-                .any(|o| (centre_of(o) - tcp.pos).length() <= GRASP_DISTANCE && from < o.width);
-            if blocked {
-                return code::GRIPPER_BLOCKED;
-            }
-        }
-        // Closing with an object's centre at the tool centre point takes it: the fingers stop
-        // at its width and it moves with the tool from now on.
-        if self.held.is_none() {
-            let grasped = self.objects.iter().position(|o| {
-                let d = (centre_of(o) - tcp.pos).length();
-                d <= GRASP_DISTANCE && target < o.width && from >= o.width
-            });
-            if let Some(index) = grasped {
-                let rel = centre_of(&self.objects[index]) - tcp.pos;
-                self.held = Some(Held {
-                    index,
-                    in_tool: tcp.rot.transpose() * rel,
-                });
-            }
-        }
-        let stop = match self.held {
-            Some(h) => target.max(self.objects[h.index].width),
-            None => target,
-        };
-        self.fingers = Fingers {
-            from,
-            to: stop,
-            start: now,
-        };
-        code::OK
-    }
-
-    /// The objects of the world at `now`: a held one where the tool has carried it.
-    pub fn objects(&mut self, now: f64) -> Vec<WorldObject> {
-        let mut out = self.objects.clone();
-        if let Some(h) = self.held {
-            let q = self.commanded(now);
-            let tcp = self.kin.fk(&q);
-            let centre = tcp.pos + tcp.rot * h.in_tool;
-            let half = out[h.index].width / 2.0;
-            out[h.index].pos = (centre - glam::DVec3::Z * half).to_array();
-        }
-        out
-    }
-
-    /// The lowest point of what the arm carries with the tool centre point at `tcp`: the tool
-    /// centre point, or a held object's underside below it (its centre less half its width).
-    fn lowest_z(&self, tcp: &Pose) -> f64 {
-        match self.held {
-            Some(h) => {
-                let centre = tcp.pos + tcp.rot * h.in_tool;
-                tcp.pos.z.min(centre.z - self.objects[h.index].width / 2.0)
-            }
-            None => tcp.pos.z,
-        }
-    }
-
-    /// The name of the object in the gripper, if any.
-    pub fn held(&self) -> Option<&str> {
-        self.held.map(|h| self.objects[h.index].name.as_str())
     }
 
     /// Every axis homed, or being homed by a homing already accepted (a motion then queues

@@ -418,3 +418,57 @@ fn a_trajectory_faster_than_the_speed_setting_is_refused_unsent() {
     r.robot.finish().unwrap();
     assert!(close(r.joints()[0], far[0]), "{:?}", r.joints());
 }
+
+/// Where the arm was seen to rest stands in for the `w2` before the next motion only while
+/// nothing but reads went to ash since (trol_controller::real::Recent): a `speed p` between
+/// makes the next motion read `w2` first.
+#[test]
+fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
+    use trol_controller::Backend;
+    let sw = Switches::default();
+    let (host, ctl) = memory::pair(Some(57600));
+    let unit = Arc::new(Mutex::new(C500c::new(sw.clone(), true, SCALE)));
+    let stop = Arc::new(AtomicBool::new(false));
+    let server = {
+        let (unit, stop) = (unit.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let _ = c500c::serve(Box::new(ctl), unit, stop);
+        })
+    };
+    let mut b = C500cBackend::connect(Box::new(host), profile(matching(&sw)), None).unwrap();
+    // However busy the machine, the sighting stands (no wall-clock bound in the test).
+    b.set_seen_for(Duration::from_secs(600));
+    let finish = |b: &mut C500cBackend| {
+        let until = std::time::Instant::now() + Duration::from_secs(60);
+        while b.moving().unwrap() {
+            assert!(std::time::Instant::now() < until, "the motion ends");
+        }
+    };
+    let typed_since = |n: usize| unit.lock().unwrap().received()[n..].to_vec();
+    assert_eq!(b.joint(1, 0.05).unwrap(), 0);
+    finish(&mut b);
+    // Straight after the end it saw: the motion goes on what was seen, no w2 first.
+    let mark = unit.lock().unwrap().received().len();
+    assert_eq!(b.joint(1, -0.05).unwrap(), 0);
+    let typed = typed_since(mark);
+    let joint = typed
+        .iter()
+        .position(|l| l.starts_with("joint 1,"))
+        .expect("sent");
+    assert!(!typed[..joint].iter().any(|l| l == "w2"), "{typed:?}");
+    finish(&mut b);
+    // A `speed p` between: w2 before the next motion.
+    assert_eq!(b.speed(20).unwrap(), 0);
+    let mark = unit.lock().unwrap().received().len();
+    assert_eq!(b.joint(1, 0.05).unwrap(), 0);
+    let typed = typed_since(mark);
+    let joint = typed
+        .iter()
+        .position(|l| l.starts_with("joint 1,"))
+        .expect("sent");
+    assert!(typed[..joint].iter().any(|l| l == "w2"), "{typed:?}");
+    finish(&mut b);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    drop(b);
+    server.join().unwrap();
+}

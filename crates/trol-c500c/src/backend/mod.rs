@@ -335,6 +335,13 @@ impl C500cBackend {
         Ok(b)
     }
 
+    /// How long where the arm was seen to rest stands in for a `w2` before a motion
+    /// ([`FRESH_REST`] by default; zero: a `w2` before every motion). For tests, and for a
+    /// cautious application.
+    pub fn set_seen_for(&mut self, d: Duration) {
+        self.rest_seen.set_window(d);
+    }
+
     /// What `robotver` said.
     pub fn version(&self) -> &str {
         &self.version

@@ -234,12 +234,18 @@ pub fn held_by(holders: &[Holder]) -> String {
 
 /// The other processes that have the device `path` open (Linux: from /proc; elsewhere, and
 /// for names that are not device paths, none). For a pseudo-terminal, the process that made
-/// it (it has the pty's master, /dev/ptmx, open too: a `trol sim` serving on it) is the other
-/// end, not a rival, and is left out.
+/// it (it has that pty's master open too: a `trol sim` serving on it) is the other end, not a
+/// rival, and is left out. A process that holds the masters of other ptys only (a test
+/// program with several lines open) is not the maker of this one.
 pub fn holders(path: &str) -> Vec<Holder> {
     let Ok(target) = std::fs::canonicalize(path) else {
         return Vec::new();
     };
+    // /dev/pts/N: N, the index a master of this pty shows in its fdinfo.
+    let pty_index: Option<u32> = target
+        .strip_prefix("/dev/pts")
+        .ok()
+        .and_then(|n| n.to_str()?.parse().ok());
     let me = std::process::id();
     let Ok(procs) = std::fs::read_dir("/proc") else {
         return Vec::new();
@@ -259,15 +265,17 @@ pub fn holders(path: &str) -> Vec<Holder> {
         let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
             continue;
         };
-        let links: Vec<PathBuf> = fds
+        let links: Vec<(std::ffi::OsString, PathBuf)> = fds
             .flatten()
-            .filter_map(|fd| std::fs::read_link(fd.path()).ok())
+            .filter_map(|fd| Some((fd.file_name(), std::fs::read_link(fd.path()).ok()?)))
             .collect();
-        let holds = links.contains(&target);
-        let pty_maker = target.starts_with("/dev/pts")
-            && links
-                .iter()
-                .any(|l| l == Path::new("/dev/ptmx") || l == Path::new("/dev/pts/ptmx"));
+        let holds = links.iter().any(|(_, l)| *l == target);
+        let pty_maker = pty_index.is_some_and(|index| {
+            links.iter().any(|(fd, l)| {
+                (l == Path::new("/dev/ptmx") || l == Path::new("/dev/pts/ptmx"))
+                    && master_of(&entry.path().join("fdinfo").join(fd), index)
+            })
+        });
         if holds && !pty_maker {
             let command = std::fs::read_to_string(entry.path().join("comm"))
                 .map(|c| c.trim().to_string())
@@ -277,6 +285,22 @@ pub fn holders(path: &str) -> Vec<Holder> {
     }
     found.sort_by_key(|h| h.pid);
     found
+}
+
+/// Whether the pty master whose fdinfo is at `fdinfo` is the master of /dev/pts/`index`
+/// (Linux gives `tty-index:`; a kernel that does not is taken at its word that it may be).
+fn master_of(fdinfo: &Path, index: u32) -> bool {
+    let Ok(info) = std::fs::read_to_string(fdinfo) else {
+        return true;
+    };
+    match info
+        .lines()
+        .find_map(|l| l.strip_prefix("tty-index:"))
+        .map(|v| v.trim().parse::<u32>())
+    {
+        Some(Ok(i)) => i == index,
+        _ => true,
+    }
 }
 
 /// Time left until `deadline`, zero when it has passed.

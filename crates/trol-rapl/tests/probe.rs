@@ -205,91 +205,103 @@ fn an_operator_who_stops_early_gets_a_fit_that_says_what_is_missing() {
     assert!(e.contains("not sent"), "{e}");
 }
 
+// The supervised steps run in real time (the answer to JOINT 6,20 must come while the joint
+// turns), so each variant is a test of its own: they run side by side, not one after another.
 #[test]
-fn the_supervised_steps_measure_what_no_reading_tells() {
-    for (variant, units, ack) in [
-        ("default", "degrees", trol_rapl::profile::MotionAck::Start),
-        (
-            "ma-radians",
-            "radians",
-            trol_rapl::profile::MotionAck::Start,
-        ),
-        ("ack-at-end", "degrees", trol_rapl::profile::MotionAck::End),
-        ("jog-tool", "degrees", trol_rapl::profile::MotionAck::Start),
-        (
-            "halt-ignored",
-            "degrees",
-            trol_rapl::profile::MotionAck::Start,
-        ),
-    ] {
-        let (controller, _) = trol_rapl::c500::variant(variant).unwrap();
-        // Real time: the answer to JOINT 6,20 must come while the joint turns (2.3 s).
-        let (port, sim) = start_at(controller, 1.0);
-        // The poses of step 4 fitted the angles (the twin's: TROL's own).
-        let fitted = Profile {
-            angles: "yaw pitch roll".into(),
-            ..Profile::default()
-        };
-        let mut b = RaplBackend::connect(port, fitted).unwrap();
-        // The operator puts the arm in free space first (all joints zero is full stretch),
-        // the tool not pointing up (where JOG's frame could not be told).
-        sim.pendant
-            .send([10.0f64, 20.0, 40.0, 30.0, -50.0, -20.0].map(f64::to_radians))
-            .unwrap();
-        let code = sim
-            .arrived
-            .recv_timeout(std::time::Duration::from_secs(60))
-            .unwrap();
-        assert_eq!(code, 0);
-        let before = {
-            let r = b.read_only("W2").unwrap();
-            trol_rapl::text::read_position(&r.text).unwrap()
-        };
-        let m = probe::measure(&mut b, &mut |l| eprintln!("probe: {l}"))
-            .unwrap_or_else(|e| panic!("{variant}: {e}"));
-        assert_eq!(m.joint_units, units, "{variant}");
-        let frame = if variant == "jog-tool" {
-            "tool"
-        } else {
-            "world"
-        };
-        assert_eq!(m.jog_frame, frame, "{variant}");
-        assert_eq!(m.motion_ack, ack, "{variant}");
-        // The stop it saw stop a running motion: ABORT where HALT is only acknowledged; none
-        // measured where a motion holds the line (Ctrl-C is then the only way in).
-        use trol_rapl::profile::Halt;
-        let halt = match variant {
-            "halt-ignored" => Some(Halt::Abort),
-            "ack-at-end" => None,
-            _ => Some(Halt::Halt),
-        };
-        assert_eq!(m.halt, halt, "{variant}");
-        // Every step undone: the arm is back where it was.
-        let after = {
-            let r = b.read_only("W2").unwrap();
-            trol_rapl::text::read_position(&r.text).unwrap()
-        };
-        for i in 0..6 {
-            assert!(
-                (after.joints[i] - before.joints[i]).abs() < 0.02,
-                "{variant}: {after:?}"
-            );
-        }
-        // Only the steps' lines moved it.
-        let ran = sim.lines.lock().unwrap().clone();
-        for line in ran {
-            let word = line.split_whitespace().next().unwrap_or("");
-            assert!(
-                READ_ONLY.contains(&word)
-                    || ["NOH", "NOHELP", "HELP"].contains(&word)
-                    || probe::MEASURE.contains(&line.as_str())
-                    // The stop steps turn joint 6 back by what it turned.
-                    || line.starts_with("JOINT 6,"),
-                "{variant}: {line}"
-            );
-        }
-        b.close();
+fn the_supervised_steps_measure_what_no_reading_tells_default() {
+    supervised_steps("default", "degrees", MotionAck::Start);
+}
+
+#[test]
+fn the_supervised_steps_measure_what_no_reading_tells_ma_radians() {
+    supervised_steps("ma-radians", "radians", MotionAck::Start);
+}
+
+#[test]
+fn the_supervised_steps_measure_what_no_reading_tells_ack_at_end() {
+    supervised_steps("ack-at-end", "degrees", MotionAck::End);
+}
+
+#[test]
+fn the_supervised_steps_measure_what_no_reading_tells_jog_tool() {
+    supervised_steps("jog-tool", "degrees", MotionAck::Start);
+}
+
+#[test]
+fn the_supervised_steps_measure_what_no_reading_tells_halt_ignored() {
+    supervised_steps("halt-ignored", "degrees", MotionAck::Start);
+}
+
+use trol_rapl::profile::MotionAck;
+
+fn supervised_steps(variant: &str, units: &str, ack: MotionAck) {
+    let (controller, _) = trol_rapl::c500::variant(variant).unwrap();
+    // Real time: the answer to JOINT 6,20 must come while the joint turns (2.3 s).
+    let (port, sim) = start_at(controller, 1.0);
+    // The poses of step 4 fitted the angles (the twin's: TROL's own).
+    let fitted = Profile {
+        angles: "yaw pitch roll".into(),
+        ..Profile::default()
+    };
+    let mut b = RaplBackend::connect(port, fitted).unwrap();
+    // The operator puts the arm in free space first (all joints zero is full stretch),
+    // the tool not pointing up (where JOG's frame could not be told).
+    sim.pendant
+        .send([10.0f64, 20.0, 40.0, 30.0, -50.0, -20.0].map(f64::to_radians))
+        .unwrap();
+    let code = sim
+        .arrived
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .unwrap();
+    assert_eq!(code, 0);
+    let before = {
+        let r = b.read_only("W2").unwrap();
+        trol_rapl::text::read_position(&r.text).unwrap()
+    };
+    let m = probe::measure(&mut b, &mut |l| eprintln!("probe: {l}"))
+        .unwrap_or_else(|e| panic!("{variant}: {e}"));
+    assert_eq!(m.joint_units, units, "{variant}");
+    let frame = if variant == "jog-tool" {
+        "tool"
+    } else {
+        "world"
+    };
+    assert_eq!(m.jog_frame, frame, "{variant}");
+    assert_eq!(m.motion_ack, ack, "{variant}");
+    // The stop it saw stop a running motion: ABORT where HALT is only acknowledged; none
+    // measured where a motion holds the line (Ctrl-C is then the only way in).
+    use trol_rapl::profile::Halt;
+    let halt = match variant {
+        "halt-ignored" => Some(Halt::Abort),
+        "ack-at-end" => None,
+        _ => Some(Halt::Halt),
+    };
+    assert_eq!(m.halt, halt, "{variant}");
+    // Every step undone: the arm is back where it was.
+    let after = {
+        let r = b.read_only("W2").unwrap();
+        trol_rapl::text::read_position(&r.text).unwrap()
+    };
+    for i in 0..6 {
+        assert!(
+            (after.joints[i] - before.joints[i]).abs() < 0.02,
+            "{variant}: {after:?}"
+        );
     }
+    // Only the steps' lines moved it.
+    let ran = sim.lines.lock().unwrap().clone();
+    for line in ran {
+        let word = line.split_whitespace().next().unwrap_or("");
+        assert!(
+            READ_ONLY.contains(&word)
+                || ["NOH", "NOHELP", "HELP"].contains(&word)
+                || probe::MEASURE.contains(&line.as_str())
+                // The stop steps turn joint 6 back by what it turned.
+                || line.starts_with("JOINT 6,"),
+            "{variant}: {line}"
+        );
+    }
+    b.close();
 }
 
 /// At the homed pose (all joints zero) the tool's z axis is the world's, and a JOG in either

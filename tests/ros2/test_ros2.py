@@ -494,6 +494,30 @@ def test_home_and_halt_are_ros2_services_that_say_what_the_arm_did(arm1: Node, d
     assert "stands" in r.message
 
 
+@pytest.mark.timeout(120)
+def test_a_client_whose_reply_reader_comes_after_its_request_still_gets_the_reply(arm1: Node, domain: int) -> None:
+    """DDS discovers each endpoint on its own: a request can reach the node before the node
+    has matched the client's reply reader. The reply waits for it (not lost to nobody)."""
+    dp = DomainParticipant(domain)
+    qos = Qos(RELIABLE, Policy.History.KeepLast(10))
+    writer = DataWriter(dp, Topic(dp, "rq/arm1/haltRequest", TriggerRequest), qos=qos)
+    wait_for("the halt service", lambda: True if writer.get_matched_subscriptions() else None)
+    writer.write(TriggerRequest(client_guid=7, sequence_number=1, structure_needs_at_least_one_member=0))
+    # The node has the request (and has halted the arm) well before its client reads replies.
+    time.sleep(1.0)
+    reader = DataReader(dp, Topic(dp, "rr/arm1/haltReply", TriggerResponse), qos=qos)
+
+    def answer():  # type: ignore[no-untyped-def]
+        for r in reader.take(N=10):
+            if isinstance(r, TriggerResponse) and r.client_guid == 7 and r.sequence_number == 1:
+                return r
+        return None
+
+    r = wait_for("halt's reply", answer, 30.0)
+    assert r.success, r.message
+    assert "stands" in r.message
+
+
 @pytest.mark.timeout(240)
 def test_two_arms_in_two_namespaces_do_not_disturb_each_other(domain: int) -> None:
     one, two = Node(domain, "arm1"), Node(domain, "arm2")

@@ -13,14 +13,17 @@
 //! rejected), a goal refused after acceptance so that its error code reaches the client, the
 //! ended goals' results for a late `get_result`, result requests that wait for their goal,
 //! the status array, and cancel: a cancel halts the arm, and is a success only with the arm
-//! seen standing.
+//! seen standing. The answers of the action's three services wait until their client can
+//! hear them ([`crate::replies`]).
 
 use std::collections::VecDeque;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use ros2_client::action::{ActionServer, ActionServerQosPolicies, GetResultResponse};
+use ros2_client::action::{
+    ActionServer, ActionServerQosPolicies, GetResultResponse, SendGoalResponse,
+};
 use ros2_client::action_msgs::{
     CancelGoalRequest, CancelGoalResponse, CancelGoalResponseEnum, GoalId, GoalInfo, GoalStatus,
     GoalStatusArray, GoalStatusEnum,
@@ -33,6 +36,7 @@ use crate::msgs::{
     self, FollowFeedback, FollowGoal, FollowResult, GripperFeedback, GripperGoal, GripperResult,
     Header, JointTrajectoryPoint, Time, follow_code,
 };
+use crate::replies::{Matches, Replies, Service};
 use crate::{JOINTS, follow, words};
 
 /// The QoS of an action's parts, as ROS 2's defaults have them: its services and feedback
@@ -73,16 +77,81 @@ pub struct Book<R> {
     ended: VecDeque<(GoalInfo, GoalStatusEnum, R)>,
     waiting: Vec<(RmwRequestId, GoalId)>,
     last_status: Option<Instant>,
+    goal_replies: Replies<SendGoalResponse>,
+    cancel_replies: Replies<CancelGoalResponse>,
+    result_replies: Replies<GetResultResponse<R>>,
+}
+
+/// The DDS topics of an action's three services.
+pub struct ActionServices {
+    pub send_goal: Service,
+    pub cancel_goal: Service,
+    pub get_result: Service,
+}
+
+impl ActionServices {
+    /// The action `<ns>/<action>`'s services, as ros2-client names them.
+    pub fn new(
+        ns: &str,
+        action: &str,
+        node: &ros2_client::NodeName,
+    ) -> Result<ActionServices, String> {
+        let part = |p: &str| Service::new(ns, &format!("{action}/_action/{p}"), node);
+        Ok(ActionServices {
+            send_goal: part("send_goal")?,
+            cancel_goal: part("cancel_goal")?,
+            get_result: part("get_result")?,
+        })
+    }
 }
 
 impl<R: Message + Clone + Default + 'static> Book<R> {
-    fn new() -> Book<R> {
+    fn new(services: ActionServices) -> Book<R> {
         Book {
             running: None,
             ended: VecDeque::new(),
             waiting: Vec::new(),
             last_status: None,
+            goal_replies: Replies::new(services.send_goal),
+            cancel_replies: Replies::new(services.cancel_goal),
+            result_replies: Replies::new(services.get_result),
         }
+    }
+
+    /// Send the answers whose clients can hear them now (or that waited long enough).
+    fn flush<G: Message + Clone + 'static, F: Message + 'static>(
+        &mut self,
+        server: &ActionServer<G, R, F>,
+        matches: &Matches,
+    ) {
+        let now = Instant::now();
+        self.goal_replies.flush(
+            now,
+            |s| matches.hear(s),
+            |id, resp| {
+                if let Err(e) = server.send_goal_response(id, resp) {
+                    tracing::warn!("send_goal's response: {e:?}");
+                }
+            },
+        );
+        self.cancel_replies.flush(
+            now,
+            |s| matches.hear(s),
+            |id, resp| {
+                if let Err(e) = server.send_cancel_response(id, resp) {
+                    tracing::warn!("cancel's response: {e:?}");
+                }
+            },
+        );
+        self.result_replies.flush(
+            now,
+            |s| matches.hear(s),
+            |id, resp| {
+                if let Err(e) = server.send_result(id, resp) {
+                    tracing::warn!("get_result's response: {e:?}");
+                }
+            },
+        );
     }
 
     /// A new goal: rejected while one runs; otherwise accepted (its info returned), so that
@@ -104,13 +173,11 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
                 server.name()
             );
         }
-        let resp = ros2_client::action::SendGoalResponse {
+        let resp = SendGoalResponse {
             accepted,
             stamp: info.stamp,
         };
-        if let Err(e) = server.send_goal_response(req_id, resp) {
-            tracing::warn!("send_goal's response: {e:?}");
-        }
+        self.goal_replies.push(req_id, resp, Instant::now());
         accepted.then_some(info)
     }
 
@@ -182,9 +249,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
                     }
                 }
             };
-            if let Err(e) = server.send_cancel_response(req_id, answer) {
-                tracing::warn!("cancel's response: {e:?}");
-            }
+            self.cancel_replies.push(req_id, answer, Instant::now());
         }
     }
 
@@ -214,9 +279,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
                     result: R::default(),
                 }
             };
-            if let Err(e) = server.send_result(req_id, resp) {
-                tracing::warn!("get_result's response: {e:?}");
-            }
+            self.result_replies.push(req_id, resp, Instant::now());
         }
         self.waiting = still;
         if self.last_status.is_none_or(|t| t.elapsed() >= STATUS_EVERY) {
@@ -290,11 +353,11 @@ pub struct Served<A: Goals> {
 }
 
 impl<A: Goals> Served<A> {
-    /// No goal yet.
-    pub fn new(goals: A) -> Served<A> {
+    /// No goal yet; `services`: the action's services on DDS.
+    pub fn new(goals: A, services: ActionServices) -> Served<A> {
         Served {
             goals,
-            book: Book::new(),
+            book: Book::new(services),
             run: None,
         }
     }
@@ -306,6 +369,7 @@ impl<A: Goals> Served<A> {
         server: &ActionServer<A::Goal, A::Result, A::Feedback>,
         arm: &Arm<'_>,
         tick: bool,
+        matches: &Matches,
     ) {
         while let Ok(Some((req_id, req))) = server.receive_goal() {
             if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
@@ -341,6 +405,7 @@ impl<A: Goals> Served<A> {
             }
         }
         self.book.results_and_status(server);
+        self.book.flush(server, matches);
     }
 }
 
@@ -374,8 +439,8 @@ fn aborted(code: i32, why: impl Into<String>) -> Option<(GoalStatusEnum, FollowR
 
 impl Served<Follow> {
     /// FollowJointTrajectory, no goal yet; the arm's clock runs `clock` times real time.
-    pub fn follow(clock: f64) -> Self {
-        Served::new(Follow { clock })
+    pub fn follow(clock: f64, services: ActionServices) -> Self {
+        Served::new(Follow { clock }, services)
     }
 }
 
@@ -522,8 +587,8 @@ pub struct Gripper;
 
 impl Served<Gripper> {
     /// GripperCommand, no goal yet.
-    pub fn gripper() -> Self {
-        Served::new(Gripper)
+    pub fn gripper(services: ActionServices) -> Self {
+        Served::new(Gripper, services)
     }
 }
 

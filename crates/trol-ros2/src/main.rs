@@ -21,6 +21,7 @@
 mod actions;
 mod follow;
 mod msgs;
+mod replies;
 
 use std::net::{IpAddr, Ipv4Addr};
 use std::sync::mpsc;
@@ -168,12 +169,17 @@ fn run(args: Args) -> Result<(), String> {
         .map_err(|e| format!("cannot join ROS 2 domain {domain}: {e:?}"))?;
     let context = Context::from_domain_participant(participant)
         .map_err(|e| format!("cannot start ROS 2: {e:?}"))?;
+    let node_name = NodeName::new(&ns, NODE).map_err(|e| format!("node name: {e:?}"))?;
     let mut node = context
-        .new_node(
-            NodeName::new(&ns, NODE).map_err(|e| format!("node name: {e:?}"))?,
-            NodeOptions::new().enable_rosout(false),
-        )
+        .new_node(node_name.clone(), NodeOptions::new().enable_rosout(false))
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
+    // Which clients' reply readers this node's writers have matched: a reply waits for its
+    // client's (replies.rs).
+    let mut matches = replies::Matches::new(context.domain_participant());
+    let service = |path: &str| replies::Service::new(&ns, path, &node_name);
+    let action_services = |action: &str| actions::ActionServices::new(&ns, action, &node_name);
+    let mut home_replies = replies::Replies::new(service("home")?);
+    let mut halt_replies = replies::Replies::new(service("halt")?);
 
     let name = |base: &str| Name::new(&ns, base).map_err(|e| format!("{base}: {e:?}"));
     let topic_qos = QosProfile::publisher_default()
@@ -251,11 +257,14 @@ fn run(args: Args) -> Result<(), String> {
         .map_err(create)?;
     // The embedded simulator runs its clock `time_scale` times faster: the desired path of a
     // trajectory is read on the arm's clock.
-    let mut trajectories = actions::Served::follow(if cfg.port == "sim" {
-        cfg.time_scale
-    } else {
-        1.0
-    });
+    let mut trajectories = actions::Served::follow(
+        if cfg.port == "sim" {
+            cfg.time_scale
+        } else {
+            1.0
+        },
+        action_services("follow_joint_trajectory")?,
+    );
 
     let prefix = if ns == "/" { String::new() } else { ns.clone() };
     trol_cli::say!(
@@ -268,7 +277,7 @@ fn run(args: Args) -> Result<(), String> {
         args.rate
     );
 
-    let mut grips = actions::Served::gripper();
+    let mut grips = actions::Served::gripper(action_services("gripper_cmd")?);
     let period = Duration::from_secs_f64(1.0 / args.rate);
     let mut next = Instant::now();
     let mut last: Option<([f64; 6], Instant)> = None;
@@ -357,24 +366,39 @@ fn run(args: Args) -> Result<(), String> {
                     message: "the arm's connection was poisoned".into(),
                 },
             };
-            if let Err(e) = halt.send_response(id, answer) {
-                tracing::warn!("halt's response: {e:?}");
-            }
+            halt_replies.push(id, answer, Instant::now());
         }
+        matches.refresh();
         let actual = if tick { last.map(|(q, _)| q) } else { None };
         let arm = actions::Arm {
             robot: &robot,
             actual,
             halts: &halts,
         };
-        trajectories.serve(&follow, &arm, tick);
-        grips.serve(&gripper, &arm, tick);
+        trajectories.serve(&follow, &arm, tick, &matches);
+        grips.serve(&gripper, &arm, tick, &matches);
         while let Ok((id, answer)) = done_rx.try_recv() {
-            if let Err(e) = home.send_response(id, answer) {
-                tracing::warn!("home's response: {e:?}");
-            }
+            home_replies.push(id, answer, Instant::now());
         }
         let now = Instant::now();
+        halt_replies.flush(
+            now,
+            |s| matches.hear(s),
+            |id, answer| {
+                if let Err(e) = halt.send_response(id, answer) {
+                    tracing::warn!("halt's response: {e:?}");
+                }
+            },
+        );
+        home_replies.flush(
+            now,
+            |s| matches.hear(s),
+            |id, answer| {
+                if let Err(e) = home.send_response(id, answer) {
+                    tracing::warn!("home's response: {e:?}");
+                }
+            },
+        );
         std::thread::sleep(next.saturating_duration_since(now).min(SERVE_EVERY));
     }
     // Leaving: an arm that still moves by this node's doing is stopped.

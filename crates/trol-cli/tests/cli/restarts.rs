@@ -258,24 +258,38 @@ pub(super) fn the_same_c_program_carries_on_after_the_controller_restarts() {
 }
 
 /// `trol init`'s activation after a failed probe (the controller in terminal mode) works
-/// every time: 50 activations in a row against one controller process over a pty, each
-/// ended by TerminatePCP.
+/// every time: 50 activations, ten in a row against each of five controller processes over
+/// their ptys (the five side by side: each activation mostly waits out its failed probe),
+/// each ended by TerminatePCP.
 #[test]
 pub(super) fn activation_after_a_failed_probe_succeeds_fifty_times_out_of_fifty() {
-    let dir = scratch("init-50");
-    let sim = Background::start(&dir, &["sim", "--homed"], "serving on ");
     // Short link timeouts, so that each failed probe (and its reset) ends quickly; still
     // twice what a loaded 2-core machine keeps a process over a pty waiting (issue 44, item 0).
     let cfg = trol_proto::link::LinkConfig {
         timeouts: trol_proto::link::Timeouts::uniform(Duration::from_millis(300)),
         ..trol_proto::link::LinkConfig::for_line(38400, Duration::ZERO)
     };
-    for i in 0..50 {
-        let port = trol_port::open(&sim.name, &trol_port::PortSettings::default()).unwrap();
-        let mut robot = trol::Robot::over(port, cfg, None);
-        trol::activate(&mut robot, &[0.0; 6]).unwrap_or_else(|e| panic!("activation {i}: {e}"));
-        robot.speed(50).unwrap();
-        robot.terminate_pcp().unwrap();
+    let runs: Vec<_> = (0..5)
+        .map(|k| {
+            std::thread::spawn(move || {
+                let dir = scratch(&format!("init-50-{k}"));
+                let sim = Background::start(&dir, &["sim", "--homed"], "serving on ");
+                for i in 0..10 {
+                    let port =
+                        trol_port::open(&sim.name, &trol_port::PortSettings::default()).unwrap();
+                    let mut robot = trol::Robot::over(port, cfg, None);
+                    trol::activate(&mut robot, &[0.0; 6])
+                        .unwrap_or_else(|e| panic!("controller {k}, activation {i}: {e}"));
+                    robot.speed(50).unwrap();
+                    robot.terminate_pcp().unwrap();
+                }
+            })
+        })
+        .collect();
+    for run in runs {
+        if let Err(panic) = run.join() {
+            std::panic::resume_unwind(panic);
+        }
     }
 }
 

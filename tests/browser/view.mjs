@@ -8,7 +8,8 @@
 //   shown {"webgl": "ok", "joints": [6 rad as the page shows them], "frames": N}
 // Then, for each line `watch` on standard input, it prints `watching`, waits until the page
 // has shown the arm moving and then still again (the test moves it meanwhile), and prints
-//   followed {"moving_frames": N, "joints": [...], "trail": N}
+//   followed {"moving_frames": N, "joints": [...], "trail": N, "trail_before": N}
+// (the trail's points after the motion, and before it).
 // For a line `held` it waits until the page shows an object in the gripper and prints
 //   held {"off_mm": centre to the fingers' point, "finger_low_mm": above the table}
 // `warnings` prints what the page logged as warnings or errors: `warnings [...]`.
@@ -88,6 +89,7 @@ try {
     }
     if (line.trim() !== 'watch') continue;
     // Count the updates that say "moving"; done once one said so and the page is still again.
+    const trailBefore = await page.evaluate(() => Number(document.body.dataset.trail || 0));
     await page.evaluate(() => {
       const w = { saw: false, frames: 0 };
       window.__watch = w;
@@ -100,7 +102,7 @@ try {
       () => window.__watch.saw && document.body.dataset.moving === 'false', null, { timeout: 60_000 });
     const frames = await page.evaluate(() => window.__watch.frames);
     const trail = await page.evaluate(() => Number(document.body.dataset.trail || 0));
-    console.log(`followed ${JSON.stringify({ moving_frames: frames, joints: await joints(page), trail })}`);
+    console.log(`followed ${JSON.stringify({ moving_frames: frames, joints: await joints(page), trail, trail_before: trailBefore })}`);
   }
 } catch (e) {
   console.log(`error ${String(e).split('\n')[0]}`);

@@ -100,6 +100,11 @@ build_ahead() {
 }
 in_process_with_builds_ahead() {
   local ahead rc=0
+  # setsid (util-linux) gives the builds a process group to stop; without it, none go ahead.
+  if ! command -v setsid >/dev/null 2>&1; then
+    in_process
+    return
+  fi
   mkdir -p target
   export -f build_ahead
   setsid nice -n 19 bash -c build_ahead > target/builds-ahead.log 2>&1 < /dev/null &

@@ -18,10 +18,15 @@ cd "$(dirname "$0")/.."
 MATURIN_VERSION=1.16.0
 out=${WHEEL_DIR:-$PWD/target/wheels}
 venv=$PWD/target/maturin
-if [ ! -x "$venv/bin/maturin" ] || ! "$venv/bin/maturin" --version | grep -q " $MATURIN_VERSION\$"; then
+# The install counts once it has finished (target/maturin/.installed): one stopped halfway
+# (scripts/test.sh stops its builds ahead when their time is up) is made again.
+if [ ! -f "$venv/.installed" ] || [ ! -x "$venv/bin/maturin" ] ||
+  ! "$venv/bin/maturin" --version | grep -q " $MATURIN_VERSION\$"; then
   echo "scripts/wheel.sh: installing maturin $MATURIN_VERSION into target/maturin"
+  rm -rf "$venv"
   "${PYTHON:-python3}" -m venv "$venv"
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "maturin==$MATURIN_VERSION"
+  touch "$venv/.installed"
 fi
 mkdir -p "$out"
 rm -f "$out"/trol-*.whl

@@ -11,7 +11,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use trol_a465::arm::{Arm, ArmSettings, Which, code};
+use std::collections::BTreeMap;
+
+use trol_a465::arm::{Arm, ArmSettings, Target, Which, code};
 use trol_a465::model::joints_to_counts;
 use trol_port::Port;
 
@@ -38,6 +40,17 @@ pub enum ErrorForm {
     Bracketed,
 }
 
+/// How `print` shows a precision point (a `ploc` variable): an open point (ash's print
+/// formats for locations are not among its public strings).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlocPrint {
+    /// Its pulses as `w2`'s PULSES row prints them, without the label (assumed; TROL's
+    /// reading).
+    Row,
+    /// `name = {p1, p2, p3, p4, p5, p6}`.
+    Braced,
+}
+
 /// The controller's behaviour where the public sources are silent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Switches {
@@ -56,6 +69,8 @@ pub struct Switches {
     pub ctrl_c_stops: bool,
     /// A power loss prints `[test: Lost robot power]`.
     pub power_loss_line: bool,
+    /// How `print` shows a precision point.
+    pub ploc_print: PlocPrint,
 }
 
 impl Default for Switches {
@@ -68,6 +83,7 @@ impl Default for Switches {
             pendant_holds: false,
             ctrl_c_stops: true,
             power_loss_line: true,
+            ploc_print: PlocPrint::Row,
         }
     }
 }
@@ -104,6 +120,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "power-loss-silent",
         "a power loss mid-motion prints nothing",
     ),
+    (
+        "print-braced",
+        "`print` shows a precision point as `name = {p1, ...}`, not as a row of pulses",
+    ),
 ];
 
 /// The switches of a named variant.
@@ -137,6 +157,10 @@ pub fn variant(name: &str) -> Option<Switches> {
             power_loss_line: false,
             ..d
         },
+        "print-braced" => Switches {
+            ploc_print: PlocPrint::Braced,
+            ..d
+        },
         _ => return None,
     })
 }
@@ -147,6 +171,60 @@ pub const APP: &str = "test";
 pub const ROBOT_VERSION: &str = "A465 simulated by TROL 1.0";
 /// What `crosver` says (the form PA's notes show).
 pub const CROS_VERSION: &str = "System type: 'CROS-104 on a C500C'";
+
+/// Rows `list` prints before its pager asks (assumed: a 24-line terminal).
+pub const PAGE_ROWS: usize = 20;
+
+/// An ash variable's base type (`help list`: int, float, string, cloc, ploc, gloc) and, for
+/// a location, its value once taught.
+#[derive(Clone, Debug, PartialEq)]
+enum Var {
+    Int,
+    Float,
+    Str,
+    /// A cartesian location: x, y, z, then the three angles (taught by `here`).
+    Cloc(Option<[f64; 6]>),
+    /// A precision point: the pulses of axes 1 to 6.
+    Ploc(Option<[i64; 6]>),
+}
+
+impl Var {
+    fn base(&self) -> &'static str {
+        match self {
+            Var::Int => "int",
+            Var::Float => "float",
+            Var::Str => "string",
+            Var::Cloc(_) => "cloc",
+            Var::Ploc(_) => "ploc",
+        }
+    }
+    fn taught(&self) -> bool {
+        match self {
+            Var::Cloc(v) => v.is_some(),
+            Var::Ploc(v) => v.is_some(),
+            _ => true,
+        }
+    }
+}
+
+/// What a question of ash's waits for.
+#[derive(Clone, Debug, PartialEq)]
+enum Ask {
+    /// `Are you sure you want to exit?`
+    Exit,
+    /// `Erase variable 'NAME' and its value?`
+    Erase(String),
+    /// `Variable 'NAME' not found.  -- create it?` (`here` of a name ash does not have).
+    Create(String),
+    /// `list`'s pager: the rows still to print.
+    Page(Vec<String>),
+}
+
+/// Whether `name` is a name ash takes (`Names must consist of 1 to 28 alphanumeric
+/// characters`).
+fn ash_name(name: &str) -> bool {
+    (1..=28).contains(&name.len()) && name.bytes().all(|b| b.is_ascii_alphanumeric())
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Shell {
@@ -167,8 +245,12 @@ pub struct C500c {
     /// A command whose prompt waits for the arm to stand (`finish`, or a motion with
     /// [`Return::AtEnd`]).
     busy: bool,
-    /// The exit question is asked.
-    asking: bool,
+    /// A question waits for its answer.
+    asking: Option<Ask>,
+    /// The application's variables (its `.v3` file), by name.
+    vars: BTreeMap<String, Var>,
+    /// What `save` last wrote (the `.v3` file).
+    saved: BTreeMap<String, Var>,
     typed: Vec<u8>,
     /// Lines typed while a command runs: the shell reads them once it prompts again.
     held: Vec<String>,
@@ -194,7 +276,9 @@ impl C500c {
             power: true,
             online: false,
             busy: false,
-            asking: false,
+            asking: None,
+            vars: BTreeMap::new(),
+            saved: BTreeMap::new(),
             typed: Vec::new(),
             held: Vec::new(),
             out: Vec::new(),
@@ -296,6 +380,21 @@ impl C500c {
     /// Feed bytes from the host; returns what the console prints.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<u8> {
         for &b in bytes {
+            if let Some(Ask::Page(_)) = &self.asking {
+                // The pager reads one key, with no line end.
+                match b {
+                    0x03 | 0x05 => self.interrupt(b),
+                    b' ' => self.page(),
+                    b'q' => {
+                        self.asking = None;
+                        let eol = self.eol();
+                        self.out.extend_from_slice(eol);
+                        self.prompt();
+                    }
+                    _ => {}
+                }
+                continue;
+            }
             match b {
                 0x03 | 0x05 => self.interrupt(b),
                 b'\r' | b'\n' => {
@@ -358,20 +457,50 @@ impl C500c {
             let t = self.now();
             self.arm.halt(t);
         }
-        self.asking = false;
+        self.asking = None;
         self.busy = false;
         self.prompt();
+    }
+
+    /// The next page of `list`'s rows, and the pager's question if rows remain.
+    fn page(&mut self) {
+        let Some(Ask::Page(rows)) = self.asking.take() else {
+            return;
+        };
+        // The question's line is overwritten by the next row.
+        self.out.extend_from_slice(b"\r");
+        let n = rows.len().min(PAGE_ROWS);
+        for r in &rows[..n] {
+            self.line(r);
+        }
+        if rows.len() > n {
+            self.out.extend_from_slice(b"Hit <space> or <q>");
+            self.asking = Some(Ask::Page(rows[n..].to_vec()));
+        } else {
+            self.prompt();
+        }
     }
 
     fn command(&mut self, line: &str) {
         let line = line.trim();
         self.received.push(line.to_string());
-        if self.asking {
-            self.asking = false;
-            match line {
-                "y" | "yes" => self.shell = Shell::System,
-                "n" | "no" => {}
-                _ => self.line("Please answer 'yes' or 'no':"),
+        if let Some(ask) = self.asking.take() {
+            match (line, ask) {
+                ("y" | "yes", Ask::Exit) => self.shell = Shell::System,
+                ("y" | "yes", Ask::Erase(name)) => {
+                    self.vars.remove(&name);
+                }
+                ("y" | "yes", Ask::Create(name)) => {
+                    // Assumed: created as a cartesian location, taught where the arm is.
+                    self.vars.insert(name.clone(), Var::Cloc(None));
+                    self.here(&name);
+                }
+                ("n" | "no", _) => {}
+                (_, ask) => {
+                    self.out.extend_from_slice(b"Please answer 'yes' or 'no': ");
+                    self.asking = Some(ask);
+                    return;
+                }
             }
             self.prompt();
             return;
@@ -406,8 +535,30 @@ impl C500c {
             (Shell::Ash, "exit") => {
                 self.out
                     .extend_from_slice(b"Are you sure you want to exit? ");
-                self.asking = true;
+                self.asking = Some(Ask::Exit);
                 return;
+            }
+            (Shell::Ash, "new") => self.new_var(args),
+            (Shell::Ash, "here") if args.is_empty() => self.position(true),
+            (Shell::Ash, "here") => {
+                if self.here(args) {
+                    return;
+                }
+            }
+            (Shell::Ash, "print" | "?") => self.print_var(args),
+            (Shell::Ash, "erase") => {
+                if self.erase(args) {
+                    return;
+                }
+            }
+            (Shell::Ash, "list") => {
+                if self.list(args) {
+                    return;
+                }
+            }
+            (Shell::Ash, "save") if args.is_empty() => {
+                self.saved = self.vars.clone();
+                self.line(&format!("Saving '{APP}.v3'...done."));
             }
             (Shell::Ash, "robotver") => self.line(&format!("Version string: '{ROBOT_VERSION}'")),
             (Shell::Ash, "armstat") => {
@@ -447,7 +598,7 @@ impl C500c {
                     return;
                 }
             }
-            (Shell::Ash, "joint" | "home" | "ready") => {
+            (Shell::Ash, "joint" | "home" | "ready" | "move") => {
                 if self.motion(word, args) {
                     return;
                 }
@@ -455,6 +606,190 @@ impl C500c {
             (Shell::Ash, _) => self.line("Unrecognized command."),
         }
         self.prompt();
+    }
+
+    /// `new <sigil><name>`: a variable of the sigil's type (none int, `%` float, `$`
+    /// string, `_` cloc, `#` ploc), untaught.
+    fn new_var(&mut self, args: &str) {
+        let (var, name) = match args.as_bytes().first() {
+            Some(b'#') => (Var::Ploc(None), &args[1..]),
+            Some(b'_') => (Var::Cloc(None), &args[1..]),
+            Some(b'%') => (Var::Float, &args[1..]),
+            Some(b'$') => (Var::Str, &args[1..]),
+            _ => (Var::Int, args),
+        };
+        if name.is_empty() {
+            self.line("Missing <variable_name>");
+        } else if !ash_name(name) {
+            self.line("Names must consist of 1 to 28 alphanumeric characters (no '/''s)");
+        } else if self.vars.contains_key(name) {
+            self.line("error: variable already exists.");
+        } else {
+            self.vars.insert(name.to_string(), var);
+        }
+    }
+
+    /// A variable named in a command: printed `error: ...` where there is none. A sigil
+    /// belongs only to `new` and `set` (`help setvalid`: `setvalid testloc`).
+    fn var(&mut self, args: &str) -> Option<String> {
+        if args.is_empty() {
+            self.line("Missing <variable_name>");
+            return None;
+        }
+        if !ash_name(args) {
+            self.line("error: no valid variable found.");
+            return None;
+        }
+        if !self.vars.contains_key(args) {
+            self.line("error: variable not found.");
+            return None;
+        }
+        Some(args.to_string())
+    }
+
+    /// `here NAME`: where the arm is, into a location variable (its pulses for a ploc).
+    /// True when a question waits (none: TROL's reading is that `here` asks only for a
+    /// variable that does not exist, `-- create it?`).
+    fn here(&mut self, args: &str) -> bool {
+        if ash_name(args) && !self.vars.contains_key(args) {
+            self.out
+                .extend_from_slice(format!("Variable '{args}' not found.").as_bytes());
+            let eol = self.eol();
+            self.out.extend_from_slice(eol);
+            self.out.extend_from_slice(b"  -- create it? ");
+            self.asking = Some(Ask::Create(args.to_string()));
+            return true;
+        }
+        let Some(name) = self.var(args) else {
+            return false;
+        };
+        let t = self.now();
+        let q = self.arm.position(t, Which::Actual);
+        let value = match self.vars[&name] {
+            Var::Ploc(_) => Var::Ploc(Some(joints_to_counts(&q).map(i64::from))),
+            Var::Cloc(_) => Var::Cloc(Some(self.arm.kinematics().fk_xyzypr(&q))),
+            _ => {
+                self.line("Not a location variable.");
+                return false;
+            }
+        };
+        self.vars.insert(name, value);
+        false
+    }
+
+    /// `print NAME`: its value (a ploc in the switch's form).
+    fn print_var(&mut self, args: &str) {
+        let Some(name) = self.var(args) else {
+            return;
+        };
+        match self.vars[&name].clone() {
+            Var::Ploc(None) | Var::Cloc(None) => self.line("Location has not been taught"),
+            Var::Ploc(Some(p)) => {
+                let text = match self.sw.ploc_print {
+                    PlocPrint::Row => format!(
+                        "        {:+10} {:+10} {:+10} {:+10} {:+10} {:+10}",
+                        p[0], p[1], p[2], p[3], p[4], p[5]
+                    ),
+                    PlocPrint::Braced => {
+                        format!("{name} = {{{}}}", p.map(|v| v.to_string()).join(", "))
+                    }
+                };
+                self.line(&text);
+            }
+            Var::Cloc(Some(w)) => {
+                let text = format!(
+                    "        {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3}",
+                    w[0],
+                    w[1],
+                    w[2],
+                    w[3].to_degrees(),
+                    w[4].to_degrees(),
+                    w[5].to_degrees()
+                );
+                self.line(&text);
+            }
+            Var::Int | Var::Float => self.line(&format!("{name} = 0")),
+            Var::Str => self.line(&format!("{name} = \"\"")),
+        }
+    }
+
+    /// `erase NAME`: asks first. True when the question waits.
+    fn erase(&mut self, args: &str) -> bool {
+        if args.is_empty() {
+            self.line("Missing <variable_name>");
+            return false;
+        }
+        if !self.vars.contains_key(args) {
+            self.line("Variable not found");
+            return false;
+        }
+        self.out
+            .extend_from_slice(format!("Erase variable '{args}' and its value? ").as_bytes());
+        self.asking = Some(Ask::Erase(args.to_string()));
+        true
+    }
+
+    /// `list [basetype]`: the variables, a pager's question after each [`PAGE_ROWS`] rows.
+    /// True when the prompt is the pager's to give.
+    fn list(&mut self, args: &str) -> bool {
+        if !matches!(
+            args,
+            "" | "int" | "float" | "string" | "cloc" | "ploc" | "gloc"
+        ) {
+            self.line("Illegal basetype: must be int|float|string|cloc|ploc|gloc");
+            return false;
+        }
+        let rows: Vec<String> = self
+            .vars
+            .iter()
+            .filter(|(_, v)| args.is_empty() || v.base() == args)
+            .map(|(n, v)| {
+                format!(
+                    "  {:<16} {}{:<32}",
+                    v.base(),
+                    if v.taught() { "" } else { "* " },
+                    n
+                )
+            })
+            .collect();
+        if rows.is_empty() {
+            self.line("< no variables >");
+            return false;
+        }
+        self.line("Variables: (* indicates not yet taught)");
+        self.asking = Some(Ask::Page(rows));
+        // The pager prompts once the last page is out.
+        self.page();
+        true
+    }
+
+    /// The application's variables as `save` last wrote them (its `.v3` file): each name,
+    /// and a precision point's pulses.
+    pub fn saved_plocs(&self) -> Vec<(String, Option<[i64; 6]>)> {
+        self.saved
+            .iter()
+            .filter_map(|(n, v)| match v {
+                Var::Ploc(p) => Some((n.clone(), *p)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The precision points as ash holds them now.
+    pub fn plocs(&self) -> Vec<(String, Option<[i64; 6]>)> {
+        self.vars
+            .iter()
+            .filter_map(|(n, v)| match v {
+                Var::Ploc(p) => Some((n.clone(), *p)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Teach a precision point as the pendant would, whatever TROL does: `pulses`, or
+    /// untaught.
+    pub fn set_ploc(&mut self, name: &str, pulses: Option<[i64; 6]>) {
+        self.vars.insert(name.to_string(), Var::Ploc(pulses));
     }
 
     fn armstat(&self) -> ArmStat {
@@ -533,6 +868,26 @@ impl C500c {
                     return false;
                 }
                 self.arm.ready(t)
+            }
+            "move" => {
+                let Some(name) = self.var(args) else {
+                    return false;
+                };
+                match self.vars[&name] {
+                    Var::Ploc(Some(p)) => {
+                        self.arm
+                            .move_to(Target::Prec(p.map(|v| v as f64)), false, t)
+                    }
+                    Var::Cloc(Some(w)) => self.arm.move_to(Target::Cart(w), false, t),
+                    Var::Ploc(None) | Var::Cloc(None) => {
+                        self.error("Location has not been taught");
+                        return false;
+                    }
+                    _ => {
+                        self.line("Not a location variable.");
+                        return false;
+                    }
+                }
             }
             _ => {
                 let Some((n, deg)) = args.split_once(',') else {

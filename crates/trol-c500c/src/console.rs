@@ -20,6 +20,8 @@ pub const QUESTIONS: &[&str] = &[
     "Limp ALL robot axes?",
     "(y/n) ?",
     "Please answer 'yes' or 'no':",
+    "and its value?",
+    "Hit <space> or <q>",
 ];
 
 /// What the console said.
@@ -40,6 +42,9 @@ pub struct Console {
     buf: Vec<u8>,
     /// The last byte was CR (a CR LF pair ends one line, not two).
     after_cr: bool,
+    /// A question was just closed: the blank that ends it may come in a later read (the
+    /// line paced byte by byte), and is not the start of what follows.
+    after_question: bool,
 }
 
 impl Console {
@@ -53,6 +58,7 @@ impl Console {
                 }
                 b'\r' | b'\n' => {
                     self.after_cr = b == b'\r';
+                    self.after_question = false;
                     // A prompt the console printed before the line (a shell that prompts
                     // and then prints, with no line end between) is a prompt of its own.
                     let mut line = text(&self.buf);
@@ -63,8 +69,10 @@ impl Console {
                     out.push(Said::Line(line));
                     self.buf.clear();
                 }
+                b' ' if self.after_question && self.buf.is_empty() => {}
                 _ => {
                     self.after_cr = false;
+                    self.after_question = false;
                     if self.buf.len() < MAX_LINE {
                         self.buf.push(b);
                     }
@@ -84,6 +92,7 @@ impl Console {
         } else if QUESTIONS.iter().any(|q| partial.trim_end().ends_with(q)) {
             out.push(Said::Question(partial.trim_end().to_string()));
             self.buf.clear();
+            self.after_question = true;
         }
         out
     }
@@ -97,6 +106,7 @@ impl Console {
     pub fn clear(&mut self) {
         self.buf.clear();
         self.after_cr = false;
+        self.after_question = false;
     }
 }
 
@@ -174,6 +184,23 @@ mod tests {
         assert_eq!(
             asked.last(),
             Some(&Said::Question("Are you sure you want to exit?".into()))
+        );
+        // Byte by byte, its blank after it is read: with the echo off, the prompt that
+        // follows the answer is still a prompt, and with it on, the echo is the answer.
+        let quiet = b"Erase variable 'p1' and its value? test> ";
+        let single: Vec<&[u8]> = quiet.chunks(1).collect();
+        assert_eq!(
+            all(&mut Console::default(), &single),
+            vec![
+                Said::Question("Erase variable 'p1' and its value?".into()),
+                Said::Prompt("test".into()),
+            ]
+        );
+        let echoed = b"Erase variable 'p1' and its value? y\r\ntest> ";
+        let single: Vec<&[u8]> = echoed.chunks(1).collect();
+        assert_eq!(
+            all(&mut Console::default(), &single)[1..],
+            [Said::Line("y".into()), Said::Prompt("test".into())]
         );
     }
 

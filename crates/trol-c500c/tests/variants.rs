@@ -183,6 +183,7 @@ fn run_variant(name: &str) {
     r.robot.joint(1, 0.1).unwrap();
     r.robot.finish().unwrap();
     assert!(close(r.joints()[0], start + 0.2), "{name}: back to back");
+    teach_and_return(&mut r, &sw, name);
     // A joint limit: refused with its code, nothing moves.
     let before = r.joints();
     let e = r.robot.joint(2, 3.0).unwrap_err();
@@ -219,7 +220,102 @@ fn run_variant(name: &str) {
             TROL_ERR_ROBOT_UNSURE,
             "{name}: after a failure: {e}"
         );
+        return;
     }
+    // A move to a taught point under the contrary profile: there, or a failure with the
+    // arm where it was or at the point.
+    if r.robot.here("#back", Tag::Prec).is_err() {
+        return;
+    }
+    let taught = r.joints();
+    if r.robot
+        .joint(1, 0.2)
+        .and_then(|_| r.robot.finish())
+        .is_err()
+    {
+        return;
+    }
+    let away = r.joints();
+    let done = r
+        .robot
+        .move_to("#back", false)
+        .and_then(|_| r.robot.finish());
+    let at = r.joints();
+    match done {
+        Ok(()) => assert!(unmoved(&taught, &at), "{name}: success at {at:?}"),
+        Err(e) => {
+            assert_ne!(e.code().0, 0, "{name}");
+            assert!(
+                unmoved(&taught, &at) || unmoved(&away, &at) || r.moving(),
+                "{name}: {e} with the arm at {at:?}"
+            );
+        }
+    }
+}
+
+/// Teach a precision point where the arm stands (an ash `ploc`), move away, move back to it
+/// by name, list it, save, delete it: each right, or (where `print` shows a precision point
+/// in a form TROL does not read) UNSURE with the arm where it was.
+fn teach_and_return(r: &mut Rig, sw: &Switches, name: &str) {
+    let home = r.joints();
+    let taught = r.robot.here("#pick1", Tag::Prec);
+    if sw.ploc_print != c500c::PlocPrint::Row {
+        let e = taught.unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ROBOT_UNSURE, "{name}: {e}");
+        assert!(unmoved(&home, &r.joints()), "{name}");
+        // Nothing further is sent, a motion least of all.
+        let before = r.received().len();
+        assert!(r.robot.joint(1, 0.1).is_err());
+        assert!(unmoved(&home, &r.joints()), "{name}");
+        assert_eq!(r.received().len(), before, "{name}: sent after UNSURE");
+        // The rest of the run needs a fresh session.
+        *r = rig(sw.clone(), true, profile(matching(sw)));
+        r.robot.speed(100).unwrap();
+        return;
+    }
+    taught.unwrap_or_else(|e| panic!("{name}: Here: {e}"));
+    let held = r.unit.lock().unwrap().plocs();
+    assert_eq!(held.len(), 1, "{name}: {held:?}");
+    assert_eq!(held[0].0, "pick1", "{name}");
+    // Away (two joints, so only the named move brings it back in one motion).
+    r.robot.joint(2, 0.2).unwrap();
+    r.robot.finish().unwrap();
+    r.robot.joint(1, -0.2).unwrap();
+    r.robot.finish().unwrap();
+    assert!(!unmoved(&home, &r.joints()), "{name}");
+    r.robot
+        .move_to("#pick1", false)
+        .unwrap_or_else(|e| panic!("{name}: Move: {e}"));
+    r.robot
+        .finish()
+        .unwrap_or_else(|e| panic!("{name}: Finish: {e}"));
+    let back = r.joints();
+    assert!(
+        (0..6).all(|j| (back[j] - home[j]).abs() < 1e-3),
+        "{name}: back at {back:?}, taught at {home:?}"
+    );
+    let listed = r.robot.locations().unwrap();
+    assert_eq!(listed.len(), 1, "{name}: {listed:?}");
+    assert_eq!(listed[0].0, "#pick1", "{name}");
+    r.robot.save_locations().unwrap();
+    assert_eq!(r.unit.lock().unwrap().saved_plocs().len(), 1, "{name}");
+    r.robot.delete_location("#pick1").unwrap();
+    assert!(r.unit.lock().unwrap().plocs().is_empty(), "{name}");
+    let e = r.robot.move_to("#pick1", false).unwrap_err();
+    assert_eq!(
+        e.code(),
+        trol_proto::application::code::TROL_ERR_LOCATION,
+        "{name}: {e}"
+    );
+    let moves = r
+        .received()
+        .iter()
+        .filter(|l| l.starts_with("move"))
+        .count();
+    assert_eq!(
+        moves, 1,
+        "{name}: a move to a name ash no longer has was sent"
+    );
 }
 
 macro_rules! each {
@@ -251,6 +347,7 @@ each! {
     pendant_holds => "pendant-holds",
     unstoppable => "unstoppable",
     power_loss_silent => "power-loss-silent",
+    print_braced => "print-braced",
 }
 
 /// Not homed at power-on: a motion is refused with BIOS_NOT_HOMED and nothing is sent;
@@ -471,4 +568,92 @@ fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     drop(b);
     server.join().unwrap();
+}
+
+/// What the pendant taught: TROL lists it (through ash's pager, which it answers because it
+/// asked for the whole list), moves to it by name and ends at its pulses; a name ash has but
+/// has not taught is TROL_ERR_LOCATION, and no `move` goes out.
+#[test]
+fn points_taught_on_the_pendant_are_listed_and_reached() {
+    let sw = Switches::default();
+    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    r.robot.speed(100).unwrap();
+    let target = [0.3, -0.2, 0.4, 0.1, -0.3, 0.2];
+    let pulses = trol_a465::model::joints_to_counts(&target).map(i64::from);
+    {
+        let mut u = r.unit.lock().unwrap();
+        // More than one page of `list`.
+        for i in 0..(c500c::PAGE_ROWS + 5) {
+            u.set_ploc(&format!("p{i:02}"), Some(pulses));
+        }
+        u.set_ploc("blank", None);
+        u.set_ploc("averyveryverylongname", Some(pulses));
+    }
+    let listed = r.robot.locations().unwrap();
+    assert_eq!(listed.len(), c500c::PAGE_ROWS + 5, "{listed:?}");
+    assert!(
+        listed
+            .iter()
+            .all(|(n, l)| n.starts_with("#p") && l.to_array6().map(|v| v.round() as i64) == pulses)
+    );
+    let before = r.joints();
+    let e = r.robot.move_to("#blank", false).unwrap_err();
+    assert_eq!(
+        e.code(),
+        trol_proto::application::code::TROL_ERR_LOCATION,
+        "{e}"
+    );
+    let e = r.robot.move_to("#nothere", false).unwrap_err();
+    assert_eq!(
+        e.code(),
+        trol_proto::application::code::TROL_ERR_LOCATION,
+        "{e}"
+    );
+    assert!(unmoved(&before, &r.joints()));
+    assert!(!r.received().iter().any(|l| l.starts_with("move")));
+    r.robot.move_to("#p07", false).unwrap();
+    r.robot.finish().unwrap();
+    assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
+}
+
+/// Cartesian names and straight moves need the WORLD row's angle order, and Define of a
+/// precision point has no ash form: each refused before anything is typed.
+#[test]
+fn what_ash_cannot_be_asked_safely_is_refused_unsent() {
+    let sw = Switches::default();
+    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    r.robot.here("#p1", Tag::Prec).unwrap();
+    let typed = r.received().len();
+    let e = r.robot.here("spot", Tag::Cart).unwrap_err();
+    assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
+    let e = r.robot.move_to("#p1", true).unwrap_err();
+    assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
+    let e = r.robot.here("#a_b", Tag::Prec).unwrap_err();
+    assert_eq!(e.code().0, trol_a465::arm::code::BAD_ARGUMENT, "{e}");
+    let loc = trol::Location::Prec(vec![0; 6]);
+    let e = r.robot.define("#p2", &loc).unwrap_err();
+    assert_eq!(e.code().0, backend::UNSUPPORTED, "{e}");
+    assert_eq!(r.received().len(), typed, "{:?}", &r.received()[typed..]);
+}
+
+/// A move to a point that ash says is done with the arm short of the point's pulses (held
+/// by hand as it returns) is not success: the end is the arm read at the pulses read back.
+#[test]
+fn a_move_that_ends_short_of_the_point_is_not_success() {
+    let sw = Switches {
+        motion_return: Return::AtEnd,
+        ..Switches::default()
+    };
+    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    r.robot.here("#p1", Tag::Prec).unwrap();
+    r.robot.joint(1, 0.3).unwrap();
+    r.robot.finish().unwrap();
+    // The arm is stopped short by hand as it returns: ash says done, w2 says elsewhere.
+    r.robot.move_to("#p1", false).unwrap();
+    r.unit
+        .lock()
+        .unwrap()
+        .move_by_hand([0.15, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let e = r.robot.finish().unwrap_err();
+    assert_ne!(e.code().0, 0, "{e}");
 }

@@ -133,6 +133,7 @@ position_on_variants! {
     position_pendant_holds => "pendant-holds",
     position_unstoppable => "unstoppable",
     position_power_loss_silent => "power-loss-silent",
+    position_print_braced => "print-braced",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; the pick
@@ -225,6 +226,42 @@ fn through_gateway(variant: &str) -> (std::path::PathBuf, Background, Background
         out.contains("getposition joint actual  ->  j(0.3") || out.contains("j(0.299"),
         "{out}"
     );
+    // A precision point taught, left and reached again by name, as ash's own variable.
+    let o = trol(
+        &dir,
+        &["interp"],
+        "here #g1 prec\njoint 2 0.2\nfinish\nmove #g1\nfinish\ngetposition joint actual\n\
+         listlocations\n",
+    );
+    let (out, err) = text(&o);
+    if variant == "print-braced" {
+        // `print` in a form TROL does not read: UNSURE at Here, nothing moved after.
+        assert!(!o.status.success(), "{out}");
+        assert!(out.contains("TROL_ERR_ROBOT_UNSURE"), "{out}\n{err}");
+        assert!(!out.contains("joint 2 0.2  ->"), "{out}");
+        return (dir, gw, sim);
+    }
+    assert!(
+        o.status.success(),
+        "{variant}: {out}\n{err}\ngateway:\n{}",
+        gw.output().join("\n")
+    );
+    // Back where it was taught: joint 1 at 0.3 (within the encoders' dither), joint 2 at 0.
+    let back = out
+        .lines()
+        .find_map(|l| l.strip_prefix("getposition joint actual  ->  j("))
+        .and_then(|v| v.strip_suffix(')'))
+        .map(|v| {
+            v.split(", ")
+                .map(|x| x.parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        (back[0] - 0.3).abs() < 1e-3 && back[1].abs() < 1e-3,
+        "{out}"
+    );
+    assert!(out.contains("listlocations  ->  #g1 p("), "{out}");
     (dir, gw, sim)
 }
 
@@ -257,6 +294,7 @@ gateway_on_variants! {
     gateway_pendant_holds => "pendant-holds",
     gateway_unstoppable => "unstoppable",
     gateway_power_loss_silent => "power-loss-silent",
+    gateway_print_braced => "print-braced",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

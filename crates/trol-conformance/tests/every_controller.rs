@@ -101,4 +101,5 @@ each! {
     lf_only => "lf-only",
     unstoppable => "unstoppable",
     power_loss_silent => "power-loss-silent",
+    print_braced => "print-braced",
 }

@@ -71,8 +71,8 @@ impl Backend for C500cBackend {
         // A Halt: its stop, and the readings that show the arm standing.
         HALT_WITHIN + REPLY_LIMIT
     }
-    fn appro(&mut self, target: &Target, _: [f64; 6], _: bool) -> BiosResult {
-        self.named(target)?;
+    fn appro(&mut self, _: &Target, _: [f64; 6], _: bool) -> BiosResult {
+        // An approach position is cartesian, whatever the location's kind.
         self.cartesian()
     }
     fn depart(&mut self, _: [f64; 6], _: bool) -> BiosResult {
@@ -81,9 +81,26 @@ impl Backend for C500cBackend {
     fn jog(&mut self, _: [f64; 3], _: bool) -> BiosResult {
         self.cartesian()
     }
-    fn move_to(&mut self, target: &Target, _: bool) -> BiosResult {
-        self.named(target)?;
-        self.cartesian()
+    fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
+        match target {
+            Target::Name(name) => self.move_named(*name, straight),
+            Target::Location(_) => self.cartesian(),
+        }
+    }
+    fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
+        self.teach_here(name, tag)
+    }
+    fn define(&mut self, name: LocName, _: &Location) -> BiosResult {
+        self.teach_define(name)
+    }
+    fn delete_location(&mut self, name: LocName) -> BiosResult {
+        self.teach_delete(name)
+    }
+    fn locations(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        self.teach_list()
+    }
+    fn save_locations(&mut self) -> BiosResult {
+        self.teach_save()
     }
     fn close(&mut self, _: u8) -> BiosResult {
         self.no_gripper()

@@ -27,7 +27,7 @@ use trol_a465::kinematics::Kinematics;
 use trol_controller::real;
 use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
-use trol_proto::application::{CodeInfo, CodeTable, Location, Tag};
+use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
 
 use crate::console::{self, Console, Said};
 use crate::profile::{MotionReturn, Profile};
@@ -35,6 +35,9 @@ use crate::reports::{self, ArmStat, Homing, Known};
 
 mod bios;
 mod motion;
+mod teach;
+
+pub use teach::ARRIVE_PULSES;
 
 pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
 /// The pendant holds the point of control (`Ash doesn't have control`).
@@ -166,11 +169,14 @@ struct Motion {
 enum Kind {
     Joint(u8, f64),
     Home,
+    /// `move var` to a precision point read back at these pulses.
+    Named([i64; 6]),
 }
 
 struct Outstanding {
     motion: Motion,
-    /// Where the motion ends, degrees (a home: where the arm is read once homed).
+    /// Where the motion ends, degrees (a home: where the arm is read once homed; a
+    /// precision point: its pulses, [`Kind::Named`]).
     target: Option<[f64; 6]>,
     watch: real::EndWatch,
     /// The motion's planned time.
@@ -430,7 +436,7 @@ impl C500cBackend {
                         "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
                     )));
                 }
-                Some(Said::Line(l)) if !echo_seen && l.trim_end() == cmd => echo_seen = true,
+                Some(Said::Line(l)) if !echo_seen && l.trim() == cmd => echo_seen = true,
                 // A bracketed line with an error of CRS's tables is the command's (ash may
                 // print a robot error so); any other is unasked.
                 Some(Said::Line(l))

@@ -71,6 +71,16 @@ impl C500cBackend {
         let r = match kind {
             Kind::Joint(n, deg) => arm.joint(n, deg.to_radians(), 0.0),
             Kind::Home => arm.home(0, 0.0),
+            // Where a precision point is in degrees needs the pulses per degree on a C500C
+            // (not settled): the time bound is that of the longest motion from here, each
+            // joint to its farther limit.
+            Kind::Named(_) => {
+                let far: [f64; 6] = std::array::from_fn(|j| {
+                    let lim = trol_a465::model::LIMITS_DEG[j];
+                    if self.rest[j] >= 0.0 { -lim } else { lim }.to_radians()
+                });
+                arm.ma(far, 0.0)
+            }
         };
         if r != code::OK {
             return Duration::from_secs(60);
@@ -86,7 +96,7 @@ impl C500cBackend {
                 t[n as usize - 1] += deg;
                 Some(t)
             }
-            Kind::Home => None,
+            Kind::Home | Kind::Named(_) => None,
         };
         if let Err(e) = self.send(format!("{}\r", m.line).as_bytes()) {
             return Err(self.unsure(format!("`{}`: the console failed: {e}", m.line)));
@@ -203,11 +213,11 @@ impl C500cBackend {
         // ash says done: the arm must be read at the motion's end.
         let p = self.read_position(true)?;
         let now = Instant::now();
-        let homed = if self
+        let homing = self
             .outstanding
             .as_ref()
-            .is_some_and(|o| o.target.is_none())
-        {
+            .is_some_and(|o| matches!(o.motion.kind, Kind::Home));
+        let homed = if homing {
             let lines = match self.exchange("armstat") {
                 Ok(l) => l,
                 Err(e) => return Err(self.fail(e)),
@@ -227,15 +237,16 @@ impl C500cBackend {
         }
         let standing_before = o.watch.stood_for(now);
         o.watch.saw_at(now, p.joints_deg);
-        if o.target.is_none() && homed && standing_before.is_some() && !o.watch.seen_moving() {
+        if homing && homed && standing_before.is_some() && !o.watch.seen_moving() {
             // A home: ash said done, and armstat says homed: the controller's own word twice.
             o.watch.saw_moving();
             o.watch.saw_at(now, p.joints_deg);
         }
-        let at_end = match o.target {
-            Some(t) => (0..6).all(|j| (p.joints_deg[j] - t[j]).abs() <= ARRIVE_DEG),
+        let at_end = match (o.target, o.motion.kind) {
+            (Some(t), _) => (0..6).all(|j| (p.joints_deg[j] - t[j]).abs() <= ARRIVE_DEG),
+            (None, Kind::Named(at)) => (0..6).all(|j| (p.pulses[j] - at[j]).abs() <= ARRIVE_PULSES),
             // A home: homed, and read standing twice.
-            None => homed && standing_before.is_some() && o.watch.stood_for(now).is_some(),
+            (None, _) => homed && standing_before.is_some() && o.watch.stood_for(now).is_some(),
         };
         match o.watch.verdict(now, at_end, times) {
             real::End::Arrived => {
@@ -288,15 +299,6 @@ impl C500cBackend {
             self.rests_at(at);
         }
         Ok(())
-    }
-
-    /// A location by name: TROL keeps no table of the C500C's yet (its ash variables are
-    /// for later), so no name is known.
-    pub(super) fn named(&mut self, target: &Target) -> Result<(), BackendError> {
-        match target {
-            Target::Name(name) => Err(BackendError::UnknownLocation(*name)),
-            Target::Location(_) => Ok(()),
-        }
     }
 
     pub(super) fn cartesian(&mut self) -> BiosResult {

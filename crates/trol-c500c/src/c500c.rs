@@ -51,6 +51,17 @@ pub enum PlocPrint {
     Braced,
 }
 
+/// The gripper ash is set up for (`griptype_set`): an open point of each controller.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GripType {
+    /// A servo gripper, whose jaws `wgrip` reads.
+    Servo,
+    /// An air gripper: a valve, nothing to read.
+    Air,
+    /// None set.
+    None,
+}
+
 /// The controller's behaviour where the public sources are silent.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Switches {
@@ -71,6 +82,10 @@ pub struct Switches {
     pub power_loss_line: bool,
     /// How `print` shows a precision point.
     pub ploc_print: PlocPrint,
+    /// The gripper set up.
+    pub grip_type: GripType,
+    /// When ash gives its prompt back after a grip command.
+    pub grip_return: Return,
 }
 
 impl Default for Switches {
@@ -84,6 +99,8 @@ impl Default for Switches {
             ctrl_c_stops: true,
             power_loss_line: true,
             ploc_print: PlocPrint::Row,
+            grip_type: GripType::Servo,
+            grip_return: Return::AtStart,
         }
     }
 }
@@ -124,6 +141,12 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "print-braced",
         "`print` shows a precision point as `name = {p1, ...}`, not as a row of pulses",
     ),
+    ("gripper-air", "an air gripper: its jaws cannot be read"),
+    ("gripper-none", "no gripper type set"),
+    (
+        "grip-return-at-end",
+        "the prompt returns once the gripper's jaws stand",
+    ),
 ];
 
 /// The switches of a named variant.
@@ -159,6 +182,18 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "print-braced" => Switches {
             ploc_print: PlocPrint::Braced,
+            ..d
+        },
+        "gripper-air" => Switches {
+            grip_type: GripType::Air,
+            ..d
+        },
+        "gripper-none" => Switches {
+            grip_type: GripType::None,
+            ..d
+        },
+        "grip-return-at-end" => Switches {
+            grip_return: Return::AtEnd,
             ..d
         },
         _ => return None,
@@ -242,6 +277,7 @@ pub struct C500c {
     power: bool,
     pendant: bool,
     online: bool,
+    grip_type: GripType,
     /// A command whose prompt waits for the arm to stand (`finish`, or a motion with
     /// [`Return::AtEnd`]).
     busy: bool,
@@ -268,6 +304,7 @@ impl C500c {
         });
         let mut c = C500c {
             pendant: sw.pendant_holds,
+            grip_type: sw.grip_type,
             sw,
             arm,
             scale: time_scale.max(1e-3),
@@ -308,6 +345,19 @@ impl C500c {
     pub fn is_moving(&mut self) -> bool {
         let t = self.now();
         self.arm.is_moving(t)
+    }
+
+    /// Whether the gripper's jaws move.
+    pub fn jaws_moving(&mut self) -> bool {
+        let t = self.now();
+        self.grip_type == GripType::Servo
+            && (self.arm.fingers(t) - self.arm.fingers(t + 1e-3)).abs() > 0.0
+    }
+
+    /// The jaws' opening, mm.
+    pub fn jaws(&mut self) -> f64 {
+        let t = self.now();
+        self.arm.fingers(t)
     }
 
     /// Give the point of control to the host (`<SHIFT><ESC>` on the pendant), or take it.
@@ -430,7 +480,7 @@ impl C500c {
 
     /// Let time pass: a command that waits for the arm gives its prompt back once it stands.
     pub fn tick(&mut self) -> Vec<u8> {
-        if self.busy && !self.is_moving() {
+        if self.busy && !self.is_moving() && !self.jaws_moving() {
             self.busy = false;
             self.prompt();
             for line in std::mem::take(&mut self.held) {
@@ -595,6 +645,25 @@ impl C500c {
             (Shell::Ash, "finish") => {
                 if self.is_moving() {
                     self.busy = true;
+                    return;
+                }
+            }
+            (Shell::Ash, "griptype_set" | "gtype") => self.grip_type_set(args),
+            (Shell::Ash, "wgrip") => {
+                if self.grip_type == GripType::Servo {
+                    let d = self.jaws();
+                    self.line(&format!("Gripper distance = {d:.3}"));
+                } else {
+                    // Assumed: what ash says without a servo gripper is not public.
+                    self.line("Gripper type must be 2(servo)");
+                }
+            }
+            (
+                Shell::Ash,
+                "grip_open" | "gopen" | "go" | "grip_close" | "gclose" | "gc" | "grip"
+                | "gripdist_set",
+            ) => {
+                if self.gripper(word, args) {
                     return;
                 }
             }
@@ -790,6 +859,85 @@ impl C500c {
     /// untaught.
     pub fn set_ploc(&mut self, name: &str, pulses: Option<[i64; 6]>) {
         self.vars.insert(name.to_string(), Var::Ploc(pulses));
+    }
+
+    /// `griptype_set [0|none|1|air|2|servo]`: with no argument, what is set.
+    fn grip_type_set(&mut self, args: &str) {
+        let t = match args {
+            "" => {
+                let what = match self.grip_type {
+                    GripType::Servo => "set to 2--SERVO",
+                    GripType::Air => "set to 1--AIR",
+                    GripType::None => "not set.",
+                };
+                self.line(&format!("Gripper type {what}"));
+                return;
+            }
+            "0" | "none" => GripType::None,
+            "1" | "air" => GripType::Air,
+            "2" | "servo" => GripType::Servo,
+            _ => {
+                self.line("Gripper type must be 1(air) or 2(servo)");
+                return;
+            }
+        };
+        self.grip_type = t;
+    }
+
+    /// A grip command; true when its prompt waits for the jaws.
+    fn gripper(&mut self, word: &str, args: &str) -> bool {
+        if self.pendant {
+            self.error(
+                "Ash doesn't have control. Transfer control back by pressing <SHIFT><ESC> on \
+                 the pendant keyboard.",
+            );
+            return false;
+        }
+        if self.grip_type == GripType::None {
+            // Assumed: ash's words for a gripper that is not set are not public.
+            self.line("Gripper type not set.");
+            return false;
+        }
+        if !self.power {
+            self.error("Arm power is OFF");
+            return false;
+        }
+        let t = self.now();
+        let value = if args.is_empty() {
+            None
+        } else {
+            match args.parse::<f64>() {
+                Ok(v) if v.is_finite() && v >= 0.0 => Some(v),
+                _ => {
+                    self.line("error: missing number.");
+                    return false;
+                }
+            }
+        };
+        match (word, value) {
+            ("grip" | "gripdist_set", None) => {
+                self.line("error: missing value(s).");
+                return false;
+            }
+            ("grip" | "gripdist_set", Some(_)) if self.grip_type == GripType::Air => {
+                self.line("Gripper type must be 2(servo)");
+                return false;
+            }
+            ("grip" | "gripdist_set", Some(d)) => {
+                self.arm.grip(d, t);
+            }
+            ("grip_open" | "gopen" | "go", f) => {
+                self.arm.open(f.unwrap_or(100.0), t);
+            }
+            (_, f) => {
+                self.arm.close(f.unwrap_or(100.0), t);
+            }
+        }
+        if self.sw.grip_return == Return::AtEnd && self.jaws_moving() {
+            self.busy = true;
+            return true;
+        }
+        false
     }
 
     fn armstat(&self) -> ArmStat {

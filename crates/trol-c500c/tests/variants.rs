@@ -184,6 +184,7 @@ fn run_variant(name: &str) {
     r.robot.finish().unwrap();
     assert!(close(r.joints()[0], start + 0.2), "{name}: back to back");
     teach_and_return(&mut r, &sw, name);
+    grip_round(&mut r, &sw, name);
     // A joint limit: refused with its code, nothing moves.
     let before = r.joints();
     let e = r.robot.joint(2, 3.0).unwrap_err();
@@ -318,6 +319,56 @@ fn teach_and_return(r: &mut Rig, sw: &Switches, name: &str) {
     );
 }
 
+/// The gripper as the manual uses it: Grip, Close and Open, each with its Finish; on a servo
+/// gripper each ends with the jaws seen standing where asked; an air gripper opens and
+/// closes but cannot be read; with none set, every grip call is refused before sending.
+fn grip_round(r: &mut Rig, sw: &Switches, name: &str) {
+    let jaws = |r: &Rig| r.unit.lock().unwrap().jaws();
+    match sw.grip_type {
+        c500c::GripType::Servo => {
+            r.robot
+                .grip(20)
+                .unwrap_or_else(|e| panic!("{name}: Grip: {e}"));
+            r.robot
+                .finish()
+                .unwrap_or_else(|e| panic!("{name}: Finish: {e}"));
+            assert!((jaws(r) - 20.0).abs() < 0.1, "{name}: jaws at {}", jaws(r));
+            let g = r.robot.gripper().unwrap();
+            assert!((g.opening_mm - 20.0).abs() < 0.1, "{name}: {g:?}");
+            r.robot.close_gripper(60).unwrap();
+            // The arm does not move while the jaws do, and a second grip waits its turn.
+            let before = r.joints();
+            if r.unit.lock().unwrap().jaws_moving() {
+                let e = r.robot.joint(1, 0.1).unwrap_err();
+                assert_eq!(e.code().0, backend::BUSY, "{name}: {e}");
+                assert!(unmoved(&before, &r.joints()), "{name}");
+            }
+            r.robot.finish().unwrap();
+            assert!(jaws(r) < 0.1, "{name}: closed at {}", jaws(r));
+            r.robot.open_gripper(50).unwrap();
+            r.robot.finish().unwrap();
+            assert!(jaws(r) > 49.9, "{name}: open at {}", jaws(r));
+        }
+        c500c::GripType::Air => {
+            r.robot.close_gripper(60).unwrap();
+            r.robot.finish().unwrap();
+            let e = r.robot.grip(20).unwrap_err();
+            assert_eq!(e.code().0, backend::UNSUPPORTED, "{name}: {e}");
+            assert!(r.robot.gripper().is_err(), "{name}");
+            r.robot.open_gripper(60).unwrap();
+            r.robot.finish().unwrap();
+        }
+        c500c::GripType::None => {
+            let e = r.robot.close_gripper(60).unwrap_err();
+            assert_eq!(e.code().0, backend::UNSUPPORTED, "{name}: {e}");
+            assert!(
+                !r.received().iter().any(|l| l.starts_with("grip_")),
+                "{name}: a grip command was sent"
+            );
+        }
+    }
+}
+
 macro_rules! each {
     ($($test:ident => $name:literal,)*) => {
         $(
@@ -348,6 +399,9 @@ each! {
     unstoppable => "unstoppable",
     power_loss_silent => "power-loss-silent",
     print_braced => "print-braced",
+    gripper_air => "gripper-air",
+    gripper_none => "gripper-none",
+    grip_return_at_end => "grip-return-at-end",
 }
 
 /// Not homed at power-on: a motion is refused with BIOS_NOT_HOMED and nothing is sent;
@@ -656,4 +710,27 @@ fn a_move_that_ends_short_of_the_point_is_not_success() {
         .move_by_hand([0.15, 0.0, 0.0, 0.0, 0.0, 0.0]);
     let e = r.robot.finish().unwrap_err();
     assert_ne!(e.code().0, 0, "{e}");
+}
+
+/// While the jaws close, the arm does not move: a motion is BIOS_BUSY and sends nothing, and
+/// TROLFinish waits for the jaws, after which the motion goes.
+#[test]
+fn the_arm_waits_for_the_jaws() {
+    let sw = Switches::default();
+    // Half real time: the jaws take 2.5 s to close, within JAWS_WITHIN.
+    let mut r = rig_at(sw.clone(), true, profile(matching(&sw)), 0.5);
+    r.robot.close_gripper(60).unwrap();
+    let before = r.joints();
+    let e = r.robot.joint(1, 0.1).unwrap_err();
+    assert_eq!(e.code().0, backend::BUSY, "{e}");
+    assert!(
+        r.unit.lock().unwrap().jaws_moving(),
+        "the test outran the jaws"
+    );
+    assert!(unmoved(&before, &r.joints()));
+    assert!(!r.received().iter().any(|l| l.starts_with("joint")));
+    r.robot.finish().unwrap();
+    assert!(r.unit.lock().unwrap().jaws() < 0.1);
+    r.robot.joint(1, 0.01).unwrap();
+    r.robot.finish().unwrap();
 }

@@ -134,6 +134,9 @@ position_on_variants! {
     position_unstoppable => "unstoppable",
     position_power_loss_silent => "power-loss-silent",
     position_print_braced => "print-braced",
+    position_gripper_air => "gripper-air",
+    position_gripper_none => "gripper-none",
+    position_grip_return_at_end => "grip-return-at-end",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; the pick
@@ -295,6 +298,9 @@ gateway_on_variants! {
     gateway_unstoppable => "unstoppable",
     gateway_power_loss_silent => "power-loss-silent",
     gateway_print_braced => "print-braced",
+    gateway_gripper_air => "gripper-air",
+    gateway_gripper_none => "gripper-none",
+    gateway_grip_return_at_end => "grip-return-at-end",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

@@ -102,4 +102,7 @@ each! {
     unstoppable => "unstoppable",
     power_loss_silent => "power-loss-silent",
     print_braced => "print-braced",
+    gripper_air => "gripper-air",
+    gripper_none => "gripper-none",
+    grip_return_at_end => "grip-return-at-end",
 }

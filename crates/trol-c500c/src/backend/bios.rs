@@ -102,16 +102,23 @@ impl Backend for C500cBackend {
     fn save_locations(&mut self) -> BiosResult {
         self.teach_save()
     }
-    fn close(&mut self, _: u8) -> BiosResult {
-        self.no_gripper()
+    fn close(&mut self, force: u8) -> BiosResult {
+        self.grip_command(gripper::GripCall::Close(force))
     }
-    fn open(&mut self, _: u8) -> BiosResult {
-        self.no_gripper()
+    fn open(&mut self, force: u8) -> BiosResult {
+        self.grip_command(gripper::GripCall::Open(force))
     }
-    fn grip(&mut self, _: u8) -> BiosResult {
-        self.no_gripper()
+    fn grip(&mut self, dist: u8) -> BiosResult {
+        self.grip_command(gripper::GripCall::Grip(dist))
+    }
+    fn gripper(&mut self) -> Result<Gripper, BackendError> {
+        self.read_gripper()
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
+        if self.jaws_wait.is_some() {
+            self.clean()?;
+            return self.look_jaws();
+        }
         if self.outstanding.is_none() {
             self.clean()?;
             if let Some(next) = self.queue.pop() {
@@ -123,7 +130,7 @@ impl Backend for C500cBackend {
         self.look()
     }
     fn stands(&mut self) -> Result<bool, BackendError> {
-        Ok(self.outstanding.is_none() && self.queue.is_empty())
+        Ok(self.outstanding.is_none() && self.queue.is_empty() && self.jaws_wait.is_none())
     }
     fn halt(&mut self) -> BiosResult {
         if let Some(why) = &self.broken {
@@ -138,6 +145,7 @@ impl Backend for C500cBackend {
             real::Halted::Standing { at, note } => {
                 let n = self.queue.drop_all();
                 self.outstanding = None;
+                self.jaws_wait = None;
                 self.rests_at(at);
                 if let Some(note) = note {
                     self.note(note);
@@ -149,6 +157,7 @@ impl Backend for C500cBackend {
             real::Halted::NotStopped(why) => {
                 self.queue.drop_all();
                 self.outstanding = None;
+                self.jaws_wait = None;
                 self.broken = Some(format!("Halt: {why}"));
                 Err(BackendError::NotStopped(why))
             }

@@ -27,16 +27,18 @@ use trol_a465::kinematics::Kinematics;
 use trol_controller::real;
 use trol_controller::{ArmReport, Backend, BackendError, BiosResult, PosMode, Target};
 use trol_port::Port;
-use trol_proto::application::{CodeInfo, CodeTable, LocName, Location, Tag};
+use trol_proto::application::{CodeInfo, CodeTable, Gripper, Held, LocName, Location, Tag};
 
 use crate::console::{self, Console, Said};
 use crate::profile::{MotionReturn, Profile};
 use crate::reports::{self, ArmStat, Homing, Known};
 
 mod bios;
+mod gripper;
 mod motion;
 mod teach;
 
+pub use gripper::{JAWS_AT_MM, JAWS_STILL_FOR, JAWS_WITHIN};
 pub use teach::ARRIVE_PULSES;
 
 pub use trol_a465::backend::real::{ARM_POWER, BUSY, NOT_AT_TARGET, UNSUPPORTED};
@@ -210,6 +212,10 @@ pub struct C500cBackend {
     outstanding: Option<Outstanding>,
     queue: real::MotionQueue<Motion>,
     note: Option<String>,
+    /// The gripper ash is set up for, once read.
+    grip_kind: Option<gripper::GripKind>,
+    /// A grip command whose end is still to be seen.
+    jaws_wait: Option<gripper::JawsWait>,
 }
 
 impl std::fmt::Debug for C500cBackend {
@@ -259,6 +265,8 @@ impl C500cBackend {
             outstanding: None,
             queue: real::MotionQueue::new(trol_a465::arm::MOTION_QUEUE),
             note: None,
+            grip_kind: None,
+            jaws_wait: None,
             profile,
         };
         b.send(b"\x05\r\r")?;
@@ -476,6 +484,7 @@ impl C500cBackend {
             let lines = std::mem::take(&mut self.unasked).join(" | ");
             self.queue.drop_all();
             self.outstanding = None;
+            self.jaws_wait = None;
             self.broken = Some(format!(
                 "the C500C said, unasked: {lines}; TROL sends nothing further (check the arm, \
                  then reconnect)"
@@ -491,6 +500,7 @@ impl C500cBackend {
     fn unsure(&mut self, why: String) -> BackendError {
         self.queue.drop_all();
         self.outstanding = None;
+        self.jaws_wait = None;
         self.note(why.clone());
         self.broken = Some(why.clone());
         BackendError::Unsure(why)

@@ -7,6 +7,14 @@ impl C500cBackend {
     /// The gate and the queue, then the motion.
     pub(super) fn motion(&mut self, m: Motion) -> BiosResult {
         self.clean()?;
+        // The arm does not move while the gripper's jaws do (the manual: TROLFinish after a
+        // grip command).
+        if self.jaws_wait.is_some() && self.look_jaws()? {
+            self.note(
+                "refused: the gripper has not ended: call TROLFinish(FINISH_WAIT) first".into(),
+            );
+            return Ok(BUSY);
+        }
         if self.profile.motion_return.is_none() {
             return self.unsettled(
                 "a motion needs to know when ash gives its prompt back: set `motion-return = \
@@ -290,6 +298,7 @@ impl C500cBackend {
     /// `finish`) and reads no other until its prompt.
     pub(super) fn console_busy(&self) -> bool {
         self.outstanding.as_ref().is_some_and(|o| o.prompt_due)
+            || self.jaws_wait.as_ref().is_some_and(|w| w.prompt_due)
     }
 
     /// Read where the arm rests (`w2`), unless it was seen a moment ago ([`FRESH_REST`]).
@@ -306,13 +315,6 @@ impl C500cBackend {
             "a cartesian motion needs the composition order of the WORLD row's Z-Rot, Y-Rot \
              and X-Rot on a C500C, which no public source settles yet",
         )
-    }
-
-    pub(super) fn no_gripper(&mut self) -> BiosResult {
-        self.note(
-            "refused before sending: ash's grip commands take a form TROL does not know yet".into(),
-        );
-        Ok(UNSUPPORTED)
     }
 
     /// A joint motion by `d` degrees: one `joint n,deg` where one joint changes; several

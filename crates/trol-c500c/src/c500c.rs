@@ -18,6 +18,7 @@ use trol_a465::model::joints_to_counts;
 use trol_port::Port;
 
 use crate::reports::{self, ArmStat, Homing, Position};
+use crate::world::{self, Angles};
 
 /// When ash gives its prompt back after a motion command: an open point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,7 +44,7 @@ pub enum ErrorForm {
 /// How `print` shows a precision point (a `ploc` variable): an open point (ash's print
 /// formats for locations are not among its public strings).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PlocPrint {
+pub enum LocPrint {
     /// Its pulses as `w2`'s PULSES row prints them, without the label (assumed; TROL's
     /// reading).
     Row,
@@ -81,11 +82,13 @@ pub struct Switches {
     /// A power loss prints `[test: Lost robot power]`.
     pub power_loss_line: bool,
     /// How `print` shows a precision point.
-    pub ploc_print: PlocPrint,
+    pub loc_print: LocPrint,
     /// The gripper set up.
     pub grip_type: GripType,
     /// When ash gives its prompt back after a grip command.
     pub grip_return: Return,
+    /// How the WORLD row's and a cartesian location's three angles compose.
+    pub world_angles: Angles,
 }
 
 impl Default for Switches {
@@ -98,10 +101,24 @@ impl Default for Switches {
             pendant_holds: false,
             ctrl_c_stops: true,
             power_loss_line: true,
-            ploc_print: PlocPrint::Row,
+            loc_print: LocPrint::Row,
             grip_type: GripType::Servo,
             grip_return: Return::AtStart,
+            world_angles: Angles::Zyx,
         }
+    }
+}
+
+/// The profile that agrees with a controller of these switches (`trol sim --c500c
+/// --print-profile`).
+pub fn matching_profile(sw: &Switches) -> crate::Profile {
+    crate::Profile {
+        motion_return: Some(match sw.motion_return {
+            Return::AtStart => crate::profile::MotionReturn::Start,
+            Return::AtEnd => crate::profile::MotionReturn::End,
+        }),
+        world_angles: Some(sw.world_angles),
+        ..crate::Profile::default()
     }
 }
 
@@ -139,13 +156,17 @@ pub const VARIANTS: &[(&str, &str)] = &[
     ),
     (
         "print-braced",
-        "`print` shows a precision point as `name = {p1, ...}`, not as a row of pulses",
+        "`print` shows a location as `name = {v1, ...}`, not as a row of values",
     ),
     ("gripper-air", "an air gripper: its jaws cannot be read"),
     ("gripper-none", "no gripper type set"),
     (
         "grip-return-at-end",
         "the prompt returns once the gripper's jaws stand",
+    ),
+    (
+        "world-xyz",
+        "the WORLD row's angles compose as Rx(c)·Ry(b)·Rz(a), not Rz(a)·Ry(b)·Rx(c)",
     ),
 ];
 
@@ -181,7 +202,7 @@ pub fn variant(name: &str) -> Option<Switches> {
             ..d
         },
         "print-braced" => Switches {
-            ploc_print: PlocPrint::Braced,
+            loc_print: LocPrint::Braced,
             ..d
         },
         "gripper-air" => Switches {
@@ -194,6 +215,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "grip-return-at-end" => Switches {
             grip_return: Return::AtEnd,
+            ..d
+        },
+        "world-xyz" => Switches {
+            world_angles: Angles::Xyz,
             ..d
         },
         _ => return None,
@@ -217,8 +242,10 @@ enum Var {
     Int,
     Float,
     Str,
-    /// A cartesian location: x, y, z, then the three angles (taught by `here`).
-    Cloc(Option<[f64; 6]>),
+    /// A cartesian location: x, y, z (mm), then the three angles (degrees) as ash prints
+    /// them (taught by `here`, or `set`), and whether it is valid to move to (`here`, or
+    /// `setvalid` after `set`).
+    Cloc(Option<[f64; 6]>, bool),
     /// A precision point: the pulses of axes 1 to 6.
     Ploc(Option<[i64; 6]>),
 }
@@ -229,13 +256,13 @@ impl Var {
             Var::Int => "int",
             Var::Float => "float",
             Var::Str => "string",
-            Var::Cloc(_) => "cloc",
+            Var::Cloc(..) => "cloc",
             Var::Ploc(_) => "ploc",
         }
     }
     fn taught(&self) -> bool {
         match self {
-            Var::Cloc(v) => v.is_some(),
+            Var::Cloc(v, valid) => v.is_some() && *valid,
             Var::Ploc(v) => v.is_some(),
             _ => true,
         }
@@ -251,14 +278,19 @@ enum Ask {
     Erase(String),
     /// `Variable 'NAME' not found.  -- create it?` (`here` of a name ash does not have).
     Create(String),
+    /// `Set the valid flag anyway (y/n) ?`
+    Valid(String),
     /// `list`'s pager: the rows still to print.
     Page(Vec<String>),
 }
 
-/// Whether `name` is a name ash takes (`Names must consist of 1 to 28 alphanumeric
-/// characters`).
+/// Whether `name` is a variable name ash takes: 1 to 28 letters, digits and `_`, a letter
+/// first (assumed: RAPL-3's identifiers; ash's own `Names must consist of 1 to 28
+/// alphanumeric characters (no '/''s)` reads as its applications' names).
 fn ash_name(name: &str) -> bool {
-    (1..=28).contains(&name.len()) && name.bytes().all(|b| b.is_ascii_alphanumeric())
+    (1..=28).contains(&name.len())
+        && name.as_bytes()[0].is_ascii_alphabetic()
+        && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_')
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -540,9 +572,14 @@ impl C500c {
                 ("y" | "yes", Ask::Erase(name)) => {
                     self.vars.remove(&name);
                 }
+                ("y" | "yes", Ask::Valid(name)) => {
+                    if let Some(Var::Cloc(v, _)) = self.vars.get(&name).cloned() {
+                        self.vars.insert(name, Var::Cloc(v, true));
+                    }
+                }
                 ("y" | "yes", Ask::Create(name)) => {
                     // Assumed: created as a cartesian location, taught where the arm is.
-                    self.vars.insert(name.clone(), Var::Cloc(None));
+                    self.vars.insert(name.clone(), Var::Cloc(None, true));
                     self.here(&name);
                 }
                 ("n" | "no", _) => {}
@@ -667,7 +704,13 @@ impl C500c {
                     return;
                 }
             }
-            (Shell::Ash, "joint" | "home" | "ready" | "move") => {
+            (Shell::Ash, "set" | "!") => self.set_var(args),
+            (Shell::Ash, "setvalid") => {
+                if self.set_valid(args) {
+                    return;
+                }
+            }
+            (Shell::Ash, "joint" | "home" | "ready" | "move" | "moves") => {
                 if self.motion(word, args) {
                     return;
                 }
@@ -682,7 +725,7 @@ impl C500c {
     fn new_var(&mut self, args: &str) {
         let (var, name) = match args.as_bytes().first() {
             Some(b'#') => (Var::Ploc(None), &args[1..]),
-            Some(b'_') => (Var::Cloc(None), &args[1..]),
+            Some(b'_') => (Var::Cloc(None, false), &args[1..]),
             Some(b'%') => (Var::Float, &args[1..]),
             Some(b'$') => (Var::Str, &args[1..]),
             _ => (Var::Int, args),
@@ -736,7 +779,7 @@ impl C500c {
         let q = self.arm.position(t, Which::Actual);
         let value = match self.vars[&name] {
             Var::Ploc(_) => Var::Ploc(Some(joints_to_counts(&q).map(i64::from))),
-            Var::Cloc(_) => Var::Cloc(Some(self.arm.kinematics().fk_xyzypr(&q))),
+            Var::Cloc(..) => Var::Cloc(Some(self.world(&q)), true),
             _ => {
                 self.line("Not a location variable.");
                 return false;
@@ -752,34 +795,96 @@ impl C500c {
             return;
         };
         match self.vars[&name].clone() {
-            Var::Ploc(None) | Var::Cloc(None) => self.line("Location has not been taught"),
+            Var::Ploc(None) | Var::Cloc(None, _) => self.line("Location has not been taught"),
             Var::Ploc(Some(p)) => {
-                let text = match self.sw.ploc_print {
-                    PlocPrint::Row => format!(
+                let text = match self.sw.loc_print {
+                    LocPrint::Row => format!(
                         "        {:+10} {:+10} {:+10} {:+10} {:+10} {:+10}",
                         p[0], p[1], p[2], p[3], p[4], p[5]
                     ),
-                    PlocPrint::Braced => {
+                    LocPrint::Braced => {
                         format!("{name} = {{{}}}", p.map(|v| v.to_string()).join(", "))
                     }
                 };
                 self.line(&text);
             }
-            Var::Cloc(Some(w)) => {
-                let text = format!(
-                    "        {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3}",
-                    w[0],
-                    w[1],
-                    w[2],
-                    w[3].to_degrees(),
-                    w[4].to_degrees(),
-                    w[5].to_degrees()
-                );
+            Var::Cloc(Some(w), _) => {
+                let text = match self.sw.loc_print {
+                    LocPrint::Row => format!(
+                        "        {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3} {:+10.3}",
+                        w[0], w[1], w[2], w[3], w[4], w[5]
+                    ),
+                    LocPrint::Braced => {
+                        format!("{name} = {{{}}}", w.map(|v| format!("{v:.3}")).join(", "))
+                    }
+                };
                 self.line(&text);
             }
             Var::Int | Var::Float => self.line(&format!("{name} = 0")),
             Var::Str => self.line(&format!("{name} = \"\"")),
         }
+    }
+
+    /// `set _NAME = {x, y, z, a, b, c[, e1, e2]}`: a cartesian location's values, not valid
+    /// until `setvalid` (`help setvalid`). Other constants are not played.
+    fn set_var(&mut self, args: &str) {
+        let Some((lhs, rhs)) = args.split_once('=') else {
+            self.line("Missing '='");
+            return;
+        };
+        let Some(name) = lhs.trim().strip_prefix('_') else {
+            self.line("error: unimplemented.");
+            return;
+        };
+        let Some(inner) = rhs
+            .trim()
+            .strip_prefix('{')
+            .and_then(|r| r.strip_suffix('}'))
+        else {
+            self.line("error: missing value(s).");
+            return;
+        };
+        let v: Result<Vec<f64>, _> = inner.split(',').map(|w| w.trim().parse::<f64>()).collect();
+        let v = match v {
+            Ok(v) if (v.len() == 6 || v.len() == 8) && v.iter().all(|x| x.is_finite()) => v,
+            _ => {
+                self.line("error: missing value(s).");
+                return;
+            }
+        };
+        match self.vars.get(name) {
+            Some(Var::Cloc(..)) => {
+                let w = [v[0], v[1], v[2], v[3], v[4], v[5]];
+                self.vars
+                    .insert(name.to_string(), Var::Cloc(Some(w), false));
+            }
+            Some(_) => self.line("error: type mismatch."),
+            // Assumed: ash asks to create it (`Variable '...' not found. -- create it?`);
+            // played as not found.
+            None => self.line("error: variable not found."),
+        }
+    }
+
+    /// `setvalid NAME`: asks first (`help setvalid`: USE EXTREME CAUTION). True when the
+    /// question waits.
+    fn set_valid(&mut self, args: &str) -> bool {
+        let Some(name) = self.var(args) else {
+            return false;
+        };
+        if !matches!(self.vars[&name], Var::Cloc(Some(_), _)) {
+            self.line("Not a location variable.");
+            return false;
+        }
+        self.line("WARNING: moving to an incorrect location can damage the robot.");
+        self.out
+            .extend_from_slice(b"Set the valid flag anyway (y/n) ? ");
+        self.asking = Some(Ask::Valid(name));
+        true
+    }
+
+    /// Where the tool is, as the WORLD row prints it (ash's tool transform is the null one).
+    fn world(&self, q: &[f64; 6]) -> [f64; 6] {
+        world::to_ash(&self.arm.kinematics().fk(q), self.sw.world_angles)
     }
 
     /// `erase NAME`: asks first. True when the question waits.
@@ -859,6 +964,46 @@ impl C500c {
     /// untaught.
     pub fn set_ploc(&mut self, name: &str, pulses: Option<[i64; 6]>) {
         self.vars.insert(name.to_string(), Var::Ploc(pulses));
+    }
+
+    /// Teach a cartesian location as the pendant would: the flange at `pose` (TROL's x y z
+    /// yaw pitch roll), or untaught.
+    pub fn set_cloc(&mut self, name: &str, pose: Option<[f64; 6]>) {
+        let v = pose.map(|p| {
+            world::to_ash(
+                &trol_a465::kinematics::Pose::from_xyzypr(p),
+                self.sw.world_angles,
+            )
+        });
+        self.vars
+            .insert(name.to_string(), Var::Cloc(v, v.is_some()));
+    }
+
+    /// The application's variables from a TROL locations file's entries (the lab's `.v3`
+    /// file): a cartesian location as a `cloc`, a precision point (`#NAME`) as a `ploc`;
+    /// joint locations have no ash form. Names in lower case.
+    pub fn load_variables(
+        &mut self,
+        entries: &[(String, trol_a465::arm::Stored)],
+    ) -> Result<usize, String> {
+        use trol_a465::arm::Stored;
+        for (name, loc) in entries {
+            let var = name.trim_start_matches('#').to_ascii_lowercase();
+            if !ash_name(&var) {
+                return Err(format!("{name}: not a name ash takes"));
+            }
+            match loc {
+                Stored::Cart(v) => self.set_cloc(&var, Some(*v)),
+                Stored::Prec(c) => self.set_ploc(&var, Some(c.map(i64::from))),
+                Stored::Joints(_) => {
+                    return Err(format!(
+                        "{name}: a joint location, which ash has no form for"
+                    ));
+                }
+            }
+        }
+        self.saved = self.vars.clone();
+        Ok(entries.len())
     }
 
     /// `griptype_set [0|none|1|air|2|servo]`: with no argument, what is set.
@@ -963,20 +1108,13 @@ impl C500c {
             Which::Commanded
         };
         let q = self.arm.position(t, which);
-        let w = self.arm.kinematics().fk_xyzypr(&q);
+        let world = self.world(&q);
         let p = Position {
             // The A465's encoder counts (assumed; the pulses per degree of an A465 on a
             // C500C are an open point).
             pulses: joints_to_counts(&q).map(i64::from),
             joints_deg: q.map(f64::to_degrees),
-            world: [
-                w[0],
-                w[1],
-                w[2],
-                w[3].to_degrees(),
-                w[4].to_degrees(),
-                w[5].to_degrees(),
-            ],
+            world,
         };
         for l in reports::print_position(&p, actual, true) {
             self.line(&l);
@@ -1017,17 +1155,26 @@ impl C500c {
                 }
                 self.arm.ready(t)
             }
-            "move" => {
+            "move" | "moves" => {
                 let Some(name) = self.var(args) else {
                     return false;
                 };
+                let straight = word == "moves";
                 match self.vars[&name] {
                     Var::Ploc(Some(p)) => {
                         self.arm
-                            .move_to(Target::Prec(p.map(|v| v as f64)), false, t)
+                            .move_to(Target::Prec(p.map(|v| v as f64)), straight, t)
                     }
-                    Var::Cloc(Some(w)) => self.arm.move_to(Target::Cart(w), false, t),
-                    Var::Ploc(None) | Var::Cloc(None) => {
+                    Var::Cloc(Some(w), true) => {
+                        let pose = world::from_ash(&w, self.sw.world_angles);
+                        self.arm
+                            .move_to(Target::Cart(pose.to_xyzypr()), straight, t)
+                    }
+                    Var::Cloc(Some(_), false) => {
+                        self.line("Invalid location flags");
+                        return false;
+                    }
+                    Var::Ploc(None) | Var::Cloc(None, _) => {
                         self.error("Location has not been taught");
                         return false;
                     }

@@ -7,6 +7,7 @@
 //!   texts;
 //! - [`probe`]: first contact that only reads, every byte recorded;
 //! - [`profile`]: what only the arm settles, one TOML file per controller;
+//! - [`world`]: the WORLD row's and a cartesian location's angles, in each reading;
 //! - [`backend`]: the robot backend behind the PCP server (`c500c:DEVICE`), on the shared
 //!   core for real controllers;
 //! - [`c500c`]: a simulated C500C (`trol sim --c500c`), with a switch for each point the
@@ -21,6 +22,7 @@ pub mod console;
 pub mod probe;
 pub mod profile;
 pub mod reports;
+pub mod world;
 
 pub use backend::{C500C_CODES, C500cBackend, C500cError};
 pub use c500c::C500c;

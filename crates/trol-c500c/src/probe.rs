@@ -288,6 +288,90 @@ pub fn motion_return_step(port: &mut dyn Port, app: &str, wait: Duration) -> Sup
     }
 }
 
+/// What the step `world-angles` saw (`trol c500c step world-angles`).
+#[derive(Debug, Default)]
+pub struct AnglesRead {
+    /// The commands, the transcript and the findings, as first contact's.
+    pub contact: Contact,
+    /// The reading of the WORLD row's angles that puts the flange where TROL's kinematics
+    /// put it from the JOINTS row, where exactly one does.
+    pub angles: Option<crate::world::Angles>,
+}
+
+/// The step `world-angles`, which only reads: `w2` where the arm stands, and which reading
+/// of the WORLD row's Z-Rot, Y-Rot and X-Rot puts the flange where TROL's A465 kinematics
+/// put it from the JOINTS row (within 0.5 mm and 0.1 degrees), where the other is more than
+/// a degree off. Where both agree (the arm stands where the readings coincide, as at READY)
+/// or neither does (a tool or base transform set in ash), it settles nothing and says so.
+pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> AnglesRead {
+    use crate::world::{self, Angles};
+    let mut p = Probe {
+        port,
+        console: Console::default(),
+        contact: Contact::default(),
+        wait,
+    };
+    let mut settled = None;
+    let r = (|| -> Result<(), String> {
+        let shell = p.attach()?;
+        let started = p.enter_ash(&shell, app)?;
+        let read = read_at(&mut p, app, "w2")
+            .and_then(|l| reports::position(&l, true).map_err(|e| e.to_string()));
+        if started {
+            p.leave_ash()?;
+        }
+        let pos = read?;
+        let flange = trol_a465::kinematics::Kinematics::new([0.0; 6])
+            .fk(&pos.joints_deg.map(f64::to_radians));
+        let gaps: Vec<(Angles, f64, f64)> = Angles::ALL
+            .iter()
+            .map(|&a| {
+                let (mm, deg) = world::gap(&world::from_ash(&pos.world, a), &flange);
+                (a, mm, deg)
+            })
+            .collect();
+        for (a, mm, deg) in &gaps {
+            p.contact.findings.push(format!(
+                "read as `{}`, the WORLD row is {mm:.2} mm and {deg:.2} degrees from TROL's \
+                 flange",
+                a.word()
+            ));
+        }
+        let agree: Vec<Angles> = gaps
+            .iter()
+            .filter(|(_, mm, deg)| *mm <= 0.5 && *deg <= 0.1)
+            .map(|g| g.0)
+            .collect();
+        let apart = gaps.iter().any(|(_, _, deg)| *deg > 1.0);
+        match agree[..] {
+            [a] if apart => {
+                p.contact
+                    .findings
+                    .push(format!("world-angles: {} (settled)", a.word()));
+                settled = Some(a);
+            }
+            [_, _] => p.contact.findings.push(
+                "both readings agree where the arm stands: turn joint 4 and joint 5 by 20 \
+                 degrees or more (the pendant, or TROLJoint), then run the step again"
+                    .into(),
+            ),
+            _ => p.contact.findings.push(
+                "neither reading puts the flange where TROL's kinematics do: ash has a tool or \
+                 base transform set (`tool`, `base`), or its units are not millimetres"
+                    .into(),
+            ),
+        }
+        Ok(())
+    })();
+    if let Err(e) = r {
+        p.contact.findings.push(format!("stopped: {e}"));
+    }
+    AnglesRead {
+        contact: p.contact,
+        angles: settled,
+    }
+}
+
 /// A command at ash's prompt that must print nothing (a setting, a motion): its lines, or
 /// the refusal.
 fn quiet(p: &mut Probe, app: &str, cmd: &str) -> Result<(), String> {
@@ -478,6 +562,49 @@ mod tests {
             c.transcript.text()
         );
         assert!(!f.contains("stopped"), "{f}");
+    }
+
+    /// The step `world-angles` on a simulated C500C of each reading, the arm at `q`: it
+    /// reads only, settles the twin's reading where the arm stands where they differ, and
+    /// nothing where they coincide.
+    #[test]
+    fn the_world_angles_step_reads_only_and_settles_only_where_it_can_tell() {
+        use crate::world::Angles;
+        let turned = [0.3, -0.2, 0.4, 0.5, -0.6, 0.2];
+        for (angles, q, want) in [
+            (Angles::Zyx, turned, Some(Angles::Zyx)),
+            (Angles::Xyz, turned, Some(Angles::Xyz)),
+            (Angles::Zyx, [0.0; 6], None),
+        ] {
+            let sw = Switches {
+                world_angles: angles,
+                ..Switches::default()
+            };
+            let (mut host, ctl) = trol_port::memory::pair(None);
+            let mut twin = C500c::new(sw, true, 10.0);
+            twin.move_by_hand(q);
+            let unit = Arc::new(Mutex::new(twin));
+            let stop = Arc::new(AtomicBool::new(false));
+            let t = {
+                let (unit, stop) = (unit.clone(), stop.clone());
+                std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
+            };
+            let s = world_angles_step(&mut host, "test", Duration::from_secs(3));
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            let _ = t.join();
+            assert_eq!(
+                s.angles, want,
+                "{angles:?} at {q:?}: {:?}",
+                s.contact.findings
+            );
+            let typed = unit.lock().unwrap().received().to_vec();
+            assert!(
+                typed
+                    .iter()
+                    .all(|l| ["", "crosver", "ash test", "w2", "exit", "y"].contains(&l.as_str())),
+                "{typed:?}"
+            );
+        }
     }
 
     /// The simulated C500C of `sw` in real time (the step compares the prompt's time with

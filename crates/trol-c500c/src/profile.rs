@@ -7,6 +7,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::world::Angles;
+
 /// When ash gives its prompt back after a motion command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -34,6 +36,9 @@ pub struct Profile {
     /// How long past a motion's planned end its end is looked for before it is given up as
     /// unsure, s (assumed).
     pub end_margin_s: u64,
+    /// How the WORLD row's and a cartesian location's three angles compose (unset:
+    /// cartesian motions are refused; `trol c500c step world-angles` reads it off the arm).
+    pub world_angles: Option<Angles>,
 }
 
 impl Default for Profile {
@@ -44,6 +49,7 @@ impl Default for Profile {
             motion_return: None,
             settle_ms: 300,
             end_margin_s: 10,
+            world_angles: None,
         }
     }
 }
@@ -124,8 +130,10 @@ mod tests {
     #[test]
     fn keys_are_checked_and_unknown_ones_refused() {
         assert_eq!(Profile::parse("").unwrap(), Profile::default());
-        let p = Profile::parse("motion-return = \"end\"\napp = \"cell\"\n").unwrap();
+        let p = Profile::parse("motion-return = \"end\"\napp = \"cell\"\nworld-angles = \"xyz\"\n")
+            .unwrap();
         assert_eq!(p.motion_return, Some(MotionReturn::End));
+        assert_eq!(p.world_angles, Some(Angles::Xyz));
         assert_eq!(p.app, "cell");
         assert_eq!(Profile::parse(&p.to_toml()).unwrap(), p);
         for bad in [
@@ -134,6 +142,7 @@ mod tests {
             "app = \"a b\"",
             "settle-ms = 0",
             "angles = \"zyx\"",
+            "world-angles = \"yzx\"",
         ] {
             assert!(Profile::parse(bad).is_err(), "{bad}");
         }

@@ -287,6 +287,8 @@ pub const ERRORS: &[(&str, Known)] = &[
     ),
     ("Collision error on axis $1", Known::Servo),
     ("Excessive lag error on axis $1", Known::Servo),
+    ("Invalid location flags", Known::Parse),
+    ("Location has not been taught", Known::Parse),
 ];
 
 /// The known error a line carries, wherever ash puts it in the line (how ash prefixes a

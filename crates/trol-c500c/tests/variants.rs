@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use trol::{PosMode, Robot, Tag};
 use trol_c500c::c500c::{self, Return, Switches};
-use trol_c500c::profile::{MotionReturn, Profile};
+use trol_c500c::profile::{Angles, MotionReturn, Profile};
 use trol_c500c::{C500C_CODES, C500c, C500cBackend, backend};
 use trol_controller::Pcp;
 use trol_port::memory;
@@ -90,11 +90,16 @@ fn profile(ret: Option<MotionReturn>) -> Profile {
     }
 }
 
-fn matching(sw: &Switches) -> Option<MotionReturn> {
-    Some(match sw.motion_return {
-        Return::AtStart => MotionReturn::Start,
-        Return::AtEnd => MotionReturn::End,
-    })
+/// A profile that disagrees with the controller on every point it states.
+fn contrary_profile(sw: &Switches) -> Profile {
+    Profile {
+        motion_return: contrary(sw),
+        world_angles: Some(match sw.world_angles {
+            Angles::Zyx => Angles::Xyz,
+            Angles::Xyz => Angles::Zyx,
+        }),
+        ..Profile::default()
+    }
 }
 
 fn contrary(sw: &Switches) -> Option<MotionReturn> {
@@ -160,7 +165,7 @@ fn run_variant(name: &str) {
 
     // The profile that agrees: the motion works, unless the pendant holds the control, which
     // is said with its code.
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.speed(100).unwrap();
     if sw.pendant_holds {
         let e = r.robot.joint(1, 0.3).unwrap_err();
@@ -185,6 +190,7 @@ fn run_variant(name: &str) {
     assert!(close(r.joints()[0], start + 0.2), "{name}: back to back");
     teach_and_return(&mut r, &sw, name);
     grip_round(&mut r, &sw, name);
+    cart_round(&mut r, &sw, name);
     // A joint limit: refused with its code, nothing moves.
     let before = r.joints();
     let e = r.robot.joint(2, 3.0).unwrap_err();
@@ -212,7 +218,7 @@ fn run_variant(name: &str) {
 
     // The contrary profile: right, or UNSURE with nothing further sent; never a false
     // success.
-    let mut r = rig(sw.clone(), true, profile(contrary(&sw)));
+    let mut r = rig(sw.clone(), true, contrary_profile(&sw));
     r.robot.speed(100).unwrap();
     if !one_motion(&mut r, name) {
         let e = r.robot.joint(1, 0.1).unwrap_err();
@@ -250,6 +256,31 @@ fn run_variant(name: &str) {
                 unmoved(&taught, &at) || unmoved(&away, &at) || r.moving(),
                 "{name}: {e} with the arm at {at:?}"
             );
+            return;
+        }
+    }
+    // Cartesian motions under the other reading of the WORLD row's angles: a pose both
+    // readings agree on goes right; one they differ on is refused, the arm unmoved (the
+    // WORLD row disagrees where the arm stands, or TROL has not seen it agree anywhere).
+    use std::f64::consts::FRAC_PI_2;
+    for target in [
+        [400.0, 0.0, 240.0, 0.0, FRAC_PI_2, 0.0],
+        [420.0, -30.0, 200.0, 0.3, 1.3, 0.2],
+    ] {
+        let before = r.joints();
+        let done = r
+            .robot
+            .move_ii(&trol::Location::Cart(target.to_vec()), false)
+            .and_then(|_| r.robot.finish());
+        match done {
+            Ok(()) => assert!(self::at(&r, &target), "{name}: success at {:?}", tcp(&r)),
+            Err(e) => {
+                assert_ne!(e.code().0, 0, "{name}");
+                assert!(
+                    unmoved(&before, &r.joints()),
+                    "{name}: {e}, and the arm moved"
+                );
+            }
         }
     }
 }
@@ -260,7 +291,7 @@ fn run_variant(name: &str) {
 fn teach_and_return(r: &mut Rig, sw: &Switches, name: &str) {
     let home = r.joints();
     let taught = r.robot.here("#pick1", Tag::Prec);
-    if sw.ploc_print != c500c::PlocPrint::Row {
+    if sw.loc_print != c500c::LocPrint::Row {
         let e = taught.unwrap_err();
         assert_eq!(e.code(), TROL_ERR_ROBOT_UNSURE, "{name}: {e}");
         assert!(unmoved(&home, &r.joints()), "{name}");
@@ -270,7 +301,7 @@ fn teach_and_return(r: &mut Rig, sw: &Switches, name: &str) {
         assert!(unmoved(&home, &r.joints()), "{name}");
         assert_eq!(r.received().len(), before, "{name}: sent after UNSURE");
         // The rest of the run needs a fresh session.
-        *r = rig(sw.clone(), true, profile(matching(sw)));
+        *r = rig(sw.clone(), true, c500c::matching_profile(sw));
         r.robot.speed(100).unwrap();
         return;
     }
@@ -317,6 +348,111 @@ fn teach_and_return(r: &mut Rig, sw: &Switches, name: &str) {
         moves, 1,
         "{name}: a move to a name ash no longer has was sent"
     );
+}
+
+/// Where the twin's tool is (TROL's tool is the null one here): TROL's x y z yaw pitch roll.
+fn tcp(r: &Rig) -> [f64; 6] {
+    trol_a465::kinematics::Kinematics::new([0.0; 6]).fk_xyzypr(&r.joints())
+}
+
+/// The tool at `v` (mm, and 0.1 degree: the end rule's tolerance).
+fn at(r: &Rig, v: &[f64; 6]) -> bool {
+    use trol_a465::kinematics::Pose;
+    let (mm, deg) = trol_c500c::world::gap(&Pose::from_xyzypr(tcp(r)), &Pose::from_xyzypr(*v));
+    mm < 0.5 && deg < 0.1
+}
+
+/// Cartesian motions as the manual's pick example makes them, from READY: a joint-
+/// interpolated move above the place, straight moves, a jog, a cartesian location taught
+/// with Here and approached, departed from and moved to by name. Each ends with the tool
+/// where TROL's kinematics put the end.
+fn cart_round(r: &mut Rig, sw: &Switches, name: &str) {
+    use std::f64::consts::FRAC_PI_2;
+    use trol::Location;
+    let down = [400.0, 0.0, 240.0, 0.0, FRAC_PI_2, 0.0];
+    if sw.loc_print != c500c::LocPrint::Row {
+        // TROL reads its own location back before moving, and cannot: UNSURE, unmoved.
+        let before = r.joints();
+        let e = r
+            .robot
+            .move_ii(&Location::Cart(down.to_vec()), false)
+            .unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ROBOT_UNSURE, "{name}: {e}");
+        assert!(unmoved(&before, &r.joints()), "{name}");
+        assert!(
+            !r.received().iter().any(|l| l.starts_with("move")),
+            "{name}"
+        );
+        *r = rig(sw.clone(), true, c500c::matching_profile(sw));
+        r.robot.speed(100).unwrap();
+        return;
+    }
+    let go = |r: &mut Rig, what: &str, res: trol::Result<()>| {
+        res.and_then(|_| r.robot.finish())
+            .unwrap_or_else(|e| panic!("{name}: {what}: {e}"));
+    };
+    let res = r.robot.move_ii(&Location::Cart(down.to_vec()), false);
+    go(r, "MoveII above the place", res);
+    assert!(at(r, &down), "{name}: at {:?}", tcp(r));
+    // A pose both readings of the angles agree on, then one where they differ: TROL reads
+    // the WORLD row there, and from then on moves to such poses too.
+    let turned = [420.0, -30.0, 200.0, 0.3, 1.3, 0.2];
+    let res = r.robot.move_ii(&Location::Cart(turned.to_vec()), true);
+    match res {
+        Err(e) => {
+            assert_eq!(e.code().0, backend::UNSETTLED, "{name}: {e}");
+            // A wrist joint turned: the WORLD row now tells the readings apart.
+            let res = r.robot.joint(4, 0.3);
+            go(r, "Joint 4", res);
+            let res = r.robot.move_ii(&Location::Cart(turned.to_vec()), true);
+            go(r, "MoveII straight, turned", res);
+        }
+        Ok(()) => go(r, "MoveII straight, turned", Ok(())),
+    }
+    assert!(at(r, &turned), "{name}: at {:?}", tcp(r));
+    let res = r.robot.jog(&[0.0, 20.0, -10.0], true);
+    go(r, "Jog", res);
+    let mut jogged = turned;
+    jogged[1] += 20.0;
+    jogged[2] -= 10.0;
+    assert!(at(r, &jogged), "{name}: at {:?}", tcp(r));
+    r.robot
+        .here("spot", Tag::Cart)
+        .unwrap_or_else(|e| panic!("{name}: Here: {e}"));
+    let res = r.robot.depart(&[-30.0, 0.0, 0.0, 0.0, 0.0, 0.0], true);
+    go(r, "Depart", res);
+    assert!(!at(r, &jogged), "{name}");
+    let res = r
+        .robot
+        .appro("spot", &[-10.0, 0.0, 0.0, 0.0, 0.0, 0.0], false);
+    go(r, "Appro", res);
+    use trol_a465::kinematics::Pose;
+    let near = Pose::from_xyzypr(jogged)
+        .then(&Pose::from_xyzypr([-10.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+        .to_xyzypr();
+    assert!(at(r, &near), "{name}: at {:?}, not {near:?}", tcp(r));
+    let res = r.robot.move_to("spot", true);
+    go(r, "Move spot", res);
+    assert!(at(r, &jogged), "{name}: at {:?}", tcp(r));
+    let listed = r.robot.locations().unwrap();
+    let spot = listed
+        .iter()
+        .find(|(n, _)| n == "spot")
+        .unwrap_or_else(|| panic!("{name}: {listed:?}"));
+    let v = spot.1.to_array6();
+    assert!(
+        (0..3).all(|j| (v[j] - jogged[j]).abs() < 0.1),
+        "{name}: listed {v:?}"
+    );
+    r.robot.delete_location("spot").unwrap();
+    // Back to READY's joints for what follows, one joint at a time.
+    for j in (1..=6u16).rev() {
+        let q = r.joints()[j as usize - 1];
+        if q.abs() > 1e-4 {
+            let res = r.robot.joint(j, -q);
+            go(r, "back", res);
+        }
+    }
 }
 
 /// The gripper as the manual uses it: Grip, Close and Open, each with its Finish; on a servo
@@ -402,6 +538,7 @@ each! {
     gripper_air => "gripper-air",
     gripper_none => "gripper-none",
     grip_return_at_end => "grip-return-at-end",
+    world_xyz => "world-xyz",
 }
 
 /// Not homed at power-on: a motion is refused with BIOS_NOT_HOMED and nothing is sent;
@@ -409,7 +546,7 @@ each! {
 #[test]
 fn home_is_success_only_once_armstat_says_homed() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), false, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), false, c500c::matching_profile(&sw));
     let e = r.robot.joint(1, 0.3).unwrap_err();
     assert_eq!(e.code().0, trol_a465::arm::code::NOT_HOMED, "{e}");
     assert!(!r.received().iter().any(|l| l.starts_with("joint")));
@@ -426,7 +563,7 @@ fn power_lost_mid_motion_is_never_success() {
     for name in ["default", "power-loss-silent", "return-at-end"] {
         let sw = c500c::variant(name).unwrap();
         // In real time, as TROL plans it: a motion of about 1.6 s, cut well before its end.
-        let mut r = rig_at(sw.clone(), true, profile(matching(&sw)), 1.0);
+        let mut r = rig_at(sw.clone(), true, c500c::matching_profile(&sw), 1.0);
         r.robot.speed(20).unwrap();
         r.robot.joint(1, 1.0).unwrap();
         std::thread::sleep(Duration::from_millis(300));
@@ -448,7 +585,7 @@ fn power_lost_mid_motion_is_never_success() {
 #[test]
 fn an_unasked_line_makes_the_next_call_unsure() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.unit.lock().unwrap().say("[test: Caught SIGABRT]");
     std::thread::sleep(Duration::from_millis(50));
     let sent = r.received().len();
@@ -465,7 +602,7 @@ fn an_unasked_line_makes_the_next_call_unsure() {
 fn a_collision_ends_the_motion_with_its_error_and_drops_the_queue() {
     for name in ["default", "return-at-end", "error-bracketed"] {
         let sw = c500c::variant(name).unwrap();
-        let mut r = rig_at(sw.clone(), true, profile(matching(&sw)), 1.0);
+        let mut r = rig_at(sw.clone(), true, c500c::matching_profile(&sw), 1.0);
         r.robot.speed(20).unwrap();
         r.robot.joint(1, 1.0).unwrap();
         r.robot.joint(1, 0.5).unwrap();
@@ -491,7 +628,7 @@ fn a_collision_ends_the_motion_with_its_error_and_drops_the_queue() {
 #[test]
 fn ma_after_a_move_by_hand_ends_where_asked() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.speed(100).unwrap();
     r.robot.joint(1, 0.2).unwrap();
     r.robot.finish().unwrap();
@@ -510,7 +647,7 @@ fn ma_after_a_move_by_hand_ends_where_asked() {
 #[test]
 fn several_joints_never_go_as_a_series() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     let q0 = r.joints();
     let mut q = q0;
     q[2] += 0.2;
@@ -520,6 +657,18 @@ fn several_joints_never_go_as_a_series() {
     let sent = r.received().len();
     let e = r.robot.ma(&[0.1, 0.1, 0.1, 0.0, 0.0, 0.0]).unwrap_err();
     assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
+    assert!(!r.received()[sent..].iter().any(|l| l.starts_with("joint")));
+    // Without `world-angles` a cartesian motion is refused too, before anything is typed.
+    let sw = Switches::default();
+    let mut r = rig(
+        sw.clone(),
+        true,
+        Profile {
+            world_angles: None,
+            ..c500c::matching_profile(&sw)
+        },
+    );
+    let sent = r.received().len();
     let e = r
         .robot
         .move_ii(
@@ -528,7 +677,7 @@ fn several_joints_never_go_as_a_series() {
         )
         .unwrap_err();
     assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
-    assert!(!r.received()[sent..].iter().any(|l| l.starts_with("joint")));
+    assert_eq!(r.received()[sent..].len(), 0, "{:?}", &r.received()[sent..]);
 }
 
 /// A trajectory's one waypoint goes at the speed setting: one whose time is shorter than
@@ -539,7 +688,7 @@ fn several_joints_never_go_as_a_series() {
 #[test]
 fn a_trajectory_faster_than_the_speed_setting_is_refused_unsent() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.speed(20).unwrap();
     let q0 = r.joints();
     let mut far = q0;
@@ -586,7 +735,7 @@ fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
             let _ = c500c::serve(Box::new(ctl), unit, stop);
         })
     };
-    let mut b = C500cBackend::connect(Box::new(host), profile(matching(&sw)), None).unwrap();
+    let mut b = C500cBackend::connect(Box::new(host), c500c::matching_profile(&sw), None).unwrap();
     // However busy the machine, the sighting stands (no wall-clock bound in the test).
     b.set_seen_for(Duration::from_secs(600));
     let finish = |b: &mut C500cBackend| {
@@ -630,7 +779,7 @@ fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
 #[test]
 fn points_taught_on_the_pendant_are_listed_and_reached() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.speed(100).unwrap();
     let target = [0.3, -0.2, 0.4, 0.1, -0.3, 0.2];
     let pulses = trol_a465::model::joints_to_counts(&target).map(i64::from);
@@ -670,19 +819,22 @@ fn points_taught_on_the_pendant_are_listed_and_reached() {
     assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
 }
 
-/// Cartesian names and straight moves need the WORLD row's angle order, and Define of a
-/// precision point has no ash form: each refused before anything is typed.
+/// Joint locations, motions to a precision point's values, names ash does not take and
+/// Define have no ash form: each refused before anything is typed.
 #[test]
 fn what_ash_cannot_be_asked_safely_is_refused_unsent() {
     let sw = Switches::default();
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.here("#p1", Tag::Prec).unwrap();
     let typed = r.received().len();
-    let e = r.robot.here("spot", Tag::Cart).unwrap_err();
-    assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
-    let e = r.robot.move_to("#p1", true).unwrap_err();
-    assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
-    let e = r.robot.here("#a_b", Tag::Prec).unwrap_err();
+    let e = r.robot.here("spot", Tag::Joint).unwrap_err();
+    assert_eq!(e.code().0, backend::UNSUPPORTED, "{e}");
+    let e = r
+        .robot
+        .move_ii(&trol::Location::Prec(vec![0; 6]), false)
+        .unwrap_err();
+    assert_eq!(e.code().0, backend::UNSUPPORTED, "{e}");
+    let e = r.robot.here("#1ab", Tag::Prec).unwrap_err();
     assert_eq!(e.code().0, trol_a465::arm::code::BAD_ARGUMENT, "{e}");
     let loc = trol::Location::Prec(vec![0; 6]);
     let e = r.robot.define("#p2", &loc).unwrap_err();
@@ -698,7 +850,7 @@ fn a_move_that_ends_short_of_the_point_is_not_success() {
         motion_return: Return::AtEnd,
         ..Switches::default()
     };
-    let mut r = rig(sw.clone(), true, profile(matching(&sw)));
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.robot.here("#p1", Tag::Prec).unwrap();
     r.robot.joint(1, 0.3).unwrap();
     r.robot.finish().unwrap();
@@ -718,7 +870,7 @@ fn a_move_that_ends_short_of_the_point_is_not_success() {
 fn the_arm_waits_for_the_jaws() {
     let sw = Switches::default();
     // Half real time: the jaws take 2.5 s to close, within JAWS_WITHIN.
-    let mut r = rig_at(sw.clone(), true, profile(matching(&sw)), 0.5);
+    let mut r = rig_at(sw.clone(), true, c500c::matching_profile(&sw), 0.5);
     r.robot.close_gripper(60).unwrap();
     let before = r.joints();
     let e = r.robot.joint(1, 0.1).unwrap_err();

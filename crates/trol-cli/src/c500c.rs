@@ -19,15 +19,18 @@ Examples:
   trol sim --c500c &    # a simulated C500C; then:
   trol c500c probe --controller /dev/pts/4 --out first.txt")]
     Probe(ProbeArgs),
-    /// A supervised step that settles one open point of the profile on the arm, and writes
-    /// only what it saw into --profile. `motion-return` (the only step so far): with the arm
-    /// powered and homed, joint 6 goes by +3 degrees at 5 % speed and back, and the speed
-    /// setting is typed back; when ash's prompt came back (as the motion started, or once it
-    /// had ended) is read from where w2 puts the arm right then. The arm moves: the step asks
-    /// for `yes` first (--yes: already confirmed). Every byte goes to --out.
+    /// A step that settles one open point of the profile on the arm, and writes only what it
+    /// saw into --profile. `motion-return` (supervised: the arm moves): with the arm powered
+    /// and homed, joint 6 goes by +3 degrees at 5 % speed and back, and the speed setting is
+    /// typed back; when ash's prompt came back (as the motion started, or once it had ended)
+    /// is read from where w2 puts the arm right then; it asks for `yes` first (--yes: already
+    /// confirmed). `world-angles` (reads only): which reading of the WORLD row's angles puts
+    /// the flange where TROL's kinematics put it from the JOINTS row, with the arm standing
+    /// where the readings differ (a wrist joint turned). Every byte goes to --out.
     #[command(after_help = "\
 Examples:
   trol c500c step motion-return --controller /dev/ttyUSB0 --profile c500c.toml --out step.txt
+  trol c500c step world-angles --controller /dev/ttyUSB0 --profile c500c.toml --out angles.txt
   trol sim --c500c --homed &    # a simulated C500C; then:
   trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
     Step(StepArgs),
@@ -38,6 +41,8 @@ Examples:
 pub enum StepName {
     /// When ash gives its prompt back after a motion command (`motion-return`).
     MotionReturn,
+    /// How the WORLD row's angles compose (`world-angles`; reads only).
+    WorldAngles,
 }
 
 #[derive(Args, Debug)]
@@ -97,7 +102,6 @@ pub fn run(c: C500c) -> Result<(), String> {
 }
 
 fn step(a: StepArgs) -> Result<(), String> {
-    let StepName::MotionReturn = a.step;
     // The profile first: a file that cannot be used stops the step before anything moves.
     let mut profile = if a.profile.exists() {
         trol_c500c::Profile::from_file(&a.profile).map_err(|e| e.to_string())?
@@ -109,6 +113,36 @@ fn step(a: StepArgs) -> Result<(), String> {
         .strip_prefix(trol_c500c::PREFIX)
         .unwrap_or(&a.controller)
         .to_string();
+    if let StepName::WorldAngles = a.step {
+        let settings = trol_port::PortSettings {
+            baud: a.baud,
+            ..Default::default()
+        };
+        let mut port = trol_port::open(&device, &settings).map_err(|e| e.to_string())?;
+        say!("trol c500c step world-angles: reading the C500C at {device} (nothing moves)");
+        let s = trol_c500c::probe::world_angles_step(
+            port.as_mut(),
+            &a.app,
+            Duration::from_millis(a.wait_ms),
+        );
+        std::fs::write(&a.out, s.contact.transcript.text())
+            .map_err(|e| format!("cannot write {}: {e}", a.out.display()))?;
+        for f in &s.contact.findings {
+            say!("  {f}");
+        }
+        say!("  every byte: {}", a.out.display());
+        let Some(angles) = s.angles else {
+            return Err(format!(
+                "nothing settled; {} left as it was",
+                a.profile.display()
+            ));
+        };
+        profile.world_angles = Some(angles);
+        std::fs::write(&a.profile, profile.to_toml())
+            .map_err(|e| format!("cannot write {}: {e}", a.profile.display()))?;
+        say!("  written to {}", a.profile.display());
+        return Ok(());
+    }
     if !a.yes {
         say!(
             "trol c500c step motion-return moves the arm: joint 6 by +{} degrees at {} % speed, \

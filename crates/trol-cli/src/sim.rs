@@ -37,7 +37,8 @@ pub struct SimArgs {
     /// Baud rate of a serial device [default: trol.cfg's, else 9600].
     #[arg(long)]
     baud: Option<u32>,
-    /// The location table to load (docs/a465.md, "Locations").
+    /// The location table to load (docs/a465.md, "Locations"); with --c500c, the
+    /// application's variables (docs/c500c.md, "Locations").
     #[arg(long, value_name = "FILE")]
     locations: Option<PathBuf>,
     /// Run the simulation this many times faster than real time [default: trol.cfg's, else
@@ -522,21 +523,24 @@ fn run_mars(a: &SimArgs) -> Result<(), String> {
 
 /// `trol sim --c500c`: the simulated C500C with an A465.
 fn run_c500c(a: &SimArgs) -> Result<(), String> {
-    use trol_c500c::c500c::{self, Return};
+    use trol_c500c::c500c;
     let variant = a.variant.as_deref().unwrap_or("default");
     let sw = c500c::variant(variant).ok_or_else(|| format!("no variant {variant}"))?;
-    let profile = trol_c500c::Profile {
-        motion_return: Some(match sw.motion_return {
-            Return::AtStart => trol_c500c::profile::MotionReturn::Start,
-            Return::AtEnd => trol_c500c::profile::MotionReturn::End,
-        }),
-        ..trol_c500c::Profile::default()
-    };
+    let profile = c500c::matching_profile(&sw);
     if a.print_profile {
         say!("{}", profile.to_toml().trim_end());
         return Ok(());
     }
-    let unit = trol_c500c::C500c::new(sw, a.r.homed, a.r.time_scale);
+    let mut unit = trol_c500c::C500c::new(sw, a.r.homed, a.r.time_scale);
+    // The application's variables, as a lab's `.v3` file holds them.
+    let n_vars = match &a.locations {
+        Some(p) => {
+            let entries = trol_a465::backend::table::load(p)?;
+            unit.load_variables(&entries)
+                .map_err(|e| format!("{}: {e}", p.display()))?
+        }
+        None => 0,
+    };
     let opened = open_side(&a.port, profile.baud, Side::Application)?;
     let name = opened.name.clone();
     say!("trol sim: serving on {name}");
@@ -552,6 +556,12 @@ fn run_c500c(a: &SimArgs) -> Result<(), String> {
         .map(|(_, w)| *w)
         .unwrap_or_default();
     say!("  variant {variant}: {what}");
+    if let Some(p) = &a.locations {
+        say!(
+            "  the application's variables: {n_vars} location(s) from {}",
+            p.display()
+        );
+    }
     say!(
         "  drive it with: port c500c:{name} in trol.cfg (c500c-profile: `trol sim --c500c          --print-profile` prints the one that matches)"
     );

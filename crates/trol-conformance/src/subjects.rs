@@ -294,8 +294,11 @@ pub fn mars(name: &str) -> Subject {
 
 // ---- a C500C (`c500c:`) ----
 
-/// C500C variants the suite does not drive, each with its reason; crates/trol-c500c's own
-/// variant tests check that TROL fails safe there (every motion refused, nothing moved).
+/// C500C variants the suite does not drive, each with its reason: where TROL fails safe
+/// (crates/trol-c500c's own variant tests check every motion refused, nothing moved), and
+/// where a variant differs only in calls the suite makes none of (locations by name,
+/// cartesian motions, the gripper: those variant tests, and the pick example on every
+/// variant in crates/trol-cli/tests/c500c.rs, drive them).
 pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
     (
         "echo-off",
@@ -306,6 +309,26 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
         "the pendant holds the point of control: every motion is refused until it hands it \
          back",
     ),
+    (
+        "print-braced",
+        "differs only in how `print` shows a location, which the suite reads none of",
+    ),
+    (
+        "gripper-air",
+        "differs only in the gripper, which the suite does not move",
+    ),
+    (
+        "gripper-none",
+        "differs only in the gripper, which the suite does not move",
+    ),
+    (
+        "grip-return-at-end",
+        "differs only in the gripper, which the suite does not move",
+    ),
+    (
+        "world-xyz",
+        "differs only in the WORLD row's angles, which only cartesian motions read",
+    ),
 ];
 
 /// A simulated C500C of variant `name` (`trol_c500c::c500c::VARIANTS`) in real time (its
@@ -314,16 +337,9 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
 /// one joint at a time, one motion at a time, a trajectory of one waypoint, nothing sent
 /// after UNSURE until reconnect (docs/c500c.md); on `unstoppable` no stop stops the arm.
 pub fn c500c(name: &str) -> Subject {
-    use trol_c500c::c500c::{self, Return};
-    use trol_c500c::profile::MotionReturn;
+    use trol_c500c::c500c;
     let sw = c500c::variant(name).expect("a C500C variant");
-    let profile = trol_c500c::Profile {
-        motion_return: Some(match sw.motion_return {
-            Return::AtStart => MotionReturn::Start,
-            Return::AtEnd => MotionReturn::End,
-        }),
-        ..trol_c500c::Profile::default()
-    };
+    let profile = c500c::matching_profile(&sw);
     let (host, ctl) = memory::pair(Some(profile.baud));
     let twin = UnitTwin::serving(
         trol_c500c::C500c::new(sw, false, 1.0),

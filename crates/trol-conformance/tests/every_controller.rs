@@ -101,8 +101,4 @@ each! {
     lf_only => "lf-only",
     unstoppable => "unstoppable",
     power_loss_silent => "power-loss-silent",
-    print_braced => "print-braced",
-    gripper_air => "gripper-air",
-    gripper_none => "gripper-none",
-    grip_return_at_end => "grip-return-at-end",
 }

@@ -59,3 +59,22 @@ def test_a_python_script_drives_the_arm_on_a_c500c(c500c_robot: trol.Robot) -> N
         c500c_robot.ma([0.1, 0.1, 0.1, 0.0, 0.0, 0.0])
     assert (e.value.code, e.value.name) == (-28, "BIOS_UNSETTLED")
     assert c500c_robot.joints(actual=True)[0] == pytest.approx(0.3, abs=1e-3)
+    # A cartesian motion from READY's neighbourhood, planned by TROL and sent through ash's
+    # own cartesian location: the tool ends where it was sent.
+    above = trol.Pose(400.0, 0.0, 240.0, 0.0, 1.5707963, 0.0)
+    c500c_robot.move(above)
+    c500c_robot.finish()
+    got = c500c_robot.pose(actual=True)
+    assert list(got)[:3] == pytest.approx([400.0, 0.0, 240.0], abs=0.5)
+    # Taught where it stands, as the application's own precision point, and reached again.
+    c500c_robot.here("#above", "prec")
+    c500c_robot.depart([-30.0, 0.0, 0.0], True)
+    c500c_robot.finish()
+    c500c_robot.move("#above")
+    c500c_robot.finish()
+    got = c500c_robot.pose(actual=True)
+    assert list(got)[:3] == pytest.approx([400.0, 0.0, 240.0], abs=0.5)
+    assert "#above" in c500c_robot.locations()
+    # The gripper: Close returns at once, Finish waits for the jaws.
+    c500c_robot.close_gripper(60)
+    c500c_robot.finish()

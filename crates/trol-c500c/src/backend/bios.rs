@@ -3,6 +3,14 @@
 
 use super::*;
 
+/// Six values of a location, or BIOS_BAD_ARGUMENT.
+fn array6(v: &[f64]) -> Result<[f64; 6], BackendError> {
+    match <[f64; 6]>::try_from(v) {
+        Ok(a) if a.iter().all(|x| x.is_finite()) => Ok(a),
+        _ => Err(BackendError::Refused(code::BAD_ARGUMENT)),
+    }
+}
+
 /// Ctrl-C for [`real::halt`], and `w2` for its readings.
 impl real::Stopping for C500cBackend {
     type Stop = ();
@@ -71,20 +79,34 @@ impl Backend for C500cBackend {
         // A Halt: its stop, and the readings that show the arm standing.
         HALT_WITHIN + REPLY_LIMIT
     }
-    fn appro(&mut self, _: &Target, _: [f64; 6], _: bool) -> BiosResult {
-        // An approach position is cartesian, whatever the location's kind.
-        self.cartesian()
+    fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
+        match target {
+            Target::Name(name) if name.is_precision() => self.unsettled(
+                "an approach to a precision point needs its joints, and the A465's pulses per \
+                 degree on a C500C are not settled: approach a cartesian location",
+            ),
+            Target::Name(name) => self.named_motion(*name, Some(disp), straight),
+            Target::Location(Location::Cart(v)) => {
+                let v = array6(v)?;
+                self.cart_motion(cartesian::CartCall::Appro(v, disp), straight)
+            }
+            Target::Location(_) => self.no_ploc_values(),
+        }
     }
-    fn depart(&mut self, _: [f64; 6], _: bool) -> BiosResult {
-        self.cartesian()
+    fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
+        self.cart_motion(cartesian::CartCall::Depart(disp), straight)
     }
-    fn jog(&mut self, _: [f64; 3], _: bool) -> BiosResult {
-        self.cartesian()
+    fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult {
+        self.cart_motion(cartesian::CartCall::Jog(d), straight)
     }
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
         match target {
             Target::Name(name) => self.move_named(*name, straight),
-            Target::Location(_) => self.cartesian(),
+            Target::Location(Location::Cart(v)) => {
+                let v = array6(v)?;
+                self.cart_motion(cartesian::CartCall::Move(v), straight)
+            }
+            Target::Location(_) => self.no_ploc_values(),
         }
     }
     fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
@@ -121,10 +143,11 @@ impl Backend for C500cBackend {
         }
         if self.outstanding.is_none() {
             self.clean()?;
-            if let Some(next) = self.queue.pop() {
-                self.send_motion(next)?;
-            } else {
-                return Ok(false);
+            match self.queue.pop() {
+                Some(next) => {
+                    self.send_next(next)?;
+                }
+                None => return Ok(false),
             }
         }
         self.look()

@@ -34,10 +34,12 @@ use crate::profile::{MotionReturn, Profile};
 use crate::reports::{self, ArmStat, Homing, Known};
 
 mod bios;
+mod cartesian;
 mod gripper;
 mod motion;
 mod teach;
 
+pub use cartesian::{AGREE_DEG, AGREE_MM, ARRIVE_MM, ARRIVE_TURN_DEG, SCRATCH};
 pub use gripper::{JAWS_AT_MM, JAWS_STILL_FOR, JAWS_WITHIN};
 pub use teach::ARRIVE_PULSES;
 
@@ -173,6 +175,10 @@ enum Kind {
     Home,
     /// `move var` to a precision point read back at these pulses.
     Named([i64; 6]),
+    /// A cartesian motion: where the flange ends, and the motion's planned time, s.
+    Pose(trol_a465::kinematics::Pose, f64),
+    /// Worked out as it goes ([`C500cBackend::resolve`]): one of the kinds above then.
+    Pending(cartesian::Pending),
 }
 
 struct Outstanding {
@@ -216,6 +222,9 @@ pub struct C500cBackend {
     grip_kind: Option<gripper::GripKind>,
     /// A grip command whose end is still to be seen.
     jaws_wait: Option<gripper::JawsWait>,
+    /// The WORLD row was seen, this session, to agree with the profile's `world-angles` at
+    /// a pose where the two readings differ.
+    angles_seen: bool,
 }
 
 impl std::fmt::Debug for C500cBackend {
@@ -267,6 +276,7 @@ impl C500cBackend {
             note: None,
             grip_kind: None,
             jaws_wait: None,
+            angles_seen: false,
             profile,
         };
         b.send(b"\x05\r\r")?;

@@ -82,6 +82,9 @@ impl C500cBackend {
             // Where a precision point is in degrees needs the pulses per degree on a C500C
             // (not settled): the time bound is that of the longest motion from here, each
             // joint to its farther limit.
+            Kind::Pose(_, secs) => return Duration::from_secs_f64(secs),
+            // Worked out before it is sent.
+            Kind::Pending(_) => return Duration::from_secs(60),
             Kind::Named(_) => {
                 let far: [f64; 6] = std::array::from_fn(|j| {
                     let lim = trol_a465::model::LIMITS_DEG[j];
@@ -97,6 +100,10 @@ impl C500cBackend {
     }
 
     pub(super) fn send_motion(&mut self, m: Motion) -> BiosResult {
+        let m = match m.kind {
+            Kind::Pending(p) => self.resolve(p)?,
+            _ => m,
+        };
         let planned = self.planned(m.kind);
         let target = match m.kind {
             Kind::Joint(n, deg) => {
@@ -104,7 +111,7 @@ impl C500cBackend {
                 t[n as usize - 1] += deg;
                 Some(t)
             }
-            Kind::Home | Kind::Named(_) => None,
+            Kind::Home | Kind::Named(_) | Kind::Pose(..) | Kind::Pending(_) => None,
         };
         if let Err(e) = self.send(format!("{}\r", m.line).as_bytes()) {
             return Err(self.unsure(format!("`{}`: the console failed: {e}", m.line)));
@@ -253,6 +260,7 @@ impl C500cBackend {
         let at_end = match (o.target, o.motion.kind) {
             (Some(t), _) => (0..6).all(|j| (p.joints_deg[j] - t[j]).abs() <= ARRIVE_DEG),
             (None, Kind::Named(at)) => (0..6).all(|j| (p.pulses[j] - at[j]).abs() <= ARRIVE_PULSES),
+            (None, Kind::Pose(end, _)) => cartesian::at_pose(&p.joints_deg, &end),
             // A home: homed, and read standing twice.
             (None, _) => homed && standing_before.is_some() && o.watch.stood_for(now).is_some(),
         };
@@ -261,10 +269,7 @@ impl C500cBackend {
                 self.rests_at(p.joints_deg);
                 self.outstanding = None;
                 match self.queue.pop() {
-                    Some(next) => {
-                        self.send_motion(next)?;
-                        Ok(true)
-                    }
+                    Some(next) => self.send_next(next),
                     None => Ok(false),
                 }
             }
@@ -294,6 +299,22 @@ impl C500cBackend {
         }
     }
 
+    /// Send a motion that waited in the queue: `true` once it runs. A refusal ends Finish
+    /// with it, and what waited behind it is dropped unsent.
+    pub(super) fn send_next(&mut self, next: Motion) -> Result<bool, BackendError> {
+        let line = next.line.clone();
+        let r = match self.send_motion(next) {
+            Ok(c) if c == code::OK => return Ok(true),
+            Ok(c) => Err(BackendError::Refused(c)),
+            Err(e) => Err(e),
+        };
+        let n = self.queue.drop_all();
+        if let Some(note) = real::MotionQueue::<Motion>::dropped_note(n, &line) {
+            self.say(&note);
+        }
+        r
+    }
+
     /// ash runs a command of TROL's to its end (a motion with `motion-return = "end"`, or
     /// `finish`) and reads no other until its prompt.
     pub(super) fn console_busy(&self) -> bool {
@@ -310,11 +331,16 @@ impl C500cBackend {
         Ok(())
     }
 
-    pub(super) fn cartesian(&mut self) -> BiosResult {
-        self.unsettled(
-            "a cartesian motion needs the composition order of the WORLD row's Z-Rot, Y-Rot \
-             and X-Rot on a C500C, which no public source settles yet",
-        )
+    /// MoveII or ApproII to a precision point's (or joints') values: ash sets a precision
+    /// point only with `here`.
+    pub(super) fn no_ploc_values(&mut self) -> BiosResult {
+        self.note(
+            "refused before sending: a motion to a precision point's values: ash sets a \
+             precision point only with `here` (its `set` takes cartesian constants only); teach \
+             it and move to it by name, or give a cartesian location"
+                .into(),
+        );
+        Ok(UNSUPPORTED)
     }
 
     /// A joint motion by `d` degrees: one `joint n,deg` where one joint changes; several

@@ -26,7 +26,7 @@ pub(super) enum Ploc {
 }
 
 /// The lines ash prints for a name it does not have (`print`, `erase`; CRS's texts).
-fn not_found(line: &str) -> bool {
+pub(super) fn not_found(line: &str) -> bool {
     let l = line.trim();
     l == "error: variable not found."
         || l == "Variable not found"
@@ -66,8 +66,8 @@ pub(super) fn read_ploc(lines: &[String]) -> Option<Ploc> {
     }
 }
 
-/// `list ploc`'s rows: each name, and whether it is taught. `None`: a row of another form.
-pub(super) fn read_list(lines: &[String]) -> Option<Vec<(String, bool)>> {
+/// `list BASE`'s rows: each name, and whether it is taught. `None`: a row of another form.
+pub(super) fn read_list(lines: &[String], base: &str) -> Option<Vec<(String, bool)>> {
     let mut out = Vec::new();
     for l in lines.iter().map(|l| l.trim()).filter(|l| !l.is_empty()) {
         if l == "Variables: (* indicates not yet taught)" || l == "< no variables >" {
@@ -75,35 +75,36 @@ pub(super) fn read_list(lines: &[String]) -> Option<Vec<(String, bool)>> {
         }
         let words: Vec<&str> = l.split_whitespace().collect();
         match words[..] {
-            ["ploc", "*", name] => out.push((name.to_string(), false)),
-            ["ploc", name] => out.push((name.to_string(), true)),
+            [b, "*", name] if b == base => out.push((name.to_string(), false)),
+            [b, name] if b == base => out.push((name.to_string(), true)),
             _ => return None,
         }
     }
     Some(out)
 }
 
-/// The ash variable of a TROL precision point: the name without `#`, in lower case (TROL
+/// The ash variable of a TROL location: the name without `#`, in lower case (TROL
 /// tells no two names apart by case; whether ash does is not public). `None`: not a name
-/// ash takes (letters and digits only: `Names must consist of 1 to 28 alphanumeric
-/// characters`).
+/// ash takes (assumed: RAPL-3's identifiers, a letter, then letters, digits and `_`).
 pub(super) fn ash_var(name: &LocName) -> Option<String> {
-    let v = name.as_str().strip_prefix('#')?.to_ascii_lowercase();
-    (!v.is_empty() && v.bytes().all(|b| b.is_ascii_alphanumeric())).then_some(v)
+    let n = name.as_str();
+    let v = n.strip_prefix('#').unwrap_or(n).to_ascii_lowercase();
+    let ok = v.as_bytes().first().is_some_and(u8::is_ascii_alphabetic)
+        && v.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
+    ok.then_some(v)
 }
 
 impl C500cBackend {
-    /// The ash variable for `name`, or the refusal to give (before anything is sent).
-    fn variable(&mut self, name: &LocName, what: &str) -> Result<String, BiosResult> {
-        if !name.is_precision() {
-            return Err(self.unsettled(&format!(
-                "{what} {}: a cartesian location on a C500C is an ash `cloc`, whose angles need \
-                 the WORLD row's order (not settled); use a precision point (#NAME)",
-                name.as_str()
-            )));
-        }
+    /// The ash variable for `name` and its base type (`ploc` for `#NAME`, else `cloc`), or
+    /// the refusal to give (before anything is sent).
+    fn variable(
+        &mut self,
+        name: &LocName,
+        what: &str,
+    ) -> Result<(String, &'static str), BiosResult> {
         match ash_var(name) {
-            Some(v) => Ok(v),
+            Some(v) if name.is_precision() => Ok((v, "ploc")),
+            Some(v) => Ok((v, "cloc")),
             None => {
                 self.note(format!(
                     "refused before sending: {what} {}: ash's variable names are letters and \
@@ -117,7 +118,7 @@ impl C500cBackend {
 
     /// The arm must stand, with nothing of TROL's under way or queued, for a call that reads
     /// or teaches where it is.
-    fn standing_only(&mut self, what: &str) -> Option<BiosResult> {
+    pub(super) fn standing_only(&mut self, what: &str) -> Option<BiosResult> {
         if let Err(e) = self.clean() {
             return Some(Err(e));
         }
@@ -151,7 +152,7 @@ impl C500cBackend {
     /// A command ash asks `question` back on, answered `answer` (TROL asked for it on
     /// purpose); the lines to the prompt after it. A prompt with no question: its lines (a
     /// refusal). Any other question: Ctrl-C, and UNSURE.
-    fn exchange_asked(
+    pub(super) fn exchange_asked(
         &mut self,
         cmd: &str,
         question: &str,
@@ -203,8 +204,10 @@ impl C500cBackend {
         }
     }
 
-    /// Here: `new #var` where ash has no such variable, `here var`, then `w2` and `print
-    /// var`, which must agree.
+    /// Here: `new #var` (a precision point) or `new _var` (a cartesian location) where ash
+    /// lists none, `here var`, then `w2` and `print var`, which must agree: the pulses with
+    /// its PULSES row, a cartesian location with its WORLD row (both as ash prints them, so
+    /// no reading of the angles is needed).
     pub(super) fn teach_here(&mut self, name: LocName, tag: Tag) -> BiosResult {
         if let Some(r) = self.standing_only("Here") {
             return r;
@@ -212,12 +215,21 @@ impl C500cBackend {
         if tag != Tag::Prec && name.is_precision() {
             return Ok(code::BAD_ARGUMENT);
         }
-        let var = match self.variable(&name, "Here") {
+        if tag == Tag::Joint {
+            self.note(format!(
+                "refused before sending: Here {} in joints: ash keeps no joint locations; use a \
+                 precision point (#NAME) or a cartesian location",
+                name.as_str()
+            ));
+            return Ok(UNSUPPORTED);
+        }
+        let (var, base) = match self.variable(&name, "Here") {
             Ok(v) => v,
             Err(r) => return r,
         };
-        if self.print_ploc(&var)? == Ploc::Missing {
-            let cmd = format!("new #{var}");
+        if !self.list_vars(base)?.iter().any(|(n, _)| *n == var) {
+            let sign = if base == "ploc" { '#' } else { '_' };
+            let cmd = format!("new {sign}{var}");
             let lines = match self.exchange(&cmd) {
                 Ok(l) => l,
                 Err(e) => return Err(self.fail(e)),
@@ -235,47 +247,62 @@ impl C500cBackend {
             return Err(self.refusal(&cmd, &lines));
         }
         let p = self.read_position(true)?;
-        match self.print_ploc(&var)? {
-            Ploc::At(v) if (0..6).all(|j| (v[j] - p.pulses[j]).abs() <= ARRIVE_PULSES) => {
-                self.rests_at(p.joints_deg);
-                Ok(code::OK)
-            }
-            other => Err(self.unsure(format!(
-                "`{cmd}` taken, and then `print {var}` reads {other:?} with the arm at pulses \
-                 {:?} (w2): what ash holds under {var} is not known",
-                p.pulses
-            ))),
+        let (agrees, read) = if base == "ploc" {
+            let got = self.print_ploc(&var)?;
+            let ok = matches!(got, Ploc::At(v)
+                if (0..6).all(|j| (v[j] - p.pulses[j]).abs() <= ARRIVE_PULSES));
+            (ok, format!("{got:?} with the arm at pulses {:?}", p.pulses))
+        } else {
+            let got = self.print_cloc(&var)?;
+            // The same place as the WORLD row read just after (the arm's dither apart), in
+            // either reading of the angles.
+            let ok = matches!(got, cartesian::Cloc::At(w)
+            if crate::world::Angles::ALL.iter().any(|&a| {
+                let (mm, deg) = crate::world::gap(
+                    &crate::world::from_ash(&w, a),
+                    &crate::world::from_ash(&p.world, a),
+                );
+                mm <= cartesian::ARRIVE_MM && deg <= cartesian::ARRIVE_TURN_DEG
+            }));
+            (
+                ok,
+                format!("{got:?} with the WORLD row at {}", join(&p.world)),
+            )
+        };
+        if !agrees {
+            return Err(self.unsure(format!(
+                "`{cmd}` taken, and then `print {var}` reads {read} (w2): what ash holds under \
+                 {var} is not known"
+            )));
         }
+        self.rests_at(p.joints_deg);
+        Ok(code::OK)
     }
 
     /// Define: ash sets a precision point only with `here` (`set` takes cartesian
-    /// constants only, `help constants`).
+    /// constants only, `help constants`), and a cartesian location's values would need the
+    /// WORLD row's reading and the tool of the moment: taught with Here instead.
     pub(super) fn teach_define(&mut self, name: LocName) -> BiosResult {
-        if !name.is_precision() {
-            return match self.variable(&name, "Define") {
-                Ok(_) => Ok(UNSETTLED),
-                Err(r) => r,
-            };
-        }
         self.note(format!(
-            "refused before sending: Define {}: ash sets a precision point only with `here` \
-             (its `set` takes cartesian constants only): move the arm there and use TROLHere",
+            "refused before sending: Define {}: on a C500C a location is taught where the arm \
+             is (TROLHere); ash's `set` takes no precision point, and TROL writes no cartesian \
+             location of ash's from values",
             name.as_str()
         ));
         Ok(UNSUPPORTED)
     }
 
-    /// DeleteLocation: `erase var`, its question answered `y`, then `print var` must find
-    /// none.
+    /// DeleteLocation: `erase var`, its question answered `y`, then ash must list it no
+    /// more.
     pub(super) fn teach_delete(&mut self, name: LocName) -> BiosResult {
         if let Some(r) = self.standing_only("DeleteLocation") {
             return r;
         }
-        let var = match self.variable(&name, "DeleteLocation") {
+        let (var, base) = match self.variable(&name, "DeleteLocation") {
             Ok(v) => v,
             Err(r) => return r,
         };
-        if self.print_ploc(&var)? == Ploc::Missing {
+        if !self.list_vars(base)?.iter().any(|(n, _)| *n == var) {
             return Err(BackendError::UnknownLocation(name));
         }
         let cmd = format!("erase {var}");
@@ -283,25 +310,19 @@ impl C500cBackend {
         if !lines.is_empty() {
             return Err(self.refusal(&cmd, &lines));
         }
-        match self.print_ploc(&var)? {
-            Ploc::Missing => Ok(code::OK),
-            other => Err(self.unsure(format!(
-                "`{cmd}` answered y, and `print {var}` still reads {other:?}"
-            ))),
+        if self.list_vars(base)?.iter().any(|(n, _)| *n == var) {
+            return Err(self.unsure(format!(
+                "`{cmd}` answered y, and `list {base}` still has {var}"
+            )));
         }
+        Ok(code::OK)
     }
 
-    /// ListLocations: `list ploc` (its pager answered with a space: TROL asked for the whole
-    /// list), then `print` of each taught one. Untaught ones, and names TROL cannot hold
-    /// (over 7 characters), are left out and named in the log.
-    pub(super) fn teach_list(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
-        if let Some(r) = self.standing_only("ListLocations") {
-            return match r {
-                Err(e) => Err(e),
-                Ok(c) => Err(BackendError::Refused(c)),
-            };
-        }
-        let cmd = "list ploc";
+    /// `list BASE` (its pager answered with a space: TROL asked for the whole list): each
+    /// variable of that base type, and whether it is taught.
+    pub(super) fn list_vars(&mut self, base: &str) -> Result<Vec<(String, bool)>, BackendError> {
+        let cmd = format!("list {base}");
+        let cmd = cmd.as_str();
         if let Err(e) = self.send(format!("{cmd}\r").as_bytes()) {
             return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
         }
@@ -339,12 +360,27 @@ impl C500cBackend {
                 }
             }
         }
-        let Some(rows) = read_list(&lines) else {
+        let Some(rows) = read_list(&lines, base) else {
             return Err(self.unsure(format!(
                 "`{cmd}`: ash printed `{}`, not the list form TROL reads",
                 lines.join(" | ")
             )));
         };
+        Ok(rows)
+    }
+
+    /// ListLocations: `list ploc` and `list cloc` (their pager answered with a space: TROL
+    /// asked for the whole list), then `print` of each taught one. Untaught ones, names TROL
+    /// cannot hold (over 7 or 8 characters), and cartesian ones where the profile has no
+    /// `world-angles`, are left out and named in the log.
+    pub(super) fn teach_list(&mut self) -> Result<Vec<(LocName, Location)>, BackendError> {
+        if let Some(r) = self.standing_only("ListLocations") {
+            return match r {
+                Err(e) => Err(e),
+                Ok(c) => Err(BackendError::Refused(c)),
+            };
+        }
+        let rows = self.list_vars("ploc")?;
         let mut out = Vec::new();
         let mut left = Vec::new();
         for (var, taught) in rows {
@@ -369,11 +405,38 @@ impl C500cBackend {
                 _ => left.push(format!("{var} (no TROL name: over 7 characters)")),
             }
         }
+        // Cartesian locations: the flange as ash keeps it, TROL's tool centre point there,
+        // in TROL's angles (which needs the profile's reading of ash's).
+        for (var, taught) in self.list_vars("cloc")? {
+            if var == cartesian::SCRATCH {
+                continue;
+            }
+            let Some(angles) = self.profile.world_angles else {
+                left.push(format!(
+                    "{var} (cartesian: needs `world-angles` in the profile)"
+                ));
+                continue;
+            };
+            match (LocName::new(&var), taught) {
+                (Ok(name), true) if ash_var(&name).is_some() => match self.print_cloc(&var)? {
+                    cartesian::Cloc::At(w) => {
+                        let tcp = crate::world::from_ash(&w, angles)
+                            .then(&trol_a465::kinematics::Pose::from_xyzypr(self.tool))
+                            .to_xyzypr();
+                        out.push((name, Location::Cart(tcp.to_vec())));
+                    }
+                    other => {
+                        return Err(self.unsure(format!(
+                            "`list cloc` names {var} taught, and `print {var}` reads {other:?}"
+                        )));
+                    }
+                },
+                (_, false) => left.push(format!("{var} (not taught or not valid)")),
+                _ => left.push(format!("{var} (no TROL name: over 8 characters)")),
+            }
+        }
         if !left.is_empty() {
-            self.note(format!(
-                "ash's precision points left out: {}",
-                left.join(", ")
-            ));
+            self.note(format!("ash's locations left out: {}", left.join(", ")));
         }
         out.sort_by(|a, b| a.0.as_str().cmp(b.0.as_str()));
         Ok(out)
@@ -400,52 +463,52 @@ impl C500cBackend {
         }
     }
 
-    /// TROLMove to a precision point of ash's: read back (`print`), then `move var` through
-    /// the gate; its end is the arm seen at those pulses. Joint-interpolated only.
+    /// TROLMove by name: a precision point or a cartesian location of ash's, through the
+    /// gate and the queue ([`Self::named_motion`]).
     pub(super) fn move_named(&mut self, name: LocName, straight: bool) -> BiosResult {
-        if let Some(r) = self.standing_only("a move to a named location") {
-            return r;
-        }
-        if !name.is_precision() {
-            // A name ash does not have is TROL_ERR_LOCATION, as on every controller; one it
-            // has is a `cloc`, which TROL cannot move to yet.
-            let var = name.as_str().to_ascii_lowercase();
-            if var.bytes().all(|b| b.is_ascii_alphanumeric()) {
-                let cmd = format!("print {var}");
-                let lines = match self.exchange(&cmd) {
-                    Ok(l) => l,
-                    Err(e) => return Err(self.fail(e)),
-                };
-                if let [l] = &lines[..]
-                    && not_found(l)
-                {
-                    return Err(BackendError::UnknownLocation(name));
-                }
-            }
-        }
-        let var = match self.variable(&name, "Move to") {
-            Ok(v) => v,
-            Err(r) => return r,
-        };
-        if straight {
-            return self.unsettled(
-                "a straight-line move needs the WORLD row's angle order (not settled): move to \
-                 a precision point joint-interpolated (straight = 0)",
-            );
-        }
-        match self.print_ploc(&var)? {
-            Ploc::At(p) => self.motion(Motion {
-                line: format!("move {var}"),
-                kind: Kind::Named(p),
-            }),
-            Ploc::Missing => Err(BackendError::UnknownLocation(name)),
-            Ploc::Untaught => Err(BackendError::Explained(
+        self.named_motion(name, None, straight)
+    }
+
+    /// `var` is listed by ash (`list BASE`) and taught; else TROL_ERR_LOCATION.
+    pub(super) fn taught_in(
+        &mut self,
+        base: &str,
+        var: &str,
+        name: LocName,
+    ) -> Result<(), BackendError> {
+        match self.list_vars(base)?.iter().find(|(n, _)| n == var) {
+            None => Err(BackendError::UnknownLocation(name)),
+            Some((_, false)) => Err(BackendError::Explained(
                 trol_proto::application::code::TROL_ERR_LOCATION.0,
                 format!(
-                    "{}: ash has the variable {var}, not yet taught: teach it (TROLHere) first",
+                    "{}: ash has the {base} {var}, not yet taught (or not valid): teach it \
+                     (TROLHere) first",
                     name.as_str()
                 ),
             )),
+            Some((_, true)) => Ok(()),
+        }
+    }
+
+    /// A move to a precision point of ash's as it goes: listed (its base type as ash lists
+    /// it: a variable of another type is not a precision point, whatever `print` shows),
+    /// read back (`print`), then `move var` or `moves var`; its end is the arm seen at those
+    /// pulses.
+    pub(super) fn resolve_ploc(
+        &mut self,
+        name: LocName,
+        straight: bool,
+    ) -> Result<Motion, BackendError> {
+        let var = ash_var(&name).ok_or(BackendError::UnknownLocation(name))?;
+        self.taught_in("ploc", &var, name)?;
+        match self.print_ploc(&var)? {
+            Ploc::At(p) => Ok(Motion {
+                line: format!("{} {var}", if straight { "moves" } else { "move" }),
+                kind: Kind::Named(p),
+            }),
+            other => Err(self.unsure(format!(
+                "`list ploc` has {var} taught, and `print {var}` reads {other:?}"
+            ))),
         }
     }
 }
@@ -485,22 +548,30 @@ mod tests {
     #[test]
     fn list_rows_are_read_exactly() {
         assert_eq!(
-            read_list(&l(&[
-                "Variables: (* indicates not yet taught)",
-                "  ploc             p1",
-                "  ploc             * p2",
-            ])),
+            read_list(
+                &l(&[
+                    "Variables: (* indicates not yet taught)",
+                    "  ploc             p1",
+                    "  ploc             * p2",
+                ]),
+                "ploc"
+            ),
             Some(vec![("p1".into(), true), ("p2".into(), false)])
         );
-        assert_eq!(read_list(&l(&["< no variables >"])), Some(vec![]));
-        assert_eq!(read_list(&l(&["  cloc             p1"])), None);
+        assert_eq!(read_list(&l(&["< no variables >"]), "ploc"), Some(vec![]));
+        assert_eq!(read_list(&l(&["  cloc             p1"]), "ploc"), None);
+        assert_eq!(
+            read_list(&l(&["  cloc             p1"]), "cloc"),
+            Some(vec![("p1".into(), true)])
+        );
     }
 
     #[test]
     fn names_map_to_ash_variables() {
         let n = |s: &str| LocName::new(s).unwrap();
         assert_eq!(ash_var(&n("#Pick1")), Some("pick1".into()));
-        assert_eq!(ash_var(&n("#a_b")), None);
-        assert_eq!(ash_var(&n("pick")), None);
+        assert_eq!(ash_var(&n("#a_b")), Some("a_b".into()));
+        assert_eq!(ash_var(&n("#1a")), None);
+        assert_eq!(ash_var(&n("Pick")), Some("pick".into()));
     }
 }

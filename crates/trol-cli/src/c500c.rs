@@ -113,37 +113,9 @@ fn step(a: StepArgs) -> Result<(), String> {
         .strip_prefix(trol_c500c::PREFIX)
         .unwrap_or(&a.controller)
         .to_string();
-    if let StepName::WorldAngles = a.step {
-        let settings = trol_port::PortSettings {
-            baud: a.baud,
-            ..Default::default()
-        };
-        let mut port = trol_port::open(&device, &settings).map_err(|e| e.to_string())?;
-        say!("trol c500c step world-angles: reading the C500C at {device} (nothing moves)");
-        let s = trol_c500c::probe::world_angles_step(
-            port.as_mut(),
-            &a.app,
-            Duration::from_millis(a.wait_ms),
-        );
-        std::fs::write(&a.out, s.contact.transcript.text())
-            .map_err(|e| format!("cannot write {}: {e}", a.out.display()))?;
-        for f in &s.contact.findings {
-            say!("  {f}");
-        }
-        say!("  every byte: {}", a.out.display());
-        let Some(angles) = s.angles else {
-            return Err(format!(
-                "nothing settled; {} left as it was",
-                a.profile.display()
-            ));
-        };
-        profile.world_angles = Some(angles);
-        std::fs::write(&a.profile, profile.to_toml())
-            .map_err(|e| format!("cannot write {}: {e}", a.profile.display()))?;
-        say!("  written to {}", a.profile.display());
-        return Ok(());
-    }
-    if !a.yes {
+    if let StepName::MotionReturn = a.step
+        && !a.yes
+    {
         say!(
             "trol c500c step motion-return moves the arm: joint 6 by +{} degrees at {} % speed, \
              then back, on the C500C at {device}. Make sure nobody and nothing is within its \
@@ -162,25 +134,34 @@ fn step(a: StepArgs) -> Result<(), String> {
         ..Default::default()
     };
     let mut port = trol_port::open(&device, &settings).map_err(|e| e.to_string())?;
-    say!("trol c500c step motion-return: on the C500C at {device}");
-    let s = trol_c500c::probe::motion_return_step(
-        port.as_mut(),
-        &a.app,
-        Duration::from_millis(a.wait_ms),
-    );
-    std::fs::write(&a.out, s.contact.transcript.text())
+    let wait = Duration::from_millis(a.wait_ms);
+    // Each step: what it saw, and whether it settled its key in the profile.
+    let (contact, settled) = match a.step {
+        StepName::MotionReturn => {
+            say!("trol c500c step motion-return: on the C500C at {device}");
+            let s = trol_c500c::probe::motion_return_step(port.as_mut(), &a.app, wait);
+            profile.motion_return = s.motion_return.or(profile.motion_return);
+            (s.contact, s.motion_return.is_some())
+        }
+        StepName::WorldAngles => {
+            say!("trol c500c step world-angles: reading the C500C at {device} (nothing moves)");
+            let s = trol_c500c::probe::world_angles_step(port.as_mut(), &a.app, wait);
+            profile.world_angles = s.angles.or(profile.world_angles);
+            (s.contact, s.angles.is_some())
+        }
+    };
+    std::fs::write(&a.out, contact.transcript.text())
         .map_err(|e| format!("cannot write {}: {e}", a.out.display()))?;
-    for f in &s.contact.findings {
+    for f in &contact.findings {
         say!("  {f}");
     }
     say!("  every byte: {}", a.out.display());
-    let Some(m) = s.motion_return else {
+    if !settled {
         return Err(format!(
             "nothing settled; {} left as it was",
             a.profile.display()
         ));
-    };
-    profile.motion_return = Some(m);
+    }
     std::fs::write(&a.profile, profile.to_toml())
         .map_err(|e| format!("cannot write {}: {e}", a.profile.display()))?;
     say!("  written to {}", a.profile.display());

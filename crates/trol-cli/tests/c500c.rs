@@ -518,6 +518,92 @@ fn the_motion_return_step_asks_first_and_writes_only_what_it_saw() {
     );
 }
 
+/// `trol c500c step world-angles` reads only: where the arm stands so that both readings of
+/// the WORLD row's angles coincide (READY) it settles nothing and says what to do; with a
+/// wrist joint turned it writes the controller's reading, the profile's other keys kept.
+#[test]
+fn the_world_angles_step_reads_only_and_writes_what_it_saw() {
+    let dir = scratch("c500c-angles");
+    let args = [
+        "sim",
+        "--c500c",
+        "--variant",
+        "world-xyz",
+        "--homed",
+        "--time-scale",
+        "10",
+    ];
+    let sim = Background::start(&dir, &args, "serving on ");
+    std::fs::write(
+        dir.join("c500c.toml"),
+        "motion-return = \"start\"\nsettle-ms = 400\n",
+    )
+    .unwrap();
+    let step = || {
+        trol(
+            &dir,
+            &[
+                "c500c",
+                "step",
+                "world-angles",
+                "--controller",
+                sim.name.as_str(),
+                "--profile",
+                "c500c.toml",
+                "--out",
+                "angles.txt",
+            ],
+            "",
+        )
+    };
+    let o = step();
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(out.contains("both readings agree"), "{out}\n{err}");
+    assert!(err.contains("nothing settled"), "{err}");
+    assert!(
+        !std::fs::read_to_string(dir.join("c500c.toml"))
+            .unwrap()
+            .contains("world-angles")
+    );
+    // Turn the wrist through the interpreter (joint motions need no world-angles).
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
+            sim.name
+        ),
+    )
+    .unwrap();
+    let o = trol(
+        &dir,
+        &["interp"],
+        "joint 4 0.5\nfinish\njoint 5 0.5\nfinish\n",
+    );
+    assert!(o.status.success(), "{}", text(&o).0);
+    let o = step();
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let profile = std::fs::read_to_string(dir.join("c500c.toml")).unwrap();
+    assert!(profile.contains("world-angles = \"xyz\""), "{profile}");
+    assert!(profile.contains("settle-ms = 400"), "{profile}");
+    let typed: Vec<String> = sim
+        .output()
+        .into_iter()
+        .filter_map(|l| l.split_once("typed: ").map(|(_, t)| t.trim().to_string()))
+        .collect();
+    // What moved the arm was the interpreter's two joint motions, nothing of the steps'.
+    let moving: Vec<&String> = typed
+        .iter()
+        .filter(|t| {
+            ["joint", "move", "home", "speed ", "set"]
+                .iter()
+                .any(|m| t.starts_with(m))
+        })
+        .collect();
+    assert_eq!(moving, ["joint 4,28.648", "joint 5,28.648"], "{typed:?}");
+}
+
 /// A fault script (`trol sim --c500c --console`): the arm's power cut during a motion that
 /// `trol interp` waits for. Finish is never success, the interpreter says why, and the next
 /// motion is not sent.

@@ -51,11 +51,7 @@ pub(super) enum Cloc {
 /// `print`'s lines of a cartesian location: one row of six numbers (two more, the extra
 /// axes, may follow on a second row).
 pub(super) fn read_cloc(lines: &[String]) -> Option<Cloc> {
-    let said: Vec<&str> = lines
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let said = said(lines);
     let nums = |l: &str| -> Option<Vec<f64>> {
         let v: Vec<f64> = l
             .split_whitespace()
@@ -335,7 +331,7 @@ impl C500cBackend {
         // TROL asked: it has planned the motion on the arm's model and reads the values back
         // before moving.
         let cmd = format!("setvalid {SCRATCH}");
-        let lines = self.exchange_asked(&cmd, "Set the valid flag anyway (y/n) ?", "y")?;
+        let lines = self.converse(&cmd, &[("Set the valid flag anyway (y/n) ?", "y\r")])?;
         let warned = "WARNING: moving to an incorrect location can damage the robot.";
         if lines
             .iter()

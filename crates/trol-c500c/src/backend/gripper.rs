@@ -52,11 +52,7 @@ pub(super) struct JawsWait {
 /// `griptype_set`'s line: `Gripper type set to 2--SERVO`, `... set to 1--AIR`, `... not
 /// set.`
 pub(super) fn read_grip_type(lines: &[String]) -> Option<GripKind> {
-    let said: Vec<&str> = lines
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let said = said(lines);
     match said[..] {
         ["Gripper type set to 2--SERVO"] => Some(GripKind::Servo),
         ["Gripper type set to 1--AIR"] => Some(GripKind::Air),
@@ -67,11 +63,7 @@ pub(super) fn read_grip_type(lines: &[String]) -> Option<GripKind> {
 
 /// `wgrip`'s line: `Gripper distance = 12.5`.
 pub(super) fn read_jaws(lines: &[String]) -> Option<f64> {
-    let said: Vec<&str> = lines
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let said = said(lines);
     match said[..] {
         [l] => l
             .strip_prefix("Gripper distance = ")?

@@ -236,6 +236,15 @@ impl std::fmt::Debug for C500cBackend {
     }
 }
 
+/// The lines ash printed, each trimmed, blank ones left out.
+fn said(lines: &[String]) -> Vec<&str> {
+    lines
+        .iter()
+        .map(|l| l.trim())
+        .filter(|l| !l.is_empty())
+        .collect()
+}
+
 fn join(q: &[f64; 6]) -> String {
     q.iter()
         .map(|v| format!("{v:.3}"))

@@ -36,11 +36,7 @@ pub(super) fn not_found(line: &str) -> bool {
 /// `print`'s lines of a precision point: one row of six signed integers (axes 7 and 8 may
 /// follow on a second row, ignored).
 pub(super) fn read_ploc(lines: &[String]) -> Option<Ploc> {
-    let lines: Vec<&str> = lines
-        .iter()
-        .map(|l| l.trim())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let lines = said(lines);
     match lines[..] {
         [l] if not_found(l) => Some(Ploc::Missing),
         ["Location has not been taught"] => Some(Ploc::Untaught),
@@ -149,47 +145,46 @@ impl C500cBackend {
         }
     }
 
-    /// A command ash asks `question` back on, answered `answer` (TROL asked for it on
-    /// purpose); the lines to the prompt after it. A prompt with no question: its lines (a
-    /// refusal). Any other question: Ctrl-C, and UNSURE.
-    pub(super) fn exchange_asked(
+    /// A command whose questions TROL asked for on purpose, each answered as `answers`
+    /// says (the bytes sent when ash asks a question ending so; a question may come again,
+    /// as a pager's); the lines to ash's prompt, the echoes taken off. A prompt with no
+    /// question: its lines (a refusal). Any other question: Ctrl-C, and UNSURE.
+    pub(super) fn converse(
         &mut self,
         cmd: &str,
-        question: &str,
-        answer: &str,
+        answers: &[(&str, &str)],
     ) -> Result<Vec<String>, BackendError> {
         if let Err(e) = self.send(format!("{cmd}\r").as_bytes()) {
             return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
         }
         let app = self.profile.app.clone();
-        let deadline = Instant::now() + REPLY_LIMIT;
+        let mut deadline = Instant::now() + REPLY_LIMIT;
         let mut lines = Vec::new();
+        let mut answered: Vec<&str> = Vec::new();
         loop {
             let said = match self.next(deadline) {
                 Ok(s) => s,
                 Err(e) => return Err(self.unsure(format!("`{cmd}`: the console failed: {e}"))),
             };
             match said {
-                Some(Said::Line(l)) if l.trim_end() == cmd || l.trim().is_empty() => {}
+                Some(Said::Line(l))
+                    if l.trim() == cmd
+                        || l.trim().is_empty()
+                        || answered.iter().any(|a| l.trim() == a.trim()) => {}
                 Some(Said::Line(l)) => lines.push(l),
                 Some(Said::Prompt(p)) if p == app => return Ok(lines),
-                Some(Said::Question(q)) if q.ends_with(question) => {
-                    if let Err(e) = self.send(format!("{answer}\r").as_bytes()) {
+                Some(Said::Question(q)) => {
+                    let Some((_, answer)) = answers.iter().find(|(end, _)| q.ends_with(end)) else {
+                        let _ = self.send(b"\x03");
+                        return Err(self.unsure(format!(
+                            "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
+                        )));
+                    };
+                    if let Err(e) = self.send(answer.as_bytes()) {
                         return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
                     }
-                    return match self.read_to_prompt(answer, Instant::now() + REPLY_LIMIT) {
-                        Ok(Some(l)) => Ok(l),
-                        Ok(None) => Err(self.unsure(format!(
-                            "`{cmd}`, answered `{answer}`: no prompt within {REPLY_LIMIT:?}"
-                        ))),
-                        Err(e) => Err(self.fail(e)),
-                    };
-                }
-                Some(Said::Question(q)) => {
-                    let _ = self.send(b"\x03");
-                    return Err(self.unsure(format!(
-                        "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
-                    )));
+                    answered.push(answer);
+                    deadline = Instant::now() + REPLY_LIMIT;
                 }
                 Some(Said::Prompt(p)) => {
                     return Err(self.unsure(format!(
@@ -306,7 +301,7 @@ impl C500cBackend {
             return Err(BackendError::UnknownLocation(name));
         }
         let cmd = format!("erase {var}");
-        let lines = self.exchange_asked(&cmd, "and its value?", "y")?;
+        let lines = self.converse(&cmd, &[("and its value?", "y\r")])?;
         if !lines.is_empty() {
             return Err(self.refusal(&cmd, &lines));
         }
@@ -322,44 +317,7 @@ impl C500cBackend {
     /// variable of that base type, and whether it is taught.
     pub(super) fn list_vars(&mut self, base: &str) -> Result<Vec<(String, bool)>, BackendError> {
         let cmd = format!("list {base}");
-        let cmd = cmd.as_str();
-        if let Err(e) = self.send(format!("{cmd}\r").as_bytes()) {
-            return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
-        }
-        let app = self.profile.app.clone();
-        let mut lines = Vec::new();
-        let mut deadline = Instant::now() + REPLY_LIMIT;
-        loop {
-            let said = match self.next(deadline) {
-                Ok(s) => s,
-                Err(e) => return Err(self.unsure(format!("`{cmd}`: the console failed: {e}"))),
-            };
-            match said {
-                Some(Said::Line(l)) if l.trim_end() == cmd => {}
-                Some(Said::Line(l)) => lines.push(l),
-                Some(Said::Prompt(p)) if p == app => break,
-                Some(Said::Question(q)) if q.ends_with("Hit <space> or <q>") => {
-                    if let Err(e) = self.send(b" ") {
-                        return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
-                    }
-                    deadline = Instant::now() + REPLY_LIMIT;
-                }
-                Some(Said::Question(q)) => {
-                    let _ = self.send(b"\x03");
-                    return Err(self.unsure(format!(
-                        "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
-                    )));
-                }
-                Some(Said::Prompt(p)) => {
-                    return Err(self.unsure(format!(
-                        "after `{cmd}` the console gave the prompt of `{p}`, not ash's"
-                    )));
-                }
-                None => {
-                    return Err(self.unsure(format!("`{cmd}`: no prompt within {REPLY_LIMIT:?}")));
-                }
-            }
-        }
+        let lines = self.converse(&cmd, &[("Hit <space> or <q>", " ")])?;
         let Some(rows) = read_list(&lines, base) else {
             return Err(self.unsure(format!(
                 "`{cmd}`: ash printed `{}`, not the list form TROL reads",
@@ -452,11 +410,7 @@ impl C500cBackend {
             Ok(l) => l,
             Err(e) => return Err(self.fail(e)),
         };
-        let said: Vec<&str> = lines
-            .iter()
-            .map(|l| l.trim())
-            .filter(|l| !l.is_empty())
-            .collect();
+        let said = said(&lines);
         match said[..] {
             [l] if l.starts_with("Saving '") && l.ends_with("done.") => Ok(code::OK),
             _ => Err(self.refusal("save", &lines)),

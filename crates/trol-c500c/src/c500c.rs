@@ -949,6 +949,24 @@ impl C500c {
             .collect()
     }
 
+    /// The backup battery died: every variable is gone, and the `.v3` file with them.
+    pub fn forget_variables(&mut self) {
+        self.vars.clear();
+        self.saved.clear();
+    }
+
+    /// The cartesian locations as ash holds them now: each name, its values as the WORLD
+    /// row prints them, and whether it is valid.
+    pub fn clocs(&self) -> Vec<(String, Option<[f64; 6]>, bool)> {
+        self.vars
+            .iter()
+            .filter_map(|(n, v)| match v {
+                Var::Cloc(w, valid) => Some((n.clone(), *w, *valid)),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// The precision points as ash holds them now.
     pub fn plocs(&self) -> Vec<(String, Option<[i64; 6]>)> {
         self.vars

@@ -886,3 +886,88 @@ fn the_arm_waits_for_the_jaws() {
     r.robot.joint(1, 0.01).unwrap();
     r.robot.finish().unwrap();
 }
+
+/// After the backup battery died: `backup` read every location variable as ash held it;
+/// `restore` without writing says what it would do and types nothing but reads; with
+/// writing, it sets each cartesian location (read back), creates the names of the precision
+/// points untaught and lists them to teach again, saves, and never moves the arm.
+#[test]
+fn a_backup_restores_what_a_dead_battery_lost() {
+    use trol_c500c::backend::Saved;
+    let sw = Switches::default();
+    let (host, ctl) = memory::pair(Some(57600));
+    let unit = Arc::new(Mutex::new(C500c::new(sw.clone(), true, SCALE)));
+    {
+        let mut u = unit.lock().unwrap();
+        u.set_ploc("pick1", Some([19101, 1, 2, 1, 1, -2]));
+        u.set_ploc("blank", None);
+        u.set_cloc(
+            "test_001",
+            Some([400.0, 0.0, 150.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0]),
+        );
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    let thread = {
+        let (unit, stop) = (unit.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let _ = c500c::serve(Box::new(ctl), unit, stop);
+        })
+    };
+    let mut b = C500cBackend::connect(Box::new(host), c500c::matching_profile(&sw), None).unwrap();
+    let saved = b.backup().unwrap();
+    assert_eq!(saved.vars.len(), 3, "{saved:?}");
+    assert_eq!(
+        saved.vars[1],
+        ("pick1".into(), Saved::Ploc(Some([19101, 1, 2, 1, 1, -2])))
+    );
+    let text = saved.to_text();
+    let file = trol_c500c::backend::Backup::parse(&text).unwrap();
+
+    unit.lock().unwrap().forget_variables();
+    let typed = unit.lock().unwrap().received().len();
+    let plan = b.restore(&file, false).unwrap();
+    assert_eq!(plan.written, ["test_001"]);
+    assert_eq!(plan.created, ["blank", "pick1"]);
+    assert_eq!(
+        plan.to_teach,
+        [("pick1".to_string(), [19101, 1, 2, 1, 1, -2])]
+    );
+    let reads = unit.lock().unwrap().received()[typed..].to_vec();
+    assert!(reads.iter().all(|l| l.starts_with("list ")), "{reads:?}");
+    assert!(unit.lock().unwrap().clocs().is_empty());
+
+    let before = unit.lock().unwrap().joints();
+    let done = b.restore(&file, true).unwrap();
+    assert_eq!(done, plan);
+    let clocs = unit.lock().unwrap().clocs();
+    let want = match &file.vars[2].1 {
+        Saved::Cloc(Some(w)) => *w,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(clocs.len(), 1);
+    assert!(clocs[0].2, "valid");
+    let got = clocs[0].1.unwrap();
+    assert!((0..6).all(|j| (got[j] - want[j]).abs() < 1e-3), "{got:?}");
+    let plocs = unit.lock().unwrap().plocs();
+    assert_eq!(plocs, [("blank".into(), None), ("pick1".into(), None)]);
+    assert_eq!(unit.lock().unwrap().saved_plocs().len(), 2, "saved");
+    assert!(unmoved(&before, &unit.lock().unwrap().joints()));
+    let typed: Vec<String> = unit.lock().unwrap().received().to_vec();
+    assert!(
+        !typed
+            .iter()
+            .any(|l| ["move", "joint", "home", "ready", "here"]
+                .iter()
+                .any(|m| l.starts_with(m))),
+        "{typed:?}"
+    );
+    // Again: the cartesian one is as the file has it; the precision point still to teach.
+    let again = b.restore(&file, true).unwrap();
+    assert!(
+        again.written.is_empty() && again.created.is_empty(),
+        "{again:?}"
+    );
+    assert_eq!(again.to_teach.len(), 1);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let _ = thread.join();
+}

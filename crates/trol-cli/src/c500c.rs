@@ -34,6 +34,58 @@ Examples:
   trol sim --c500c --homed &    # a simulated C500C; then:
   trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
     Step(StepArgs),
+    /// The application's location variables (precision points and cartesian locations, as
+    /// ash prints them) into a text file on the PC. Reads only; connects as `c500c:` does
+    /// (starting `ash APP` where the system shell runs).
+    #[command(after_help = "\
+Examples:
+  trol c500c backup --controller /dev/ttyUSB0 --out cell.locations
+  trol c500c restore --controller /dev/ttyUSB0 cell.locations")]
+    Backup(BackupArgs),
+    /// Write a backup's locations back: first says what it would do (reads only), then,
+    /// after `yes` (--yes: already confirmed), sets each cartesian location that differs or
+    /// is missing (each read back), creates missing names, and saves (ash's `save`).
+    /// Precision points cannot be given from values on a C500C: those that differ are listed,
+    /// with the file's pulses, to teach again on the arm. Never moves the arm.
+    #[command(after_help = "\
+Examples:
+  trol c500c restore --controller /dev/ttyUSB0 cell.locations --dry-run
+  trol c500c restore --controller /dev/ttyUSB0 cell.locations")]
+    Restore(RestoreArgs),
+}
+
+/// The console to connect to, as backup and restore share it.
+#[derive(Args, Debug)]
+pub struct ConsoleArgs {
+    /// The front console's serial device, or socket://HOST:PORT (c500c: may lead).
+    #[arg(long, value_name = "DEVICE")]
+    controller: String,
+    /// The C500C profile (its `baud` and `app`; default: 57600 and test).
+    #[arg(long, value_name = "FILE")]
+    profile: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct BackupArgs {
+    #[command(flatten)]
+    console: ConsoleArgs,
+    /// The file to write.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct RestoreArgs {
+    #[command(flatten)]
+    console: ConsoleArgs,
+    /// The backup to restore (written by `trol c500c backup`).
+    file: PathBuf,
+    /// Only say what it would do.
+    #[arg(long)]
+    dry_run: bool,
+    /// Already confirmed (no question asked).
+    #[arg(long)]
+    yes: bool,
 }
 
 /// The supervised steps.
@@ -98,6 +150,94 @@ pub fn run(c: C500c) -> Result<(), String> {
     match c {
         C500c::Probe(a) => probe(a),
         C500c::Step(a) => step(a),
+        C500c::Backup(a) => backup(a),
+        C500c::Restore(a) => restore(a),
+    }
+}
+
+/// Connect as `c500c:` does: reads only.
+fn connect(c: &ConsoleArgs) -> Result<trol_c500c::C500cBackend, String> {
+    let profile = match &c.profile {
+        Some(p) => trol_c500c::Profile::from_file(p).map_err(|e| e.to_string())?,
+        None => trol_c500c::Profile::default(),
+    };
+    let device = c
+        .controller
+        .strip_prefix(trol_c500c::PREFIX)
+        .unwrap_or(&c.controller);
+    let settings = trol_port::PortSettings {
+        baud: profile.baud,
+        ..Default::default()
+    };
+    let port = trol_port::open(device, &settings).map_err(|e| e.to_string())?;
+    trol_c500c::C500cBackend::connect(port, profile, None).map_err(|e| e.to_string())
+}
+
+fn backup(a: BackupArgs) -> Result<(), String> {
+    let mut b = connect(&a.console)?;
+    let saved = b.backup().map_err(|e| format!("backup: {e}"))?;
+    std::fs::write(&a.out, saved.to_text())
+        .map_err(|e| format!("cannot write {}: {e}", a.out.display()))?;
+    say!(
+        "trol c500c backup: {} location variable(s) of the application {} in {}",
+        saved.vars.len(),
+        saved.app,
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn restore(a: RestoreArgs) -> Result<(), String> {
+    let text = std::fs::read_to_string(&a.file)
+        .map_err(|e| format!("cannot read {}: {e}", a.file.display()))?;
+    let file = trol_c500c::backend::Backup::parse(&text)
+        .map_err(|e| format!("{}: {e}", a.file.display()))?;
+    let mut b = connect(&a.console)?;
+    let plan = b
+        .restore(&file, false)
+        .map_err(|e| format!("restore: {e}"))?;
+    let show = |r: &trol_c500c::backend::Restored, done: bool| {
+        let (set, made) = if done {
+            ("written and read back", "created")
+        } else {
+            ("to write", "to create")
+        };
+        say!("  as the file has them: {}", list(&r.same));
+        say!("  cartesian locations {set}: {}", list(&r.written));
+        say!("  names {made}: {}", list(&r.created));
+        for (n, p) in &r.to_teach {
+            say!(
+                "  precision point {n}: teach again on the arm (the file's pulses: {})",
+                p.map(|x| x.to_string()).join(" ")
+            );
+        }
+    };
+    say!("trol c500c restore {}:", a.file.display());
+    show(&plan, false);
+    if a.dry_run || (plan.written.is_empty() && plan.created.is_empty()) {
+        return Ok(());
+    }
+    if !a.yes {
+        say!("Write these into the application's variables and save? Type yes to go on:");
+        let mut answer = String::new();
+        let _ = std::io::stdin().read_line(&mut answer);
+        if answer.trim() != "yes" {
+            return Err("not confirmed: nothing was written (type yes, or give --yes)".into());
+        }
+    }
+    let done = b
+        .restore(&file, true)
+        .map_err(|e| format!("restore: {e}"))?;
+    say!("done:");
+    show(&done, true);
+    Ok(())
+}
+
+fn list(v: &[String]) -> String {
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
     }
 }
 

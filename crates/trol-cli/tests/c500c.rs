@@ -661,3 +661,130 @@ fn a_power_cut_during_a_motion_is_never_success() {
         "a motion went out after the power cut: {typed:?}"
     );
 }
+
+/// `trol c500c backup` and `restore` over a pty: the application's locations out to a file,
+/// and back into a controller that lost them (a new simulated one): the cartesian location
+/// written and read back, the precision point's name created and listed to teach again;
+/// `--dry-run` and an unconfirmed run write nothing.
+#[test]
+fn backup_and_restore_bring_back_what_a_controller_lost() {
+    let dir = scratch("c500c-backup");
+    let locations = cbuild::root().join("examples").join("locations.txt");
+    let args = [
+        "sim",
+        "--c500c",
+        "--homed",
+        "--locations",
+        locations.to_str().unwrap(),
+    ];
+    let first = Background::start(&dir, &args, "serving on ");
+    let o = trol(
+        &dir,
+        &[
+            "c500c",
+            "backup",
+            "--controller",
+            &first.name,
+            "--out",
+            "cell.locations",
+        ],
+        "",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("2 location variable(s)"), "{out}");
+    let file = std::fs::read_to_string(dir.join("cell.locations")).unwrap();
+    assert!(file.contains("park ploc 0 0 0 0 0 0"), "{file}");
+    assert!(
+        file.contains("test_001 cloc 400.000 0.000 150.000"),
+        "{file}"
+    );
+    drop(first);
+
+    // The battery died: a controller with no variables.
+    let second = Background::start(&dir, &["sim", "--c500c", "--homed"], "serving on ");
+    let restore = |extra: &[&str], input: &str| {
+        let mut a = vec![
+            "c500c",
+            "restore",
+            "--controller",
+            second.name.as_str(),
+            "cell.locations",
+        ];
+        a.extend_from_slice(extra);
+        trol(&dir, &a, input)
+    };
+    let o = restore(&["--dry-run"], "");
+    let (out, _) = text(&o);
+    assert!(o.status.success(), "{out}");
+    assert!(
+        out.contains("cartesian locations to write: test_001"),
+        "{out}"
+    );
+    let o = restore(&[], "no\n");
+    assert!(!o.status.success());
+    assert!(text(&o).1.contains("nothing was written"));
+    // Every line the controller took, gathered as it logs them (each read takes them).
+    let typed = |lines: Vec<String>| -> Vec<String> {
+        lines
+            .into_iter()
+            .filter_map(|l| l.split_once("typed: ").map(|(_, t)| t.trim().to_string()))
+            .collect()
+    };
+    // The unconfirmed run's last read is logged before what is checked (the dry run and
+    // the unconfirmed one each read the controller's variables once).
+    let mut log = typed(second.output_until("typed: list cloc", 2, 30));
+    assert_eq!(
+        log.iter().filter(|t| *t == "list cloc").count(),
+        2,
+        "{log:?}"
+    );
+    assert!(
+        !log.iter()
+            .any(|t| t.starts_with("set ") || t.starts_with("new ")),
+        "written before a yes: {log:?}"
+    );
+    let o = restore(&["--yes"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(
+        out.contains("cartesian locations written and read back: test_001"),
+        "{out}"
+    );
+    assert!(
+        out.contains("precision point park: teach again on the arm"),
+        "{out}"
+    );
+    // What the controller holds now, read back by a second backup.
+    let o = trol(
+        &dir,
+        &[
+            "c500c",
+            "backup",
+            "--controller",
+            &second.name,
+            "--out",
+            "after.locations",
+        ],
+        "",
+    );
+    assert!(o.status.success(), "{}", text(&o).1);
+    let after = std::fs::read_to_string(dir.join("after.locations")).unwrap();
+    assert!(
+        after.contains("test_001 cloc 400.000 0.000 150.000"),
+        "{after}"
+    );
+    assert!(after.contains("park ploc untaught"), "{after}");
+    // The restore's own last line is logged before what is checked.
+    log.extend(typed(second.output_until("typed: save", 1, 30)));
+    assert!(
+        log.iter()
+            .any(|t| t == "set _test_001 = {400.000, 0.000, 150.000, 0.000, 90.000, 0.000, 0, 0}"),
+        "{log:?}"
+    );
+    let moving = ["move", "joint", "home", "ready", "here "];
+    assert!(
+        !log.iter().any(|t| moving.iter().any(|m| t.starts_with(m))),
+        "{log:?}"
+    );
+}

@@ -322,7 +322,7 @@ impl C500cBackend {
                 return Err(self.refusal(&cmd, &lines));
             }
         }
-        let values: Vec<String> = v.iter().map(|x| format!("{x:.3}")).collect();
+        let values: Vec<String> = v.iter().copied().map(fmt3).collect();
         let cmd = format!("set _{SCRATCH} = {{{}, 0, 0}}", values.join(", "));
         let lines = self.exchange(&cmd).map_err(|e| self.fail(e))?;
         if !lines.is_empty() {

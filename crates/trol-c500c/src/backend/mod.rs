@@ -33,12 +33,14 @@ use crate::console::{self, Console, Said};
 use crate::profile::{MotionReturn, Profile};
 use crate::reports::{self, ArmStat, Homing, Known};
 
+mod backup;
 mod bios;
 mod cartesian;
 mod gripper;
 mod motion;
 mod teach;
 
+pub use backup::{Backup, Restored, Saved};
 pub use cartesian::{AGREE_DEG, AGREE_MM, ARRIVE_MM, ARRIVE_TURN_DEG, SCRATCH};
 pub use gripper::{JAWS_AT_MM, JAWS_STILL_FOR, JAWS_WITHIN};
 pub use teach::ARRIVE_PULSES;
@@ -243,6 +245,12 @@ fn said(lines: &[String]) -> Vec<&str> {
         .map(|l| l.trim())
         .filter(|l| !l.is_empty())
         .collect()
+}
+
+/// A value as TROL types it into ash: three decimals, and no `-0.000`.
+fn fmt3(x: f64) -> String {
+    let x = if x.abs() < 0.0005 { 0.0 } else { x };
+    format!("{x:.3}")
 }
 
 fn join(q: &[f64; 6]) -> String {

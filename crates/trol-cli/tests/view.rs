@@ -183,11 +183,16 @@ fn the_page_draws_the_arm_and_follows_it() {
         colours.len()
     );
 
-    // The page follows a motion as it runs, and ends where GetPosition says.
+    // The page follows a motion as it runs, and ends where GetPosition says. At a quarter of
+    // the speed the motion lasts about 3 s: a browser on a loaded machine, whose page may
+    // draw nothing for half a second, still sees it run (at full speed, 0.7 s, one run under
+    // two busy loops saw no update that said moving).
     page.type_line("watch");
     page.wait_for("watching", 30);
+    robot.speed(25).unwrap();
     robot.ma(&[-0.6, 0.1, 0.9, 0.4, -0.5, 1.0]).unwrap();
     robot.finish().unwrap();
+    robot.speed(100).unwrap();
     let followed = page.wait_for("followed ", 90).pop().unwrap();
     let followed: serde_json::Value =
         serde_json::from_str(followed.split("followed ").nth(1).unwrap()).unwrap();

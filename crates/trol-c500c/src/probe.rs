@@ -262,30 +262,45 @@ const STEP_TOL_DEG: f64 = 0.05;
 /// reading after the motion failed, nothing further moves it. The caller has the
 /// confirmation; this sends.
 pub fn motion_return_step(port: &mut dyn Port, app: &str, wait: Duration) -> Supervised {
+    let (contact, settled) = in_ash(port, app, wait, |p| supervised_motion(p, app));
+    Supervised {
+        contact,
+        motion_return: settled.flatten(),
+    }
+}
+
+/// A step's frame: attach, `ash APP` where the system shell runs, `step`, and `exit` again
+/// where it started ash, so the controller is left as found; what `step` returned, or the
+/// reason it stopped among the findings.
+fn in_ash<T>(
+    port: &mut dyn Port,
+    app: &str,
+    wait: Duration,
+    step: impl FnOnce(&mut Probe) -> Result<T, String>,
+) -> (Contact, Option<T>) {
     let mut p = Probe {
         port,
         console: Console::default(),
         contact: Contact::default(),
         wait,
     };
-    let mut settled = None;
-    let r = (|| -> Result<(), String> {
+    let r = (|| -> Result<T, String> {
         let shell = p.attach()?;
         let started = p.enter_ash(&shell, app)?;
-        let r = supervised_motion(&mut p, app);
+        let r = step(&mut p);
         if started {
             p.leave_ash()?;
         }
-        settled = r?;
-        Ok(())
+        r
     })();
-    if let Err(e) = r {
-        p.contact.findings.push(format!("stopped: {e}"));
-    }
-    Supervised {
-        contact: p.contact,
-        motion_return: settled,
-    }
+    let out = match r {
+        Ok(v) => Some(v),
+        Err(e) => {
+            p.contact.findings.push(format!("stopped: {e}"));
+            None
+        }
+    };
+    (p.contact, out)
 }
 
 /// What the step `world-angles` saw (`trol c500c step world-angles`).
@@ -305,71 +320,62 @@ pub struct AnglesRead {
 /// or neither does (a tool or base transform set in ash), it settles nothing and says so.
 pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> AnglesRead {
     use crate::world::{self, Angles};
-    let mut p = Probe {
-        port,
-        console: Console::default(),
-        contact: Contact::default(),
-        wait,
+    let (mut contact, read) = in_ash(port, app, wait, |p| {
+        let lines = read_at(p, app, "w2")?;
+        reports::position(&lines, true).map_err(|e| e.to_string())
+    });
+    let Some(pos) = read else {
+        return AnglesRead {
+            contact,
+            angles: None,
+        };
     };
-    let mut settled = None;
-    let r = (|| -> Result<(), String> {
-        let shell = p.attach()?;
-        let started = p.enter_ash(&shell, app)?;
-        let read = read_at(&mut p, app, "w2")
-            .and_then(|l| reports::position(&l, true).map_err(|e| e.to_string()));
-        if started {
-            p.leave_ash()?;
+    let flange =
+        trol_a465::kinematics::Kinematics::new([0.0; 6]).fk(&pos.joints_deg.map(f64::to_radians));
+    let gaps: Vec<(Angles, f64, f64)> = Angles::ALL
+        .iter()
+        .map(|&a| {
+            let (mm, deg) = world::gap(&world::from_ash(&pos.world, a), &flange);
+            (a, mm, deg)
+        })
+        .collect();
+    for (a, mm, deg) in &gaps {
+        contact.findings.push(format!(
+            "read as `{}`, the WORLD row is {mm:.2} mm and {deg:.2} degrees from TROL's flange",
+            a.word()
+        ));
+    }
+    let agree: Vec<Angles> = gaps
+        .iter()
+        .filter(|(_, mm, deg)| *mm <= 0.5 && *deg <= 0.1)
+        .map(|g| g.0)
+        .collect();
+    let apart = gaps.iter().any(|(_, _, deg)| *deg > 1.0);
+    let angles = match agree[..] {
+        [a] if apart => {
+            contact
+                .findings
+                .push(format!("world-angles: {} (settled)", a.word()));
+            Some(a)
         }
-        let pos = read?;
-        let flange = trol_a465::kinematics::Kinematics::new([0.0; 6])
-            .fk(&pos.joints_deg.map(f64::to_radians));
-        let gaps: Vec<(Angles, f64, f64)> = Angles::ALL
-            .iter()
-            .map(|&a| {
-                let (mm, deg) = world::gap(&world::from_ash(&pos.world, a), &flange);
-                (a, mm, deg)
-            })
-            .collect();
-        for (a, mm, deg) in &gaps {
-            p.contact.findings.push(format!(
-                "read as `{}`, the WORLD row is {mm:.2} mm and {deg:.2} degrees from TROL's \
-                 flange",
-                a.word()
-            ));
-        }
-        let agree: Vec<Angles> = gaps
-            .iter()
-            .filter(|(_, mm, deg)| *mm <= 0.5 && *deg <= 0.1)
-            .map(|g| g.0)
-            .collect();
-        let apart = gaps.iter().any(|(_, _, deg)| *deg > 1.0);
-        match agree[..] {
-            [a] if apart => {
-                p.contact
-                    .findings
-                    .push(format!("world-angles: {} (settled)", a.word()));
-                settled = Some(a);
-            }
-            [_, _] => p.contact.findings.push(
+        [_, _] => {
+            contact.findings.push(
                 "both readings agree where the arm stands: turn joint 4 and joint 5 by 20 \
                  degrees or more (the pendant, or TROLJoint), then run the step again"
                     .into(),
-            ),
-            _ => p.contact.findings.push(
+            );
+            None
+        }
+        _ => {
+            contact.findings.push(
                 "neither reading puts the flange where TROL's kinematics do: ash has a tool or \
                  base transform set (`tool`, `base`), or its units are not millimetres"
                     .into(),
-            ),
+            );
+            None
         }
-        Ok(())
-    })();
-    if let Err(e) = r {
-        p.contact.findings.push(format!("stopped: {e}"));
-    }
-    AnglesRead {
-        contact: p.contact,
-        angles: settled,
-    }
+    };
+    AnglesRead { contact, angles }
 }
 
 /// A command at ash's prompt that must print nothing (a setting, a motion): its lines, or

@@ -148,38 +148,25 @@ impl C500cBackend {
             return Err(BackendError::Refused(BUSY));
         }
         let mut vars = Vec::new();
-        for (var, taught) in self.list_vars("ploc")? {
-            let v = if taught {
-                match self.print_ploc(&var)? {
-                    Ploc::At(p) => Some(p),
-                    other => {
-                        return Err(self.unsure(format!(
-                            "`list ploc` has {var} taught, and `print {var}` reads {other:?}"
-                        )));
-                    }
+        for base in ["ploc", "cloc"] {
+            for (var, taught) in self.list_vars(base)? {
+                if var == cartesian::SCRATCH {
+                    continue;
                 }
-            } else {
-                None
-            };
-            vars.push((var, Saved::Ploc(v)));
-        }
-        for (var, taught) in self.list_vars("cloc")? {
-            if var == cartesian::SCRATCH {
-                continue;
+                let saved = match (base, taught) {
+                    ("ploc", false) => Saved::Ploc(None),
+                    (_, false) => Saved::Cloc(None),
+                    ("ploc", true) => match self.print_ploc(&var)? {
+                        Ploc::At(p) => Saved::Ploc(Some(p)),
+                        other => return Err(self.misread(base, &var, &other)),
+                    },
+                    (_, true) => match self.print_cloc(&var)? {
+                        Cloc::At(w) => Saved::Cloc(Some(w)),
+                        other => return Err(self.misread(base, &var, &other)),
+                    },
+                };
+                vars.push((var, saved));
             }
-            let v = if taught {
-                match self.print_cloc(&var)? {
-                    Cloc::At(w) => Some(w),
-                    other => {
-                        return Err(self.unsure(format!(
-                            "`list cloc` has {var} taught, and `print {var}` reads {other:?}"
-                        )));
-                    }
-                }
-            } else {
-                None
-            };
-            vars.push((var, Saved::Cloc(v)));
         }
         vars.sort_by(|a, b| a.0.cmp(&b.0));
         Ok(Backup {
@@ -262,6 +249,18 @@ impl C500cBackend {
             }
         }
         Ok(r)
+    }
+
+    /// `list BASE` said `var` is taught, and `print` says otherwise: UNSURE.
+    pub(super) fn misread(
+        &mut self,
+        base: &str,
+        var: &str,
+        got: &dyn std::fmt::Debug,
+    ) -> BackendError {
+        self.unsure(format!(
+            "`list {base}` has {var} taught, and `print {var}` reads {got:?}"
+        ))
     }
 
     /// `new #name` or `new _name`: nothing printed.

@@ -272,11 +272,7 @@ impl C500cBackend {
                 self.world_check(angles)?;
                 let w = match self.print_cloc(&var)? {
                     Cloc::At(w) => w,
-                    other => {
-                        return Err(self.unsure(format!(
-                            "`list cloc` has {var} taught, and `print {var}` reads {other:?}"
-                        )));
-                    }
+                    other => return Err(self.misread("cloc", &var, &other)),
                 };
                 self.reading_settled(&w)?;
                 // The location is the flange (ash's tool is the null one: the check saw

@@ -8,6 +8,7 @@
 //! settles: refused before sending, as cartesian motions are.
 
 use super::*;
+use crate::backend::backup::Saved;
 
 /// How far (pulses) the arm may stand from a precision point and be at it (assumed: about
 /// 0.05 degrees at an A465's 561 to 1,111 pulses per degree, which a C500C's are not known
@@ -338,59 +339,48 @@ impl C500cBackend {
                 Ok(c) => Err(BackendError::Refused(c)),
             };
         }
-        let rows = self.list_vars("ploc")?;
+        // What ash holds, as `trol c500c backup` reads it; then in TROL's forms.
+        let held = self.backup()?;
         let mut out = Vec::new();
         let mut left = Vec::new();
-        for (var, taught) in rows {
-            let name = LocName::new(&format!("#{var}"));
-            match (name, taught) {
-                (Ok(name), true) if ash_var(&name).is_some() => match self.print_ploc(&var)? {
-                    Ploc::At(p) => {
-                        let counts: Option<Vec<i32>> =
-                            p.iter().map(|&v| i32::try_from(v).ok()).collect();
-                        match counts {
-                            Some(c) => out.push((name, Location::Prec(c))),
-                            None => left.push(format!("{var} (pulses out of range)")),
-                        }
-                    }
-                    other => {
-                        return Err(self.unsure(format!(
-                            "`list ploc` names {var} taught, and `print {var}` reads {other:?}"
-                        )));
-                    }
-                },
-                (_, false) => left.push(format!("{var} (not taught)")),
-                _ => left.push(format!("{var} (no TROL name: over 7 characters)")),
-            }
-        }
-        // Cartesian locations: the flange as ash keeps it, TROL's tool centre point there,
-        // in TROL's angles (which needs the profile's reading of ash's).
-        for (var, taught) in self.list_vars("cloc")? {
-            if var == cartesian::SCRATCH {
-                continue;
-            }
-            let Some(angles) = self.profile.world_angles else {
-                left.push(format!(
-                    "{var} (cartesian: needs `world-angles` in the profile)"
-                ));
+        for (var, saved) in held.vars {
+            let sign = if matches!(saved, Saved::Ploc(_)) {
+                "#"
+            } else {
+                ""
+            };
+            let name = LocName::new(&format!("{sign}{var}"))
+                .ok()
+                .filter(|n| ash_var(n).is_some());
+            let Some(name) = name else {
+                left.push(format!("{var} (no TROL name: over 8 characters)"));
                 continue;
             };
-            match (LocName::new(&var), taught) {
-                (Ok(name), true) if ash_var(&name).is_some() => match self.print_cloc(&var)? {
-                    cartesian::Cloc::At(w) => {
+            match saved {
+                Saved::Ploc(Some(p)) => {
+                    let counts: Option<Vec<i32>> =
+                        p.iter().map(|&v| i32::try_from(v).ok()).collect();
+                    match counts {
+                        Some(c) => out.push((name, Location::Prec(c))),
+                        None => left.push(format!("{var} (pulses out of range)")),
+                    }
+                }
+                // The flange as ash keeps it; TROL's tool centre point there, in TROL's
+                // angles (which needs the profile's reading of ash's).
+                Saved::Cloc(Some(w)) => match self.profile.world_angles {
+                    Some(angles) => {
                         let tcp = crate::world::from_ash(&w, angles)
                             .then(&trol_a465::kinematics::Pose::from_xyzypr(self.tool))
                             .to_xyzypr();
                         out.push((name, Location::Cart(tcp.to_vec())));
                     }
-                    other => {
-                        return Err(self.unsure(format!(
-                            "`list cloc` names {var} taught, and `print {var}` reads {other:?}"
-                        )));
-                    }
+                    None => left.push(format!(
+                        "{var} (cartesian: needs `world-angles` in the profile)"
+                    )),
                 },
-                (_, false) => left.push(format!("{var} (not taught or not valid)")),
-                _ => left.push(format!("{var} (no TROL name: over 8 characters)")),
+                Saved::Ploc(None) | Saved::Cloc(None) => {
+                    left.push(format!("{var} (not taught or not valid)"))
+                }
             }
         }
         if !left.is_empty() {
@@ -460,9 +450,7 @@ impl C500cBackend {
                 line: format!("{} {var}", if straight { "moves" } else { "move" }),
                 kind: Kind::Named(p),
             }),
-            other => Err(self.unsure(format!(
-                "`list ploc` has {var} taught, and `print {var}` reads {other:?}"
-            ))),
+            other => Err(self.misread("ploc", &var, &other)),
         }
     }
 }

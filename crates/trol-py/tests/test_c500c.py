@@ -1,6 +1,7 @@
 """TROL for Python driving an A465 on its C500C: `trol sim --c500c` over a pty, through
-`c500c:` in trol.cfg with the profile that matches it (docs/c500c.md), on every variant of
-the simulated controller: right, or failed safe with the manual's code."""
+`c500c:` in trol.cfg with the profile that matches it (docs/c500c.md) and through `trol
+gateway --controller c500c:`, on every variant of the simulated controller: right, or failed
+safe with the manual's code."""
 
 from __future__ import annotations
 
@@ -30,40 +31,61 @@ def variants() -> list[str]:
 VARIANTS = variants()
 
 
-@pytest.fixture(params=VARIANTS)
+def start(args: list[str]) -> tuple[subprocess.Popen[str], str]:
+    """`trol ARGS` as its own process, and the port it says it serves on."""
+    proc = subprocess.Popen(
+        [str(trol_binary()), *args], stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+    )
+    assert proc.stdout is not None
+    said: list[str] = []
+    # The gateway says what it typed at connect (its transcript) before where it serves.
+    while "serving on " not in (line := proc.stdout.readline()):
+        assert line, "".join(said)
+        said.append(line)
+    threading.Thread(target=proc.stdout.read, daemon=True).start()
+    return proc, line.split("serving on ", 1)[1].split()[0]
+
+
+@pytest.fixture(params=[
+    pytest.param((variant, via), id=f"{variant}-{via}")
+    for variant in VARIANTS for via in ("c500c", "gateway")
+])
 def c500c_robot(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[trol.Robot]:
-    """`trol sim --c500c` of one variant as its own process, 10 times real time, driven
-    through `c500c:` with the profile that matches it."""
-    variant = request.param
+    """`trol sim --c500c` of one variant as its own process, 10 times real time, driven with
+    the profile that matches it: in-process through `c500c:` in trol.cfg, or through `trol
+    gateway --controller c500c:` (a PCP server, as a 1998 host drives it)."""
+    variant, via = request.param
     profile = subprocess.run(
         [str(trol_binary()), "sim", "--c500c", "--variant", variant, "--print-profile"],
         check=True, capture_output=True, text=True,
     ).stdout
     (tmp_path / "c500c.toml").write_text(profile)
-    proc = subprocess.Popen(
-        [str(trol_binary()), "sim", "--c500c", "--variant", variant, "--time-scale", "10"],
-        stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-    )
+    procs: list[subprocess.Popen[str]] = []
     try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        assert "serving on " in line, line
-        port = line.split("serving on ", 1)[1].split()[0]
-        threading.Thread(target=proc.stdout.read, daemon=True).start()
-        cfg = tmp_path / "trol.cfg"
-        cfg.write_text(f"9600\nc500c:{port}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n")
-        with trol.Robot.from_config(cfg) as robot:
-            yield robot
+        proc, port = start(["sim", "--c500c", "--variant", variant, "--time-scale", "10"])
+        procs.append(proc)
+        if via == "gateway":
+            proc, gateway = start(["gateway", "--controller", f"c500c:{port}", "--profile",
+                                   str(tmp_path / "c500c.toml"), "--server"])
+            procs.append(proc)
+            with trol.Robot.open(gateway) as robot:
+                yield robot
+        else:
+            cfg = tmp_path / "trol.cfg"
+            cfg.write_text(f"9600\nc500c:{port}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n")
+            with trol.Robot.from_config(cfg) as robot:
+                yield robot
     finally:
-        proc.kill()
-        proc.wait()
+        for p in procs:
+            p.kill()
+            p.wait()
 
 
 @pytest.mark.timeout(120)
 def test_a_python_script_drives_the_arm_on_a_c500c(
     c500c_robot: trol.Robot, request: pytest.FixtureRequest
 ) -> None:
-    variant = request.node.callspec.params["c500c_robot"]
+    variant, _via = request.node.callspec.params["c500c_robot"]
     assert c500c_robot.version()[1] == "C500C over ash"
     # Nothing moves before Home: armstat says the arm is not homed.
     with pytest.raises(trol.RefusedError) as e:

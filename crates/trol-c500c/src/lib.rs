@@ -7,6 +7,7 @@
 //!   texts;
 //! - [`probe`]: first contact that only reads, every byte recorded;
 //! - [`profile`]: what only the arm settles, one TOML file per controller;
+//! - [`pulses`]: how the PULSES row relates to the JOINTS row, joint by joint;
 //! - [`world`]: the WORLD row's and a cartesian location's angles, in each reading;
 //! - [`backend`]: the robot backend behind the PCP server (`c500c:DEVICE`), on the shared
 //!   core for real controllers;
@@ -21,6 +22,7 @@ pub mod c500c;
 pub mod console;
 pub mod probe;
 pub mod profile;
+pub mod pulses;
 pub mod reports;
 pub mod world;
 

@@ -378,6 +378,159 @@ pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> Angl
     AnglesRead { contact, angles }
 }
 
+/// What the step `pulses` saw (`trol c500c step pulses`).
+#[derive(Debug, Default)]
+pub struct PulsesRead {
+    /// The commands, the transcript and the findings, as first contact's.
+    pub contact: Contact,
+    /// How the PULSES row relates to the JOINTS row, where every joint told it.
+    pub pulses: Option<crate::pulses::Pulses>,
+}
+
+/// How far the two legs of a joint's step may disagree on its pulses per degree (a share of
+/// it) and still tell it: the rounding of the rows over 3 degrees is about 0.03 %.
+const LEGS_AGREE: f64 = 0.002;
+
+/// The supervised step `pulses`: after the person at the arm has confirmed it is clear, with
+/// the arm powered and homed, each joint in turn goes by 3 degrees at 5 % speed and back
+/// (away from its nearer limit), with `finish` and `w2` after each. A joint's pulses per
+/// degree is what its PULSES moved over what its JOINTS moved, on both legs, which must
+/// agree; where it counts from follows. Every other joint's pulses must stay put while one
+/// moves (an axis whose pulses follow another's is not one ratio per joint: nothing is
+/// settled). The arm not ending where sent stops the step, with nothing further sent to
+/// move it. The caller has the confirmation; this sends.
+pub fn pulses_step(port: &mut dyn Port, app: &str, wait: Duration) -> PulsesRead {
+    let (mut contact, read) = in_ash(port, app, wait, |p| {
+        at_step_speed(p, app, |p| {
+            let mut per_degree = [0.0; 6];
+            let mut at_zero = [0; 6];
+            for j in 0..6 {
+                let (k, zero) = one_joint(p, app, j)?;
+                per_degree[j] = k;
+                at_zero[j] = zero;
+            }
+            Ok(crate::pulses::Pulses {
+                per_degree,
+                at_zero,
+            })
+        })
+    });
+    if let Some(rel) = &read {
+        if let Err(e) = rel.check() {
+            contact.findings.push(format!("{e}: nothing settled"));
+            return PulsesRead {
+                contact,
+                pulses: None,
+            };
+        }
+        contact.findings.push(format!(
+            "pulses-per-degree = [{}], pulses-at-zero = [{}] (settled)",
+            rel.per_degree
+                .iter()
+                .map(|k| format!("{k:.4}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            rel.at_zero
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    PulsesRead {
+        contact,
+        pulses: read,
+    }
+}
+
+/// `w2`'s PULSES and JOINTS rows.
+fn w2_rows(p: &mut Probe, app: &str) -> Result<reports::Position, String> {
+    let lines = read_at(p, app, "w2")?;
+    reports::position(&lines, true).map_err(|e| e.to_string())
+}
+
+/// Joint `j` (0-based) by 3 degrees and back: its pulses per degree and its pulses at zero.
+fn one_joint(p: &mut Probe, app: &str, j: usize) -> Result<(f64, i64), String> {
+    let n = j + 1;
+    let a = w2_rows(p, app)?;
+    let lim = trol_a465::model::LIMITS_DEG[j];
+    let deg = if a.joints_deg[j] + STEP_DEG <= lim - 1.0 {
+        STEP_DEG
+    } else {
+        -STEP_DEG
+    };
+    let moved = |e: String| {
+        format!(
+            "{e} (joint {n} may stand up to {STEP_DEG} degrees from where it started; nothing \
+             further was sent to move it)"
+        )
+    };
+    let leg = |p: &mut Probe, from: &reports::Position, by: f64| {
+        let cmd = format!("joint {n},{by}");
+        quiet(p, app, &cmd)?;
+        read_at(p, app, "finish")?;
+        let to = w2_rows(p, app)?;
+        let want = from.joints_deg[j] + by;
+        let arrived = (to.joints_deg[j] - want).abs() <= STEP_TOL_DEG
+            && (0..6)
+                .all(|k| k == j || (to.joints_deg[k] - from.joints_deg[k]).abs() <= STEP_TOL_DEG);
+        if !arrived {
+            return Err(format!(
+                "after `{cmd}` and `finish` the arm is at {:?} degrees, not at joint {n} \
+                 {want:.3}: nothing settled, and nothing further was sent (check the arm)",
+                to.joints_deg
+            ));
+        }
+        if let Some(k) = (0..6).find(|&k| {
+            k != j && (to.pulses[k] - from.pulses[k]).abs() as f64 > crate::pulses::tolerance(0.0)
+        }) {
+            return Err(format!(
+                "as joint {n} moved, joint {}'s pulses went from {} to {} with its angle \
+                 unchanged: its pulses follow another axis, not one ratio per joint; nothing \
+                 settled",
+                k + 1,
+                from.pulses[k],
+                to.pulses[k]
+            ));
+        }
+        let k = (to.pulses[j] - from.pulses[j]) as f64 / (to.joints_deg[j] - from.joints_deg[j]);
+        Ok((to, k))
+    };
+    let (b, k1) = leg(p, &a, deg).map_err(moved)?;
+    let (c, k2) = leg(p, &b, -deg).map_err(moved)?;
+    if (k1 - k2).abs() > LEGS_AGREE * k1.abs().max(k2.abs()) {
+        return Err(format!(
+            "joint {n}: {k1:.4} pulses per degree going, {k2:.4} coming back: not one ratio; \
+             nothing settled"
+        ));
+    }
+    let k = (k1 + k2) / 2.0;
+    // Where it counts from, by the first reading, and checked on all three.
+    let zero = |r: &reports::Position| r.pulses[j] as f64 - k * r.joints_deg[j];
+    let z = zero(&a).round() as i64;
+    let rel = crate::pulses::Pulses {
+        per_degree: [k; 6],
+        at_zero: [z; 6],
+    };
+    for r in [&a, &b, &c] {
+        let mut deg = [0.0; 6];
+        let mut pulses = [z; 6];
+        deg[j] = r.joints_deg[j];
+        pulses[j] = r.pulses[j];
+        if !rel.agrees(&deg, &pulses)[j] {
+            return Err(format!(
+                "joint {n}: {k:.4} pulses per degree from {z} does not give the {} pulses read \
+                 at {:.3} degrees; nothing settled",
+                r.pulses[j], r.joints_deg[j]
+            ));
+        }
+    }
+    p.contact.findings.push(format!(
+        "joint {n}: {k:.4} pulses per degree ({k1:.4} going, {k2:.4} back), {z} pulses at zero"
+    ));
+    Ok((k, z))
+}
+
 /// A command at ash's prompt that must print nothing (a setting, a motion): its lines, or
 /// the refusal.
 fn quiet(p: &mut Probe, app: &str, cmd: &str) -> Result<(), String> {
@@ -414,9 +567,14 @@ fn w2(p: &mut Probe, app: &str) -> Result<[f64; 6], String> {
         .map_err(|e| e.to_string())
 }
 
-/// The motion of the supervised step and what it tells; the speed setting typed back
-/// whatever happened once it was changed.
-fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, String> {
+/// A supervised step's frame: with the arm powered and homed (armstat), the speed setting
+/// read, set to [`STEP_SPEED`] and read back, `body` run, and the speed typed back as it was
+/// found whatever happened once it was changed.
+fn at_step_speed<T>(
+    p: &mut Probe,
+    app: &str,
+    body: impl FnOnce(&mut Probe) -> Result<T, String>,
+) -> Result<T, String> {
     let stat = reports::armstat(&read_at(p, app, "armstat")?).map_err(|e| e.to_string())?;
     if !stat.power {
         return Err(
@@ -430,7 +588,6 @@ fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, S
         ));
     }
     let speed = reports::speed(&read_at(p, app, "speed")?).map_err(|e| e.to_string())?;
-    let q0 = w2(p, app)?;
     quiet(p, app, &format!("speed {STEP_SPEED}"))?;
     let r = (|| {
         let now = reports::speed(&read_at(p, app, "speed")?).map_err(|e| e.to_string())?;
@@ -439,6 +596,23 @@ fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, S
                 "`speed {STEP_SPEED}` taken, and `speed` then says {now}: nothing moved"
             ));
         }
+        body(p)
+    })();
+    let restored = quiet(p, app, &format!("speed {speed}"));
+    if let Err(e) = &restored {
+        p.contact.findings.push(format!(
+            "the speed setting ({speed} %) could not be typed back: {e}"
+        ));
+    }
+    let found = r?;
+    restored?;
+    Ok(found)
+}
+
+/// The motion of the supervised step `motion-return` and what it tells.
+fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, String> {
+    let found = at_step_speed(p, app, |p| {
+        let q0 = w2(p, app)?;
         let j = STEP_JOINT - 1;
         let cmd = format!("joint {STEP_JOINT},{STEP_DEG}");
         let sent = Instant::now();
@@ -503,16 +677,7 @@ fn supervised_motion(p: &mut Probe, app: &str) -> Result<Option<MotionReturn>, S
             );
             None
         })
-    })();
-    // The speed setting as it was found.
-    let restored = quiet(p, app, &format!("speed {speed}"));
-    if let Err(e) = &restored {
-        p.contact.findings.push(format!(
-            "the speed setting ({speed} %) could not be typed back: {e}"
-        ));
-    }
-    let found = r?;
-    restored?;
+    })?;
     if let Some(m) = found {
         p.contact.findings.push(format!(
             "motion-return = \"{}\": ash gives its prompt back {}",
@@ -663,6 +828,86 @@ mod tests {
                 s.contact.transcript.text().contains("> joint 6,3"),
                 "{name}"
             );
+        }
+    }
+
+    #[test]
+    fn the_pulses_step_measures_each_joint_and_leaves_the_arm_where_it_was() {
+        for name in ["default", "pulses-offset"] {
+            let sw = crate::c500c::variant(name).unwrap();
+            let want = sw.pulses;
+            let (mut host, ctl) = trol_port::memory::pair(None);
+            let unit = Arc::new(Mutex::new(C500c::new(sw, true, 20.0)));
+            // Away from READY, joint 5 near its limit: that one goes the other way.
+            unit.lock()
+                .unwrap()
+                .move_by_hand([0.3, -0.2, 0.5, 0.1, 104.0f64.to_radians(), -0.4]);
+            let before = unit.lock().unwrap().joints();
+            let stop = Arc::new(AtomicBool::new(false));
+            let t = {
+                let (unit, stop) = (unit.clone(), stop.clone());
+                std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
+            };
+            let s = pulses_step(&mut host, "test", Duration::from_secs(10));
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            let _ = t.join();
+            let f = s.contact.findings.join("\n");
+            let got = s.pulses.unwrap_or_else(|| panic!("{name}: {f}"));
+            for j in 0..6 {
+                let k = want.per_degree[j];
+                assert!(
+                    (got.per_degree[j] - k).abs() <= 0.001 * k.abs(),
+                    "{name}: joint {}: {} for {k}\n{f}",
+                    j + 1,
+                    got.per_degree[j]
+                );
+                assert!(
+                    (got.at_zero[j] - want.at_zero[j]).abs() as f64
+                        <= crate::pulses::tolerance(k * 180.0),
+                    "{name}: joint {}: {} for {}\n{f}",
+                    j + 1,
+                    got.at_zero[j],
+                    want.at_zero[j]
+                );
+            }
+            let mut u = unit.lock().unwrap();
+            let after = u.joints();
+            for k in 0..6 {
+                assert!(
+                    (after[k] - before[k]).abs() < 1e-3,
+                    "{name}: {before:?} -> {after:?}"
+                );
+            }
+            let joints: Vec<&str> = u
+                .received()
+                .iter()
+                .filter(|l| l.starts_with("joint"))
+                .map(String::as_str)
+                .collect();
+            assert_eq!(
+                joints,
+                [
+                    "joint 1,3",
+                    "joint 1,-3",
+                    "joint 2,3",
+                    "joint 2,-3",
+                    "joint 3,3",
+                    "joint 3,-3",
+                    "joint 4,3",
+                    "joint 4,-3",
+                    "joint 5,-3",
+                    "joint 5,3",
+                    "joint 6,3",
+                    "joint 6,-3"
+                ],
+                "{name}"
+            );
+            let speeds: Vec<&String> = u
+                .received()
+                .iter()
+                .filter(|l| l.starts_with("speed "))
+                .collect();
+            assert_eq!(speeds, ["speed 5", "speed 100"], "{name}");
         }
     }
 

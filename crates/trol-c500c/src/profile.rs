@@ -7,6 +7,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::pulses::Pulses;
 pub use crate::world::Angles;
 
 /// When ash gives its prompt back after a motion command.
@@ -39,6 +40,12 @@ pub struct Profile {
     /// How the WORLD row's and a cartesian location's three angles compose (unset:
     /// cartesian motions are refused; `trol c500c step world-angles` reads it off the arm).
     pub world_angles: Option<Angles>,
+    /// The A465's encoder pulses per degree, joints 1 to 6, on this C500C (unset: an
+    /// approach to a precision point is refused; `trol c500c step pulses` measures it).
+    pub pulses_per_degree: Option<[f64; 6]>,
+    /// `w2`'s PULSES row with every joint at 0 degrees (set with `pulses-per-degree`, by the
+    /// same step).
+    pub pulses_at_zero: Option<[i64; 6]>,
 }
 
 impl Default for Profile {
@@ -50,6 +57,8 @@ impl Default for Profile {
             settle_ms: 300,
             end_margin_s: 10,
             world_angles: None,
+            pulses_per_degree: None,
+            pulses_at_zero: None,
         }
     }
 }
@@ -114,7 +123,26 @@ impl Profile {
         if !(1..=120).contains(&p.end_margin_s) {
             return Err(format!("end-margin-s = {}: 1 to 120", p.end_margin_s));
         }
+        match (p.pulses_per_degree, p.pulses_at_zero) {
+            (None, None) => {}
+            (Some(_), Some(_)) => p.pulses().iter().try_for_each(Pulses::check)?,
+            _ => {
+                return Err(
+                    "pulses-per-degree and pulses-at-zero go together (`trol c500c step pulses` \
+                     writes both)"
+                        .into(),
+                );
+            }
+        }
         Ok(p)
+    }
+
+    /// How the PULSES row relates to the JOINTS row, where both keys are set.
+    pub fn pulses(&self) -> Option<Pulses> {
+        Some(Pulses {
+            per_degree: self.pulses_per_degree?,
+            at_zero: self.pulses_at_zero?,
+        })
     }
 
     /// The profile as TOML.
@@ -136,6 +164,13 @@ mod tests {
         assert_eq!(p.world_angles, Some(Angles::Xyz));
         assert_eq!(p.app, "cell");
         assert_eq!(Profile::parse(&p.to_toml()).unwrap(), p);
+        let p = Profile::parse(
+            "pulses-per-degree = [1000.0, -800.0, 600.5, 561.0, 700.0, 1111.1]\n\
+             pulses-at-zero = [1200, -800, 400, -2000, 500, 300]\n",
+        )
+        .unwrap();
+        assert_eq!(p.pulses().unwrap().at_zero[3], -2000);
+        assert_eq!(Profile::parse(&p.to_toml()).unwrap(), p);
         for bad in [
             "motion-return = \"later\"",
             "baud = 1200",
@@ -143,6 +178,11 @@ mod tests {
             "settle-ms = 0",
             "angles = \"zyx\"",
             "world-angles = \"yzx\"",
+            "pulses-per-degree = [1000.0, 1000.0, 1000.0, 1000.0, 1000.0, 1000.0]",
+            "pulses-at-zero = [0, 0, 0, 0, 0, 0]",
+            "pulses-per-degree = [1000.0, 0.0, 1000.0, 1000.0, 1000.0, 1000.0]\n\
+             pulses-at-zero = [0, 0, 0, 0, 0, 0]",
+            "pulses-per-degree = [1000.0, 1000.0]\npulses-at-zero = [0, 0]",
         ] {
             assert!(Profile::parse(bad).is_err(), "{bad}");
         }

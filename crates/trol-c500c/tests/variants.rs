@@ -23,6 +23,8 @@ const SCALE: f64 = 10.0;
 struct Rig {
     robot: Robot,
     unit: Arc<Mutex<C500c>>,
+    /// What the backend said in its log (its notes: why it refused).
+    said: Arc<Mutex<Vec<String>>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
@@ -46,6 +48,9 @@ impl Rig {
     fn received(&self) -> Vec<String> {
         self.unit.lock().unwrap().received().to_vec()
     }
+    fn said(&self) -> String {
+        self.said.lock().unwrap().join("\n")
+    }
 }
 
 fn rig(sw: Switches, homed: bool, profile: Profile) -> Rig {
@@ -64,10 +69,15 @@ fn rig_at(sw: Switches, homed: bool, profile: Profile, scale: f64) -> Rig {
             let _ = c500c::serve(Box::new(ctl), unit, stop);
         })
     };
+    let said = Arc::new(Mutex::new(Vec::new()));
+    let log = said.clone();
     let backend = C500cBackend::connect(
         Box::new(host),
         profile,
-        Some(Box::new(|l: &str| eprintln!("c500c: {l}"))),
+        Some(Box::new(move |l: &str| {
+            eprintln!("c500c: {l}");
+            log.lock().unwrap().push(l.to_string());
+        })),
     )
     .unwrap_or_else(|e| panic!("the session opens: {e}"));
     let cfg = LinkConfig::default();
@@ -78,6 +88,7 @@ fn rig_at(sw: Switches, homed: bool, profile: Profile, scale: f64) -> Rig {
     Rig {
         robot,
         unit,
+        said,
         stop,
         thread: Some(thread),
     }
@@ -445,6 +456,19 @@ fn cart_round(r: &mut Rig, sw: &Switches, name: &str) {
         "{name}: listed {v:?}"
     );
     r.robot.delete_location("spot").unwrap();
+    // A precision point taught here, left, and approached: its joints by the profile's
+    // pulses, which every joint has been seen to agree with by now.
+    r.robot
+        .here("#over", Tag::Prec)
+        .unwrap_or_else(|e| panic!("{name}: Here #over: {e}"));
+    let res = r.robot.depart(&[-30.0, 0.0, 0.0, 0.0, 0.0, 0.0], true);
+    go(r, "Depart #over", res);
+    let res = r
+        .robot
+        .appro("#over", &[-10.0, 0.0, 0.0, 0.0, 0.0, 0.0], true);
+    go(r, "Appro #over", res);
+    assert!(at(r, &near), "{name}: at {:?}, not {near:?}", tcp(r));
+    r.robot.delete_location("#over").unwrap();
     // Back to READY's joints for what follows, one joint at a time.
     for j in (1..=6u16).rev() {
         let q = r.joints()[j as usize - 1];
@@ -539,6 +563,7 @@ each! {
     gripper_none => "gripper-none",
     grip_return_at_end => "grip-return-at-end",
     world_xyz => "world-xyz",
+    pulses_offset => "pulses-offset",
 }
 
 /// Not homed at power-on: a motion is refused with BIOS_NOT_HOMED and nothing is sent;
@@ -815,6 +840,71 @@ fn points_taught_on_the_pendant_are_listed_and_reached() {
     assert!(unmoved(&before, &r.joints()));
     assert!(!r.received().iter().any(|l| l.starts_with("move")));
     r.robot.move_to("#p07", false).unwrap();
+    r.robot.finish().unwrap();
+    assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
+}
+
+/// An approach to a precision point of the pendant's needs its joints, which need the
+/// pulses per degree: unset in the profile, refused naming the keys and the step; a profile
+/// whose pulses are not the arm's, refused at the first `w2` that shows it; the right ones,
+/// refused for a joint not yet seen away from its zero, then the approach ends where TROL's
+/// kinematics put it. Never a motion on a value TROL has not seen hold on the arm.
+#[test]
+fn an_approach_to_a_precision_point_trusts_the_pulses_only_as_far_as_seen() {
+    use trol_a465::kinematics::Pose;
+    let sw = c500c::variant("pulses-offset").unwrap();
+    let target = [0.3, -0.2, 0.9, 0.1, 0.6, 0.2];
+    let pulses = c500c::offset_pulses().pulses(&target.map(f64::to_degrees));
+    let disp = [-30.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let approach = |r: &mut Rig| r.robot.appro("#bin", &disp, false);
+    let refused_unmoved = |r: &mut Rig, res: trol::Result<()>, says: &str| {
+        let e = res.unwrap_err();
+        assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
+        let why = r.said();
+        assert!(why.contains(says), "{why}");
+        assert!(!r.received().iter().any(|l| l.starts_with("move")));
+        assert!(!r.moving());
+    };
+
+    let unset = Profile {
+        pulses_per_degree: None,
+        pulses_at_zero: None,
+        ..c500c::matching_profile(&sw)
+    };
+    let mut r = rig(sw.clone(), true, unset);
+    r.unit.lock().unwrap().set_ploc("bin", Some(pulses));
+    let res = approach(&mut r);
+    refused_unmoved(&mut r, res, "trol c500c step pulses");
+    drop(r);
+
+    // The A465 model's pulses, where this controller counts from elsewhere.
+    let wrong = c500c::matching_profile(&Switches::default());
+    let mut r = rig(sw.clone(), true, wrong);
+    r.unit.lock().unwrap().set_ploc("bin", Some(pulses));
+    let res = approach(&mut r);
+    refused_unmoved(&mut r, res, "not this arm's");
+    drop(r);
+
+    let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
+    r.robot.speed(100).unwrap();
+    r.unit.lock().unwrap().set_ploc("bin", Some(pulses));
+    // The arm has stood at READY only: no joint's ratio seen yet.
+    let res = approach(&mut r);
+    refused_unmoved(&mut r, res, "move joint 1 by a degree");
+    for j in 1..=6u16 {
+        r.robot.joint(j, 0.05).unwrap();
+        r.robot.finish().unwrap();
+    }
+    approach(&mut r)
+        .and_then(|_| r.robot.finish())
+        .unwrap_or_else(|e| panic!("Appro #bin: {e}"));
+    let kin = trol_a465::kinematics::Kinematics::new([0.0; 6]);
+    let want = Pose::from_xyzypr(kin.fk_xyzypr(&target))
+        .then(&Pose::from_xyzypr(disp))
+        .to_xyzypr();
+    assert!(at(&r, &want), "at {:?}, not {want:?}", tcp(&r));
+    // And to the point itself, by its pulses.
+    r.robot.move_to("#bin", false).unwrap();
     r.robot.finish().unwrap();
     assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
 }

@@ -24,13 +24,17 @@ Examples:
     /// and homed, joint 6 goes by +3 degrees at 5 % speed and back, and the speed setting is
     /// typed back; when ash's prompt came back (as the motion started, or once it had ended)
     /// is read from where w2 puts the arm right then; it asks for `yes` first (--yes: already
-    /// confirmed). `world-angles` (reads only): which reading of the WORLD row's angles puts
-    /// the flange where TROL's kinematics put it from the JOINTS row, with the arm standing
-    /// where the readings differ (a wrist joint turned). Every byte goes to --out.
+    /// confirmed). `pulses` (supervised: the arm moves): each joint in turn by 3 degrees at
+    /// 5 % speed and back, `w2` after each; its pulses per degree and where it counts from
+    /// (`pulses-per-degree`, `pulses-at-zero`); it asks for `yes` first. `world-angles` (reads
+    /// only): which reading of the WORLD row's angles puts the flange where TROL's kinematics
+    /// put it from the JOINTS row, with the arm standing where the readings differ (a wrist
+    /// joint turned). Every byte goes to --out.
     #[command(after_help = "\
 Examples:
   trol c500c step motion-return --controller /dev/ttyUSB0 --profile c500c.toml --out step.txt
   trol c500c step world-angles --controller /dev/ttyUSB0 --profile c500c.toml --out angles.txt
+  trol c500c step pulses --controller /dev/ttyUSB0 --profile c500c.toml --out pulses.txt
   trol sim --c500c --homed &    # a simulated C500C; then:
   trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
     Step(StepArgs),
@@ -95,6 +99,9 @@ pub enum StepName {
     MotionReturn,
     /// How the WORLD row's angles compose (`world-angles`; reads only).
     WorldAngles,
+    /// Each joint's pulses per degree and where it counts from (`pulses-per-degree`,
+    /// `pulses-at-zero`).
+    Pulses,
 }
 
 #[derive(Args, Debug)]
@@ -253,15 +260,27 @@ fn step(a: StepArgs) -> Result<(), String> {
         .strip_prefix(trol_c500c::PREFIX)
         .unwrap_or(&a.controller)
         .to_string();
-    if let StepName::MotionReturn = a.step
+    let moves = match a.step {
+        StepName::MotionReturn => Some(format!(
+            "trol c500c step motion-return moves the arm: joint 6 by +{} degrees at {} % speed, \
+             then back",
+            trol_c500c::probe::STEP_DEG,
+            trol_c500c::probe::STEP_SPEED
+        )),
+        StepName::Pulses => Some(format!(
+            "trol c500c step pulses moves the arm: each joint in turn by {} degrees at {} % \
+             speed, then back (away from its nearer limit)",
+            trol_c500c::probe::STEP_DEG,
+            trol_c500c::probe::STEP_SPEED
+        )),
+        StepName::WorldAngles => None,
+    };
+    if let Some(what) = moves
         && !a.yes
     {
         say!(
-            "trol c500c step motion-return moves the arm: joint 6 by +{} degrees at {} % speed, \
-             then back, on the C500C at {device}. Make sure nobody and nothing is within its \
-             reach and a hand is on the emergency stop. Type yes to go on:",
-            trol_c500c::probe::STEP_DEG,
-            trol_c500c::probe::STEP_SPEED
+            "{what}, on the C500C at {device}. Make sure nobody and nothing is within its \
+             reach and a hand is on the emergency stop. Type yes to go on:"
         );
         let mut answer = String::new();
         let _ = std::io::stdin().read_line(&mut answer);
@@ -288,6 +307,16 @@ fn step(a: StepArgs) -> Result<(), String> {
             let s = trol_c500c::probe::world_angles_step(port.as_mut(), &a.app, wait);
             profile.world_angles = s.angles.or(profile.world_angles);
             (s.contact, s.angles.is_some())
+        }
+        StepName::Pulses => {
+            say!("trol c500c step pulses: on the C500C at {device}");
+            let s = trol_c500c::probe::pulses_step(port.as_mut(), &a.app, wait);
+            if let Some(rel) = s.pulses {
+                // Four decimals, as the step says them.
+                profile.pulses_per_degree = Some(rel.per_degree.map(|k| (k * 1e4).round() / 1e4));
+                profile.pulses_at_zero = Some(rel.at_zero);
+            }
+            (s.contact, s.pulses.is_some())
         }
     };
     std::fs::write(&a.out, contact.transcript.text())

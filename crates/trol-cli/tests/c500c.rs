@@ -205,6 +205,7 @@ pick_on_variants! {
     pick_gripper_none => "gripper-none",
     pick_grip_return_at_end => "grip-return-at-end",
     pick_world_xyz => "world-xyz",
+    pick_pulses_offset => "pulses-offset",
 }
 
 macro_rules! position_on_variants {
@@ -241,6 +242,7 @@ position_on_variants! {
     position_gripper_none => "gripper-none",
     position_grip_return_at_end => "grip-return-at-end",
     position_world_xyz => "world-xyz",
+    position_pulses_offset => "pulses-offset",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; with one that
@@ -448,6 +450,7 @@ gateway_on_variants! {
     gateway_gripper_none => "gripper-none",
     gateway_grip_return_at_end => "grip-return-at-end",
     gateway_world_xyz => "world-xyz",
+    gateway_pulses_offset => "pulses-offset",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and
@@ -555,6 +558,125 @@ fn the_motion_return_step_asks_first_and_writes_only_what_it_saw() {
         ["speed 5", "joint 6,3", "joint 6,-3", "speed 100"],
         "{typed:?}"
     );
+}
+
+/// `trol c500c step pulses` asks first; confirmed, it moves each joint by 3 degrees and back
+/// and writes each joint's pulses per degree and where it counts from (a controller whose
+/// axes count from elsewhere than zero, and joint 3 the other way), the profile's other keys
+/// kept. With that profile the interpreter approaches a precision point it taught.
+#[test]
+fn the_pulses_step_asks_first_and_its_profile_approaches_a_precision_point() {
+    let dir = scratch("c500c-pulses");
+    let print = trol(
+        &dir,
+        &[
+            "sim",
+            "--c500c",
+            "--variant",
+            "pulses-offset",
+            "--print-profile",
+        ],
+        "",
+    );
+    let unsettled: String = String::from_utf8(print.stdout)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("pulses-"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("c500c.toml"), &unsettled).unwrap();
+    let args = [
+        "sim",
+        "--c500c",
+        "--variant",
+        "pulses-offset",
+        "--homed",
+        "--time-scale",
+        "10",
+    ];
+    let sim = Background::start(&dir, &args, "serving on ");
+    let step = |extra: &[&str], input: &str| {
+        let mut a = vec![
+            "c500c",
+            "step",
+            "pulses",
+            "--controller",
+            sim.name.as_str(),
+            "--profile",
+            "c500c.toml",
+            "--out",
+            "pulses.txt",
+        ];
+        a.extend_from_slice(extra);
+        trol(&dir, &a, input)
+    };
+    let o = step(&[], "no\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("not confirmed: nothing was sent"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("c500c.toml")).unwrap(),
+        unsettled
+    );
+    let o = step(&["--yes"], "");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let profile = trol_c500c::Profile::from_file(&dir.join("c500c.toml")).unwrap();
+    let want = trol_c500c::c500c::offset_pulses();
+    let got = profile.pulses().unwrap_or_else(|| panic!("{out}"));
+    for j in 0..6 {
+        let k = want.per_degree[j];
+        assert!((got.per_degree[j] - k).abs() <= 0.001 * k.abs(), "{got:?}");
+        assert!((got.at_zero[j] - want.at_zero[j]).abs() <= 100, "{got:?}");
+    }
+    assert!(profile.world_angles.is_some() && profile.motion_return.is_some());
+    let transcript = std::fs::read_to_string(dir.join("pulses.txt")).unwrap();
+    assert!(transcript.contains("> joint 3,-3\\x0d"), "{transcript}");
+    // Only the confirmed run typed a motion: six joints there and back.
+    let typed: Vec<String> = sim
+        .output_until("typed: y", 1, 30)
+        .into_iter()
+        .filter_map(|l| l.split_once("typed: ").map(|(_, t)| t.trim().to_string()))
+        .filter(|t| t.starts_with("joint"))
+        .collect();
+    assert_eq!(typed.len(), 12, "{typed:?}");
+
+    // The profile at work: a point taught off zero, left, and approached.
+    std::fs::write(
+        dir.join("trol.cfg"),
+        format!(
+            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
+            sim.name
+        ),
+    )
+    .unwrap();
+    let o = trol(
+        &dir,
+        &["interp"],
+        "joint 2 0.3\nfinish\njoint 3 0.6\nfinish\njoint 5 0.4\nfinish\n\
+         here #bin prec\ndepart c(-30) straight\nfinish\nappro #bin c(-10)\nfinish\n\
+         getposition joint actual\n",
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("appro #bin c(-10)  ->  0 (success)"), "{out}");
+    // 10 mm back from the point along the tool's axis, as TROL's kinematics have it.
+    let q: Vec<f64> = out
+        .lines()
+        .find_map(|l| l.strip_prefix("getposition joint actual  ->  j("))
+        .and_then(|v| v.strip_suffix(')'))
+        .unwrap_or_else(|| panic!("{out}"))
+        .split(", ")
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let kin = trol_a465::kinematics::Kinematics::new([0.0; 6]);
+    let at = kin.fk_xyzypr(&[q[0], q[1], q[2], q[3], q[4], q[5]]);
+    let taught = kin.fk_xyzypr(&[0.0, 0.3, 0.6, 0.0, 0.4, 0.0]);
+    let gap = (0..3)
+        .map(|j| (at[j] - taught[j]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!((gap - 10.0).abs() < 0.5, "{gap} mm from the point: {out}");
 }
 
 /// `trol c500c step world-angles` reads only: where the arm stands so that both readings of

@@ -329,6 +329,11 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
         "world-xyz",
         "differs only in the WORLD row's angles, which only cartesian motions read",
     ),
+    (
+        "pulses-offset",
+        "differs only in how the PULSES row counts, which only an approach to a precision \
+         point converts; the suite makes none",
+    ),
 ];
 
 /// A simulated C500C of variant `name` (`trol_c500c::c500c::VARIANTS`) in real time (its

@@ -50,9 +50,9 @@ impl real::Stopping for C500cBackend {
             Fail::Io(e) => e.to_string(),
             Fail::Silent(s) | Fail::Unsure(s) => s,
         })?;
-        reports::position(&lines, true)
-            .map(|p| Some(p.joints_deg))
-            .map_err(|e| e.to_string())
+        let p = reports::position(&lines, true).map_err(|e| e.to_string())?;
+        self.note_pulses(&p);
+        Ok(Some(p.joints_deg))
     }
 
     fn still_within(&self) -> [f64; 6] {
@@ -81,10 +81,6 @@ impl Backend for C500cBackend {
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         match target {
-            Target::Name(name) if name.is_precision() => self.unsettled(
-                "an approach to a precision point needs its joints, and the A465's pulses per \
-                 degree on a C500C are not settled: approach a cartesian location",
-            ),
             Target::Name(name) => self.named_motion(*name, Some(disp), straight),
             Target::Location(Location::Cart(v)) => {
                 let v = array6(v)?;

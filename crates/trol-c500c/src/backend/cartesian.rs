@@ -70,7 +70,7 @@ pub(super) fn read_cloc(lines: &[String]) -> Option<Cloc> {
 }
 
 /// The flange where TROL's kinematics put it for joints in degrees.
-fn flange(joints_deg: &[f64; 6]) -> Pose {
+pub(super) fn flange(joints_deg: &[f64; 6]) -> Pose {
     Kinematics::new([0.0; 6]).fk(&joints_deg.map(f64::to_radians))
 }
 
@@ -245,8 +245,11 @@ impl C500cBackend {
         if teach::ash_var(&name).is_none() {
             return Err(BackendError::UnknownLocation(name));
         }
-        if !name.is_precision() {
+        if !name.is_precision() || disp.is_some() {
             self.cart_keys()?;
+        }
+        if name.is_precision() && disp.is_some() {
+            self.pulses_keys()?;
         }
         self.motion(Motion {
             line: format!(
@@ -262,8 +265,11 @@ impl C500cBackend {
     pub(super) fn resolve(&mut self, p: Pending) -> Result<Motion, BackendError> {
         match p {
             Pending::Cart(call, straight) => self.resolve_cart(call, straight),
-            Pending::Named(name, _, straight) if name.is_precision() => {
+            Pending::Named(name, None, straight) if name.is_precision() => {
                 self.resolve_ploc(name, straight)
+            }
+            Pending::Named(name, Some(disp), straight) if name.is_precision() => {
+                self.resolve_ploc_appro(name, disp, straight)
             }
             Pending::Named(name, disp, straight) => {
                 let var = teach::ash_var(&name).ok_or(BackendError::UnknownLocation(name))?;
@@ -300,7 +306,11 @@ impl C500cBackend {
 
     /// A cartesian motion of TROL's as it goes: the WORLD row checked, the plan, `trolgo`
     /// set, made valid and read back; then `move trolgo` or `moves trolgo`.
-    fn resolve_cart(&mut self, call: CartCall, straight: bool) -> Result<Motion, BackendError> {
+    pub(super) fn resolve_cart(
+        &mut self,
+        call: CartCall,
+        straight: bool,
+    ) -> Result<Motion, BackendError> {
         let angles = self.cart_keys()?;
         self.world_check(angles)?;
         let (end, planned) = self.cart_plan(call, straight).map_err(|c| {

@@ -38,6 +38,7 @@ mod bios;
 mod cartesian;
 mod gripper;
 mod motion;
+mod precision;
 mod teach;
 
 pub use backup::{Backup, Restored, Saved};
@@ -227,6 +228,11 @@ pub struct C500cBackend {
     /// The WORLD row was seen, this session, to agree with the profile's `world-angles` at
     /// a pose where the two readings differ.
     angles_seen: bool,
+    /// Per joint: a `w2` read this session agreed with the profile's pulses with the joint a
+    /// degree or more from its zero.
+    pulses_seen: [bool; 6],
+    /// A `w2` read this session that disagreed with the profile's pulses.
+    pulses_wrong: Option<String>,
 }
 
 impl std::fmt::Debug for C500cBackend {
@@ -294,6 +300,8 @@ impl C500cBackend {
             grip_kind: None,
             jaws_wait: None,
             angles_seen: false,
+            pulses_seen: [false; 6],
+            pulses_wrong: None,
             profile,
         };
         b.send(b"\x05\r\r")?;
@@ -539,7 +547,11 @@ impl C500cBackend {
             Ok(l) => l,
             Err(e) => return Err(self.fail(e)),
         };
-        reports::position(&lines, actual).map_err(|e| self.unsure(e.to_string()))
+        let p = reports::position(&lines, actual).map_err(|e| self.unsure(e.to_string()))?;
+        if actual {
+            self.note_pulses(&p);
+        }
+        Ok(p)
     }
 
     fn fail(&mut self, e: Fail) -> BackendError {

@@ -14,9 +14,9 @@ use std::time::{Duration, Instant};
 use std::collections::BTreeMap;
 
 use trol_a465::arm::{Arm, ArmSettings, Target, Which, code};
-use trol_a465::model::joints_to_counts;
 use trol_port::Port;
 
+use crate::pulses::Pulses;
 use crate::reports::{self, ArmStat, Homing, Position};
 use crate::world::{self, Angles};
 
@@ -94,6 +94,8 @@ pub struct Switches {
     pub grip_return: Return,
     /// How the WORLD row's and a cartesian location's three angles compose.
     pub world_angles: Angles,
+    /// How the PULSES row relates to the JOINTS row (the A465 model's counts by default).
+    pub pulses: Pulses,
 }
 
 impl Default for Switches {
@@ -110,6 +112,7 @@ impl Default for Switches {
             grip_type: GripType::Servo,
             grip_return: Return::AtStart,
             world_angles: Angles::Zyx,
+            pulses: Pulses::a465_model(),
         }
     }
 }
@@ -123,6 +126,8 @@ pub fn matching_profile(sw: &Switches) -> crate::Profile {
             Return::AtEnd => crate::profile::MotionReturn::End,
         }),
         world_angles: Some(sw.world_angles),
+        pulses_per_degree: Some(sw.pulses.per_degree),
+        pulses_at_zero: Some(sw.pulses.at_zero),
         ..crate::Profile::default()
     }
 }
@@ -173,7 +178,20 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "world-xyz",
         "the WORLD row's angles compose as Rx(c)·Ry(b)·Rz(a), not Rz(a)·Ry(b)·Rx(c)",
     ),
+    (
+        "pulses-offset",
+        "each axis counts its pulses from elsewhere than joint zero, and joint 3 the other way",
+    ),
 ];
+
+/// The pulses of the variant `pulses-offset`: each axis counts from elsewhere than joint
+/// zero, and joint 3 the other way.
+pub fn offset_pulses() -> Pulses {
+    let mut p = Pulses::a465_model();
+    p.per_degree[2] = -p.per_degree[2];
+    p.at_zero = [12_000, -8_000, 4_000, -20_000, 5_000, 3_000];
+    p
+}
 
 /// The switches of a named variant.
 pub fn variant(name: &str) -> Option<Switches> {
@@ -224,6 +242,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "world-xyz" => Switches {
             world_angles: Angles::Xyz,
+            ..d
+        },
+        "pulses-offset" => Switches {
+            pulses: offset_pulses(),
             ..d
         },
         _ => return None,
@@ -707,9 +729,9 @@ impl C500c {
         let q = self.arm.position(t, which);
         let world = self.world(&q);
         let p = Position {
-            // The A465's encoder counts (assumed; the pulses per degree of an A465 on a
-            // C500C are an open point).
-            pulses: joints_to_counts(&q).map(i64::from),
+            // The pulses per degree of an A465 on a C500C, and where its axes count from,
+            // are an open point: the switch's (the A465 model's counts by default).
+            pulses: self.sw.pulses.pulses(&q.map(f64::to_degrees)),
             joints_deg: q.map(f64::to_degrees),
             world,
         };
@@ -759,8 +781,8 @@ impl C500c {
                 let straight = word == "moves";
                 match self.vars[&name] {
                     Var::Ploc(Some(p)) => {
-                        self.arm
-                            .move_to(Target::Prec(p.map(|v| v as f64)), straight, t)
+                        let q = self.sw.pulses.degrees(&p).map(f64::to_radians);
+                        self.arm.move_to(Target::Joints(q), straight, t)
                     }
                     Var::Cloc(Some(w), true) => {
                         let pose = world::from_ash(&w, self.sw.world_angles);

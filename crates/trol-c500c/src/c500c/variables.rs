@@ -106,7 +106,7 @@ impl C500c {
         let t = self.now();
         let q = self.arm.position(t, Which::Actual);
         let value = match self.vars[&name] {
-            Var::Ploc(_) => Var::Ploc(Some(joints_to_counts(&q).map(i64::from))),
+            Var::Ploc(_) => Var::Ploc(Some(self.sw.pulses.pulses(&q.map(f64::to_degrees)))),
             Var::Cloc(..) => Var::Cloc(Some(self.world(&q)), true),
             _ => {
                 self.line("Not a location variable.");
@@ -340,7 +340,12 @@ impl C500c {
             }
             match loc {
                 Stored::Cart(v) => self.set_cloc(&var, Some(*v)),
-                Stored::Prec(c) => self.set_ploc(&var, Some(c.map(i64::from))),
+                // The file's counts are the A465 model's: as this controller counts them.
+                Stored::Prec(c) => {
+                    let q = trol_a465::model::counts_to_joints(&c.map(f64::from));
+                    let p = self.sw.pulses.pulses(&q.map(f64::to_degrees));
+                    self.set_ploc(&var, Some(p))
+                }
                 Stored::Joints(_) => {
                     return Err(format!(
                         "{name}: a joint location, which ash has no form for"

@@ -40,7 +40,8 @@ Examples:
     Step(StepArgs),
     /// The application's location variables (precision points and cartesian locations, as
     /// ash prints them) into a text file on the PC. Reads only; connects as `c500c:` does
-    /// (starting `ash APP` where the system shell runs).
+    /// (starting `ash APP` where the system shell runs). The `.v3` file itself is not copied:
+    /// the console has no public way to read a file out (docs/c500c.md).
     #[command(after_help = "\
 Examples:
   trol c500c backup --controller /dev/ttyUSB0 --out cell.locations
@@ -190,6 +191,11 @@ fn backup(a: BackupArgs) -> Result<(), String> {
         saved.vars.len(),
         saved.app,
         a.out.display()
+    );
+    say!(
+        "  (the values of its locations; the {}.v3 file itself is not copied: \
+         docs/c500c.md, Backup and restore)",
+        saved.app
     );
     Ok(())
 }

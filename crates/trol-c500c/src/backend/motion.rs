@@ -79,12 +79,17 @@ impl C500cBackend {
         let r = match kind {
             Kind::Joint(n, deg) => arm.joint(n, deg.to_radians(), 0.0),
             Kind::Home => arm.home(0, 0.0),
-            // Where a precision point is in degrees needs the pulses per degree on a C500C
-            // (not settled): the time bound is that of the longest motion from here, each
-            // joint to its farther limit.
             Kind::Pose(_, secs) => return Duration::from_secs_f64(secs),
             // Worked out before it is sent.
             Kind::Pending(_) => return Duration::from_secs(60),
+            // Where a precision point is in degrees, by the profile's pulses where the arm
+            // has shown them ([`Self::ploc_degrees`]).
+            Kind::Named(p) if self.ploc_degrees(&p).is_some() => {
+                let q = self.ploc_degrees(&p).unwrap_or(self.rest);
+                arm.ma(q.map(f64::to_radians), 0.0)
+            }
+            // Else the time bound is that of the longest motion from here, each joint to its
+            // farther limit.
             Kind::Named(_) => {
                 let far: [f64; 6] = std::array::from_fn(|j| {
                     let lim = trol_a465::model::LIMITS_DEG[j];

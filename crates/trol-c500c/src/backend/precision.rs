@@ -58,6 +58,24 @@ impl C500cBackend {
         Ok(rel)
     }
 
+    /// A precision point's joints, degrees, where the profile's pulses have not been
+    /// contradicted and every joint that needs its ratio has been seen agreeing with it.
+    pub(super) fn ploc_degrees(&self, p: &[i64; 6]) -> Option<[f64; 6]> {
+        let rel = self.profile.pulses()?;
+        if self.pulses_wrong.is_some() || self.unseen_joint(&rel, p).is_some() {
+            return None;
+        }
+        Some(rel.degrees(p))
+    }
+
+    /// The first joint (0-based) of the precision point `p` that stands off its zero with
+    /// its ratio not yet seen on the arm.
+    fn unseen_joint(&self, rel: &Pulses, p: &[i64; 6]) -> Option<usize> {
+        (0..6).find(|&j| {
+            !self.pulses_seen[j] && ((p[j] - rel.at_zero[j]) as f64).abs() > pulses::tolerance(0.0)
+        })
+    }
+
     /// An approach to the precision point `name` (its pulses read back with `print`): its
     /// joints by the profile's pulses, checked against `w2` where the arm stands, then the
     /// approach planned and sent as any cartesian one ([`Self::resolve_cart`]).
@@ -77,19 +95,14 @@ impl C500cBackend {
         let here = self.read_position(true)?;
         self.rests_at(here.joints_deg);
         let rel = self.pulses_keys()?;
-        for (j, (&v, &zero)) in p.iter().zip(&rel.at_zero).enumerate() {
-            let from_zero = (v - zero) as f64;
-            if !self.pulses_seen[j] && from_zero.abs() > pulses::tolerance(0.0) {
-                self.unsettled(&format!(
-                    "{var} stands joint {} away from its zero, and TROL has not yet seen the \
-                     arm agree with the profile's pulses per degree of that joint in this \
-                     session: move joint {} by a degree or more first (TROLJoint), then try \
-                     again",
-                    j + 1,
-                    j + 1
-                ))?;
-                return Err(BackendError::Refused(UNSETTLED));
-            }
+        if let Some(j) = self.unseen_joint(&rel, &p) {
+            self.unsettled(&format!(
+                "{var} stands joint {n} away from its zero, and TROL has not yet seen the arm \
+                 agree with the profile's pulses per degree of that joint in this session: \
+                 move joint {n} by a degree or more first (TROLJoint), then try again",
+                n = j + 1
+            ))?;
+            return Err(BackendError::Refused(UNSETTLED));
         }
         let deg = rel.degrees(&p);
         let tcp = flange(&deg).then(&Pose::from_xyzypr(self.tool)).to_xyzypr();

@@ -23,7 +23,18 @@ fn execute(request: &[u8]) -> Vec<u8> {
     request.iter().rev().copied().collect()
 }
 
-fn serve<P: Port>(mut server: Server<P>, max_idle: Duration) -> u32 {
+fn serve<P: Port>(server: Server<P>, max_idle: Duration) -> u32 {
+    serve_telling(server, max_idle, None)
+}
+
+/// [`serve`], telling `events` each transaction's end as the controller saw it (all but
+/// [`ServerEvent::Idle`]): a test waits for the controller's side to be over, not for a
+/// fixed time.
+fn serve_telling<P: Port>(
+    mut server: Server<P>,
+    max_idle: Duration,
+    events: Option<std::sync::mpsc::Sender<ServerEvent>>,
+) -> u32 {
     let mut executed = 0;
     let mut quit = false;
     let started = Instant::now();
@@ -37,8 +48,27 @@ fn serve<P: Port>(mut server: Server<P>, max_idle: Duration) -> u32 {
         if ev == ServerEvent::Executed {
             executed += 1;
         }
+        if ev != ServerEvent::Idle
+            && let Some(tx) = &events
+        {
+            // After a failed transfer the link stays deaf for its reset (the manual's), then
+            // flushes its input: told once it listens again, so that the next request is
+            // not dropped by the reset.
+            while server.responder().link().is_resetting() {
+                server.wait(Duration::from_millis(5)).unwrap();
+            }
+            let _ = tx.send(ev);
+        }
     }
     executed
+}
+
+/// The next transaction's end on the controller's side, its link listening again, within a
+/// bound a loaded machine keeps (the link's own timeouts are a fraction of it).
+fn controller_done(events: &std::sync::mpsc::Receiver<ServerEvent>) -> ServerEvent {
+    events
+        .recv_timeout(Duration::from_secs(30))
+        .expect("the controller's side ends its transaction")
 }
 
 fn quick_link() -> LinkConfig {
@@ -362,8 +392,14 @@ impl<P: Port> Port for FailsOnce<P> {
 #[test]
 fn a_port_error_mid_transaction_is_reported_and_the_next_transaction_works() {
     let (a, b) = memory::pair(None);
-    let server =
-        std::thread::spawn(move || serve(Server::new(b, quick_link()), Duration::from_secs(30)));
+    let (tx, events) = std::sync::mpsc::channel();
+    let server = std::thread::spawn(move || {
+        serve_telling(
+            Server::new(b, quick_link()),
+            Duration::from_secs(30),
+            Some(tx),
+        )
+    });
     let port = FailsOnce {
         inner: a,
         recvs: 0,
@@ -372,8 +408,13 @@ fn a_port_error_mid_transaction_is_reported_and_the_next_transaction_works() {
     let mut t = Transactor::new(port, quick_link());
     let err = t.trans_sr(b"first").unwrap_err();
     assert!(matches!(err, TransError::Io(_)), "{err}");
-    // The controller may still be finishing its side; give its link time to reset.
-    std::thread::sleep(Duration::from_millis(1500));
+    // The controller may still be finishing its side: wait until its link has ended it.
+    let ended = controller_done(&events);
+    assert_ne!(
+        ended,
+        ServerEvent::Executed,
+        "a reply nobody heard counted as sent"
+    );
     let _ = t.driver_mut().port_mut().flush_input();
     let reply = t
         .trans_sr(b"second")
@@ -454,8 +495,14 @@ fn a_port_that_fails_is_told_to_the_handler_of_its_side_and_kept_for_get_last_co
     // While the reply is awaited: ReceiveData's ERR_PORT, ErrOnReceive; then a transaction
     // that goes through leaves no stale failure behind.
     let (a, b) = memory::pair(None);
-    let server =
-        std::thread::spawn(move || serve(Server::new(b, quick_link()), Duration::from_secs(30)));
+    let (tx, events) = std::sync::mpsc::channel();
+    let server = std::thread::spawn(move || {
+        serve_telling(
+            Server::new(b, quick_link()),
+            Duration::from_secs(30),
+            Some(tx),
+        )
+    });
     let told = Told::default();
     let mut t = Transactor::new(
         FailsAfterRequest {
@@ -475,8 +522,10 @@ fn a_port_that_fails_is_told_to_the_handler_of_its_side_and_kept_for_get_last_co
     );
     assert_eq!(t.last_comm_error(), Some(port_receive));
     assert_eq!(port_receive.code(), 0x88);
-    // The controller's reply to "first" may still come: let its link give up, drop it.
-    std::thread::sleep(Duration::from_millis(1500));
+    // The controller's reply to "first" may still come: wait until its link has given up,
+    // then drop what came.
+    let ended = controller_done(&events);
+    assert!(matches!(ended, ServerEvent::ReplyFailed(_)), "{ended:?}");
     let _ = t.driver_mut().port_mut().flush_input();
     t.set_repeats(2);
     assert_eq!(t.trans_sr(b"second").unwrap(), b"dnoces");
@@ -538,6 +587,10 @@ fn a_repeat_answered_from_memory_whose_reply_is_lost_again_is_not_reported_as_ru
                 .serve(Duration::from_millis(100), &mut |req| execute(req))
                 .unwrap();
             if ev != ServerEvent::Idle {
+                // Told once the link listens again after its reset (see serve_telling).
+                while server.responder().link().is_resetting() {
+                    server.wait(Duration::from_millis(5)).unwrap();
+                }
                 seen.lock().unwrap().push(ev);
             }
             if seen.lock().unwrap().len() >= 3 {
@@ -558,8 +611,17 @@ fn a_repeat_answered_from_memory_whose_reply_is_lost_again_is_not_reported_as_ru
     t.initiator_mut()
         .set_reply_timeout(Duration::from_millis(800));
     assert!(t.trans_sr(b"move").is_err());
-    // Let the server give up on the second reply, then hear again: a third request.
-    std::thread::sleep(Duration::from_millis(1500));
+    // Let the server give up on the second reply (its second event), then hear again: a
+    // third request.
+    let gave_up = Instant::now();
+    while events.lock().unwrap().len() < 2 {
+        assert!(
+            gave_up.elapsed() < Duration::from_secs(30),
+            "the server never gave up: {:?}",
+            events.lock().unwrap()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
     deaf.store(false, std::sync::atomic::Ordering::SeqCst);
     let _ = t.driver_mut().port_mut().flush_input();
     assert_eq!(t.trans_sr(b"next").unwrap(), b"txen");

@@ -120,6 +120,15 @@ fn contrary(sw: &Switches) -> Option<MotionReturn> {
     })
 }
 
+/// Wait until `cond` holds, within a bound a loaded machine keeps.
+fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    let start = std::time::Instant::now();
+    while !cond() {
+        assert!(start.elapsed() < Duration::from_secs(30), "{what}: never");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() < 2e-3
 }
@@ -211,7 +220,7 @@ fn run_variant(name: &str) {
     // only with the arm standing.
     r.robot.speed(1).unwrap();
     r.robot.joint(1, -2.0).unwrap();
-    std::thread::sleep(Duration::from_millis(300));
+    wait_until("the motion starts", || r.moving());
     match r.robot.halt() {
         Ok(()) => {
             assert!(
@@ -591,7 +600,7 @@ fn power_lost_mid_motion_is_never_success() {
         let mut r = rig_at(sw.clone(), true, c500c::matching_profile(&sw), 1.0);
         r.robot.speed(20).unwrap();
         r.robot.joint(1, 1.0).unwrap();
-        std::thread::sleep(Duration::from_millis(300));
+        wait_until("the motion starts", || r.moving());
         r.unit.lock().unwrap().set_power_off();
         let e = r.robot.finish().unwrap_err();
         assert_ne!(e.code().0, 0, "{name}");
@@ -612,7 +621,10 @@ fn an_unasked_line_makes_the_next_call_unsure() {
     let sw = Switches::default();
     let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
     r.unit.lock().unwrap().say("[test: Caught SIGABRT]");
-    std::thread::sleep(Duration::from_millis(50));
+    wait_until("the line is sent", || !r.unit.lock().unwrap().has_unsent());
+    // Its time on the paced 57600 Bd line (25 bytes, 4.3 ms): a lower bound, which a loaded
+    // machine only makes longer.
+    std::thread::sleep(Duration::from_millis(20));
     let sent = r.received().len();
     let e = r.robot.joint(1, 0.3).unwrap_err();
     assert_eq!(e.code(), TROL_ERR_ROBOT_UNSURE, "{e}");
@@ -631,7 +643,7 @@ fn a_collision_ends_the_motion_with_its_error_and_drops_the_queue() {
         r.robot.speed(20).unwrap();
         r.robot.joint(1, 1.0).unwrap();
         r.robot.joint(1, 0.5).unwrap();
-        std::thread::sleep(Duration::from_millis(300));
+        wait_until("the motion starts", || r.moving());
         r.unit.lock().unwrap().collide(2);
         let e = r.robot.finish().unwrap_err();
         assert_eq!(e.code().0, backend::C500C_ERROR, "{name}: {e}");
@@ -661,7 +673,9 @@ fn ma_after_a_move_by_hand_ends_where_asked() {
         .lock()
         .unwrap()
         .move_by_hand([0.5, 0.0, 0.0, 0.0, 0.0, 0.0]);
-    std::thread::sleep(Duration::from_millis(300));
+    // Past the window in which where the arm was seen to rest stands in for `w2` (a lower
+    // bound: a loaded machine only makes it longer).
+    std::thread::sleep(trol_controller::real::SEEN_FOR + Duration::from_millis(50));
     r.robot.ma(&[0.1, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     r.robot.finish().unwrap();
     assert!(close(r.joints()[0], 0.1), "{:?}", r.joints());

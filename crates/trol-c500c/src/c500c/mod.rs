@@ -416,6 +416,11 @@ impl C500c {
         self.line(text);
     }
 
+    /// Whether output waits for the serving thread to send it ([`serve`]).
+    pub fn has_unsent(&self) -> bool {
+        !self.out.is_empty()
+    }
+
     fn eol(&self) -> &'static [u8] {
         if self.sw.lf_only { b"\n" } else { b"\r\n" }
     }
@@ -864,13 +869,13 @@ pub fn serve(mut port: Box<dyn Port>, unit: Shared, stop: Arc<AtomicBool>) -> st
     let mut buf = [0u8; 512];
     while !stop.load(Ordering::Relaxed) {
         let n = port.recv(&mut buf, Instant::now() + Duration::from_millis(5))?;
-        let out = {
-            let mut u = unit.lock().unwrap_or_else(|e| e.into_inner());
-            u.feed(&buf[..n])
-        };
+        // Sent under the lock: once [`C500c::has_unsent`] is false, the bytes are on the line.
+        let mut u = unit.lock().unwrap_or_else(|e| e.into_inner());
+        let out = u.feed(&buf[..n]);
         if !out.is_empty() {
             port.send(&out)?;
         }
+        drop(u);
     }
     Ok(())
 }

@@ -272,8 +272,16 @@ fn trace_spies_on_a_session_and_reads_its_capture() {
         "joint 1 0.5\nfinish\ngetposition joint\n",
     );
     assert!(o.status.success(), "{:?}", text(&o));
-    std::thread::sleep(Duration::from_millis(300));
-    let live = spy.output().join("\n");
+    // The spy prints as it relays: up to the last request, then its reply.
+    let mut live = spy.output_until("TROLGetPosition", 1, 30);
+    if !live
+        .iter()
+        .skip_while(|l| !l.contains("TROLGetPosition"))
+        .any(|l| l.contains("REPLY   #"))
+    {
+        live.extend(spy.output_until("REPLY   #", 1, 30));
+    }
+    let live = live.join("\n");
     assert!(live.contains("PC  -> CTL  ENQ"), "{live}");
     assert!(live.contains("REQUEST #"), "{live}");
     assert!(live.contains("TROLJoint 1 0.5"), "{live}");

@@ -495,6 +495,48 @@ fn the_probe_reads_only_and_records_every_byte() {
     );
 }
 
+/// `trol c500c step NAME` against `sim` with c500c.toml, its transcript into `out`, with
+/// `extra` arguments and `input` typed.
+fn run_step(
+    dir: &Path,
+    sim: &Background,
+    name: &str,
+    out: &str,
+    extra: &[&str],
+    input: &str,
+) -> std::process::Output {
+    let mut a = vec![
+        "c500c",
+        "step",
+        name,
+        "--controller",
+        sim.name.as_str(),
+        "--profile",
+        "c500c.toml",
+        "--out",
+        out,
+    ];
+    a.extend_from_slice(extra);
+    trol(dir, &a, input)
+}
+
+/// A supervised step answered `no`: it fails, says nothing was sent, and the profile is
+/// `before` still.
+fn step_unconfirmed(
+    dir: &Path,
+    step: &dyn Fn(&[&str], &str) -> std::process::Output,
+    before: &str,
+) {
+    let o = step(&[], "no\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(err.contains("not confirmed: nothing was sent"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("c500c.toml")).unwrap(),
+        before
+    );
+}
+
 /// The supervised step `motion-return` (`trol c500c step`): not confirmed, nothing is
 /// typed; confirmed, it moves joint 6 and back at 5 % and writes what it saw into the
 /// profile, keeping its other keys: `end` on a controller whose prompt returns at a
@@ -514,28 +556,9 @@ fn the_motion_return_step_asks_first_and_writes_only_what_it_saw() {
     let sim = Background::start(&dir, &args, "serving on ");
     std::fs::write(dir.join("c500c.toml"), "settle-ms = 400\n").unwrap();
     let step = |extra: &[&str], input: &str| {
-        let mut a = vec![
-            "c500c",
-            "step",
-            "motion-return",
-            "--controller",
-            sim.name.as_str(),
-            "--profile",
-            "c500c.toml",
-            "--out",
-            "step.txt",
-        ];
-        a.extend_from_slice(extra);
-        trol(&dir, &a, input)
+        run_step(&dir, &sim, "motion-return", "step.txt", extra, input)
     };
-    let o = step(&[], "no\n");
-    let (out, err) = text(&o);
-    assert!(!o.status.success(), "{out}");
-    assert!(err.contains("not confirmed: nothing was sent"), "{err}");
-    assert_eq!(
-        std::fs::read_to_string(dir.join("c500c.toml")).unwrap(),
-        "settle-ms = 400\n"
-    );
+    step_unconfirmed(&dir, &step, "settle-ms = 400\n");
 
     let o = step(&["--yes"], "");
     let (out, err) = text(&o);
@@ -595,29 +618,9 @@ fn the_pulses_step_asks_first_and_its_profile_approaches_a_precision_point() {
         "10",
     ];
     let sim = Background::start(&dir, &args, "serving on ");
-    let step = |extra: &[&str], input: &str| {
-        let mut a = vec![
-            "c500c",
-            "step",
-            "pulses",
-            "--controller",
-            sim.name.as_str(),
-            "--profile",
-            "c500c.toml",
-            "--out",
-            "pulses.txt",
-        ];
-        a.extend_from_slice(extra);
-        trol(&dir, &a, input)
-    };
-    let o = step(&[], "no\n");
-    let (out, err) = text(&o);
-    assert!(!o.status.success(), "{out}");
-    assert!(err.contains("not confirmed: nothing was sent"), "{err}");
-    assert_eq!(
-        std::fs::read_to_string(dir.join("c500c.toml")).unwrap(),
-        unsettled
-    );
+    let step =
+        |extra: &[&str], input: &str| run_step(&dir, &sim, "pulses", "pulses.txt", extra, input);
+    step_unconfirmed(&dir, &step, &unsettled);
     let o = step(&["--yes"], "");
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");

@@ -63,6 +63,25 @@ fn serve_telling<P: Port>(
     executed
 }
 
+/// A server on `port` in a thread of its own (30 s at most), with [`quick_link`], telling
+/// each transaction's end ([`serve_telling`]).
+fn telling_server<P: Port + Send + 'static>(
+    port: P,
+) -> (
+    std::thread::JoinHandle<u32>,
+    std::sync::mpsc::Receiver<ServerEvent>,
+) {
+    let (tx, events) = std::sync::mpsc::channel();
+    let server = std::thread::spawn(move || {
+        serve_telling(
+            Server::new(port, quick_link()),
+            Duration::from_secs(30),
+            Some(tx),
+        )
+    });
+    (server, events)
+}
+
 /// The next transaction's end on the controller's side, its link listening again, within a
 /// bound a loaded machine keeps (the link's own timeouts are a fraction of it).
 fn controller_done(events: &std::sync::mpsc::Receiver<ServerEvent>) -> ServerEvent {
@@ -392,14 +411,7 @@ impl<P: Port> Port for FailsOnce<P> {
 #[test]
 fn a_port_error_mid_transaction_is_reported_and_the_next_transaction_works() {
     let (a, b) = memory::pair(None);
-    let (tx, events) = std::sync::mpsc::channel();
-    let server = std::thread::spawn(move || {
-        serve_telling(
-            Server::new(b, quick_link()),
-            Duration::from_secs(30),
-            Some(tx),
-        )
-    });
+    let (server, events) = telling_server(b);
     let port = FailsOnce {
         inner: a,
         recvs: 0,
@@ -495,14 +507,7 @@ fn a_port_that_fails_is_told_to_the_handler_of_its_side_and_kept_for_get_last_co
     // While the reply is awaited: ReceiveData's ERR_PORT, ErrOnReceive; then a transaction
     // that goes through leaves no stale failure behind.
     let (a, b) = memory::pair(None);
-    let (tx, events) = std::sync::mpsc::channel();
-    let server = std::thread::spawn(move || {
-        serve_telling(
-            Server::new(b, quick_link()),
-            Duration::from_secs(30),
-            Some(tx),
-        )
-    });
+    let (server, events) = telling_server(b);
     let told = Told::default();
     let mut t = Transactor::new(
         FailsAfterRequest {

@@ -701,18 +701,27 @@ mod tests {
     use std::sync::atomic::AtomicBool;
     use std::sync::{Arc, Mutex};
 
-    #[test]
-    fn it_reads_and_leaves_the_controller_in_the_system_shell() {
+    /// `step` on the host's end of a line whose other end serves `unit` (in a thread of its
+    /// own, stopped after).
+    fn served<T>(unit: &Arc<Mutex<C500c>>, step: impl FnOnce(&mut dyn Port) -> T) -> T {
         let (mut host, ctl) = trol_port::memory::pair(None);
-        let unit = Arc::new(Mutex::new(C500c::new(Switches::default(), false, 10.0)));
         let stop = Arc::new(AtomicBool::new(false));
         let t = {
             let (unit, stop) = (unit.clone(), stop.clone());
             std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
         };
-        let c = first_contact(&mut host, "test", Duration::from_secs(3));
+        let out = step(&mut host);
         stop.store(true, std::sync::atomic::Ordering::Relaxed);
         let _ = t.join();
+        out
+    }
+
+    #[test]
+    fn it_reads_and_leaves_the_controller_in_the_system_shell() {
+        let unit = Arc::new(Mutex::new(C500c::new(Switches::default(), false, 10.0)));
+        let c = served(&unit, |host| {
+            first_contact(host, "test", Duration::from_secs(3))
+        });
         let typed = unit.lock().unwrap().received().to_vec();
         let moving = [
             "joint", "home", "ready", "move", "speed ", "armpower", "limp",
@@ -751,18 +760,12 @@ mod tests {
                 world_angles: angles,
                 ..Switches::default()
             };
-            let (mut host, ctl) = trol_port::memory::pair(None);
             let mut twin = C500c::new(sw, true, 10.0);
             twin.move_by_hand(q);
             let unit = Arc::new(Mutex::new(twin));
-            let stop = Arc::new(AtomicBool::new(false));
-            let t = {
-                let (unit, stop) = (unit.clone(), stop.clone());
-                std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
-            };
-            let s = world_angles_step(&mut host, "test", Duration::from_secs(3));
-            stop.store(true, std::sync::atomic::Ordering::Relaxed);
-            let _ = t.join();
+            let s = served(&unit, |host| {
+                world_angles_step(host, "test", Duration::from_secs(3))
+            });
             assert_eq!(
                 s.angles, want,
                 "{angles:?} at {q:?}: {:?}",
@@ -781,17 +784,11 @@ mod tests {
     /// The simulated C500C of `sw` in real time (the step compares the prompt's time with
     /// the motion's), its arm homed or not, and the step run on it.
     fn step_on(sw: Switches, homed: bool) -> (Supervised, Vec<String>, [f64; 6], [f64; 6]) {
-        let (mut host, ctl) = trol_port::memory::pair(None);
         let unit = Arc::new(Mutex::new(C500c::new(sw, homed, 1.0)));
         let before = unit.lock().unwrap().joints();
-        let stop = Arc::new(AtomicBool::new(false));
-        let t = {
-            let (unit, stop) = (unit.clone(), stop.clone());
-            std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
-        };
-        let s = motion_return_step(&mut host, "test", Duration::from_secs(10));
-        stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        let _ = t.join();
+        let s = served(&unit, |host| {
+            motion_return_step(host, "test", Duration::from_secs(10))
+        });
         let mut u = unit.lock().unwrap();
         let after = u.joints();
         (s, u.received().to_vec(), before, after)
@@ -836,21 +833,15 @@ mod tests {
         for name in ["default", "pulses-offset"] {
             let sw = crate::c500c::variant(name).unwrap();
             let want = sw.pulses;
-            let (mut host, ctl) = trol_port::memory::pair(None);
             let unit = Arc::new(Mutex::new(C500c::new(sw, true, 20.0)));
             // Away from READY, joint 5 near its limit: that one goes the other way.
             unit.lock()
                 .unwrap()
                 .move_by_hand([0.3, -0.2, 0.5, 0.1, 104.0f64.to_radians(), -0.4]);
             let before = unit.lock().unwrap().joints();
-            let stop = Arc::new(AtomicBool::new(false));
-            let t = {
-                let (unit, stop) = (unit.clone(), stop.clone());
-                std::thread::spawn(move || serve(Box::new(ctl), unit, stop))
-            };
-            let s = pulses_step(&mut host, "test", Duration::from_secs(10));
-            stop.store(true, std::sync::atomic::Ordering::Relaxed);
-            let _ = t.join();
+            let s = served(&unit, |host| {
+                pulses_step(host, "test", Duration::from_secs(10))
+            });
             let f = s.contact.findings.join("\n");
             let got = s.pulses.unwrap_or_else(|| panic!("{name}: {f}"));
             for j in 0..6 {

@@ -6,6 +6,7 @@
 #[macro_use]
 extern crate trol_cli;
 
+mod c500c;
 mod faults;
 mod lines;
 mod mars;
@@ -210,6 +211,13 @@ enum Bench {
     ///
     /// Example: trol bench mars --moves 10 --python target/py/bin/python --json
     Mars(mars::MarsArgs),
+    /// A simulated C500C through a relay paced at its console's 57600 baud: from the call to
+    /// the arm's start and from its stand to Finish's return, for TROL (`c500c:`, TROLJoint,
+    /// Finish) and, in the same run on the same controller, for ash typed bare (`joint 1,D`
+    /// and `finish`, each ended by ash's prompt, with no check of any kind: the anchor).
+    ///
+    /// Example: trol bench c500c --moves 10 --json
+    C500c(c500c::C500cArgs),
     /// The manual's pick example (examples/pick.py: two approaches and a move back to back,
     /// the gripper, the depart, each followed by Finish) through a line paced at a baud rate,
     /// the simulated A465 in real time, against the arm's own limit (the same calls on the
@@ -413,6 +421,19 @@ fn all() -> Result<(), String> {
                 f(&v, "end_ratio")
             ),
         },
+    ));
+    let args = ["c500c", "--moves", "10"];
+    let v = run(&args)?;
+    rows.push((
+        "a C500C at 57600 baud through a relay".into(),
+        format!("trol bench {}", args.join(" ")),
+        format!(
+            "TROL {}; ash typed bare in the same run {}: {:.2} and {:.2} times",
+            client(&v["trol"]),
+            client(&v["bare_ash"]),
+            f(&v, "start_ratio"),
+            f(&v, "end_ratio")
+        ),
     ));
     let args = ["pick", "--baud", "38400", "--cycles", "5"];
     let v = run(&args)?;
@@ -765,6 +786,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Faults(a) => faults(a),
         Bench::Gateway(a) => gateway(a),
         Bench::Mars(a) => mars::mars(a),
+        Bench::C500c(a) => c500c::c500c(a),
         Bench::Pick(a) => pick::pick(a),
         Bench::Pty(a) => pty::pty(a),
         Bench::Relay(a) => relay::relay(a),

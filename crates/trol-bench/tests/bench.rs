@@ -260,6 +260,26 @@ fn the_mars_bench_times_trol_and_says_what_its_anchor_needs() {
     );
 }
 
+/// A C500C from the call to the arm's start and from its stand to Finish's return: TROL's
+/// figures and the anchor's (ash typed bare) from the simulated controller's own arm, in the
+/// same run.
+#[test]
+fn the_c500c_bench_times_trol_and_bare_ash_on_the_same_controller() {
+    let dir = scratch("bench-c500c");
+    let o = bench(&dir, &["c500c", "--moves", "2", "--json"]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for client in ["trol", "bare_ash"] {
+        for key in ["call_to_start", "end_to_return"] {
+            let ms = v[client][key]["median_ms"].as_f64().unwrap();
+            assert!((0.0..10_000.0).contains(&ms), "{client} {key}: {out}");
+        }
+    }
+    assert_eq!(v["baud"], 57600, "{out}");
+    assert!(v["start_ratio"].as_f64().unwrap() > 0.0, "{out}");
+}
+
 /// The IK anchor: a Python without EAIK is a clear error that says how to get it; one with it
 /// (the virtual environment of scripts/test.sh, when it has `eaik`) gives both figures.
 #[test]

@@ -758,9 +758,11 @@ fn a_trajectory_faster_than_the_speed_setting_is_refused_unsent() {
     assert!(close(r.joints()[0], far[0]), "{:?}", r.joints());
 }
 
-/// Where the arm was seen to rest stands in for the `w2` before the next motion only while
-/// nothing but reads went to ash since (trol_controller::real::Recent): a `speed p` between
-/// makes the next motion read `w2` first.
+/// Where the arm was seen to rest, and the gate's `armstat`, stand in for the `w2` and the
+/// `armstat` before the next motion only while nothing but reads went to ash since
+/// (trol_controller::real::Recent): a `speed p` between makes the next motion read both
+/// first; a power loss in between that nobody read is ash's refusal, with its code, and
+/// nothing moves.
 #[test]
 fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
     use trol_controller::Backend;
@@ -794,9 +796,12 @@ fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
         .iter()
         .position(|l| l.starts_with("joint 1,"))
         .expect("sent");
-    assert!(!typed[..joint].iter().any(|l| l == "w2"), "{typed:?}");
+    assert!(
+        !typed[..joint].iter().any(|l| l == "w2" || l == "armstat"),
+        "{typed:?}"
+    );
     finish(&mut b);
-    // A `speed p` between: w2 before the next motion.
+    // A `speed p` between: w2 and armstat before the next motion.
     assert_eq!(b.speed(20).unwrap(), 0);
     let mark = unit.lock().unwrap().received().len();
     assert_eq!(b.joint(1, 0.05).unwrap(), 0);
@@ -806,7 +811,18 @@ fn a_line_that_is_not_a_read_makes_the_next_motion_read_w2_again() {
         .position(|l| l.starts_with("joint 1,"))
         .expect("sent");
     assert!(typed[..joint].iter().any(|l| l == "w2"), "{typed:?}");
+    assert!(typed[..joint].iter().any(|l| l == "armstat"), "{typed:?}");
     finish(&mut b);
+    // The power lost silently right after the end TROL saw: the motion goes on what was
+    // seen, ash refuses it, and that is the refusal with its code; the arm stays.
+    unit.lock().unwrap().set_power_off();
+    let before = unit.lock().unwrap().joints();
+    match b.joint(1, 0.05) {
+        Err(trol_controller::BackendError::Refused(c)) => assert_eq!(c, backend::ARM_POWER),
+        other => panic!("{other:?}"),
+    }
+    assert!(unmoved(&unit.lock().unwrap().joints(), &before));
+    assert!(!unit.lock().unwrap().is_moving());
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     drop(b);
     server.join().unwrap();

@@ -215,6 +215,9 @@ pub struct C500cBackend {
     rest: [f64; 6],
     /// The same, while it may stand in for a `w2` before a motion ([`FRESH_REST`]).
     rest_seen: real::Recent<[f64; 6]>,
+    /// What `armstat` said, while it may stand in for the gate's `armstat` before a motion:
+    /// as read, or as a motion that ash ran to its end and the arm was seen to end found it.
+    stat_seen: real::Recent<ArmStat>,
     speed: u8,
     unasked: Vec<String>,
     broken: Option<String>,
@@ -291,6 +294,7 @@ impl C500cBackend {
             tool: [0.0; 6],
             rest: [0.0; 6],
             rest_seen: real::Recent::new(),
+            stat_seen: real::Recent::new(),
             speed: 0,
             unasked: Vec::new(),
             broken: None,
@@ -389,6 +393,7 @@ impl C500cBackend {
     /// cautious application.
     pub fn set_seen_for(&mut self, d: Duration) {
         self.rest_seen.set_window(d);
+        self.stat_seen.set_window(d);
     }
 
     /// What `robotver` said.
@@ -413,6 +418,7 @@ impl C500cBackend {
         let line = std::str::from_utf8(bytes).unwrap_or("").trim_end();
         if !crate::probe::READS.contains(&line) {
             self.rest_seen.forget();
+            self.stat_seen.forget();
         }
         self.port.send(bytes)
     }

@@ -24,12 +24,22 @@ impl C500cBackend {
         }
         // While ash runs a motion of TROL's to its end it reads no command: the gate then
         // takes the status read before that motion (a fault meanwhile ends it with a line).
+        // Else `armstat`, unless it was read, or a motion of TROL's was seen to end, a moment
+        // ago with nothing but reads typed since ([`real::SEEN_FOR`]): ash refuses a motion
+        // itself where the arm lost power meanwhile (`Arm power is OFF`), which is then the
+        // refusal with its code.
         if !self.console_busy() {
-            let lines = match self.exchange("armstat") {
-                Ok(l) => l,
-                Err(e) => return Err(self.fail(e)),
-            };
-            self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+            match self.stat_seen.get(Instant::now()) {
+                Some(stat) => self.stat = stat.clone(),
+                None => {
+                    let lines = match self.exchange("armstat") {
+                        Ok(l) => l,
+                        Err(e) => return Err(self.fail(e)),
+                    };
+                    self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+                    self.stat_seen.saw(Instant::now(), Some(self.stat.clone()));
+                }
+            }
         }
         let ours = self.outstanding.is_some() || !self.queue.is_empty();
         if !ours {
@@ -272,6 +282,11 @@ impl C500cBackend {
         match o.watch.verdict(now, at_end, times) {
             real::End::Arrived => {
                 self.rests_at(p.joints_deg);
+                // ash ran it to its end, and the arm was seen there: powered and homed as the
+                // gate found it, for the motion that follows at once.
+                if self.stat.power && self.stat.homing == Homing::Homed {
+                    self.stat_seen.saw(now, Some(self.stat.clone()));
+                }
                 self.outstanding = None;
                 match self.queue.pop() {
                     Some(next) => self.send_next(next),

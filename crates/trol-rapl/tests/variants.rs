@@ -350,8 +350,12 @@ impl Run<'_> {
             r.position(Tag::Joint, PosMode::Actual).map(|_| ())
         });
 
-        // Halt gets through while a long motion runs, and stops it short.
-        self.plain("speed 2", |r| r.speed(2));
+        // Halt gets through while a long motion runs, and stops it short. At 1 % (about 2.4
+        // s at the twin's time scale 20), so that the motion outlasts a controller's reply
+        // window (ack-at-end: TROLJoint returns only once it has passed) and the Halt's way
+        // to the arm on a loaded machine: at 2 %, a loaded run saw the Halt land at 1.40 rad
+        // of 1.5, where 1.4 means it came too late to tell.
+        self.plain("speed 1", |r| r.speed(1));
         let before = self.sim.planned_end();
         let r = self.robot.joint(1, 1.5);
         let under_way = r.is_ok() && self.accepted(&before) && self.sim.moving();

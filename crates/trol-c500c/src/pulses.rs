@@ -1,9 +1,9 @@
 //! How `w2`'s PULSES row relates to its JOINTS row on one C500C: joint by joint, `pulses =
-//! at_zero + per_degree * degrees`. The A465's pulses per degree on a C500C, and where
-//! each axis counts from, are not public (an open point): `trol c500c step pulses` measures
-//! them on the arm, into the profile's `pulses-per-degree` and `pulses-at-zero`; the
-//! backend checks them against every `w2` it reads before it converts a precision point's
-//! pulses to joints (docs/c500c.md, "The profile").
+//! at_zero + per_degree * degrees`. The A465's pulses per degree on a C500C, and where each
+//! axis counts from, are not public (an open point): `trol c500c step pulses` measures them on
+//! the arm, into the profile's `pulses-per-degree` and `pulses-at-zero`; the backend checks
+//! them against every `w2` of the arm at rest before it converts a precision point's pulses to
+//! joints (docs/c500c.md, "The profile").
 
 /// How far a PULSES reading may stand from what the relation gives and still agree: the
 /// rounding of both rows and of a measured ratio (assumed: 25 pulses, about 0.03 degrees

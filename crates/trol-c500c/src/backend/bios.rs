@@ -50,9 +50,11 @@ impl real::Stopping for C500cBackend {
             Fail::Io(e) => e.to_string(),
             Fail::Silent(s) | Fail::Unsure(s) => s,
         })?;
-        let p = reports::position(&lines, true).map_err(|e| e.to_string())?;
-        self.note_pulses(&p);
-        Ok(Some(p.joints_deg))
+        // Halt's readings: the arm may still move, and the two rows of a moving arm need not
+        // be one instant's, so they are not held against the profile's pulses.
+        reports::position(&lines, true)
+            .map(|p| Some(p.joints_deg))
+            .map_err(|e| e.to_string())
     }
 
     fn still_within(&self) -> [f64; 6] {

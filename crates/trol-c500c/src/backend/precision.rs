@@ -1,9 +1,9 @@
-//! A precision point's joints (docs/c500c.md, "Locations"): a `ploc` holds pulses, and how
-//! they relate to degrees on a C500C is the profile's `pulses-per-degree` and
-//! `pulses-at-zero` (an open point, measured by `trol c500c step pulses`). TROL believes
-//! them only as far as the arm has shown them: every `w2` it reads is checked against them,
-//! one disagreement refuses them for the session, and a joint's ratio is used only once the
-//! arm has been seen agreeing with it a degree or more from that joint's zero.
+//! A precision point's joints (docs/c500c.md, "Locations"): a `ploc` holds pulses, and how they
+//! relate to degrees on a C500C is the profile's `pulses-per-degree` and `pulses-at-zero` (an
+//! open point, measured by `trol c500c step pulses`). TROL believes them only as far as the arm
+//! has shown them: every `w2` it reads of the arm at rest is checked against them, one
+//! disagreement refuses them for the session, and a joint's ratio is used only once the arm has
+//! been seen agreeing with it a degree or more from that joint's zero.
 
 use trol_a465::kinematics::Pose;
 
@@ -13,7 +13,8 @@ use super::*;
 use crate::pulses::{self, Pulses};
 
 impl C500cBackend {
-    /// A `w2` reading, against the profile's pulses.
+    /// A `w2` reading of the arm at rest (before a motion, or once ash has said a motion
+    /// done), against the profile's pulses.
     pub(super) fn note_pulses(&mut self, p: &reports::Position) {
         let Some(rel) = self.profile.pulses() else {
             return;

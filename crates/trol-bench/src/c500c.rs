@@ -9,9 +9,9 @@
 //! clients take the other end in turn. A thread watches the arm every millisecond and notes
 //! when it starts and when it stands (the MARS 8's bench does the same).
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use super::watch::{ArmWatch, Client};
 use super::*;
 use trol_c500c::c500c::{self, C500c};
 
@@ -29,14 +29,6 @@ pub struct C500cArgs {
 }
 
 #[derive(Serialize)]
-struct Client {
-    /// From the call to the arm's start, ms.
-    call_to_start: Spread,
-    /// From the arm's stand to the wait's return, ms.
-    end_to_return: Spread,
-}
-
-#[derive(Serialize)]
 struct C500cReport {
     baud: u32,
     moves: u32,
@@ -48,84 +40,22 @@ struct C500cReport {
     end_ratio: f64,
 }
 
-/// The simulated controller on a relay's end, and the thread that watches its arm.
-struct Unit {
-    stop: Arc<AtomicBool>,
-    changes: Arc<Mutex<Vec<(Instant, bool)>>>,
-    threads: Vec<std::thread::JoinHandle<()>>,
-}
-
-impl Unit {
-    fn start(device: &str, baud: u32) -> Result<Unit, String> {
-        let unit: c500c::Shared = Arc::new(Mutex::new(C500c::new(
-            c500c::Switches::default(),
-            true,
-            1.0,
-        )));
-        let port = trol_port::serial::SerialLine::open(device, baud)
-            .map_err(|e| format!("the controller's end {device}: {e}"))?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let changes = Arc::new(Mutex::new(Vec::new()));
-        let (s, u) = (stop.clone(), unit.clone());
-        let serving = std::thread::spawn(move || {
-            let _ = c500c::serve(Box::new(port), u, s);
-        });
-        let (s, u, w) = (stop.clone(), unit, changes.clone());
-        let watching = std::thread::spawn(move || {
-            let mut last = false;
-            while !s.load(Ordering::Relaxed) {
-                let moving = u.lock().unwrap_or_else(|e| e.into_inner()).is_moving();
-                if moving != last {
-                    w.lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .push((Instant::now(), moving));
-                    last = moving;
-                }
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        });
-        Ok(Unit {
-            stop,
-            changes,
-            threads: vec![serving, watching],
-        })
-    }
-
-    /// Call-to-start and end-to-return, ms, of each (call, return) pair. (A stand the
-    /// watcher noted after the return is its lateness: the time after the end counts as 0.)
-    fn timings(&self, pairs: &[(Instant, Instant)]) -> Result<Client, String> {
-        // The watcher's last look after the last return.
-        std::thread::sleep(Duration::from_millis(100));
-        let changes = self.changes.lock().unwrap_or_else(|e| e.into_inner());
-        let (mut to_start, mut after) = (Vec::new(), Vec::new());
-        for &(call, returned) in pairs {
-            let start = changes
-                .iter()
-                .find(|(t, moving)| *moving && *t >= call)
-                .map(|(t, _)| *t)
-                .ok_or("the arm was never seen moving after the call")?;
-            let stood = changes
-                .iter()
-                .find(|(t, moving)| !*moving && *t >= start)
-                .map(|(t, _)| *t)
-                .ok_or("the arm was never seen standing after the motion")?;
-            to_start.push(start.duration_since(call).as_secs_f64() * 1e3);
-            after.push(returned.saturating_duration_since(stood).as_secs_f64() * 1e3);
-        }
-        Ok(Client {
-            call_to_start: Spread::of(to_start),
-            end_to_return: Spread::of(after),
-        })
-    }
-}
-
-impl Drop for Unit {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        for t in self.threads.drain(..) {
-            let _ = t.join();
-        }
-    }
+/// The simulated controller (default variant, homed, real time) on a relay's end, watched.
+fn unit(device: &str, baud: u32) -> Result<ArmWatch, String> {
+    let unit: c500c::Shared = Arc::new(Mutex::new(C500c::new(
+        c500c::Switches::default(),
+        true,
+        1.0,
+    )));
+    let port = trol_port::serial::SerialLine::open(device, baud)
+        .map_err(|e| format!("the controller's end {device}: {e}"))?;
+    let u = unit.clone();
+    Ok(ArmWatch::start(
+        move |stop| {
+            let _ = c500c::serve(Box::new(port), u, stop);
+        },
+        move || unit.lock().unwrap_or_else(|e| e.into_inner()).is_moving(),
+    ))
 }
 
 /// TROL's motions: TROLJoint of joint 1 there and back, each followed by Finish, with the
@@ -213,7 +143,7 @@ pub fn c500c(a: C500cArgs) -> Result<(), String> {
     let baud = trol_c500c::Profile::default().baud;
     let relay = super::relay::Relay::start(baud)?;
     let (unit_end, client_end) = relay.ends.clone();
-    let unit = Unit::start(&unit_end, baud)?;
+    let unit = unit(&unit_end, baud)?;
     let trol = unit.timings(&trol_moves(
         &client_end,
         baud,

@@ -14,6 +14,7 @@ mod pick;
 mod pty;
 mod relay;
 mod view;
+mod watch;
 
 mod gateway;
 mod ik;

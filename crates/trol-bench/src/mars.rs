@@ -9,9 +9,9 @@
 //! waits for each motion: TROL with TROLMA and Finish, CTU's with move_to_q and
 //! wait_for_motion_stop (anchors/ctu_crs_moves.py, in a Python that has ctu-crs).
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use super::watch::{ArmWatch, Client};
 use super::*;
 use trol_mars::mars8::{self, Mars8};
 
@@ -37,14 +37,6 @@ pub struct MarsArgs {
 }
 
 #[derive(Serialize)]
-struct Client {
-    /// From the call to the arm's start, ms.
-    call_to_start: Spread,
-    /// From the arm's stand to the wait's return, ms.
-    end_to_return: Spread,
-}
-
-#[derive(Serialize)]
 struct MarsReport {
     baud: u32,
     moves: u32,
@@ -57,105 +49,23 @@ struct MarsReport {
     end_ratio: Option<f64>,
 }
 
-/// When the unit's arm started and stood, as its watcher saw them.
-#[derive(Default)]
-struct Seen {
-    changes: Vec<(Instant, bool)>,
-}
-
-impl Seen {
-    /// The first start after `call`, and the first stand after that. (The watcher notes
-    /// each when it sees it: on a loaded machine it may see a stand after the wait has
-    /// returned; the wait cannot have returned before the arm stood, as the unit answers
-    /// from its arm, so that is the watcher's lateness, and the time after the end counts
-    /// as 0.)
-    fn around(&self, call: Instant) -> Result<(Instant, Instant), String> {
-        let start = self
-            .changes
-            .iter()
-            .find(|(t, moving)| *moving && *t >= call)
-            .map(|(t, _)| *t)
-            .ok_or("the arm was never seen moving after the call")?;
-        let stood = self
-            .changes
-            .iter()
-            .find(|(t, moving)| !*moving && *t >= start)
-            .map(|(t, _)| *t)
-            .ok_or("the arm was never seen standing after the motion")?;
-        Ok((start, stood))
-    }
-}
-
-/// The simulated unit on a relay's end, and the thread that watches its arm.
-struct Unit {
-    stop: Arc<AtomicBool>,
-    seen: Arc<Mutex<Seen>>,
-    threads: Vec<std::thread::JoinHandle<()>>,
-}
-
-impl Unit {
-    fn start(device: &str, baud: u32) -> Result<Unit, String> {
-        let unit: mars8::Shared = Arc::new(Mutex::new(Mars8::new(
-            trol_mars::Profile::crs93(),
-            mars8::Switches::default(),
-            true,
-            1.0,
-        )));
-        let port = trol_port::serial::SerialLine::open(device, baud)
-            .map_err(|e| format!("the unit's end {device}: {e}"))?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let seen = Arc::new(Mutex::new(Seen::default()));
-        let (s, u) = (stop.clone(), unit.clone());
-        let serving = std::thread::spawn(move || {
-            let _ = mars8::serve(Box::new(port), u, s);
-        });
-        let (s, u, w) = (stop.clone(), unit, seen.clone());
-        let watching = std::thread::spawn(move || {
-            let mut last = false;
-            while !s.load(Ordering::Relaxed) {
-                let moving = u.lock().unwrap_or_else(|e| e.into_inner()).is_moving();
-                if moving != last {
-                    w.lock()
-                        .unwrap_or_else(|e| e.into_inner())
-                        .changes
-                        .push((Instant::now(), moving));
-                    last = moving;
-                }
-                std::thread::sleep(Duration::from_millis(1));
-            }
-        });
-        Ok(Unit {
-            stop,
-            seen,
-            threads: vec![serving, watching],
-        })
-    }
-
-    /// Call-to-start and end-to-return, ms, of each (call, return) pair.
-    fn timings(&self, pairs: &[(Instant, Instant)]) -> Result<Client, String> {
-        // The watcher's last look after the last return.
-        std::thread::sleep(Duration::from_millis(100));
-        let seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
-        let (mut to_start, mut after) = (Vec::new(), Vec::new());
-        for &(call, returned) in pairs {
-            let (start, stood) = seen.around(call)?;
-            to_start.push(start.duration_since(call).as_secs_f64() * 1e3);
-            after.push(returned.saturating_duration_since(stood).as_secs_f64() * 1e3);
-        }
-        Ok(Client {
-            call_to_start: Spread::of(to_start),
-            end_to_return: Spread::of(after),
-        })
-    }
-}
-
-impl Drop for Unit {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        for t in self.threads.drain(..) {
-            let _ = t.join();
-        }
-    }
+/// The simulated unit (CTU's CRS93, homed, real time) on a relay's end, watched.
+fn unit(device: &str, baud: u32) -> Result<ArmWatch, String> {
+    let unit: mars8::Shared = Arc::new(Mutex::new(Mars8::new(
+        trol_mars::Profile::crs93(),
+        mars8::Switches::default(),
+        true,
+        1.0,
+    )));
+    let port = trol_port::serial::SerialLine::open(device, baud)
+        .map_err(|e| format!("the unit's end {device}: {e}"))?;
+    let u = unit.clone();
+    Ok(ArmWatch::start(
+        move |stop| {
+            let _ = mars8::serve(Box::new(port), u, stop);
+        },
+        move || unit.lock().unwrap_or_else(|e| e.into_inner()).is_moving(),
+    ))
 }
 
 /// TROL's motions: TROLMA of joint 1 there and back, each followed by Finish.
@@ -265,7 +175,7 @@ pub fn mars(a: MarsArgs) -> Result<(), String> {
     let baud = trol_mars::Profile::crs93().baud;
     let relay = super::relay::Relay::start(baud)?;
     let (unit_end, client_end) = relay.ends.clone();
-    let unit = Unit::start(&unit_end, baud)?;
+    let unit = unit(&unit_end, baud)?;
     let step = a.degrees.to_radians();
     let trol = unit.timings(&trol_moves(&client_end, baud, a.moves, step)?)?;
     let python = a

@@ -49,6 +49,13 @@ fn c500c_sim_profiled(dir: &Path, variant: &str, settled: bool, contrary: bool) 
         locations,
     ];
     let sim = Background::start(dir, &args, "serving on ");
+    c500c_cfg(dir, &sim.name, settled);
+    sim
+}
+
+/// A trol.cfg in `dir` that drives the simulated C500C on `port` in-process through `c500c:`,
+/// with the profile c500c.toml where `settled`.
+fn c500c_cfg(dir: &Path, port: &str, settled: bool) {
     let profile = if settled {
         "c500c-profile = c500c.toml\n"
     } else {
@@ -56,10 +63,9 @@ fn c500c_sim_profiled(dir: &Path, variant: &str, settled: bool, contrary: bool) 
     };
     std::fs::write(
         dir.join("trol.cfg"),
-        format!("9600\nc500c:{}\n0 0 0 0 0 0\n{profile}", sim.name),
+        format!("9600\nc500c:{port}\n0 0 0 0 0 0\n{profile}"),
     )
     .unwrap();
-    sim
 }
 
 fn run_example(name: &str, dir: &Path) -> (bool, String, String) {
@@ -645,14 +651,7 @@ fn the_pulses_step_asks_first_and_its_profile_approaches_a_precision_point() {
     assert_eq!(typed.len(), 12, "{typed:?}");
 
     // The profile at work: a point taught off zero, left, and approached.
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!(
-            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
-            sim.name
-        ),
-    )
-    .unwrap();
+    c500c_cfg(&dir, &sim.name, true);
     let o = trol(
         &dir,
         &["interp"],
@@ -731,14 +730,7 @@ fn the_world_angles_step_reads_only_and_writes_what_it_saw() {
             .contains("world-angles")
     );
     // Turn the wrist through the interpreter (joint motions need no world-angles).
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!(
-            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
-            sim.name
-        ),
-    )
-    .unwrap();
+    c500c_cfg(&dir, &sim.name, true);
     let o = trol(
         &dir,
         &["interp"],
@@ -781,14 +773,7 @@ fn a_power_cut_during_a_motion_is_never_success() {
         &["sim", "--c500c", "--console", "--homed"],
         "serving on ",
     );
-    std::fs::write(
-        dir.join("trol.cfg"),
-        format!(
-            "9600\nc500c:{}\n0 0 0 0 0 0\nc500c-profile = c500c.toml\n",
-            sim.name
-        ),
-    )
-    .unwrap();
+    c500c_cfg(&dir, &sim.name, true);
     let interp = {
         let dir = dir.clone();
         // Joint 1 by 1 rad at 10 %: about 3 s in real time.

@@ -554,7 +554,10 @@ impl C500cBackend {
             Err(e) => return Err(self.fail(e)),
         };
         let p = reports::position(&lines, actual).map_err(|e| self.unsure(e.to_string()))?;
-        if actual {
+        // Held against the profile's pulses only with no motion of TROL's under way (a moving
+        // arm's two rows need not be one instant's); a motion's end is noted where Finish
+        // sees it arrive.
+        if actual && self.outstanding.is_none() {
             self.note_pulses(&p);
         }
         Ok(p)

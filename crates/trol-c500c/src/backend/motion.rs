@@ -93,19 +93,16 @@ impl C500cBackend {
             // Worked out before it is sent.
             Kind::Pending(_) => return Duration::from_secs(60),
             // Where a precision point is in degrees, by the profile's pulses where the arm
-            // has shown them ([`Self::ploc_degrees`]).
-            Kind::Named(p) if self.ploc_degrees(&p).is_some() => {
-                let q = self.ploc_degrees(&p).unwrap_or(self.rest);
-                arm.ma(q.map(f64::to_radians), 0.0)
-            }
-            // Else the time bound is that of the longest motion from here, each joint to its
-            // farther limit.
-            Kind::Named(_) => {
-                let far: [f64; 6] = std::array::from_fn(|j| {
-                    let lim = trol_a465::model::LIMITS_DEG[j];
-                    if self.rest[j] >= 0.0 { -lim } else { lim }.to_radians()
+            // has shown them ([`Self::ploc_degrees`]); else the time bound is that of the
+            // longest motion from here, each joint to its farther limit.
+            Kind::Named(p) => {
+                let end = self.ploc_degrees(&p).unwrap_or_else(|| {
+                    std::array::from_fn(|j| {
+                        let lim = trol_a465::model::LIMITS_DEG[j];
+                        if self.rest[j] >= 0.0 { -lim } else { lim }
+                    })
                 });
-                arm.ma(far, 0.0)
+                arm.ma(end.map(f64::to_radians), 0.0)
             }
         };
         if r != code::OK {
@@ -282,6 +279,7 @@ impl C500cBackend {
         match o.watch.verdict(now, at_end, times) {
             real::End::Arrived => {
                 self.rests_at(p.joints_deg);
+                self.note_pulses(&p);
                 // ash ran it to its end, and the arm was seen there: powered and homed as the
                 // gate found it, for the motion that follows at once.
                 if self.stat.power && self.stat.homing == Homing::Homed {

@@ -13,8 +13,8 @@ use super::*;
 use crate::pulses::{self, Pulses};
 
 impl C500cBackend {
-    /// A `w2` reading of the arm at rest (before a motion, or once ash has said a motion
-    /// done), against the profile's pulses.
+    /// A `w2` reading of the arm at rest (with no motion of TROL's under way, or at a
+    /// motion's end as Finish sees it arrive), against the profile's pulses.
     pub(super) fn note_pulses(&mut self, p: &reports::Position) {
         let Some(rel) = self.profile.pulses() else {
             return;

@@ -9,31 +9,69 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # Every stage runs, even after one failed; the failures are listed at the end (and the
-# script exits 1), so one flaky stage never hides the others.
-FAILED=()
+# script exits 1), so one flaky stage never hides the others. They are kept in a file, so
+# that the stages of a lane (a subshell, below) count too.
+FAILED=$(mktemp)
+trap 'rm -f "$FAILED"' EXIT
 # A stage that runs longer than 30 s says so every 30 s (a test program or a build may
-# print nothing for minutes), so the script is never silent for long.
+# print nothing for minutes), so the script is never silent for long. In a lane the lanes'
+# own ticker says it (TICKER=0).
 stage() {
   local name=$1
   shift
-  local started=$SECONDS ticker
+  local started=$SECONDS ticker=
   echo "== scripts/test.sh: $name"
-  (
-    t=0
-    while sleep 30 </dev/null >/dev/null 2>&1; do
-      t=$((t + 30))
-      echo "== scripts/test.sh: $name: still running (${t} s)"
-    done
-  ) &
-  ticker=$!
+  if [ "${TICKER:-1}" != 0 ]; then
+    (
+      t=0
+      while sleep 30 </dev/null >/dev/null 2>&1; do
+        t=$((t + 30))
+        echo "== scripts/test.sh: $name: still running (${t} s)"
+      done
+    ) &
+    ticker=$!
+  fi
   if "$@"; then
     echo "== scripts/test.sh: $name: passed ($((SECONDS - started)) s)"
   else
     echo "== scripts/test.sh: $name: FAILED ($((SECONDS - started)) s)"
-    FAILED+=("$name")
+    echo "$name" >> "$FAILED"
   fi
+  if [ -n "$ticker" ]; then
+    kill "$ticker" 2>/dev/null || true
+    wait "$ticker" 2>/dev/null || true
+  fi
+}
+
+# Two lanes of stages side by side (each a function), where both mostly wait: each lane's
+# output goes to a file of its own and is printed whole when the lane ends, so the two never
+# interleave; meanwhile every 30 s a line says which stage each lane is at.
+lanes() {
+  local dir started=$SECONDS ticker pid_a pid_b
+  dir=$(mktemp -d)
+  (TICKER=0 "$1") > "$dir/a" 2>&1 &
+  pid_a=$!
+  (TICKER=0 "$2") > "$dir/b" 2>&1 &
+  pid_b=$!
+  (
+    t=0
+    while sleep 30 </dev/null >/dev/null 2>&1; do
+      t=$((t + 30))
+      echo "== scripts/test.sh: two lanes still running (${t} s):" \
+        "[$(grep '^== ' "$dir/a" | tail -n 1 | cut -c 21-)]" \
+        "[$(grep '^== ' "$dir/b" | tail -n 1 | cut -c 21-)]"
+    done
+  ) &
+  ticker=$!
+  wait "$pid_b" || true
+  echo "== scripts/test.sh: lane \"$2\" ended after $((SECONDS - started)) s; its output:"
+  cat "$dir/b"
+  wait "$pid_a" || true
+  echo "== scripts/test.sh: lane \"$1\" ended after $((SECONDS - started)) s; its output:"
+  cat "$dir/a"
   kill "$ticker" 2>/dev/null || true
   wait "$ticker" 2>/dev/null || true
+  rm -rf "$dir"
 }
 
 # The live view's browser test (crates/trol-cli/tests/view.rs): headless Chromium driven by
@@ -70,7 +108,8 @@ stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 # they compute (the conformance suite: 28 s of CPU in 273 s), so they run six at a time.
 # Everything else starts processes of its own (trol sim, gateways, C programs, a browser) and
 # keeps the default of one test per core: eight at once starved the links of those processes
-# on this 2-core machine. Both halves build the same artifacts (the features do not differ).
+# on this 2-core machine. Both halves use the same artifacts (the features do not differ),
+# built once before either runs.
 IN_PROCESS=(trol-conformance trol-rapl trol-mars trol-c500c trol)
 in_process() {
   local p args=()
@@ -82,7 +121,6 @@ the_rest() {
   for p in "${IN_PROCESS[@]}"; do args+=(--exclude "$p"); done
   cargo test --workspace "${args[@]}" --no-fail-fast
 }
-stage "cargo test --workspace: the rest (one test per core)" the_rest
 
 # While the in-process tests wait on their simulated arms, the CPU they leave idle builds
 # ahead, at the lowest priority, what later stages build in release, each as its stage builds
@@ -118,20 +156,19 @@ in_process_with_builds_ahead() {
   grep -E "Finished|scripts/wheel.sh: /" target/builds-ahead.log | sed 's/^ */   built ahead: /' || true
   return $rc
 }
-stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
-  in_process_with_builds_ahead
 # The client with its live view (a feature the utilities and libtrol leave out): the tests
 # the feature changes (the whole suite ran above without it).
-stage "cargo test -p trol --features view" cargo test -p trol --features view --test api -- \
-  robots_from_a_config_file the_watchdog_halts_the_arm_when_the_application_falls_silent
+client_view() {
+  cargo test -p trol --features view --test api "$@" -- \
+    robots_from_a_config_file the_watchdog_halts_the_arm_when_the_application_falls_silent
+}
 # The client without its backends, and with each alone: each builds and its own tests pass.
 client_features() {
-  cargo test -p trol --no-default-features --lib &&
+  cargo test -p trol --no-default-features --lib "$@" &&
     for feature in sim rapl mars c500c; do
-      cargo test -p trol --no-default-features --features "$feature" --lib || return 1
+      cargo test -p trol --no-default-features --features "$feature" --lib "$@" || return 1
     done
 }
-stage "the client's features one by one" client_features
 
 # TROL for Python (crates/trol-py, outside the cargo workspace): scripts/wheel.sh builds it
 # as a binary wheel (maturin, into target/wheels); the wheel goes into a fresh virtual
@@ -159,11 +196,9 @@ python_setup() {
     # The module is the wheel's, not the source tree's.
     no_rust "$PY" -c 'import trol, sys; assert "/target/py/" in trol.__file__, trol.__file__; print("   trol for Python from", trol.__file__)'
 }
-stage "Python: the wheel, in a virtual environment without Rust" python_setup
 python_tests() {
   (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" no_rust "$PY" -m pytest -q)
 }
-stage "Python: pytest" python_tests
 python_examples() {
   local root=$PWD plots
   plots=$(mktemp -d)
@@ -173,8 +208,6 @@ python_examples() {
   rm -rf "$plots"
   return $rc
 }
-stage "Python: the examples (pick.py, plot_motion.py)" python_examples
-stage "Python: stubs (mypy.stubtest)" bash -c "cd /tmp && '$PY' -m mypy.stubtest trol"
 
 # CTU Prague's own MARS 8 client (ctu-crs, from the package registry; its camera import
 # stubbed) drives `trol sim --mars` across the unit's variants (tests/ctu, docs/mars.md).
@@ -183,7 +216,6 @@ ctu() {
     "$PY" -m pip install --quiet pyyaml pyserial &&
     TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/ctu
 }
-stage "CTU's ctu-crs against trol sim --mars" ctu
 
 # `trol urdf` in another simulator: MuJoCo (from the package registry) loads it, and its
 # kinematics are TROL's (tests/urdf).
@@ -191,16 +223,50 @@ mujoco_urdf() {
   "$PY" -m pip install --quiet mujoco pybullet &&
     TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/urdf
 }
-stage "the URDF in MuJoCo and pybullet" mujoco_urdf
 
 # `trol ros2` against a real DDS peer: Eclipse Cyclone DDS, the DDS under ROS 2's
 # rmw_cyclonedds, from the package registry, on loopback only (tests/ros2, docs/ros2.md).
 ros2_dds() {
-  cargo build --quiet -p trol-ros2 -p trol-cli &&
+  cargo build --quiet -p trol-ros2 &&
     "$PY" -m pip install --quiet cyclonedds==11.0.1 &&
     TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q tests/ros2
 }
-stage "trol ros2 against Cyclone DDS" ros2_dds
+
+# Everything the two lanes run is built first, while nothing else runs: the workspace's test
+# programs (with `trol`, which the tests start), the client with its view and with each feature
+# alone, and `trol ros2`. Only `cargo build -p trol-ros2`, not `-p trol-cli` beside it: that
+# resolves trol-cli's features without the tests' dev-dependencies and would put another
+# build of target/debug/trol in place while the other lane's tests start it.
+build_tests() {
+  cargo test --workspace --no-run &&
+    client_view --no-run &&
+    client_features --no-run &&
+    cargo build -p trol-ros2
+}
+stage "build the test programs (cargo test --workspace --no-run, ...)" build_tests
+
+# The two lanes side by side. The first: the tests that start processes, one test per core.
+# The second: the in-process controllers six at a time, then what starts few processes of its
+# own or waits on them (the client's features, Python, CTU's client, MuJoCo, ROS 2). Each
+# lane alone took about 11 minutes of an idle run (docs/performance.md, "Where an idle CI's
+# time goes"), so side by side they take half the time they took one after the other.
+processes() {
+  stage "cargo test --workspace: the tests that start processes (one test per core)" the_rest
+}
+in_process_then_python() {
+  stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
+    in_process_with_builds_ahead
+  stage "cargo test -p trol --features view" client_view
+  stage "the client's features one by one" client_features
+  stage "Python: the wheel, in a virtual environment without Rust" python_setup
+  stage "Python: pytest" python_tests
+  stage "Python: the examples (pick.py, plot_motion.py)" python_examples
+  stage "Python: stubs (mypy.stubtest)" bash -c "cd /tmp && '$PY' -m mypy.stubtest trol"
+  stage "CTU's ctu-crs against trol sim --mars" ctu
+  stage "the URDF in MuJoCo and pybullet" mujoco_urdf
+  stage "trol ros2 against Cyclone DDS" ros2_dds
+}
+lanes processes in_process_then_python
 
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).
@@ -210,9 +276,9 @@ stage "the README's walk-through" bash scripts/readme.sh
 stage "docs/mars.md's first hour" bash scripts/readme.sh docs/mars.md
 stage "docs/c500c.md's first hour" bash scripts/readme.sh docs/c500c.md
 
-if [ ${#FAILED[@]} -gt 0 ]; then
-  echo "scripts/test.sh: ${#FAILED[@]} stage(s) failed:"
-  printf '  - %s\n' "${FAILED[@]}"
+if [ -s "$FAILED" ]; then
+  echo "scripts/test.sh: $(wc -l < "$FAILED") stage(s) failed:"
+  sed 's/^/  - /' "$FAILED"
   exit 1
 fi
 echo "scripts/test.sh: every stage passed"

@@ -212,6 +212,7 @@ pick_on_variants! {
     pick_grip_return_at_end => "grip-return-at-end",
     pick_world_xyz => "world-xyz",
     pick_pulses_offset => "pulses-offset",
+    pick_rows_apart => "rows-apart",
 }
 
 macro_rules! position_on_variants {
@@ -249,6 +250,7 @@ position_on_variants! {
     position_grip_return_at_end => "grip-return-at-end",
     position_world_xyz => "world-xyz",
     position_pulses_offset => "pulses-offset",
+    position_rows_apart => "rows-apart",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; with one that
@@ -457,6 +459,7 @@ gateway_on_variants! {
     gateway_grip_return_at_end => "grip-return-at-end",
     gateway_world_xyz => "world-xyz",
     gateway_pulses_offset => "pulses-offset",
+    gateway_rows_apart => "rows-apart",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

@@ -96,6 +96,7 @@ each! {
     c500c, subjects::c500c, trol_c500c::c500c::VARIANTS, subjects::C500C_FAIL_SAFE;
     default => "default",
     return_at_end => "return-at-end",
+    rows_apart => "rows-apart",
     error_prefixed => "error-prefixed",
     error_bracketed => "error-bracketed",
     lf_only => "lf-only",

@@ -96,6 +96,11 @@ pub struct Switches {
     pub world_angles: Angles,
     /// How the PULSES row relates to the JOINTS row (the A465 model's counts by default).
     pub pulses: Pulses,
+    /// How long (s of the controller's time) before the JOINTS and WORLD rows of `w0` and
+    /// `w2` ash samples their PULSES row. Whether the rows are one instant's is not public:
+    /// 0 by default (one instant), 40 ms on the variant `rows-apart` (assumed), where a
+    /// moving arm's rows disagree and only an arm at rest shows how they relate.
+    pub rows_apart: f64,
 }
 
 impl Default for Switches {
@@ -113,6 +118,7 @@ impl Default for Switches {
             grip_return: Return::AtStart,
             world_angles: Angles::Zyx,
             pulses: Pulses::a465_model(),
+            rows_apart: 0.0,
         }
     }
 }
@@ -182,6 +188,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "pulses-offset",
         "each axis counts its pulses from elsewhere than joint zero, and joint 3 the other way",
     ),
+    (
+        "rows-apart",
+        "w0's and w2's PULSES row is read 40 ms before their JOINTS row: a moving arm's disagree",
+    ),
 ];
 
 /// The pulses of the variant `pulses-offset`: each axis counts from elsewhere than joint
@@ -246,6 +256,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "pulses-offset" => Switches {
             pulses: offset_pulses(),
+            ..d
+        },
+        "rows-apart" => Switches {
+            rows_apart: 0.040,
             ..d
         },
         _ => return None,
@@ -731,12 +745,14 @@ impl C500c {
         } else {
             Which::Commanded
         };
+        // The PULSES row sampled first, `rows_apart` before the others (an open point).
+        let at_pulses = self.arm.position(t - self.sw.rows_apart, which);
         let q = self.arm.position(t, which);
         let world = self.world(&q);
         let p = Position {
             // The pulses per degree of an A465 on a C500C, and where its axes count from,
             // are an open point: the switch's (the A465 model's counts by default).
-            pulses: self.sw.pulses.pulses(&q.map(f64::to_degrees)),
+            pulses: self.sw.pulses.pulses(&at_pulses.map(f64::to_degrees)),
             joints_deg: q.map(f64::to_degrees),
             world,
         };
@@ -911,6 +927,44 @@ mod tests {
         );
         let s = said(&mut c, "y\r");
         assert_eq!(s.last(), Some(&Said::Prompt("$".into())));
+    }
+
+    /// `w2` as the backend reads it: the lines between the echo and the prompt.
+    fn w2(c: &mut C500c) -> crate::reports::Position {
+        let lines: Vec<String> = said(c, "w2\r")
+            .into_iter()
+            .filter_map(|s| match s {
+                Said::Line(l) if l != "w2" => Some(l),
+                _ => None,
+            })
+            .collect();
+        crate::reports::position(&lines, true).unwrap()
+    }
+
+    /// On `rows-apart` a moving arm's PULSES row lags its JOINTS row by the arm's speed times
+    /// 40 ms, far beyond the tolerance TROL holds the pulses to; at rest, and on `default`
+    /// always, the rows agree within the encoders' dither.
+    #[test]
+    fn a_moving_arms_rows_disagree_only_where_they_are_read_apart() {
+        for (name, apart) in [("default", false), ("rows-apart", true)] {
+            let sw = variant(name).unwrap();
+            let mut c = C500c::new(sw.clone(), true, 1.0);
+            c.feed(b"ash test\r");
+            c.feed(b"joint 1,60\r");
+            let mut widest: f64 = 0.0;
+            let mut reads = 0;
+            while c.is_moving() {
+                let p = w2(&mut c);
+                widest = widest.max((sw.pulses.degrees(&p.pulses)[0] - p.joints_deg[0]).abs());
+                reads += 1;
+            }
+            assert!(reads > 3, "{name}: {reads} readings mid-motion");
+            // 25 pulses, TROL's tolerance, are well under a tenth of a degree on joint 1.
+            assert_eq!(widest > 0.2, apart, "{name}: rows {widest} degrees apart");
+            let p = w2(&mut c);
+            let rest = (sw.pulses.degrees(&p.pulses)[0] - p.joints_deg[0]).abs();
+            assert!(rest < 0.01, "{name}: at rest, rows {rest} degrees apart");
+        }
     }
 
     #[test]

@@ -38,15 +38,48 @@ if [ "$page" != README.md ]; then
   cd "$work/folder"
 fi
 
+# A block that serves the live view (`--view`, at its default address): the reader opens
+# the page, as the block says to. Here that is what a page does as it loads: it opens the
+# view's event stream (GET /events) and reads it until the program ends. So `trol demo
+# --view` starts at once instead of waiting for a page, and the block passes only if the
+# view sent the page the arm's state.
+view_reader() {
+  local tries=0
+  until {
+    printf 'GET /events HTTP/1.1\r\nHost: 127.0.0.1:8465\r\n\r\n' >&3 && cat <&3
+  } 3<>/dev/tcp/127.0.0.1/8465 2>/dev/null; do
+    tries=$((tries + 1))
+    [ "$tries" -lt 1200 ] || return 1
+    sleep 0.05
+  done
+}
+
 n=0
 while IFS= read -r -d '' block; do
   n=$((n + 1))
   echo "--- $page walk-through, block $n:"
   printf '%s\n' "$block" | sed 's/^/    /'
+  reader=
+  if [[ $block == *--view* ]]; then
+    : > "$work/events"
+    view_reader > "$work/events" 2>/dev/null &
+    reader=$!
+  fi
   if ! bash -euo pipefail -c "$block" > "$work/out" 2>&1; then
     cat "$work/out"
+    [ -z "$reader" ] || kill "$reader" 2>/dev/null || true
     echo "$page walk-through: block $n failed" >&2
     exit 1
+  fi
+  if [ -n "$reader" ]; then
+    kill "$reader" 2>/dev/null || true
+    wait "$reader" 2>/dev/null || true
+    if ! grep -q '^data: ' "$work/events"; then
+      cat "$work/out"
+      echo "$page walk-through: block $n served no view to the page that opened it" >&2
+      exit 1
+    fi
+    echo "  > (the page that opened the view got $(grep -c '^data: ' "$work/events") updates)"
   fi
   tail -n 3 "$work/out" | sed 's/^/  > /'
 done < "$work/blocks"

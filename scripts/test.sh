@@ -111,9 +111,11 @@ stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 # on this 2-core machine. Both halves use the same artifacts (the features do not differ),
 # built once before either runs.
 IN_PROCESS=(trol-conformance trol-rapl trol-mars trol-c500c trol)
+# The packages named (all of IN_PROCESS without any).
 in_process() {
   local p args=()
-  for p in "${IN_PROCESS[@]}"; do args+=(-p "$p"); done
+  [ $# -gt 0 ] || set -- "${IN_PROCESS[@]}"
+  for p in "$@"; do args+=(-p "$p"); done
   cargo test "${args[@]}" --no-fail-fast -- --test-threads "${TROL_TEST_THREADS:-6}"
 }
 the_rest() {
@@ -140,14 +142,14 @@ in_process_with_builds_ahead() {
   local ahead rc=0
   # setsid (util-linux) gives the builds a process group to stop; without it, none go ahead.
   if ! command -v setsid >/dev/null 2>&1; then
-    in_process
+    in_process "$@"
     return
   fi
   mkdir -p target
   export -f build_ahead
   setsid nice -n 19 bash -c build_ahead > target/builds-ahead.log 2>&1 < /dev/null &
   ahead=$!
-  in_process || rc=$?
+  in_process "$@" || rc=$?
   if kill -0 "$ahead" 2>/dev/null; then
     kill -TERM -- "-$ahead" 2>/dev/null || true
     echo "   the builds ahead were stopped with the tests; their stages build what is left"
@@ -245,17 +247,63 @@ build_tests() {
 }
 stage "build the test programs (cargo test --workspace --no-run, ...)" build_tests
 
-# The two lanes side by side. The first: the tests that start processes, one test per core.
-# The second: the in-process controllers six at a time, then what starts few processes of its
-# own or waits on them (the client's features, Python, CTU's client, MuJoCo, ROS 2). Each
-# lane alone took about 11 minutes of an idle run (docs/performance.md, "Where an idle CI's
-# time goes"), so side by side they take half the time they took one after the other.
+# The two lanes. The first: the tests that start processes, one test per core, then the
+# C500C's in-process tests. The second: the other in-process controllers six at a time, then
+# Python, CTU's client, MuJoCo and ROS 2. Each
+# took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
+# .ci/run: 1,012 s, against 1,571 s one after the other). On a busy one they run one after
+# the other, as every loaded run before them did: side by side under two busy loops, the
+# processes of the first lane were starved for seconds at a time (a gateway that took over
+# 20 s to start, a 1998 host's link that timed out waiting for ENQ), because the second
+# lane's tests and its builds ahead then take the CPU share those processes had
+# (docs/performance.md, "Two lanes on an idle machine"). `TROL_TEST_LANES=1` runs them side
+# by side, `=0` in turn, whatever the machine does.
+#
+# How busy the machine is: the share of its CPU time, in percent, that went to anything but
+# idling over 3 s (from /proc/stat; this script runs nothing meanwhile). 100 where it cannot
+# tell.
+busy_percent() {
+  local cpu user nice system idle iowait irq softirq steal rest t0 b0 t1 b1
+  [ -r /proc/stat ] || { echo 100; return; }
+  read -r cpu user nice system idle iowait irq softirq steal rest < /proc/stat
+  b0=$((user + nice + system + irq + softirq + steal))
+  t0=$((b0 + idle + iowait))
+  sleep 3
+  read -r cpu user nice system idle iowait irq softirq steal rest < /proc/stat
+  b1=$((user + nice + system + irq + softirq + steal))
+  t1=$((b1 + idle + iowait))
+  if [ $((t1 - t0)) -le 0 ]; then echo 100; else echo $((100 * (b1 - b0) / (t1 - t0))); fi
+}
+side_by_side_if_idle() {
+  local busy
+  case "${TROL_TEST_LANES:-auto}" in
+    1) lanes "$@" ;;
+    0)
+      "$1" || true
+      "$2" || true
+      ;;
+    *)
+      busy=$(busy_percent)
+      if [ "$busy" -lt 25 ]; then
+        echo "== scripts/test.sh: the machine is idle (${busy} % busy over 3 s): two lanes side by side"
+        lanes "$@"
+      else
+        echo "== scripts/test.sh: the machine is busy (${busy} % busy over 3 s): the lanes one after the other"
+        "$1" || true
+        "$2" || true
+      fi
+      ;;
+  esac
+}
+# The C500C's in-process tests (35 s idle) end the first lane, which is the shorter.
 processes() {
   stage "cargo test --workspace: the tests that start processes (one test per core)" the_rest
+  stage "cargo test -p trol-c500c: the C500C in-process (six tests at a time)" \
+    in_process trol-c500c
 }
 in_process_then_python() {
-  stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
-    in_process_with_builds_ahead
+  stage "cargo test --workspace: the other in-process controllers (six tests at a time)" \
+    in_process_with_builds_ahead trol-conformance trol-rapl trol-mars trol
   stage "cargo test -p trol --features view" client_view
   stage "the client's features one by one" client_features
   stage "Python: the wheel, in a virtual environment without Rust" python_setup
@@ -266,7 +314,7 @@ in_process_then_python() {
   stage "the URDF in MuJoCo and pybullet" mujoco_urdf
   stage "trol ros2 against Cyclone DDS" ros2_dds
 }
-lanes processes in_process_then_python
+side_by_side_if_idle processes in_process_then_python
 
 # The README's walk-through, every block as written (install, demo, interp, the simulator as
 # a process, a C program through pkg-config, Rust, Python, completions and man pages).

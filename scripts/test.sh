@@ -194,12 +194,16 @@ python_setup() {
     python3 -m venv target/py &&
     no_rust bash -c '! command -v cargo && ! command -v rustc' >/dev/null &&
     no_rust "$PY" -m pip install --quiet --disable-pip-version-check \
-      target/wheels/trol-*.whl pytest pytest-timeout numpy mypy matplotlib &&
+      target/wheels/trol-*.whl pytest pytest-timeout pytest-xdist numpy mypy matplotlib &&
     # The module is the wheel's, not the source tree's.
     no_rust "$PY" -c 'import trol, sys; assert "/target/py/" in trol.__file__, trol.__file__; print("   trol for Python from", trol.__file__)'
 }
+# Two at a time (pytest-xdist) where the lanes run side by side on an idle machine: they
+# wait on `trol sim` processes far more than they compute (130 s one at a time, 72 s two).
 python_tests() {
-  (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" no_rust "$PY" -m pytest -q)
+  local workers=()
+  [ "${SIDE_BY_SIDE:-0}" = 1 ] && workers=(-n 2)
+  (cd crates/trol-py && TROL_BIN="$PWD/../../target/debug/trol" no_rust "$PY" -m pytest -q "${workers[@]}")
 }
 python_examples() {
   local root=$PWD plots
@@ -234,22 +238,20 @@ ros2_dds() {
     TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q tests/ros2
 }
 
-# Everything the two lanes run is built first, while nothing else runs: the workspace's test
-# programs (with `trol`, which the tests start), the client with its view and with each feature
-# alone, and `trol ros2`. Only `cargo build -p trol-ros2`, not `-p trol-cli` beside it: that
+# What the two lanes run is built first, while nothing else runs: the workspace's test
+# programs (with `trol`, which the tests start) and `trol ros2` (the client with its view and
+# with each feature alone is built by its stage: it puts nothing in place that a test starts). Only `cargo build -p trol-ros2`, not `-p trol-cli` beside it: that
 # resolves trol-cli's features without the tests' dev-dependencies and would put another
 # build of target/debug/trol in place while the other lane's tests start it.
 build_tests() {
-  cargo test --workspace --no-run &&
-    client_view --no-run &&
-    client_features --no-run &&
-    cargo build -p trol-ros2
+  cargo test --workspace --no-run && cargo build -p trol-ros2
 }
 stage "build the test programs (cargo test --workspace --no-run, ...)" build_tests
 
 # The two lanes. The first: the tests that start processes, one test per core, then the
-# C500C's in-process tests. The second: the other in-process controllers six at a time, then
-# Python, CTU's client, MuJoCo and ROS 2. Each
+# client with its view and with each feature alone. The second: the in-process controllers six
+# at a time, then Python (two tests at a time where the lanes run side by side), CTU's client,
+# MuJoCo and ROS 2. Each
 # took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
 # .ci/run: 1,012 s, against 1,571 s one after the other). On a busy one they run one after
 # the other, as every loaded run before them did: side by side under two busy loops, the
@@ -277,7 +279,7 @@ busy_percent() {
 side_by_side_if_idle() {
   local busy
   case "${TROL_TEST_LANES:-auto}" in
-    1) lanes "$@" ;;
+    1) SIDE_BY_SIDE=1 lanes "$@" ;;
     0)
       "$1" || true
       "$2" || true
@@ -286,7 +288,7 @@ side_by_side_if_idle() {
       busy=$(busy_percent)
       if [ "$busy" -lt 25 ]; then
         echo "== scripts/test.sh: the machine is idle (${busy} % busy over 3 s): two lanes side by side"
-        lanes "$@"
+        SIDE_BY_SIDE=1 lanes "$@"
       else
         echo "== scripts/test.sh: the machine is busy (${busy} % busy over 3 s): the lanes one after the other"
         "$1" || true
@@ -295,17 +297,14 @@ side_by_side_if_idle() {
       ;;
   esac
 }
-# The C500C's in-process tests (35 s idle) end the first lane, which is the shorter.
 processes() {
   stage "cargo test --workspace: the tests that start processes (one test per core)" the_rest
-  stage "cargo test -p trol-c500c: the C500C in-process (six tests at a time)" \
-    in_process trol-c500c
-}
-in_process_then_python() {
-  stage "cargo test --workspace: the other in-process controllers (six tests at a time)" \
-    in_process_with_builds_ahead trol-conformance trol-rapl trol-mars trol
   stage "cargo test -p trol --features view" client_view
   stage "the client's features one by one" client_features
+}
+in_process_then_python() {
+  stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
+    in_process_with_builds_ahead
   stage "Python: the wheel, in a virtual environment without Rust" python_setup
   stage "Python: pytest" python_tests
   stage "Python: the examples (pick.py, plot_motion.py)" python_examples

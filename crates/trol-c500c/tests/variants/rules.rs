@@ -298,9 +298,7 @@ fn points_taught_on_the_pendant_are_listed_and_reached() {
     );
     assert!(unmoved(&before, &r.joints()));
     assert!(!r.received().iter().any(|l| l.starts_with("move")));
-    r.robot.move_to("#p07", false).unwrap();
-    r.robot.finish().unwrap();
-    assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
+    reaches(&mut r, "#p07", &target);
 }
 
 /// An approach to a precision point of the pendant's needs its joints, which need the
@@ -363,9 +361,7 @@ fn an_approach_to_a_precision_point_trusts_the_pulses_only_as_far_as_seen() {
         .to_xyzypr();
     assert!(at(&r, &want), "at {:?}, not {want:?}", tcp(&r));
     // And to the point itself, by its pulses.
-    r.robot.move_to("#bin", false).unwrap();
-    r.robot.finish().unwrap();
-    assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
+    reaches(&mut r, "#bin", &target);
 }
 
 /// Whether ash's `w2` rows are one instant's is not public (variant `rows-apart`: its PULSES
@@ -401,9 +397,7 @@ fn readings_of_a_moving_arm_never_refuse_the_pulses() {
         .appro("#bin", &[-30.0, 0.0, 0.0, 0.0, 0.0, 0.0], false)
         .and_then(|_| r.robot.finish())
         .unwrap_or_else(|e| panic!("Appro #bin after readings mid-motion: {e}\n{}", r.said()));
-    r.robot.move_to("#bin", false).unwrap();
-    r.robot.finish().unwrap();
-    assert!(unmoved(&target, &r.joints()), "{:?}", r.joints());
+    reaches(&mut r, "#bin", &target);
 }
 
 /// Joint locations, motions to a precision point's values, names ash does not take and
@@ -557,4 +551,11 @@ fn a_backup_restores_what_a_dead_battery_lost() {
     assert_eq!(again.to_teach.len(), 1);
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     let _ = thread.join();
+}
+
+/// A motion to the precision point `name` by its pulses ends with the arm at `target`.
+fn reaches(r: &mut Rig, name: &str, target: &[f64; 6]) {
+    r.robot.move_to(name, false).unwrap();
+    r.robot.finish().unwrap();
+    assert!(unmoved(target, &r.joints()), "{name}: at {:?}", r.joints());
 }

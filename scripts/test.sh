@@ -253,7 +253,7 @@ stage "build the test programs (cargo test --workspace --no-run, ...)" build_tes
 # at a time, then Python (two tests at a time where the lanes run side by side), CTU's client,
 # MuJoCo and ROS 2. Each
 # took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
-# .ci/run: 1,012 s, against 1,571 s one after the other). On a busy one they run one after
+# .ci/run: 930 s, against 1,571 s one after the other). On a busy one they run one after
 # the other, as every loaded run before them did: side by side under two busy loops, the
 # processes of the first lane were starved for seconds at a time (a gateway that took over
 # 20 s to start, a 1998 host's link that timed out waiting for ENQ), because the second

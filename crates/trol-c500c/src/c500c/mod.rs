@@ -950,6 +950,8 @@ mod tests {
             let sw = variant(name).unwrap();
             let mut c = C500c::new(sw.clone(), true, 1.0);
             c.feed(b"ash test\r");
+            // At 20 %, a motion of seconds: read many times even on a busy machine.
+            c.feed(b"speed 20\r");
             c.feed(b"joint 1,60\r");
             let mut widest: f64 = 0.0;
             let mut reads = 0;

@@ -105,23 +105,61 @@ stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 
 # The controllers' own tests run in one process each (the backends against their twins, the
 # conformance suite, the API over the embedded line): they wait on simulated arms far more than
-# they compute (the conformance suite: 28 s of CPU in 273 s), so they run six at a time.
-# Everything else starts processes of its own (trol sim, gateways, C programs, a browser) and
-# keeps the default of one test per core: eight at once starved the links of those processes
-# on this 2-core machine. Both halves use the same artifacts (the features do not differ),
-# built once before either runs.
+# they compute (the conformance suite: 28 s of CPU in 273 s), so they run six at a time, with
+# every package's unit tests (a few seconds in all). Everything else starts processes of its
+# own (trol sim, gateways, C programs, a browser) and keeps the default of one test per core:
+# eight at once starved the links of those processes on this 2-core machine.
+#
+# Both halves are `cargo test --workspace` with the test programs named (`--test NAME`), so
+# that cargo resolves every crate's features as the build above did and builds nothing:
+# `cargo test -p trol-rapl ...` resolves them for those packages alone (serde, rustix, memchr
+# and more with other features), and rebuilt TROL's crates for 78 s while the other lane ran.
 IN_PROCESS=(trol-conformance trol-rapl trol-mars trol-c500c trol)
-# The packages named (all of IN_PROCESS without any).
+# A test program of the other packages that runs as a stage of its own, in the lane of the
+# in-process tests: docs/c500.md's first hour, one test of about 50 s, which kept one of the
+# other lane's two test threads for itself.
+ON_ITS_OWN=(c500_first_hour)
+# The integration tests of the packages in IN_PROCESS (`in`) or of every other package but
+# ON_ITS_OWN (`rest`), one `--test NAME` per line. cargo selects a test by its name in every
+# package, so a name both halves have stops the script with what to rename.
+test_programs() {
+  cargo metadata --format-version 1 --no-deps | python3 -c '
+import json, sys
+half, ours, own = sys.argv[1], set(sys.argv[2].split()), set(sys.argv[3].split())
+names = {True: set(), False: set()}
+for p in json.load(sys.stdin)["packages"]:
+    for t in p["targets"]:
+        if "test" in t["kind"]:
+            names[p["name"] in ours].add(t["name"])
+both = names[True] & names[False]
+if both:
+    sys.exit("scripts/test.sh: the test programs %s are in a package of IN_PROCESS and in"
+             " another: rename one (cargo selects a test by its name in every package)"
+             % ", ".join(sorted(both)))
+if not own <= names[False]:
+    sys.exit("scripts/test.sh: ON_ITS_OWN names %s, which no package outside IN_PROCESS has"
+             % ", ".join(sorted(own - names[False])))
+for name in sorted(names[True] if half == "in" else names[False] - own):
+    print("--test\n" + name)
+' "$1" "${IN_PROCESS[*]}" "${ON_ITS_OWN[*]}"
+}
+on_its_own() {
+  local name args=()
+  for name in "${ON_ITS_OWN[@]}"; do args+=(--test "$name"); done
+  cargo test --workspace --no-fail-fast "${args[@]}"
+}
 in_process() {
-  local p args=()
-  [ $# -gt 0 ] || set -- "${IN_PROCESS[@]}"
-  for p in "$@"; do args+=(-p "$p"); done
-  cargo test "${args[@]}" --no-fail-fast -- --test-threads "${TROL_TEST_THREADS:-6}"
+  local programs
+  programs=$(test_programs in) || return 1
+  # shellcheck disable=SC2086 # one word per line
+  cargo test --workspace --no-fail-fast --lib --bins $programs -- \
+    --test-threads "${TROL_TEST_THREADS:-6}"
 }
 the_rest() {
-  local p args=()
-  for p in "${IN_PROCESS[@]}"; do args+=(--exclude "$p"); done
-  cargo test --workspace "${args[@]}" --no-fail-fast
+  local programs
+  programs=$(test_programs rest) || return 1
+  # shellcheck disable=SC2086 # one word per line
+  cargo test --workspace --no-fail-fast $programs && cargo test --workspace --doc
 }
 
 # While the in-process tests wait on their simulated arms, the CPU they leave idle builds
@@ -142,14 +180,14 @@ in_process_with_builds_ahead() {
   local ahead rc=0
   # setsid (util-linux) gives the builds a process group to stop; without it, none go ahead.
   if ! command -v setsid >/dev/null 2>&1; then
-    in_process "$@"
+    in_process
     return
   fi
   mkdir -p target
   export -f build_ahead
   setsid nice -n 19 bash -c build_ahead > target/builds-ahead.log 2>&1 < /dev/null &
   ahead=$!
-  in_process "$@" || rc=$?
+  in_process || rc=$?
   if kill -0 "$ahead" 2>/dev/null; then
     kill -TERM -- "-$ahead" 2>/dev/null || true
     echo "   the builds ahead were stopped with the tests; their stages build what is left"
@@ -232,26 +270,35 @@ mujoco_urdf() {
 
 # `trol ros2` against a real DDS peer: Eclipse Cyclone DDS, the DDS under ROS 2's
 # rmw_cyclonedds, from the package registry, on loopback only (tests/ros2, docs/ros2.md).
+# Two at a time where the lanes run side by side (each test on a DDS domain of its own, apart
+# from the other worker's: 94 s one at a time, about 50 s two).
 ros2_dds() {
-  cargo build --quiet -p trol-ros2 &&
-    "$PY" -m pip install --quiet cyclonedds==11.0.1 &&
-    TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q tests/ros2
+  local workers=()
+  [ "${SIDE_BY_SIDE:-0}" = 1 ] && workers=(-n 2)
+  "$PY" -m pip install --quiet cyclonedds==11.0.1 &&
+    TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q "${workers[@]}" tests/ros2
 }
 
 # What the two lanes run is built first, while nothing else runs: the workspace's test
-# programs (with `trol`, which the tests start) and `trol ros2` (the client with its view and
-# with each feature alone is built by its stage: it puts nothing in place that a test starts). Only `cargo build -p trol-ros2`, not `-p trol-cli` beside it: that
-# resolves trol-cli's features without the tests' dev-dependencies and would put another
-# build of target/debug/trol in place while the other lane's tests start it.
+# programs, then every program, library and example of the workspace (`trol`, `trol ros2`,
+# libtrol, the examples the C tests link). The second command resolves features as the first
+# did (dev-dependencies are in play for the whole workspace where examples are built), so it
+# adds only what the test build leaves out: `trol-ros2` and libtrol.so and .a, a few seconds.
+# (`cargo build -p trol-ros2` alone resolved rustix, serde, clap and regex otherwise and
+# rebuilt them: 32 s.) The client with its view and with each feature alone is built by its
+# stage: it puts nothing in place that a test starts. After this, the tests build nothing that
+# a test starts (`TROL_TEST_BUILT=1`: crates/trol-cli/tests/cli builds no program; libtrol's
+# build in the C tests is the same command, and finds everything up to date).
 build_tests() {
-  cargo test --workspace --no-run && cargo build -p trol-ros2
+  cargo test --workspace --no-run && cargo build --workspace --bins --lib --examples
 }
-stage "build the test programs (cargo test --workspace --no-run, ...)" build_tests
+stage "build the test programs (cargo test --workspace --no-run, cargo build --workspace ...)" build_tests
+export TROL_TEST_BUILT=1
 
 # The two lanes. The first: the tests that start processes, one test per core, then the
 # client with its view and with each feature alone. The second: the in-process controllers six
-# at a time, then Python (two tests at a time where the lanes run side by side), CTU's client,
-# MuJoCo and ROS 2. Each
+# at a time, docs/c500.md's first hour, then Python and ROS 2 (both two tests at a time where
+# the lanes run side by side), CTU's client and MuJoCo. Each
 # took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
 # .ci/run: 930 s, against 1,571 s one after the other). On a busy one they run one after
 # the other, as every loaded run before them did: side by side under two busy loops, the
@@ -305,6 +352,7 @@ processes() {
 in_process_then_python() {
   stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
     in_process_with_builds_ahead
+  stage "cargo test --workspace --test ${ON_ITS_OWN[*]}: docs/c500.md's first hour" on_its_own
   stage "Python: the wheel, in a virtual environment without Rust" python_setup
   stage "Python: pytest" python_tests
   stage "Python: the examples (pick.py, plot_motion.py)" python_examples

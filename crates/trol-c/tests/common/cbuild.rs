@@ -19,8 +19,15 @@ pub fn lib_dir() -> PathBuf {
 }
 
 /// `cargo test` builds the trol crate as a Rust library only; build libtrol.a and .so, and
-/// the guide's example programs, once, with the same cargo and profile (a no-op when they
-/// are up to date).
+/// the guide's example programs (`extending_controller`, `extending_client`), once, with the
+/// same cargo and profile.
+///
+/// It builds every library and example of the workspace, as `scripts/test.sh` does after
+/// `cargo test --workspace --no-run`: with dev-dependencies in play for the whole workspace,
+/// cargo resolves each crate's features as the test build did and finds it all up to date.
+/// (`-p trol-c -p trol` alone resolved bitflags without `std`, and rebuilt serialport and
+/// every TROL crate above it: 46 s in the middle of the tests.) It builds no program, so it
+/// never puts another `trol` in place while a test starts it.
 pub fn build_libtrol() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
@@ -28,15 +35,9 @@ pub fn build_libtrol() {
         let mut cmd = Command::new(cargo);
         cmd.args([
             "build",
-            "-p",
-            "trol-c",
+            "--workspace",
             "--lib",
-            "-p",
-            "trol",
-            "--example",
-            "extending_controller",
-            "--example",
-            "extending_client",
+            "--examples",
             "--manifest-path",
         ])
         .arg(root().join("Cargo.toml"));

@@ -63,9 +63,15 @@ fn demo_runs_to_the_end_and_every_step_succeeds() {
 }
 
 /// Build `package`'s program (once per test binary, `once`), so that `trol` finds it beside
-/// itself.
+/// itself; where `scripts/test.sh` built every program of the workspace before its tests
+/// (`TROL_TEST_BUILT=1`), nothing. There `cargo build -p trol-ros2` would resolve features
+/// for that package alone, build it again (about 30 s) and put it in place while another
+/// test may start it.
 fn build_once(once: &'static std::sync::Once, package: &str) {
     once.call_once(|| {
+        if std::env::var_os("TROL_TEST_BUILT").is_some_and(|v| v == "1") {
+            return;
+        }
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
         let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../Cargo.toml");
         let status = std::process::Command::new(cargo)

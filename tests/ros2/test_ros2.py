@@ -369,10 +369,27 @@ class Node:
             self.proc.wait()
 
 
+# The domains this process hands out: each test gets one of its own. With pytest-xdist
+# (`pytest -n N`, scripts/test.sh where its lanes run side by side) worker k of N takes the
+# domains k, k + N, k + 2N, ... from a start that all the run's workers share, so two tests
+# running at once never meet; the start is the run's (xdist's run id) or, one at a time, a
+# random one, so that two runs on one machine seldom do.
+_DOMAINS = 200  # domains 1..200
+_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+_WORKER = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+_RUN = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+_START = int(_RUN[:8], 16) if _RUN else random.randrange(_DOMAINS)
+_handed_out = 0
+
+
 @pytest.fixture
 def domain() -> int:
-    # A domain of its own, so that runs beside each other do not meet.
-    return random.randint(1, 200)
+    global _handed_out
+    # A multiple of the workers, so that k, k + N, ... stay apart across the wrap.
+    span = _DOMAINS - _DOMAINS % _WORKERS
+    d = 1 + (_START + _WORKER + _WORKERS * _handed_out) % span
+    _handed_out += 1
+    return d
 
 
 @pytest.fixture

@@ -269,6 +269,13 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
             .port_mut()
             .flush_input()
             .map_err(io)?;
+        // The probe above failed, so this end's link is resetting: deaf for two periods, as
+        // the manual has a sender do after a failed transfer (layer 2, "Rückgabewerte"), so
+        // that neither end takes a byte of that transfer into the next. The controller has
+        // just answered the activation line from terminal mode: its link starts now, idle,
+        // and the input here is flushed. So there is nothing left to wait out (it was 2 s of
+        // every `trol init` of a controller in terminal mode).
+        robot.transactor_mut().initiator_mut().abort();
         check_server(robot)?;
     }
     robot.set_tool_transform(tool)

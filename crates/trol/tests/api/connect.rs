@@ -97,6 +97,11 @@ pub(super) fn robots_from_a_config_file() {
 
 /// The activation line agrees on the block check: a host with the manual's LRC activates a
 /// controller in terminal mode, which then speaks LRC; a host with CRC-16 gets nowhere with it.
+///
+/// The probe that found the controller in terminal mode failed, and a failed transfer leaves
+/// the sender deaf for two reset periods; the activation itself starts both links afresh, so
+/// InitTROL(0) does not wait them out. Here a reset period is a minute: activation and the
+/// first call after it take far less than the two minutes a wait would.
 #[test]
 pub(super) fn activation_agrees_on_the_block_check() {
     use trol_controller::{Controller, Embedded, Mode};
@@ -109,13 +114,20 @@ pub(super) fn activation_agrees_on_the_block_check() {
         Mode::Terminal,
     );
     let handle = Embedded::spawn(controller);
-    let lrc = LinkConfig {
+    let mut lrc = LinkConfig {
         check: BlockCheck::Lrc,
         ..steady()
     };
+    lrc.timeouts.reset = Duration::from_secs(60);
     let mut robot = Robot::over(Box::new(host), lrc, None);
+    let started = std::time::Instant::now();
     trol::activate(&mut robot, &[0.0; 6]).unwrap();
     assert_eq!(robot.status().unwrap(), (true, SUCCESS));
+    assert!(
+        started.elapsed() < Duration::from_secs(60),
+        "activation waited out the failed probe's reset ({:?})",
+        started.elapsed()
+    );
     robot.home(0).unwrap();
     // The same controller (still running), a host that computes CRC-16: its header is refused
     // with NAK ERR_BCC until the retries run out.

@@ -49,9 +49,15 @@ stage() {
 lanes() {
   local dir started=$SECONDS ticker pid_a pid_b
   dir=$(mktemp -d)
-  (TICKER=0 "$1") > "$dir/a" 2>&1 &
+  (
+    TICKER=0 "$1"
+    echo $((SECONDS - started)) > "$dir/a.end"
+  ) > "$dir/a" 2>&1 &
   pid_a=$!
-  (TICKER=0 "$2") > "$dir/b" 2>&1 &
+  (
+    TICKER=0 "$2"
+    echo $((SECONDS - started)) > "$dir/b.end"
+  ) > "$dir/b" 2>&1 &
   pid_b=$!
   (
     t=0
@@ -64,10 +70,10 @@ lanes() {
   ) &
   ticker=$!
   wait "$pid_b" || true
-  echo "== scripts/test.sh: lane \"$2\" ended after $((SECONDS - started)) s; its output:"
+  echo "== scripts/test.sh: lane \"$2\" ended after $(cat "$dir/b.end" 2>/dev/null || echo ?) s; its output:"
   cat "$dir/b"
   wait "$pid_a" || true
-  echo "== scripts/test.sh: lane \"$1\" ended after $((SECONDS - started)) s; its output:"
+  echo "== scripts/test.sh: lane \"$1\" ended after $(cat "$dir/a.end" 2>/dev/null || echo ?) s; its output:"
   cat "$dir/a"
   kill "$ticker" 2>/dev/null || true
   wait "$ticker" 2>/dev/null || true
@@ -115,17 +121,13 @@ stage "libmodbus set-up (the pty bench's anchor)" modbus_setup
 # `cargo test -p trol-rapl ...` resolves them for those packages alone (serde, rustix, memchr
 # and more with other features), and rebuilt TROL's crates for 78 s while the other lane ran.
 IN_PROCESS=(trol-conformance trol-rapl trol-mars trol-c500c trol)
-# A test program of the other packages that runs as a stage of its own, in the lane of the
-# in-process tests: docs/c500.md's first hour, one test of about 50 s, which kept one of the
-# other lane's two test threads for itself.
-ON_ITS_OWN=(c500_first_hour)
-# The integration tests of the packages in IN_PROCESS (`in`) or of every other package but
-# ON_ITS_OWN (`rest`), one `--test NAME` per line. cargo selects a test by its name in every
-# package, so a name both halves have stops the script with what to rename.
+# The integration tests of the packages in IN_PROCESS (`in`) or of every other package
+# (`rest`), one `--test NAME` per line. cargo selects a test by its name in every package, so
+# a name both halves have stops the script with what to rename.
 test_programs() {
   cargo metadata --format-version 1 --no-deps | python3 -c '
 import json, sys
-half, ours, own = sys.argv[1], set(sys.argv[2].split()), set(sys.argv[3].split())
+half, ours = sys.argv[1], set(sys.argv[2:])
 names = {True: set(), False: set()}
 for p in json.load(sys.stdin)["packages"]:
     for t in p["targets"]:
@@ -136,17 +138,9 @@ if both:
     sys.exit("scripts/test.sh: the test programs %s are in a package of IN_PROCESS and in"
              " another: rename one (cargo selects a test by its name in every package)"
              % ", ".join(sorted(both)))
-if not own <= names[False]:
-    sys.exit("scripts/test.sh: ON_ITS_OWN names %s, which no package outside IN_PROCESS has"
-             % ", ".join(sorted(own - names[False])))
-for name in sorted(names[True] if half == "in" else names[False] - own):
+for name in sorted(names[half == "in"]):
     print("--test\n" + name)
-' "$1" "${IN_PROCESS[*]}" "${ON_ITS_OWN[*]}"
-}
-on_its_own() {
-  local name args=()
-  for name in "${ON_ITS_OWN[@]}"; do args+=(--test "$name"); done
-  cargo test --workspace --no-fail-fast "${args[@]}"
+' "$1" "${IN_PROCESS[@]}"
 }
 in_process() {
   local programs
@@ -297,7 +291,7 @@ export TROL_TEST_BUILT=1
 
 # The two lanes. The first: the tests that start processes, one test per core, then the
 # client with its view and with each feature alone. The second: the in-process controllers six
-# at a time, docs/c500.md's first hour, then Python and ROS 2 (both two tests at a time where
+# at a time, then Python and ROS 2 (both two tests at a time where
 # the lanes run side by side), CTU's client and MuJoCo. Each
 # took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
 # .ci/run: 930 s, against 1,571 s one after the other). On a busy one they run one after
@@ -352,7 +346,6 @@ processes() {
 in_process_then_python() {
   stage "cargo test --workspace: the in-process controllers (six tests at a time)" \
     in_process_with_builds_ahead
-  stage "cargo test --workspace --test ${ON_ITS_OWN[*]}: docs/c500.md's first hour" on_its_own
   stage "Python: the wheel, in a virtual environment without Rust" python_setup
   stage "Python: pytest" python_tests
   stage "Python: the examples (pick.py, plot_motion.py)" python_examples

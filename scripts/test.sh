@@ -281,8 +281,8 @@ ros2_dds() {
 # (`cargo build -p trol-ros2` alone resolved rustix, serde, clap and regex otherwise and
 # rebuilt them: 32 s.) The client with its view and with each feature alone is built by its
 # stage: it puts nothing in place that a test starts. After this, the tests build nothing that
-# a test starts (`TROL_TEST_BUILT=1`: crates/trol-cli/tests/cli builds no program; libtrol's
-# build in the C tests is the same command, and finds everything up to date).
+# a test starts (`TROL_TEST_BUILT=1`: crates/trol-cli/tests/cli builds no program; the C
+# tests' `cargo build --workspace --lib --examples` finds libtrol up to date).
 build_tests() {
   cargo test --workspace --no-run && cargo build --workspace --bins --lib --examples
 }

@@ -150,10 +150,13 @@ in_process() {
     --test-threads "${TROL_TEST_THREADS:-6}"
 }
 the_rest() {
-  local programs
+  local programs rc=0
   programs=$(test_programs rest) || return 1
   # shellcheck disable=SC2086 # one word per line
-  cargo test --workspace --no-fail-fast $programs && cargo test --workspace --doc
+  cargo test --workspace --no-fail-fast $programs || rc=$?
+  # The doctests of every package (each a few lines; they ran with their package before).
+  cargo test --workspace --doc || rc=$?
+  return $rc
 }
 
 # While the in-process tests wait on their simulated arms, the CPU they leave idle builds
@@ -291,10 +294,10 @@ export TROL_TEST_BUILT=1
 
 # The two lanes. The first: the tests that start processes, one test per core, then the
 # client with its view and with each feature alone. The second: the in-process controllers six
-# at a time, then Python and ROS 2 (both two tests at a time where
-# the lanes run side by side), CTU's client and MuJoCo. Each
-# took 10 to 12 minutes of an idle run, so on an idle machine they run side by side (an idle
-# .ci/run: 930 s, against 1,571 s one after the other). On a busy one they run one after
+# at a time, then Python and ROS 2 (both two tests at a time where the lanes run side by
+# side), CTU's client and MuJoCo. Each takes about 10 minutes of an idle run, so on an idle
+# machine they run side by side (an idle .ci/run: 825 s, against 1,571 s one after the other
+# before the lanes and the changes since). On a busy one they run one after
 # the other, as every loaded run before them did: side by side under two busy loops, the
 # processes of the first lane were starved for seconds at a time (a gateway that took over
 # 20 s to start, a 1998 host's link that timed out waiting for ENQ), because the second

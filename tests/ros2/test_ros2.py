@@ -19,6 +19,7 @@ import random
 import subprocess
 import threading
 import time
+import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -378,7 +379,7 @@ _DOMAINS = 200  # domains 1..200
 _WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
 _WORKER = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
 _RUN = os.environ.get("PYTEST_XDIST_TESTRUNUID")
-_START = int(_RUN[:8], 16) if _RUN else random.randrange(_DOMAINS)
+_START = zlib.crc32(_RUN.encode()) if _RUN else random.randrange(_DOMAINS)
 _handed_out = 0
 
 

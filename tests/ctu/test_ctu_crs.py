@@ -6,10 +6,12 @@ years; `trol sim --mars` must satisfy them byte for byte (docs/mars.md). Each te
 client does not settle), and runs the client's own code against it: initialize with hard
 and soft home, move_to_q, wait_for_motion_stop, get_q, in_motion and the gripper.
 
-Only the camera import is stubbed (tests/ctu/stub/pypylon): there is no camera here.
+Only the camera import is stubbed (tests/ctu/stub/pypylon): there is no camera here. And the
+client's serial port keeps the line's time (`LineTimedSerial`): the client's code is unchanged.
 """
 
 import os
+import select
 import subprocess
 import sys
 import threading
@@ -19,7 +21,46 @@ import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "stub"))
 
+import ctu_mars_control_unit.mars_control_unit as mars_control_unit  # noqa: E402
+import serial  # noqa: E402
 from ctu_crs import CRS93  # noqa: E402
+
+
+class LineTimedSerial(serial.Serial):
+    """The client's serial port, with a query's answer started inside the client's read window.
+
+    The client reads for 10 ms at a time and its gripper wait parses one read as one answer
+    (`AP<axis>?`; ctu_crs/gripper.py): a read that got nothing makes it ask again, and the
+    next read holds both answers, which it cannot parse ("could not convert string to float:
+    '103\\nAPG=103'"). On the real line at 19200 baud the unit's answer starts about 3 ms
+    after the question, always inside the window. Here the answer passes three scheduled
+    tasks (the simulated unit, the kernel's pty worker, this process), and a loaded 2-core
+    machine has held them past 10 ms (CI of 375cc23, the homing-silent variant). So after a
+    query, a read first waits, up to 2 s, for the answer's first byte; then the client's own
+    read window runs as written. Nothing is added to, dropped from or reordered in the bytes.
+    """
+
+    QUERY_WAIT_S = 2.0
+
+    def __init__(self, *args, **kwargs):
+        self._asked = False
+        super().__init__(*args, **kwargs)
+
+    def write(self, data):
+        if b"?" in bytes(data):
+            self._asked = True
+        return super().write(data)
+
+    def read(self, size=1):
+        if self._asked:
+            self._asked = False
+            select.select([self.fd], [], [], self.QUERY_WAIT_S)
+        return super().read(size)
+
+
+@pytest.fixture(autouse=True)
+def line_timed_serial(monkeypatch):
+    monkeypatch.setattr(mars_control_unit, "Serial", LineTimedSerial)
 
 TROL = os.environ.get("TROL_BIN", "target/debug/trol")
 VARIANTS = ["default", "echo", "noise", "moving-lag", "refusal-line",

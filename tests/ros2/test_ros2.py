@@ -426,6 +426,17 @@ def wait_for(what: str, fn, limit: float = 30.0):  # type: ignore[no-untyped-def
     raise AssertionError(f"no {what} within {limit} s")
 
 
+def newest_state(states: DataReader) -> JointState:
+    """The newest joint state the reader holds; if none has come yet (a new reader is still
+    being matched, and a busy machine can take longer than any fixed pause), wait for one."""
+
+    def newest():  # type: ignore[no-untyped-def]
+        got = [s for s in states.take(N=50) if isinstance(s, JointState)]
+        return got[-1] if got else None
+
+    return wait_for("a joint state", newest)
+
+
 class Service:
     """A ROS 2 service client as rmw_cyclonedds makes one: requests with its header on
     `rq/<name>Request`, replies with the same header on `rr/<name>Reply`."""
@@ -632,7 +643,7 @@ def test_follow_joint_trajectory_runs_a_goal_with_feedback_and_its_result(arm_at
     assert worst < 0.02, worst
     # The arm is where the last point asked, as joint_states says.
     time.sleep(0.5)
-    last = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    last = newest_state(states)
     assert list(last.position) == pytest.approx(list(reversed(end)), abs=2e-3)
     # The status says it too.
     st = wait_for("the goal's status", lambda: next(
@@ -657,7 +668,7 @@ def test_follow_joint_trajectory_refuses_a_bad_goal_with_the_action_s_code_and_m
     assert "BIOS_TOO_FAST" in r.result.error_string
     states = states_reader(dp, "arm1")
     time.sleep(0.5)
-    last = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    last = newest_state(states)
     assert list(last.position) == pytest.approx([0.0] * 6, abs=2e-3)
 
 
@@ -678,9 +689,9 @@ def standing_short_of_far_target(dp: DomainParticipant) -> None:
     """Two readings half a second apart agree, and the arm is not at FAR_TARGET."""
     states = states_reader(dp, "arm1")
     time.sleep(0.5)
-    a = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    a = newest_state(states)
     time.sleep(0.5)
-    b = [s for s in states.take(N=50) if isinstance(s, JointState)][-1]
+    b = newest_state(states)
     assert list(a.position) == pytest.approx(list(b.position), abs=1e-3)
     assert abs(b.position[0] - FAR_TARGET[0]) > 0.1, "the arm went on to the target"
 
@@ -814,7 +825,7 @@ def test_a_path_tolerance_the_arm_cannot_keep_aborts_the_goal_and_halts_the_arm(
     assert "joint_1" in out.result.error_string and "halted" in out.result.error_string
     states = states_reader(dp, "arm1")
     time.sleep(0.5)
-    last = [x for x in states.take(N=50) if isinstance(x, JointState)][-1]
+    last = newest_state(states)
     assert abs(last.position[0] - target[0]) > 0.5, "the arm was stopped early"
 
 

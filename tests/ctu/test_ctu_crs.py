@@ -32,12 +32,13 @@ class LineTimedSerial(serial.Serial):
     The client reads for 10 ms at a time and its gripper wait parses one read as one answer
     (`AP<axis>?`; ctu_crs/gripper.py): a read that got nothing makes it ask again, and the
     next read holds both answers, which it cannot parse ("could not convert string to float:
-    '103\\nAPG=103'"). On the real line at 19200 baud the unit's answer starts about 3 ms
-    after the question, always inside the window. Here the answer passes three scheduled
-    tasks (the simulated unit, the kernel's pty worker, this process), and a loaded 2-core
-    machine has held them past 10 ms (CI of 375cc23, the homing-silent variant). So after a
-    query, a read first waits, up to 2 s, for the answer's first byte; then the client's own
-    read window runs as written. Nothing is added to, dropped from or reordered in the bytes.
+    '103\\nAPG=103'"). The client was written for the real line, where the question
+    takes 2.6 ms at 19200 baud and the answer follows inside the window. Here the answer
+    passes three scheduled tasks (the simulated unit, the kernel's pty worker, this process),
+    and a loaded 2-core machine has held them past 10 ms (CI of 375cc23, the homing-silent
+    variant). So after a query, a read first waits, up to 2 s, for the answer's first byte;
+    then the client's own read window runs as written. Nothing is added to, dropped from or
+    reordered in the bytes.
     """
 
     QUERY_WAIT_S = 2.0

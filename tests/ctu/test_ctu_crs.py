@@ -8,13 +8,17 @@ and soft home, move_to_q, wait_for_motion_stop, get_q, in_motion and the gripper
 
 Only the camera import is stubbed (tests/ctu/stub/pypylon): there is no camera here. And the
 client's serial port keeps the line's time (`LineTimedSerial`): the client's code is unchanged.
+One test makes the line late on purpose (`LateLine`), as a loaded machine can.
 """
 
 import os
+import queue
+import random
 import select
 import subprocess
 import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -59,9 +63,47 @@ class LineTimedSerial(serial.Serial):
         return super().read(size)
 
 
+class LateLine(LineTimedSerial):
+    """A loaded machine made to order: each write reaches the unit up to 30 ms late, in the
+    order written (a seeded random delay per write; one thread sends them)."""
+
+    MAX_DELAY_S = 0.03
+
+    def __init__(self, *args, **kwargs):
+        self._pending = queue.Queue()
+        self._due = 0.0
+        self._random = random.Random(465)
+        self._pump = None
+        super().__init__(*args, **kwargs)
+        self._pump = threading.Thread(target=self._send_late, daemon=True)
+        self._pump.start()
+
+    def _send_late(self):
+        while (item := self._pending.get()) is not None:
+            due, data = item
+            time.sleep(max(0.0, due - time.monotonic()))
+            serial.Serial.write(self, data)
+
+    def write(self, data):
+        data = bytes(data)
+        if b"?" in data:
+            self._asked = True
+        self._due = max(self._due, time.monotonic() + self._random.uniform(0, self.MAX_DELAY_S))
+        self._pending.put((self._due, data))
+        return len(data)
+
+    def close(self):
+        if self._pump is not None:
+            self._pending.put(None)
+            self._pump.join()
+            self._pump = None
+        super().close()
+
+
 @pytest.fixture(autouse=True)
 def line_timed_serial(monkeypatch):
     monkeypatch.setattr(mars_control_unit, "Serial", LineTimedSerial)
+
 
 TROL = os.environ.get("TROL_BIN", "target/debug/trol")
 VARIANTS = ["default", "echo", "noise", "moving-lag", "refusal-line",
@@ -88,6 +130,20 @@ def unit(request):
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("unit", VARIANTS, indirect=True)
 def test_ctu_crs_drives_the_simulated_mars8(unit, capsys):
+    drive(unit, capsys)
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("unit", ["default"], indirect=True)
+def test_ctu_crs_drives_it_through_a_line_up_to_30_ms_late(unit, capsys, monkeypatch):
+    """The test above, on a line made as slow as a loaded machine can make the pty. Without
+    LineTimedSerial's wait the client's gripper wait fails so (tried: 13 of 13 variants)."""
+    monkeypatch.setattr(mars_control_unit, "Serial", LateLine)
+    drive(unit, capsys)
+
+
+def drive(unit, capsys):
+    """CTU's client through its own steps: homes, moves, 25 moves queued, the gripper."""
     robot = CRS93(tty_dev=unit)
     assert "Firmware version : TROL simulated MARS 8" in capsys.readouterr().out
     robot.initialize(home=True)

@@ -253,8 +253,10 @@ python_examples() {
 # CTU Prague's own MARS 8 client (ctu-crs, from the package registry; its camera import
 # stubbed) drives `trol sim --mars` across the unit's variants (tests/ctu, docs/mars.md).
 ctu() {
-  "$PY" -m pip install --quiet --no-deps ctu-crs==1.0.6 ctu-mars-control-unit==0.1.3 &&
-    "$PY" -m pip install --quiet pyyaml pyserial &&
+  # Their dependencies first: installed after them, pip would report the camera package it
+  # lacks as an ERROR (harmless: the camera import is stubbed).
+  "$PY" -m pip install --quiet pyyaml pyserial &&
+    "$PY" -m pip install --quiet --no-deps ctu-crs==1.0.6 ctu-mars-control-unit==0.1.3 &&
     TROL_BIN="$PWD/target/debug/trol" "$PY" -m pytest -q tests/ctu
 }
 

@@ -52,8 +52,12 @@ class LineTimedSerial(serial.Serial):
         super().__init__(*args, **kwargs)
 
     def write(self, data):
-        if b"?" in bytes(data):
+        data = bytes(data)
+        if b"?" in data:
             self._asked = True
+        return self._send(data)
+
+    def _send(self, data):
         return super().write(data)
 
     def read(self, size=1):
@@ -84,10 +88,7 @@ class LateLine(LineTimedSerial):
             time.sleep(max(0.0, due - time.monotonic()))
             serial.Serial.write(self, data)
 
-    def write(self, data):
-        data = bytes(data)
-        if b"?" in data:
-            self._asked = True
+    def _send(self, data):
         self._due = max(self._due, time.monotonic() + self._random.uniform(0, self.MAX_DELAY_S))
         self._pending.put((self._due, data))
         return len(data)

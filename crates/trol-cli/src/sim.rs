@@ -74,6 +74,11 @@ pub struct SimArgs {
     /// (the request's). --check does not apply. For trying a host against an old controller.
     #[arg(long, value_name = "PCI", num_args = 0..=1, default_missing_value = "zero", value_parser = parse_manual_pci, conflicts_with_all = ["rapl", "mars", "c500c"])]
     manual: Option<ManualLayer3>,
+    /// Take MS milliseconds to start the server after answering the activation line, losing
+    /// what arrives meanwhile, as a 1998 controller whose PCP takes a moment to come up may
+    /// (the host tries its check again: docs/protocol.md, "The controller's modes").
+    #[arg(long, value_name = "MS", default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000))]
+    start_pause: u64,
     /// Commands an application added, described in FILE (docs/extending.md): the log shows
     /// them by name. `trol sim` has no handlers for them and answers TROL_ERR_UNKNOWN; a
     /// controller program of the application's own serves them.
@@ -366,6 +371,7 @@ pub fn run(a: SimArgs) -> Result<(), String> {
         );
         controller.speak_manual_only(pci);
     }
+    controller.set_start_pause(std::time::Duration::from_millis(a.start_pause));
     serve(controller, described, trol_sim::SIM_CODES)
 }
 

@@ -165,6 +165,10 @@ pub struct Controller<P, B> {
     reports: Option<(SharedReport, Duration, Instant)>,
     /// Requests from the pendant, if one was made.
     pendant: Option<PendantInbox>,
+    /// How long the server takes to start after its activation line was answered
+    /// ([`Controller::set_start_pause`]), and until when it is still starting.
+    start_pause: Duration,
+    starting_until: Option<Instant>,
 }
 
 impl<P: Port, B: Backend> Controller<P, B> {
@@ -183,6 +187,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
             trip: None,
             reports: None,
             pendant: None,
+            start_pause: Duration::ZERO,
+            starting_until: None,
         };
         c.check_requests();
         // "Still working" while a request executes, to a host that takes it: without a
@@ -347,6 +353,14 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.server.responder_mut().set_request_check(None);
     }
 
+    /// Take `pause` to start the server after answering the activation line, as a 1998
+    /// controller whose PCP takes a moment to come up may: whatever arrives meanwhile is
+    /// lost, as it would be on a line nobody reads yet (issue 67: the host's first ENQ
+    /// must be tried again). For the simulated 1998 controller; 0 (the default) serves at once.
+    pub fn set_start_pause(&mut self, pause: Duration) {
+        self.start_pause = pause;
+    }
+
     /// The mode.
     pub fn mode(&self) -> Mode {
         self.mode
@@ -395,12 +409,24 @@ impl<P: Port, B: Backend> Controller<P, B> {
                         .set_manual_host(activation == crate::terminal::Activation::Manual);
                     self.mode = Mode::Server;
                     self.last_seen = Instant::now();
+                    self.starting_until =
+                        (!self.start_pause.is_zero()).then(|| Instant::now() + self.start_pause);
                 } else if n == 0 {
                     // Quiet in terminal mode: a view still follows the arm.
                     self.refresh_report();
                 }
             }
+            Mode::Server if self.starting_until.is_some_and(|t| Instant::now() < t) => {
+                // Still starting: nothing reads the line yet, so what arrives is lost.
+                let until = self.starting_until.unwrap_or_else(Instant::now);
+                let port = self.server.driver_mut().port_mut();
+                let mut buf = [0u8; 256];
+                let _ = port.recv(&mut buf, until.min(Instant::now() + slice))?;
+            }
             Mode::Server => {
+                if self.starting_until.take().is_some() {
+                    self.server.driver_mut().port_mut().flush_input()?;
+                }
                 let ev = match self.serve_one(slice) {
                     Ok(Some(ev)) => ev,
                     Ok(None) => return Ok(()),

@@ -276,9 +276,49 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
         // and the input here is flushed. So there is nothing left to wait out (it was 2 s of
         // every `trol init` of a controller in terminal mode).
         robot.transactor_mut().initiator_mut().abort();
-        check_server(robot)?;
+        check_activated(robot)?;
     }
     robot.set_tool_transform(tool)
+}
+
+/// How long a controller may take to start its server after it answered the activation
+/// line. The manual gives no figure; a 1998 PCP server that is loaded and started by the
+/// line may miss the first ENQ (issue 67: 0 of 4 activations with a 50 ms start), so the
+/// check is tried again, each try one ENQ, until this has passed.
+pub const ACTIVATION_WINDOW: std::time::Duration = std::time::Duration::from_secs(3);
+
+/// The check after the activation line: GetStatus, tried again while nothing at all answers
+/// its ENQ and the server may still be starting ([`ACTIVATION_WINDOW`]). A controller that
+/// answers and refuses (another version, damaged blocks) is not asked again.
+fn check_activated(robot: &mut Robot) -> Result<()> {
+    let started = std::time::Instant::now();
+    loop {
+        let e = match check_server(robot) {
+            Ok(()) => return Ok(()),
+            Err(e) => e,
+        };
+        let silent = robot
+            .transactor_mut()
+            .initiator()
+            .link()
+            .last_error()
+            .is_some_and(|l| l == trol_proto::link::LinkError::Send(
+                trol_proto::link::codes::SendError::TimeoutEnq,
+            ));
+        if !silent || started.elapsed() >= ACTIVATION_WINDOW {
+            return Err(e);
+        }
+        // Nothing answered: the server was not listening yet, so no byte of that try is
+        // on its way back. Start the next try at once instead of waiting out the reset.
+        let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
+        robot
+            .transactor_mut()
+            .driver_mut()
+            .port_mut()
+            .flush_input()
+            .map_err(io)?;
+        robot.transactor_mut().initiator_mut().abort();
+    }
 }
 
 /// How a controller in terminal mode took an activation line.

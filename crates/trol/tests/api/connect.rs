@@ -143,6 +143,60 @@ pub(super) fn activation_agrees_on_the_block_check() {
     drop(handle);
 }
 
+/// A 1998 controller whose server takes a moment to start after it answered the activation
+/// line (the bytes sent meanwhile are lost) is activated all the same: the host tries its
+/// check again, one ENQ each, within `trol::ACTIVATION_WINDOW` (issue 67, item 3: with one
+/// try, 0 of 4 activations at a 50 ms start). Each pause of the issue, and none.
+#[test]
+pub(super) fn a_1998_controller_that_starts_slowly_is_activated() {
+    use trol_controller::{Controller, Embedded, Mode};
+    use trol_proto::link::BlockCheck;
+    use trol_proto::transaction::ManualLayer3;
+    for pause_ms in [0u64, 50, 200, 1000] {
+        let cfg = LinkConfig {
+            check: BlockCheck::Lrc,
+            ..steady()
+        };
+        let (host, ctl) = trol_port::memory::pair(None);
+        let mut controller = Controller::new(
+            ctl,
+            cfg,
+            Pcp::new(SimBackend::new(settings())),
+            Mode::Terminal,
+        );
+        controller.speak_manual_only(ManualLayer3::ZeroPci);
+        controller.set_start_pause(Duration::from_millis(pause_ms));
+        let handle = Embedded::spawn(controller);
+        let mut robot = Robot::over(Box::new(host), cfg, None);
+        robot.keep(handle);
+        trol::activate(&mut robot, &[0.0; 6])
+            .unwrap_or_else(|e| panic!("a start of {pause_ms} ms: {e}"));
+        assert!(robot.speaks_manual_only(), "{pause_ms} ms");
+        assert_eq!(robot.status().unwrap(), (true, SUCCESS), "{pause_ms} ms");
+        robot.home(0).unwrap();
+    }
+}
+
+/// A controller that never starts its server after the activation line is given up on once
+/// the activation window has passed, with the cable hint, not waited for without end.
+#[test]
+pub(super) fn a_controller_whose_server_never_starts_is_given_up_on() {
+    use trol_controller::{Controller, Embedded, Mode};
+    let (host, ctl) = trol_port::memory::pair(None);
+    let mut controller = Controller::new(
+        ctl,
+        steady(),
+        Pcp::new(SimBackend::new(settings())),
+        Mode::Terminal,
+    );
+    controller.set_start_pause(Duration::from_secs(3600));
+    let handle = Embedded::spawn(controller);
+    let mut robot = Robot::over(Box::new(host), steady(), None);
+    robot.keep(handle);
+    let e = trol::activate(&mut robot, &[0.0; 6]).unwrap_err();
+    assert!(e.to_string().contains("does not answer"), "{e}");
+}
+
 /// Settings that cannot work are refused with TROL_ERR_ARG_RANGE and change nothing; the
 /// inter-character delay lengthens the link's timeouts.
 #[test]

@@ -178,10 +178,22 @@ TINT TROLTerminatePCP(void);
 TINT TROLGetStatus(int *lastBIOSRetVal);
 /* Additions for the manual's GetStatus method: which transaction the status belongs to and
  * the controller's epoch (it changes when the controller restarts); and the number of the
- * last request sent. After a failed call: n = TROLLastTransaction(); then
- * TROLGetStatusOf(&last, &t, &e); if t == n, the status is the failed call's. A controller
- * that speaks only the manual's protocol answers GetStatus in the manual's 4 bytes: t and e
- * are then 0 (no request is numbered 0, no controller draws epoch 0). */
+ * last request sent. After a CAT1/CAT2 call whose outcome never came back (TROL_ERR_COMM, or
+ * TROL_ERR_ROBOT_UNSURE from a repeat the controller could not place), GetStatus and
+ * GetStatusOf speak of that call, never of an older one (docs/reliability.md, "Exactly
+ * once"):
+ *   n = TROLLastTransaction();
+ *   called = TROLGetStatusOf(&last, &t, &e);      t == n: the failed call's status
+ *   called == 0                    it never ran: send it again
+ *   called == 1, last == TROL_ERR_ROBOT_UNSURE    it may have run (the controller restarted
+ *                                  and its journal, if any, could not place it): do NOT send
+ *                                  it again blindly; read the arm (TROLGetPosition) and
+ *                                  compare with where it was before the call
+ *   called == 1, otherwise         it ran, with result last: do not send it again
+ * The manual's TROLGetStatus gives the same called and last. e differs from the epoch of an
+ * earlier GetStatus when the controller restarted. A controller that speaks only the manual's
+ * protocol answers GetStatus in the manual's 4 bytes: t and e are then 0 (no request is
+ * numbered 0, no controller draws epoch 0), and its status is its own last call's. */
 TINT TROLGetStatusOf(int *lastBIOSRetVal, TUINT *transaction, TUINT *epoch);
 TUINT TROLLastTransaction(void);
 /* Added (docs/protocol.md "Version and kind", "Watchdog"). TROLGetVersion: the protocol

@@ -22,6 +22,7 @@ Examples:
   trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
   trol gateway --controller mars:/dev/ttyUSB0 --profile crates/trol-mars/profiles/crs93.toml  # a MARS 8
   trol gateway --controller c500c:/dev/ttyUSB0 --profile c500c.toml     # a C500C (docs/c500c.md)
+  trol gateway --controller /dev/ttyUSB0 --profile c500.toml --journal c500.journal  # exactly once across restarts
 
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]
@@ -64,6 +65,12 @@ pub struct GatewayArgs {
     /// With --control: an address besides this machine's that may drive the arm.
     #[arg(long, value_name = "IP", requires = "control")]
     control_from: Vec<std::net::IpAddr>,
+    /// Keep the last call in FILE, so that a gateway killed and started again with the same
+    /// FILE still knows whether that call ran: GetStatus and a repeat answer for it, and no
+    /// recovery sends a move again that ran (docs/reliability.md, "Exactly once"). One
+    /// FILE per arm; made if missing.
+    #[arg(long, value_name = "FILE")]
+    journal: Option<PathBuf>,
 }
 
 fn parse_check(s: &str) -> Result<BlockCheck, String> {
@@ -208,6 +215,15 @@ fn serve_backend<B: trol_controller::Backend>(
         Mode::Terminal
     };
     let mut controller = Controller::new(opened.port, cfg, Pcp::new(backend), mode);
+    if let Some(path) = &a.journal {
+        match controller
+            .set_journal(path)
+            .map_err(|e| format!("cannot use the journal {}: {e}", path.display()))?
+        {
+            Some(restored) => say!("  journal {}: {restored}", path.display()),
+            None => say!("  journal {}: nothing to go on from", path.display()),
+        }
+    }
     if a.control {
         controller.set_pendant(inbox);
     }

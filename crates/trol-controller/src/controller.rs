@@ -169,6 +169,10 @@ pub struct Controller<P, B> {
     /// ([`Controller::set_start_pause`]), and until when it is still starting.
     start_pause: Duration,
     starting_until: Option<Instant>,
+    /// The journal of the last call ([`Controller::set_journal`]).
+    journal: Option<crate::journal::Journal>,
+    /// A CAT1/CAT2 request of the line runs, its `done` not yet journaled.
+    journaling: bool,
 }
 
 impl<P: Port, B: Backend> Controller<P, B> {
@@ -189,6 +193,8 @@ impl<P: Port, B: Backend> Controller<P, B> {
             pendant: None,
             start_pause: Duration::ZERO,
             starting_until: None,
+            journal: None,
+            journaling: false,
         };
         c.check_requests();
         // "Still working" while a request executes, to a host that takes it: without a
@@ -361,6 +367,37 @@ impl<P: Port, B: Backend> Controller<P, B> {
         self.start_pause = pause;
     }
 
+    /// Keep the last call in the journal at `path` (`trol gateway --journal FILE`), and go on
+    /// from what it holds: the epoch, GetStatus's record and the exactly-once memory of a
+    /// controller before this one on the same arm (docs/reliability.md, "Exactly once").
+    /// Returns what was restored, for the log. Each CAT1/CAT2 request of the line is
+    /// journaled before it runs and once its reply is settled; a journal that cannot be
+    /// written then stops the controller's serving with that error (it would otherwise lie
+    /// after the next restart).
+    pub fn set_journal(&mut self, path: &std::path::Path) -> std::io::Result<Option<String>> {
+        let (journal, restored) = crate::journal::Journal::open(path)?;
+        let said = restored.map(|r| {
+            self.pcp.restore(r.epoch, r.status);
+            self.server
+                .responder_mut()
+                .remember(r.memory.0, r.memory.1.clone());
+            r.to_string()
+        });
+        self.journal = Some(journal);
+        Ok(said)
+    }
+
+    /// The reply of the request being journaled is settled: journal it as done.
+    fn journal_done(&mut self, reply: &[u8]) -> std::io::Result<()> {
+        if !std::mem::take(&mut self.journaling) {
+            return Ok(());
+        }
+        match self.journal.as_mut() {
+            Some(j) => j.done(self.pcp.epoch(), self.pcp.status(), reply),
+            None => Ok(()),
+        }
+    }
+
     /// The mode.
     pub fn mode(&self) -> Mode {
         self.mode
@@ -501,6 +538,7 @@ impl<P: Port, B: Backend> Controller<P, B> {
             // that arrived meanwhile is run as any other, never answered blindly). What the
             // call changed is shared first: whoever reads the arm after the reply sees it.
             self.pcp.backend_mut().after_request();
+            self.journal_done(&reply)?;
             self.server.respond(&reply);
             self.last.1 = reply;
         }
@@ -508,25 +546,65 @@ impl<P: Port, B: Backend> Controller<P, B> {
         let pcp = &mut self.pcp;
         let last = &mut self.last;
         let ran = &mut self.ran;
-        self.server
-            .serve_deferrable(slice, &mut |req, pci| {
-                last.0 = req.to_vec();
-                last.1.clear();
-                *ran = true;
-                pcp.set_transaction(trol_proto::transaction::pci_number(pci));
-                let handled = pcp.handle(req);
-                // What the call changed is shared before its reply leaves: whoever reads the
-                // arm after the reply (a test, a view) sees it.
-                pcp.backend_mut().after_request();
-                match handled {
-                    Handled::Reply(reply) => {
-                        last.1 = reply.clone();
-                        Some(reply)
-                    }
-                    Handled::Pending => None,
+        let journal = &mut self.journal;
+        let journaling = &mut self.journaling;
+        let mut failed = None;
+        let event = self.server.serve_deferrable(slice, &mut |req, pci| {
+            last.0 = req.to_vec();
+            last.1.clear();
+            let number = trol_proto::transaction::pci_number(pci);
+            // A CAT1/CAT2 request may run from here on: the journal says so first.
+            if let Some(j) = journal
+                .as_mut()
+                .filter(|_| req.first().is_some_and(|c| *c < 128))
+            {
+                if let Err(e) = j.running(pcp.epoch(), number) {
+                    failed = Some(e);
+                    return Some(
+                        trol_proto::application::Reply::Code(
+                            trol_proto::application::code::TROL_ERR_ROBOT,
+                        )
+                        .encode(),
+                    );
                 }
-            })
-            .map(Some)
+                *journaling = true;
+            }
+            *ran = true;
+            pcp.set_transaction(number);
+            let handled = pcp.handle(req);
+            // What the call changed is shared before its reply leaves: whoever reads the
+            // arm after the reply (a test, a view) sees it.
+            pcp.backend_mut().after_request();
+            match handled {
+                Handled::Reply(reply) => {
+                    if std::mem::take(journaling) {
+                        if let Some(j) = journal.as_mut() {
+                            if let Err(e) = j.done(pcp.epoch(), pcp.status(), &reply) {
+                                failed = Some(e);
+                            }
+                        }
+                    }
+                    last.1 = reply.clone();
+                    Some(reply)
+                }
+                Handled::Pending => None,
+            }
+        });
+        if let Some(e) = failed {
+            let path = self
+                .journal
+                .as_ref()
+                .map(|j| j.path().display().to_string());
+            return Err(std::io::Error::new(
+                e.kind(),
+                format!(
+                    "the journal {} cannot be written ({e}): serving stops, since after a \
+                     restart it could not say whether the last call ran",
+                    path.unwrap_or_default()
+                ),
+            ));
+        }
+        event.map(Some)
     }
 
     /// Tell the log hook how the transaction ended (whether its request ran included).

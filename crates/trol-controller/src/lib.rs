@@ -18,6 +18,7 @@
 
 pub mod backend;
 pub mod controller;
+pub mod journal;
 pub mod pcp;
 pub mod real;
 pub mod terminal;

@@ -284,6 +284,13 @@ impl<B: Backend> Pcp<B> {
         self.epoch
     }
 
+    /// Go on from what a controller before this one knew (its journal,
+    /// [`crate::journal::Restored`]): its epoch and GetStatus's record.
+    pub fn restore(&mut self, epoch: u16, status: Status) {
+        self.epoch = epoch;
+        self.status = status;
+    }
+
     /// The watchdog's limit (SetWatchdog), if it is on: the controller loop halts the arm when
     /// no transaction arrives for this long.
     pub fn watchdog(&self) -> Option<std::time::Duration> {

@@ -302,9 +302,11 @@ fn check_activated(robot: &mut Robot) -> Result<()> {
             .initiator()
             .link()
             .last_error()
-            .is_some_and(|l| l == trol_proto::link::LinkError::Send(
-                trol_proto::link::codes::SendError::TimeoutEnq,
-            ));
+            .is_some_and(|l| {
+                l == trol_proto::link::LinkError::Send(
+                    trol_proto::link::codes::SendError::TimeoutEnq,
+                )
+            });
         if !silent || started.elapsed() >= ACTIVATION_WINDOW {
             return Err(e);
         }

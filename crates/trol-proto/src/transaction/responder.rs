@@ -221,6 +221,15 @@ impl Responder {
                 .is_some_and(|(n, _)| *n == pci_number(self.request_pci))
     }
 
+    /// Remember `number` as the last request executed, answered with `reply`: a repeat of it
+    /// gets that reply, nothing run (a controller's journal, restored after a restart).
+    /// Ignored with the manual's layer 3, which has no memory.
+    pub fn remember(&mut self, number: u8, reply: Vec<u8>) {
+        if self.manual.is_none() {
+            self.memory = Some((number, reply));
+        }
+    }
+
     /// Forget the last executed request (the manual's behaviour: every request executes).
     pub fn forget(&mut self) {
         self.memory = None;

@@ -314,6 +314,16 @@ impl Robot {
     /// TROLGetStatus in full: also which transaction the status belongs to (compare with
     /// [`Robot::last_transaction`] after a failed call) and the controller's epoch (it changes
     /// when the controller restarts).
+    ///
+    /// After a CAT1/CAT2 call whose outcome never came back, the status is that call's,
+    /// never an older one's (issue 67; docs/reliability.md, "Exactly once"): where the
+    /// controller's status belongs to another transaction, TROL answers for the call from
+    /// what the controller's status shows. The controller kept its memory (the same epoch),
+    /// so the call never ran there: not called, TROL_ERR_COMM. The controller restarted
+    /// since (another epoch) and cannot place it: called, TROL_ERR_ROBOT_UNSURE (it may
+    /// have run before the restart; look at the arm before sending it again). Either way
+    /// the record names the call's transaction. A controller of 1998 (epoch 0) says only
+    /// what the manual's GetStatus says.
     pub fn status_record(&mut self) -> Result<StatusRecord> {
         let def = &table::GET_STATUS;
         match self.call(def, &[])? {
@@ -323,13 +333,40 @@ impl Robot {
                 transaction,
                 epoch,
             } => {
-                self.epoch = Some(epoch);
-                Ok(StatusRecord {
+                let reported = StatusRecord {
                     bios_called,
                     last,
                     transaction,
                     epoch,
-                })
+                };
+                let record = match self.doubt {
+                    Some(d) if epoch != 0 && transaction != d.transaction => {
+                        let kept = d.epoch == Some(epoch);
+                        tracing::info!(
+                            "GetStatus speaks of transaction {transaction}, not of the call \
+                             in doubt ({}); the controller {}",
+                            d.transaction,
+                            if kept {
+                                "kept its memory, so that call never ran there"
+                            } else {
+                                "restarted since, so that call may have run"
+                            }
+                        );
+                        StatusRecord {
+                            bios_called: !kept,
+                            last: if kept {
+                                TROL_ERR_COMM
+                            } else {
+                                TROL_ERR_ROBOT_UNSURE
+                            },
+                            transaction: d.transaction,
+                            epoch,
+                        }
+                    }
+                    _ => reported,
+                };
+                self.epoch = Some(epoch);
+                Ok(record)
             }
             other => Err(Error::BadReply {
                 command: def.name,

@@ -8,7 +8,7 @@ use trol_comm::{DefaultHandlers, ErrorHandlers, TransError, Transactor};
 use trol_controller::Embedded;
 use trol_port::{Port, PortSettings};
 use trol_proto::application::code::{
-    Code, CodeTable, TROL_ERR_ARG_RANGE, TROL_ERR_BAD_RSIZE, TROL_ERR_COMM,
+    Code, CodeTable, TROL_ERR_ARG_RANGE, TROL_ERR_BAD_RSIZE, TROL_ERR_COMM, TROL_ERR_ROBOT_UNSURE,
 };
 use trol_proto::application::record::{self, RequestError, Value};
 use trol_proto::application::table::{self, FINISH_STATUS, FINISH_WAIT};
@@ -309,6 +309,17 @@ pub struct StatusRecord {
     pub epoch: u16,
 }
 
+/// A CAT1/CAT2 call whose request went out and whose outcome never came back (the call
+/// failed on the link, or a repeat of it was answered TROL_ERR_ROBOT_UNSURE): GetStatus must
+/// not speak of an older call as if it were this one (issue 67).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Doubt {
+    /// Its transaction number.
+    transaction: u8,
+    /// The controller's epoch as known before it was sent.
+    epoch: Option<u16>,
+}
+
 /// A connection to a TROL controller.
 pub struct Robot {
     transactor: Transactor<Box<dyn Port>>,
@@ -326,6 +337,8 @@ pub struct Robot {
     reactivate: Option<[f64; 6]>,
     /// The controller's epoch when last seen (GetStatus).
     epoch: Option<u16>,
+    /// The last CAT1/CAT2 call whose fate this end does not know ([`Doubt`]).
+    doubt: Option<Doubt>,
     /// The live view of an embedded simulator, served while the connection lives.
     #[cfg(feature = "view")]
     view: Option<trol_view::ViewServer>,
@@ -478,6 +491,16 @@ impl Robot {
             if self.may_fall_back(error) {
                 result = self.fall_back_to_lrc(request);
             }
+        }
+        if request.first().is_some_and(|c| *c < 128) {
+            // A CAT1/CAT2 call: GetStatus speaks of it from now on. Its fate is known when
+            // its reply came, unless the reply says the controller cannot place it.
+            let unsure = TROL_ERR_ROBOT_UNSURE.0.to_le_bytes();
+            let known = matches!(&result, Ok(reply) if reply.as_slice() != unsure);
+            self.doubt = (!known).then_some(Doubt {
+                transaction: self.transactor.transaction_number(),
+                epoch: self.epoch,
+            });
         }
         match result {
             Ok(reply) => {

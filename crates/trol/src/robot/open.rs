@@ -276,6 +276,7 @@ impl Robot {
             broken: false,
             reactivate: None,
             epoch: None,
+            doubt: None,
             #[cfg(feature = "view")]
             view: None,
             kept: Vec::new(),

@@ -153,6 +153,25 @@ fn floats(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f6
     {
         return Err(bad(type_name(obj)));
     }
+    // Only an ordered sequence: a dict would give its keys (`mi({2: 0.1})` turned joint 1
+    // by 2 rad), a set its items in no order, a generator whatever it yields; a range is
+    // counting, not angles (issue 67, item 6).
+    // SAFETY: PySequence_Check only reads the object's type slots; `obj` is a live object.
+    let ordered = unsafe { pyo3::ffi::PySequence_Check(obj.as_ptr()) } == 1;
+    if !ordered || obj.is_instance_of::<pyo3::types::PyRange>() {
+        return Err(exception(
+            py,
+            "ArgumentTypeError",
+            (
+                format!(
+                    "{what}: expected an ordered sequence of up to 6 real numbers (a list, a \
+                     tuple or a numpy array), got {}",
+                    type_name(obj)
+                ),
+                TROL_ERR_ARG_RANGE.0,
+            ),
+        ));
+    }
     // A buffer of bytes or integers (memoryview, array.array): its items are small ints
     // to Python, and `mi(memoryview(b"abcdef"))` was an MI of 97..102 rad. Only a buffer of
     // reals is taken.

@@ -148,6 +148,35 @@ def test_values_that_are_not_real_numbers_are_refused_and_nothing_moves(
     assert list(sim_robot.joints()) == pytest.approx(before, abs=1e-9)
 
 
+@pytest.mark.parametrize(
+    "joints",
+    [
+        {2: 0.1},  # a dict gives its keys: joint 1 turned by 2 rad
+        {0.1, 0.2},
+        frozenset([0.1]),
+        (x for x in [0.1, 0.2]),
+        iter([0.1, 0.2]),
+        range(3),
+        {0.1: 0.2}.values(),
+    ],
+)
+def test_what_is_no_ordered_sequence_is_a_type_error_and_nothing_moves(
+    sim_robot: trol.Robot, joints: object
+) -> None:
+    sim_robot.home()
+    sim_robot.finish()
+    before = list(sim_robot.joints())
+    for call in (sim_robot.mi, sim_robot.ma):
+        with pytest.raises(TypeError) as e:
+            call(joints)  # type: ignore[arg-type]
+        assert isinstance(e.value, trol.ArgumentError)
+        assert "ordered sequence" in str(e.value)
+    with pytest.raises(trol.ArgumentTypeError):
+        sim_robot.move({400: 0.0})  # type: ignore[arg-type]
+    sim_robot.finish()
+    assert list(sim_robot.joints()) == pytest.approx(before, abs=1e-9)
+
+
 def test_refused_calls_raise_refused_error_with_the_code_and_its_name(robot: trol.Robot) -> None:
     with pytest.raises(trol.RefusedError) as e:
         robot.joint(1, 0.1)

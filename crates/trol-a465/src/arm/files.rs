@@ -103,18 +103,10 @@ pub fn parse_locations(text: &str) -> Result<Vec<(String, Stored)>, String> {
                     .filter(|x| x.is_finite())
                     .ok_or_else(|| err(&format!("{v:?} is not a number")))?;
             }
-            // Angles are radians; one past a full turn was almost surely written in degrees.
-            for (k, label) in [(3, "yaw"), (4, "pitch"), (5, "roll")] {
-                if c[k].abs() > 2.0 * std::f64::consts::PI + 1e-9 {
-                    return Err(format!(
-                        "line {}: {label} {} is more than a full turn: angles are radians \
-                         here ({} degrees would be {:.7})",
-                        n + 1,
-                        c[k],
-                        c[k],
-                        c[k].to_radians()
-                    ));
-                }
+            // Angles are radians; one past a full turn was almost surely written in degrees
+            // (the words every surface uses: the command table refuses the same).
+            if let Some(why) = trol_proto::application::location::orientation_beyond_a_turn(&c) {
+                return Err(format!("line {}: {why}", n + 1));
             }
             Stored::Cart(c)
         };

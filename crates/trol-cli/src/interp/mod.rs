@@ -258,6 +258,12 @@ impl Session {
 
     /// Run one line; print its result to stdout, or its error to stderr after `origin`.
     fn line(&mut self, line: &str, origin: &str, echo: bool) -> Outcome {
+        let line = line.trim_end_matches(['\r', '\n']);
+        if let Some(why) = control_character(line) {
+            // Never echoed raw: a NUL or an escape sequence would reach the terminal.
+            eprintln!("{}error: {why}", prefix(origin));
+            return Outcome::Failed;
+        }
         let parsed = scanner::scan(line)
             .and_then(|tokens| commands::parse(&tokens, line.chars().count(), &self.catalog));
         let action = match parsed {
@@ -841,4 +847,36 @@ fn next_step(failure: &str) -> Option<&'static str> {
         .iter()
         .find(|(name, _)| failure.contains(name))
         .map(|(_, step)| *step)
+}
+
+/// Why a line is refused for a control character in it (a NUL, an escape sequence pasted or
+/// piped in), with the line shown escaped; `None` for printable text (tabs included).
+fn control_character(line: &str) -> Option<String> {
+    let (col, c) = line
+        .chars()
+        .enumerate()
+        .find(|(_, c)| c.is_control() && *c != '\t')?;
+    Some(format!(
+        "the line holds a control character ({}) at column {}: only printable text is read \
+         (the line: \"{}\")",
+        c.escape_default(),
+        col + 1,
+        line.escape_default()
+    ))
+}
+
+#[cfg(test)]
+mod control_tests {
+    use super::control_character;
+
+    #[test]
+    fn control_characters_are_refused_and_shown_escaped() {
+        assert_eq!(control_character("home 0"), None);
+        assert_eq!(control_character("speed\t50"), None);
+        let why = control_character("home\u{1b}[2J 0").unwrap();
+        assert!(why.contains("(\\u{1b}) at column 5"), "{why}");
+        assert!(!why.contains('\u{1b}'), "shown raw: {why}");
+        let why = control_character("ho\0me").unwrap();
+        assert!(!why.contains('\0') && why.contains("column 3"), "{why}");
+    }
 }

@@ -255,6 +255,26 @@ impl LocName {
 /// The highest scratch name a controller keeps for itself (`T18`, [`LocName::reserved`]).
 pub const RESERVED_SCRATCH: u8 = 18;
 
+/// Why a cartesian location's orientation is refused: one of yaw, pitch, roll (values 3..6)
+/// beyond a full turn, which was almost surely written in degrees (`c(400, 0, 240, 0, 90,
+/// 0)` turned the tool to pitch 1.106, 90 rad less 14 turns). The words the locations file
+/// uses too. `None`: each angle within a full turn.
+pub fn orientation_beyond_a_turn(values: &[f64]) -> Option<String> {
+    let turn = 2.0 * std::f64::consts::PI + 1e-6;
+    values
+        .iter()
+        .zip(["x", "y", "z", "yaw", "pitch", "roll"])
+        .skip(3)
+        .find(|(v, _)| v.abs() > turn)
+        .map(|(v, label)| {
+            format!(
+                "{label} {v} is more than a full turn: angles are radians here ({v} degrees \
+                 would be {:.7})",
+                v.to_radians()
+            )
+        })
+}
+
 /// Why a reserved name is refused, with what to do.
 pub fn reserved_message(name: &LocName) -> String {
     format!(

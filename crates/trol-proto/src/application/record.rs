@@ -276,6 +276,11 @@ fn check(def: &CommandDef, arg: &Arg, value: &Value) -> Result<(), RequestError>
                     "holds a value that is not a finite 32-bit number",
                 ));
             }
+            if let Location::Cart(v) = loc
+                && let Some(why) = super::location::orientation_beyond_a_turn(v)
+            {
+                return Err(range(def, arg, why));
+            }
             Ok(())
         }
         (ArgKind::Path { max }, Value::Path(points)) => check_path(def, arg, max, points),
@@ -694,6 +699,58 @@ pub fn format_call(def: &CommandDef, values: &[Value]) -> String {
 mod tests {
     use super::*;
     use crate::application::table::*;
+
+    /// A pose typed in degrees (an angle past a full turn) is refused where the record is
+    /// made and where it is decoded, with the locations file's words; a full turn itself,
+    /// rounded to f32 on its way, is not (issue 67, item 6).
+    #[test]
+    fn an_orientation_past_a_full_turn_is_refused_on_both_ends() {
+        let degrees = Location::Cart(vec![400.0, 0.0, 240.0, 0.0, 90.0, 0.0]);
+        let e = encode(&MOVE_II, &[Value::Loc(degrees.clone()), Value::Flag(false)]).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_ARG_RANGE);
+        let text = e.to_string();
+        assert!(
+            text.contains("pitch 90 is more than a full turn: angles are radians"),
+            "{text}"
+        );
+        // The same bytes from a host that does not check (a 1998 program): the controller's
+        // decode refuses them.
+        let mut bytes = encode(
+            &MOVE_II,
+            &[
+                Value::Loc(Location::Cart(vec![400.0, 0.0, 240.0, 0.0, 1.0, 0.0])),
+                Value::Flag(false),
+            ],
+        )
+        .unwrap();
+        let at = bytes.len() - 4 * 2;
+        bytes[at..at + 4].copy_from_slice(&90f32.to_le_bytes());
+        assert_eq!(
+            decode(&MOVE_II, &bytes).unwrap_err().code(),
+            TROL_ERR_ARG_RANGE
+        );
+        for disp in [
+            vec![-90.0, 0.0, 0.0, -400.0],
+            vec![0.0, 0.0, 0.0, 0.0, 0.0, 7.0],
+        ] {
+            let e = encode(
+                &DEPART,
+                &[Value::Loc(Location::Cart(disp)), Value::Flag(false)],
+            );
+            assert_eq!(e.unwrap_err().code(), TROL_ERR_ARG_RANGE);
+        }
+        let turn = std::f64::consts::TAU;
+        for ok in [
+            vec![0.0, 0.0, 0.0, turn, -turn, 3.1],
+            vec![1e4, -1e4, 500.0],
+        ] {
+            let bytes = encode(
+                &MOVE_II,
+                &[Value::Loc(Location::Cart(ok)), Value::Flag(false)],
+            );
+            decode(&MOVE_II, &bytes.unwrap()).unwrap();
+        }
+    }
 
     #[test]
     fn a_real_and_a_location_keep_their_f32_exactly() {

@@ -15,6 +15,7 @@ See docs/python.md.
 
 from trol._errors import (
     ArgumentError,
+    ArgumentTypeError,
     BadReplyError,
     IncompatibleError,
     LinkError,
@@ -28,6 +29,7 @@ from trol._types import Gripper, Joints, Pose, Precision
 
 __all__ = [
     "ArgumentError",
+    "ArgumentTypeError",
     "BadReplyError",
     "Gripper",
     "IncompatibleError",

@@ -48,6 +48,12 @@ class ArgumentError(TrolError, ValueError):
     """TROL_ERR_ARG_RANGE: an argument is out of its range; nothing was sent."""
 
 
+class ArgumentTypeError(ArgumentError, TypeError):
+    """TROL_ERR_ARG_RANGE: an argument is of a kind that cannot mean the values asked for
+    (a dict, a set, a generator, a range where an ordered sequence of numbers is expected);
+    nothing was sent. Both an ``ArgumentError`` and a ``TypeError``."""
+
+
 class BadReplyError(TrolError):
     """TROL_ERR_BAD_RSIZE: the reply does not fit the command."""
 

@@ -434,8 +434,23 @@ fn arb_reals(max: usize) -> impl Strategy<Value = Vec<f64>> {
 fn arb_target() -> impl Strategy<Value = Location> {
     prop_oneof![
         prop::collection::vec(any::<i32>(), 1..=6).prop_map(Location::Prec),
-        arb_reals(6).prop_map(Location::Cart),
+        arb_reals(6).prop_map(|v| Location::Cart(within_a_turn(v))),
     ]
+}
+
+/// A cartesian location's angles (values 3..6) kept within a full turn, as every surface
+/// requires (f32 exact, so the round trip stays exact).
+fn within_a_turn(v: Vec<f64>) -> Vec<f64> {
+    v.into_iter()
+        .enumerate()
+        .map(|(i, x)| {
+            if i < 3 {
+                x
+            } else {
+                f64::from((x as f32) % 6.0)
+            }
+        })
+        .collect()
 }
 
 fn arb_request() -> impl Strategy<Value = (&'static CommandDef, Vec<Value>)> {
@@ -444,7 +459,7 @@ fn arb_request() -> impl Strategy<Value = (&'static CommandDef, Vec<Value>)> {
         .prop_map(|s| LocName::new(&s).unwrap())
         .prop_filter("a reserved name is refused", |n| !n.reserved())
         .prop_map(Name);
-    let c = |v: Vec<f64>| Loc(Location::Cart(v));
+    let c = |v: Vec<f64>| Loc(Location::Cart(within_a_turn(v)));
     let j = |v: Vec<f64>| Loc(Location::Joint(v));
     prop_oneof![
         (name.clone(), arb_reals(6), any::<bool>())

@@ -365,6 +365,21 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
             accepted: None,
             relative: false,
         });
+        // And the controller's epoch, as InitTROL's check reads it: a call in doubt before
+        // the host knew an epoch would be answered UNSURE (docs/reliability.md).
+        let mut status = Err(String::new());
+        for _ in 0..20 {
+            status = robot.status_record().map_err(|e| e.to_string());
+            if status.is_ok() {
+                break;
+            }
+        }
+        status.map_err(|e| format!("GetStatus at first contact failed 20 times: {e}"))?;
+        asked.push(Asked {
+            request: record::encode(&table::GET_STATUS, &[]).map_err(|e| e.to_string())?,
+            accepted: None,
+            relative: false,
+        });
     }
     let deadline = started + Duration::from_secs_f64(plan.seconds);
     let mut n = 0u64;
@@ -498,6 +513,14 @@ fn getstatus_method(
             continue;
         };
         if sent != before && status.transaction == sent && status.bios_called {
+            if status.last == trol::code::TROL_ERR_ROBOT_UNSURE {
+                // It may have run, and GetStatus cannot tell (the controller restarted): the
+                // documented method reads the arm; this bench has no restarts, so say so.
+                return Err(format!(
+                    "GetStatus answered TROL_ERR_ROBOT_UNSURE for transaction {sent} with no \
+                     restart of the controller"
+                ));
+            }
             // It ran: its result is GetStatus's.
             return Ok(Some(Reply::Code(status.last).encode()));
         }

@@ -263,19 +263,6 @@ pub fn activate(robot: &mut Robot, tool: &[f64; 6]) -> Result<()> {
             }
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
-        robot
-            .transactor_mut()
-            .driver_mut()
-            .port_mut()
-            .flush_input()
-            .map_err(io)?;
-        // The probe above failed, so this end's link is resetting: deaf for two periods, as
-        // the manual has a sender do after a failed transfer (layer 2, "Rückgabewerte"), so
-        // that neither end takes a byte of that transfer into the next. The controller has
-        // just answered the activation line from terminal mode: its link starts now, idle,
-        // and the input here is flushed. So there is nothing left to wait out (it was 2 s of
-        // every `trol init` of a controller in terminal mode).
-        robot.transactor_mut().initiator_mut().abort();
         check_activated(robot)?;
     }
     robot.set_tool_transform(tool)
@@ -292,7 +279,23 @@ pub const ACTIVATION_WINDOW: std::time::Duration = std::time::Duration::from_sec
 /// answers and refuses (another version, damaged blocks) is not asked again.
 fn check_activated(robot: &mut Robot) -> Result<()> {
     let started = std::time::Instant::now();
+    let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
     loop {
+        // Each try starts afresh. Before the first: the probe that found the controller in
+        // terminal mode failed, so this end's link is resetting, deaf for two periods as the
+        // manual has a sender do after a failed transfer (layer 2, "Rückgabewerte"), so that
+        // neither end takes a byte of that transfer into the next. But the controller has
+        // just answered the activation line: its link starts now, idle. Before a later try:
+        // nothing answered the last, so no byte of it is on its way back. Either way the
+        // input is dropped and there is nothing to wait out (it was 2 s of every `trol
+        // init` of a controller in terminal mode).
+        robot
+            .transactor_mut()
+            .driver_mut()
+            .port_mut()
+            .flush_input()
+            .map_err(io)?;
+        robot.transactor_mut().initiator_mut().abort();
         let e = match check_server(robot) {
             Ok(()) => return Ok(()),
             Err(e) => e,
@@ -310,16 +313,6 @@ fn check_activated(robot: &mut Robot) -> Result<()> {
         if !silent || started.elapsed() >= ACTIVATION_WINDOW {
             return Err(e);
         }
-        // Nothing answered: the server was not listening yet, so no byte of that try is
-        // on its way back. Start the next try at once instead of waiting out the reset.
-        let io = |e: std::io::Error| Error::Setup(SetupError::NoServer(format!("port error: {e}")));
-        robot
-            .transactor_mut()
-            .driver_mut()
-            .port_mut()
-            .flush_input()
-            .map_err(io)?;
-        robot.transactor_mut().initiator_mut().abort();
     }
 }
 

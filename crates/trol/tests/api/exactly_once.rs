@@ -127,17 +127,16 @@ impl Port for Swap {
     }
 }
 
-/// A relative move ran, its reply was lost, and the controller restarted before the
-/// application asked (a gateway killed and started again, without its journal): the new
-/// controller remembers nothing, so its GetStatus speaks of no call (transaction 0). Both
-/// recovery methods must then hear "may have run", never "did not run": GetStatus answers
-/// for the call, called and TROL_ERR_ROBOT_UNSURE, under its own transaction (issue 67: 26
-/// of 100 moves ran twice by trol.h's method, 4 by the manual's). A repeat of it is
-/// answered UNSURE too, and not run.
-#[test]
-pub(super) fn after_a_restart_the_call_in_doubt_may_have_run_never_did_not() {
-    let (line, first) =
-        trol_controller::embedded_with(Pcp::new(SimBackend::new(settings())), quick());
+/// A robot on a controller that can be restarted (its line put into `slot`), the reply
+/// loseable as in [`Switchable`], checked (so it knows the controller's epoch).
+struct Restartable {
+    robot: Robot,
+    slot: Arc<std::sync::Mutex<trol_port::memory::MemoryLine>>,
+    deaf: Arc<AtomicBool>,
+    deaf_after_eot: Arc<AtomicBool>,
+}
+
+fn restartable(line: trol_port::memory::MemoryLine) -> Restartable {
     let slot = Arc::new(std::sync::Mutex::new(line));
     let deaf = Arc::new(AtomicBool::new(false));
     let deaf_after_eot = Arc::new(AtomicBool::new(false));
@@ -151,6 +150,31 @@ pub(super) fn after_a_restart_the_call_in_doubt_may_have_run_never_did_not() {
     let mut robot = Robot::over(Box::new(port), quick(), None);
     robot.set_reply_timeout_tenths(10).unwrap();
     trol::check_server(&mut robot).unwrap();
+    Restartable {
+        robot,
+        slot,
+        deaf,
+        deaf_after_eot,
+    }
+}
+
+/// A relative move ran, its reply was lost, and the controller restarted before the
+/// application asked (a gateway killed and started again, without its journal): the new
+/// controller remembers nothing, so its GetStatus speaks of no call (transaction 0). Both
+/// recovery methods must then hear "may have run", never "did not run": GetStatus answers
+/// for the call, called and TROL_ERR_ROBOT_UNSURE, under its own transaction (issue 67: 26
+/// of 100 moves ran twice by trol.h's method, 4 by the manual's). A repeat of it is
+/// answered UNSURE too, and not run.
+#[test]
+pub(super) fn after_a_restart_the_call_in_doubt_may_have_run_never_did_not() {
+    let (line, first) =
+        trol_controller::embedded_with(Pcp::new(SimBackend::new(settings())), quick());
+    let Restartable {
+        mut robot,
+        slot,
+        deaf,
+        deaf_after_eot,
+    } = restartable(line);
     let before = robot.controller_epoch().expect("the check read the epoch");
     robot.set_repeats(0);
     robot.home(0).unwrap();
@@ -577,19 +601,12 @@ pub(super) fn a_controller_started_again_on_its_journal_knows_the_call_before() 
     let _ = std::fs::remove_file(&path);
     let (line, first, said) = journaled(&path);
     assert_eq!(said, None, "a new journal");
-    let slot = Arc::new(std::sync::Mutex::new(line));
-    let deaf = Arc::new(AtomicBool::new(false));
-    let deaf_after_eot = Arc::new(AtomicBool::new(false));
-    let port = Switchable {
-        inner: Swap(slot.clone()),
-        deaf: deaf.clone(),
-        mute: Arc::new(AtomicBool::new(false)),
-        deaf_after_eot: deaf_after_eot.clone(),
-        drop_next_eot: Arc::new(AtomicBool::new(false)),
-    };
-    let mut robot = Robot::over(Box::new(port), quick(), None);
-    robot.set_reply_timeout_tenths(10).unwrap();
-    trol::check_server(&mut robot).unwrap();
+    let Restartable {
+        mut robot,
+        slot,
+        deaf,
+        deaf_after_eot,
+    } = restartable(line);
     let epoch = robot.controller_epoch().unwrap();
 
     // The manual's method: repeats off, the call fails, GetStatus after the restart.

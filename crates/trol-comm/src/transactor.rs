@@ -4,7 +4,7 @@ use std::io;
 use std::time::Duration;
 
 use trol_port::Port;
-use trol_proto::link::{LinkConfig, LinkError, ReceiveError, SendError};
+use trol_proto::link::{LinkConfig, LinkError, NakCode, ReceiveError, SendError};
 use trol_proto::transaction::{Decision, Failure, Initiator, InitiatorEvent, TransCode};
 
 use crate::channel::LineChannel;
@@ -217,6 +217,8 @@ impl<P: Port> Transactor<P> {
         let mut aborted = false;
         // The failure that started the repeats: what the caller hears if they fail too.
         let mut first_failure = None;
+        // The request was sent again after the controller refused its frames (NAK ERR_FID).
+        let mut resent_after_fid = false;
         loop {
             let event = self
                 .driver
@@ -296,6 +298,22 @@ impl<P: Port> Transactor<P> {
                             aborted = true;
                             Decision::GiveUp
                         }
+                    };
+                    // The controller aborted the request's transfer with NAK ERR_FID (a
+                    // frame it did not expect, or, with the LRC, a request that fits no
+                    // command it knows: docs/protocol.md "Checked as the bytes allow"). The
+                    // request never reached its EOT, so it did not run: send it once more,
+                    // the same bytes under the same PCI, which such a controller takes the
+                    // second time. Not after the application's handler gave up for good.
+                    let decision = if decision == Decision::GiveUp
+                        && !aborted
+                        && !resent_after_fid
+                        && failure == Failure::Send(SendError::Nak(NakCode::Fid))
+                    {
+                        resent_after_fid = true;
+                        Decision::Retry
+                    } else {
+                        decision
                     };
                     attempts += 1;
                     let now = self.driver.clock().now();

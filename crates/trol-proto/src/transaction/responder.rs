@@ -107,12 +107,16 @@ impl Responder {
         }
     }
 
-    /// With the manual's LRC: check every request before its last block is acknowledged
-    /// (docs/protocol.md, "What the LRC cannot see"): `fits(request)` says whether its bytes
-    /// are a request the controller knows, whose fields fit its record (the controller's
-    /// command table); and from a host that numbers its requests, the PCI must fit
-    /// ([`pci_fits`]). A request that does not is damage the sum let through: asked for
-    /// again, never run as another command. `None`: the block check alone.
+    /// With the manual's LRC: check every request from a host that numbers its requests
+    /// (a TROL host, which sends a refused request again) before its last block is
+    /// acknowledged (docs/protocol.md, "Checked as the bytes allow"): `fits(request)` says
+    /// whether its bytes are a request the controller knows, whose fields fit its record
+    /// (the controller's command table), and the PCI must fit ([`pci_fits`]). A request that
+    /// does not is damage the sum let through: asked for again, never run as another
+    /// command; the same bytes a second time are taken. A host that does not number its
+    /// requests (the manual's) never sends a refused request again: its requests are taken
+    /// as the 1998 server took them, and the server answers one it cannot run with its code
+    /// (TROL_ERR_UNKNOWN, TROL_ERR_BAD_CSIZE, ...). `None`: the block check alone.
     pub fn set_request_check(&mut self, fits: Option<crate::link::Plausible>) {
         let Some(fits) = fits else {
             self.link.set_plausible(None);
@@ -123,7 +127,7 @@ impl Responder {
             .set_plausible(Some(crate::link::Plausible::new(move |pci, request| {
                 let known = numbering.load(std::sync::atomic::Ordering::Relaxed);
                 let numbered = known & 0x0100 != 0;
-                fits.check(pci, request) && (!numbered || pci_fits(pci, (known & 0xFF) as u8))
+                !numbered || fits.check(pci, request) && pci_fits(pci, (known & 0xFF) as u8)
             })));
     }
 

@@ -428,3 +428,110 @@ pub(super) fn a_trajectory_over_the_whole_stack() {
     let q = joints(r);
     assert!((0..6).all(|i| (q[i] - end[i]).abs() < 1e-6), "{q:?}");
 }
+
+/// A port that keeps a copy of every byte it received.
+struct Tap<P> {
+    inner: P,
+    heard: Arc<std::sync::Mutex<Vec<u8>>>,
+}
+
+impl<P: Port> Port for Tap<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        self.heard.lock().unwrap().extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+    fn available(&mut self) -> io::Result<usize> {
+        self.inner.available()
+    }
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.inner.flush_input()
+    }
+    fn name(&self) -> String {
+        "tap".into()
+    }
+}
+
+/// Issue 67, item 4: with the manual's LRC and framing, a command the controller does not
+/// have is answered TROL_ERR_UNKNOWN (-32051), the manual's code, and not TROL_ERR_COMM:
+/// - from a TROL host (it numbers its requests) the controller aborts the first transfer
+///   with NAK ERR_FID, since noise may have made the request (docs/protocol.md "Checked as
+///   the bytes allow"); layer 3 sends the same bytes again, which are taken;
+/// - a host that does not number its requests (the manual's, which never sends a refused
+///   request again) is answered at once, as the 1998 server answered it.
+///
+/// Both with a request of three frames (600 bytes) and with an added CAT1 command.
+#[test]
+pub(super) fn with_the_lrc_a_command_the_controller_lacks_is_answered_unknown() {
+    use trol_controller::{Controller, Embedded, Mode};
+    use trol_proto::link::BlockCheck;
+    use trol_proto::link::control::NAK;
+    const ADDED: CommandDef = CommandDef {
+        code: trol::table::LAST_CAT1_CODE + 1,
+        name: "TROLAdded",
+        args: &[trol_proto::application::Arg {
+            name: "value",
+            kind: trol_proto::application::ArgKind::Real,
+        }],
+        reply: ReplyKind::Code,
+        success: &[],
+        wait: Wait::Reply,
+        help: "a command this controller lacks",
+    };
+    let fid = [NAK, trol_proto::link::NakCode::Fid.byte()];
+    for activated in [true, false] {
+        let cfg = LinkConfig {
+            check: BlockCheck::Lrc,
+            ..steady()
+        };
+        let (host, ctl) = trol_port::memory::pair(None);
+        let mode = if activated {
+            Mode::Terminal
+        } else {
+            Mode::Server
+        };
+        let controller = Controller::new(ctl, cfg, Pcp::new(SimBackend::new(settings())), mode);
+        let handle = Embedded::spawn(controller);
+        let heard = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let tap = Tap {
+            inner: host,
+            heard: heard.clone(),
+        };
+        let mut robot = Robot::over(Box::new(tap), cfg, None);
+        robot.keep(handle);
+        if activated {
+            trol::activate(&mut robot, &[0.0; 6]).unwrap();
+        }
+        heard.lock().unwrap().clear();
+        let mut long = vec![ADDED.code];
+        long.resize(600, 0x5A);
+        let who = if activated {
+            "a TROL host"
+        } else {
+            "a host that does not number"
+        };
+        assert_eq!(
+            robot
+                .transact_raw(&long)
+                .unwrap_or_else(|e| panic!("{who}: {e}")),
+            TROL_ERR_UNKNOWN.0.to_le_bytes(),
+            "{who}"
+        );
+        let refused = heard
+            .lock()
+            .unwrap()
+            .windows(2)
+            .filter(|w| *w == fid)
+            .count();
+        assert_eq!(refused, usize::from(activated), "{who}: NAK ERR_FID");
+        robot.add_command(ADDED).unwrap();
+        let e = robot.call(&ADDED, &[trol::Value::Real(1.5)]).unwrap_err();
+        assert_eq!(e.code(), TROL_ERR_UNKNOWN, "{who}: {e}");
+        assert_eq!(robot.status().unwrap(), (false, TROL_ERR_UNKNOWN), "{who}");
+        // The line works on.
+        robot.home(0).unwrap();
+    }
+}

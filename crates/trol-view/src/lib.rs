@@ -17,24 +17,30 @@
 //! every [`REPORT_INTERVAL`]; this server's threads encode it once for every viewer. A client that stops reading is
 //! dropped once its socket's buffer is full and a write has waited a second; one that closes
 //! is noticed within a round. Each kind of request has its own limit: [`MAX_CLIENTS`] for the
-//! page, its files and `/state`, [`MAX_STREAMS`] `/events` streams, and [`MAX_CONTROL`]
-//! pendant requests, so that no number of open pages keeps a Halt from the pendant out.
+//! page, its files and `/state`, [`MAX_STREAMS`] `/events` streams, [`MAX_CONTROL`]
+//! pendant requests and [`MAX_HALT`] Halts besides, so that no number of open pages, nor of
+//! other pendant requests, keeps a Halt from the pendant out. Connections still sending
+//! their request's head wait in one thread ([`intake`]): however many send nothing, a
+//! request that comes whole is read at once. Only requests for this machine's names or the
+//! view's own address are answered, and from no other page's scripts (DNS rebinding).
 //!
 //! With `--control`, the page is also a pendant that drives the arm ([`pendant`]); without
 //! it, nothing can be moved through the view.
 //!
-//! The server is a few dozen lines on `std::net` instead of an HTTP crate: it serves GET
-//! (and the pendant's POST, whose arguments are in the query), and each event stream needs a
-//! write timeout of its own, which std gives directly.
+//! The server is a few dozen lines on `std::net` and mio instead of an HTTP crate: it serves
+//! GET (and the pendant's POST, whose arguments are in the query), and each event stream
+//! needs a write timeout of its own, which std gives directly.
 
 #![forbid(unsafe_code)]
 #![warn(missing_docs, missing_debug_implementations)]
 
+pub mod intake;
 pub mod pendant;
 
+pub use intake::{HEAD_DEADLINE, MAX_WAITING};
 pub use pendant::Control;
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -73,16 +79,9 @@ pub const MAX_STREAMS: usize = 32;
 /// viewer: a Halt from the pendant never waits behind open pages (issue 37).
 pub const MAX_CONTROL: usize = 8;
 
-/// At most this many connections may be still sending their request's head; more are
-/// closed with 503 at once. Apart from [`MAX_CLIENTS`], so that connections that send nothing
-/// (or a byte now and then) never take the places of viewers.
-pub const MAX_WAITING: usize = 64;
-
-/// A request's head must arrive whole within this time of the connection.
-pub const HEAD_DEADLINE: Duration = Duration::from_secs(2);
-
-/// The most a request's head may take.
-const MAX_HEAD: u64 = 16 * 1024;
+/// At most this many pendant Halts (`/control/halt`) are answered at once, apart from the
+/// other pendant requests: a Halt never waits behind jogs or a flood of them (issue 67).
+pub const MAX_HALT: usize = 4;
 
 const INDEX: &str = include_str!("../assets/index.html");
 const APP: &str = include_str!("../assets/app.js");
@@ -282,58 +281,21 @@ pub fn serve_controlled(
     let local = listener.local_addr()?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let clients = Arc::new(Slots::default());
-    let frames = Arc::new(Frames::new(shared));
-    let waiting = Arc::new(AtomicUsize::new(0));
+    let served = Served {
+        slots: Arc::new(Slots::default()),
+        frames: Arc::new(Frames::new(shared)),
+        control,
+        names: intake::Names::new(addr),
+        stop: stop.clone(),
+    };
     let watchers = Watchers::default();
     let opened = watchers.clone();
     std::thread::Builder::new()
         .name("trol-view".into())
         .spawn(move || {
-            for conn in listener.incoming() {
-                if flag.load(Ordering::Relaxed) {
-                    break;
-                }
-                let Ok(mut conn) = conn else {
-                    // Out of file descriptors, say: wait a moment, not a busy loop.
-                    std::thread::sleep(Duration::from_millis(10));
-                    continue;
-                };
-                if waiting.fetch_add(1, Ordering::SeqCst) >= MAX_WAITING {
-                    waiting.fetch_sub(1, Ordering::SeqCst);
-                    too_many(&mut conn);
-                    continue;
-                }
-                let shared = frames.clone();
-                let control = control.clone();
-                let flag = flag.clone();
-                let (count, heads) = (clients.clone(), waiting.clone());
-                let opened = opened.clone();
-                let spawned = std::thread::Builder::new()
-                    .name("trol-view-client".into())
-                    .spawn(move || {
-                        let head = read_head_of(&conn);
-                        heads.fetch_sub(1, Ordering::SeqCst);
-                        let Ok(head) = head else {
-                            return;
-                        };
-                        let (slots, max) = count.of(head.as_ref().map(|h| h.1.as_str()));
-                        if slots.fetch_add(1, Ordering::SeqCst) >= max {
-                            slots.fetch_sub(1, Ordering::SeqCst);
-                            too_many(&mut conn);
-                            return;
-                        }
-                        let path = head.as_ref().map(|h| h.1.as_str()).unwrap_or("");
-                        if path.split('?').next() == Some("/events") {
-                            opened.0.fetch_add(1, Ordering::SeqCst);
-                        }
-                        let _ = answer(conn, head, &shared, &flag, control.as_ref().as_ref());
-                        slots.fetch_sub(1, Ordering::SeqCst);
-                    });
-                if spawned.is_err() {
-                    waiting.fetch_sub(1, Ordering::SeqCst);
-                }
-            }
+            let _ = intake::run(listener, &flag, |conn, head| {
+                served.dispatch(conn, head, &opened);
+            });
         })?;
     Ok(ViewServer {
         addr: local,
@@ -342,32 +304,109 @@ pub fn serve_controlled(
     })
 }
 
-/// The requests answered now, by kind: each kind has its own limit.
+/// What every request is answered from.
+struct Served {
+    slots: Arc<Slots>,
+    frames: Arc<Frames>,
+    control: Arc<Option<Control>>,
+    names: intake::Names,
+    stop: Arc<AtomicBool>,
+}
+
+impl Served {
+    /// A request whose head came whole: checked, and answered on a thread of its own if its
+    /// kind has room (else 503).
+    fn dispatch(&self, mut conn: TcpStream, head: intake::Head, opened: &Watchers) {
+        // What is written here is small enough for a new connection's buffer; the limit
+        // keeps the intake from waiting on a client that does not read in any case.
+        let _ = conn.set_write_timeout(Some(Duration::from_millis(200)));
+        if let Err(why) = self.names.check(&head, intake::local_ip(&conn)) {
+            let _ = refuse(&mut conn, &head.target, "403 Forbidden", &why);
+            return;
+        }
+        let kind = Kind::of(&head.target);
+        let slots = self.slots.clone();
+        if slots.of(kind).fetch_add(1, Ordering::SeqCst) >= kind.limit() {
+            slots.of(kind).fetch_sub(1, Ordering::SeqCst);
+            too_many(&mut conn);
+            return;
+        }
+        if kind == Kind::Stream {
+            opened.0.fetch_add(1, Ordering::SeqCst);
+        }
+        let (frames, control, stop) =
+            (self.frames.clone(), self.control.clone(), self.stop.clone());
+        let spawned = std::thread::Builder::new()
+            .name("trol-view-client".into())
+            .spawn(move || {
+                let _ = answer(conn, head, &frames, &stop, control.as_ref().as_ref());
+                slots.of(kind).fetch_sub(1, Ordering::SeqCst);
+            });
+        if spawned.is_err() {
+            self.slots.of(kind).fetch_sub(1, Ordering::SeqCst);
+        }
+    }
+}
+
+/// The kinds of request, each with a limit of its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// The page, its files, `/state`: [`MAX_CLIENTS`].
+    File,
+    /// `/events`: [`MAX_STREAMS`].
+    Stream,
+    /// The pendant's requests but Halt: [`MAX_CONTROL`].
+    Control,
+    /// The pendant's Halt: [`MAX_HALT`].
+    Halt,
+}
+
+impl Kind {
+    fn of(target: &str) -> Kind {
+        let bare = target.split('?').next().unwrap_or(target);
+        if bare == "/control/halt" {
+            Kind::Halt
+        } else if bare == "/control" || bare.starts_with("/control/") {
+            Kind::Control
+        } else if bare == "/events" {
+            Kind::Stream
+        } else {
+            Kind::File
+        }
+    }
+
+    fn limit(self) -> usize {
+        match self {
+            Kind::File => MAX_CLIENTS,
+            Kind::Stream => MAX_STREAMS,
+            Kind::Control => MAX_CONTROL,
+            Kind::Halt => MAX_HALT,
+        }
+    }
+}
+
+/// The requests answered now, by kind.
 #[derive(Default)]
 struct Slots {
     files: AtomicUsize,
     streams: AtomicUsize,
     control: AtomicUsize,
+    halts: AtomicUsize,
 }
 
 impl Slots {
-    /// The counter of a request for `path` and its limit.
-    fn of(&self, path: Option<&str>) -> (&AtomicUsize, usize) {
-        let path = path.unwrap_or("");
-        let bare = path.split('?').next().unwrap_or(path);
-        if bare == "/control" || bare.starts_with("/control/") {
-            (&self.control, MAX_CONTROL)
-        } else if bare == "/events" {
-            (&self.streams, MAX_STREAMS)
-        } else {
-            (&self.files, MAX_CLIENTS)
+    fn of(&self, kind: Kind) -> &AtomicUsize {
+        match kind {
+            Kind::File => &self.files,
+            Kind::Stream => &self.streams,
+            Kind::Control => &self.control,
+            Kind::Halt => &self.halts,
         }
     }
 }
 
 /// Turn a connection away: the server is full.
 fn too_many(conn: &mut TcpStream) {
-    let _ = conn.set_write_timeout(Some(Duration::from_secs(1)));
     let _ = respond(
         conn,
         "503 Service Unavailable",
@@ -376,32 +415,15 @@ fn too_many(conn: &mut TcpStream) {
     );
 }
 
-/// A reader of `conn` that gives up once [`HEAD_DEADLINE`] has passed since it was made,
-/// however the bytes trickle in.
-struct Deadlined<'a> {
-    conn: &'a TcpStream,
-    until: std::time::Instant,
-}
-
-impl Read for Deadlined<'_> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let left = self
-            .until
-            .checked_duration_since(std::time::Instant::now())
-            .filter(|d| !d.is_zero())
-            .ok_or_else(|| std::io::Error::from(std::io::ErrorKind::TimedOut))?;
-        self.conn.set_read_timeout(Some(left))?;
-        (&mut &*self.conn).read(buf)
+/// Refuse a request in words: JSON for the pendant's paths (as its other answers), text for
+/// the others.
+fn refuse(conn: &mut TcpStream, target: &str, status: &str, why: &str) -> std::io::Result<()> {
+    if target == "/control" || target.starts_with("/control/") || target.starts_with("/control?") {
+        let body = json!({"ok": false, "error": why}).to_string();
+        respond(conn, status, "application/json", body.as_bytes())
+    } else {
+        respond(conn, status, "text/plain", format!("{why}\n").as_bytes())
     }
-}
-
-/// The head of the request on `conn`, read within [`HEAD_DEADLINE`]; `Ok(None)`: too large.
-fn read_head_of(conn: &TcpStream) -> std::io::Result<Option<(String, String)>> {
-    let reader = Deadlined {
-        conn,
-        until: std::time::Instant::now() + HEAD_DEADLINE,
-    };
-    read_head(BufReader::new(reader))
 }
 
 fn respond(conn: &mut TcpStream, status: &str, kind: &str, body: &[u8]) -> std::io::Result<()> {
@@ -415,38 +437,10 @@ fn respond(conn: &mut TcpStream, status: &str, kind: &str, body: &[u8]) -> std::
     conn.flush()
 }
 
-/// A request's method and path, from its head (read up to its blank line); `None` if the
-/// head is larger than [`MAX_HEAD`] (nothing beyond that is read).
-fn read_head(reader: impl BufRead) -> std::io::Result<Option<(String, String)>> {
-    let mut reader = reader.take(MAX_HEAD);
-    let mut line = String::new();
-    reader.read_line(&mut line)?;
-    let mut parts = line.split_whitespace();
-    let (method, path) = (
-        parts.next().unwrap_or("").to_string(),
-        parts.next().unwrap_or("").to_string(),
-    );
-    loop {
-        let mut h = String::new();
-        let n = reader.read_line(&mut h)?;
-        if n > 0 && h.trim().is_empty() {
-            return Ok(Some((method, path)));
-        }
-        if n == 0 || !h.ends_with('\n') {
-            // The end of the input, or of what may be read, inside the head.
-            return Ok(if reader.limit() == 0 {
-                None
-            } else {
-                Some((method, path))
-            });
-        }
-    }
-}
-
 /// Answer one request, whose head was read.
 fn answer(
     mut conn: TcpStream,
-    head: Option<(String, String)>,
+    head: intake::Head,
     shared: &Frames,
     stop: &AtomicBool,
     control: Option<&Control>,
@@ -454,14 +448,11 @@ fn answer(
     conn.set_read_timeout(Some(Duration::from_secs(5)))?;
     // A client that stops reading is dropped: every write must go through within a second.
     conn.set_write_timeout(Some(Duration::from_secs(1)))?;
-    let Some((method, path)) = head else {
-        return respond(
-            &mut conn,
-            "431 Request Header Fields Too Large",
-            "text/plain",
-            b"the request's head is too large\n",
-        );
-    };
+    let intake::Head {
+        method,
+        target: path,
+        ..
+    } = head;
     if path == "/control" || path.starts_with("/control/") || path.starts_with("/control?") {
         let peer = conn.peer_addr().ok().map(|a| a.ip());
         let (status, body) = pendant::answer(&method, &path, peer, control);
@@ -621,24 +612,5 @@ mod tests {
         let frames = Frames::with_age(shared, Duration::ZERO);
         let a = frames.frame().unwrap();
         assert!(!Arc::ptr_eq(&a, &frames.frame().unwrap()));
-    }
-
-    #[test]
-    fn a_head_is_read_to_its_blank_line_and_no_further_than_the_limit() {
-        let head = read_head(&b"GET /state?x HTTP/1.1\r\nHost: a\r\n\r\nrest"[..]).unwrap();
-        assert_eq!(head, Some(("GET".into(), "/state?x".into())));
-        // A megabyte of head without an end: refused after the limit, the rest unread.
-        let mut big = b"GET / HTTP/1.1\r\nX: ".to_vec();
-        big.extend(std::iter::repeat_n(b'a', 1 << 20));
-        let mut input = std::io::Cursor::new(big);
-        assert_eq!(read_head(&mut input).unwrap(), None);
-        assert!(
-            input.position() <= MAX_HEAD + 8 * 1024,
-            "read {}",
-            input.position()
-        );
-        // A head cut short by the client is taken as it is.
-        let head = read_head(&b"GET /urdf HTTP/1.1\r\n"[..]).unwrap();
-        assert_eq!(head, Some(("GET".into(), "/urdf".into())));
     }
 }

@@ -110,7 +110,9 @@ struct Callbacks {
 struct State {
     robot: Option<Robot>,
     callbacks: Callbacks,
-    reply_tenths: u16,
+    /// SetL3_TO_Intervall's choice; `None`: the controller's reply time decides (TROL's
+    /// controllers), or the manual's 15 s (a 1998 controller).
+    reply_tenths: Option<u16>,
     delay: Duration,
     /// TROLSetRepeats's choice; `None`: as the controller's version handshake allows.
     repeats: Option<u8>,
@@ -124,7 +126,7 @@ const FRESH: State = State {
         app_timeout: None,
         fatal: None,
     },
-    reply_tenths: trol_proto::transaction::DEFAULT_REPLY_TIMEOUT_TENTHS,
+    reply_tenths: None,
     delay: Duration::ZERO,
     repeats: None,
 };

@@ -22,9 +22,13 @@ pub extern "C" fn InitTROL(serOnly: TUINT) -> TUINT {
         };
         // The one connect path (trol::Connect), with what the application set before
         // (SetL3_TO_Intervall, SetDelay, the repeats; each checked when it was set).
-        let mut connect = trol_client::Connect::config(&cfg)
-            .reply_timeout_tenths(tenths)
-            .delay(delay);
+        // A reply timeout only when the application set one: else a controller of this
+        // protocol says how long it takes (TROLGetReplyTime), so that a dead one costs a call
+        // 3 s and not the manual's 15 (issue 67, item 2).
+        let mut connect = trol_client::Connect::config(&cfg).delay(delay);
+        if let Some(tenths) = tenths {
+            connect = connect.reply_timeout_tenths(tenths);
+        }
         if let Some(n) = repeats {
             connect = connect.repeats(n);
         }
@@ -86,7 +90,7 @@ pub extern "C" fn SetL3_TO_Intervall(TO_Intervall: TUINT) {
             return;
         }
         let mut st = state();
-        st.reply_tenths = tenths;
+        st.reply_tenths = Some(tenths);
         if let Some(r) = st.robot.as_mut() {
             let _ = r.set_reply_timeout_tenths(tenths);
         }

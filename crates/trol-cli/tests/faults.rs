@@ -3,6 +3,8 @@
 //! within seconds, not the manual's 15 s; once the controller thaws, the next call works,
 //! and the request the host gave up on never ran.
 
+#[path = "../../trol-c/tests/common/cbuild.rs"]
+mod cbuild;
 mod common;
 
 use std::process::Command;
@@ -171,4 +173,108 @@ fn a_gateway_that_works_long_is_waited_for_and_one_that_froze_is_not() {
     // call ends with TROL_ERR_COMM within what a loaded machine keeps (it had 1.1 s of room).
     assert!(took < Duration::from_secs(15), "{took:?}");
     signal(pid, "-CONT");
+}
+
+/// The controller's end of a pty that freezes once armed and the next request's EOT came:
+/// the request complete, no reply, nothing read or sent any more.
+struct FrozenAfterRequest<P> {
+    inner: P,
+    armed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    frozen: bool,
+}
+
+impl<P: trol_port::Port> trol_port::Port for FrozenAfterRequest<P> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        if self.frozen {
+            return Ok(());
+        }
+        self.inner.send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], deadline: std::time::Instant) -> std::io::Result<usize> {
+        if self.frozen {
+            std::thread::sleep(deadline.saturating_duration_since(std::time::Instant::now()));
+            return Ok(0);
+        }
+        let n = self.inner.recv(&mut buf[..1], deadline)?;
+        if n == 1 && buf[0] == 0x87 && self.armed.load(std::sync::atomic::Ordering::SeqCst) {
+            self.frozen = true;
+            return Ok(0);
+        }
+        Ok(n)
+    }
+    fn available(&mut self) -> std::io::Result<usize> {
+        if self.frozen {
+            Ok(0)
+        } else {
+            self.inner.available()
+        }
+    }
+    fn flush_input(&mut self) -> std::io::Result<()> {
+        if self.frozen {
+            Ok(())
+        } else {
+            self.inner.flush_input()
+        }
+    }
+    fn name(&self) -> String {
+        "frozen after a request".into()
+    }
+}
+
+/// A 1998 program (InitTROL(1), the manual's three-line trol.cfg) on a TROL server started
+/// active, over a pty; the controller freezes once a request of the program's arrived whole
+/// (the instant no keep-alive or repeat can cover): its TROLGetPosition fails within the 3 s
+/// of docs/reliability.md, as any TROL host's (issue 67, item 2: libtrol's InitTROL set the
+/// manual's 15 s reply timeout as if the program had asked for it, so the call waited 16 s).
+/// The time is printed; the bound asserted is 8 s (a loaded machine; the defect was 16 s).
+#[test]
+fn a_1998_program_on_a_frozen_controller_fails_its_call_within_seconds() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let dir = scratch("frozen-1998-program");
+    let (line, _other, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let armed = Arc::new(AtomicBool::new(false));
+    let port = FrozenAfterRequest {
+        inner: line,
+        armed: armed.clone(),
+        frozen: false,
+    };
+    let mut settings = trol_sim::SimSettings::default();
+    settings.arm.homed = true;
+    let controller = trol_controller::Controller::new(
+        port,
+        trol_proto::link::LinkConfig::default(),
+        trol_controller::Pcp::new(trol_sim::SimBackend::new(settings)),
+        trol_controller::Mode::Server,
+    );
+    let _serving = trol_controller::Embedded::spawn(controller);
+    std::fs::write(dir.join("trol.cfg"), format!("9600\n{path}\n0 0 0 0 0 0\n")).unwrap();
+    let exe = cbuild::compile(
+        &cbuild::root().join("crates/trol-cli/tests/c/frozen_1998_style.c"),
+        "frozen_1998_style",
+        cbuild::Link::Static,
+    );
+    let mut child = cbuild::program(&exe)
+        .current_dir(&dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut said = String::new();
+    out.read_line(&mut said).unwrap();
+    assert_eq!(said, "ready\n", "{said}");
+    armed.store(true, Ordering::SeqCst);
+    writeln!(child.stdin.take().unwrap(), "go").unwrap();
+    said.clear();
+    out.read_line(&mut said).unwrap();
+    let _ = child.wait();
+    eprintln!("a controller frozen with the request in hand: {said}");
+    let mut words = said.split_whitespace();
+    assert_eq!(words.next(), Some("position"), "{said}");
+    let ret: i32 = words.next().unwrap().parse().unwrap();
+    let ms: f64 = words.next().unwrap().parse().unwrap();
+    assert_eq!(ret, i32::from(trol::code::TROL_ERR_COMM.0), "{said}");
+    assert!(ms < 8000.0, "the call waited {ms} ms");
 }

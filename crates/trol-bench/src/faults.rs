@@ -62,9 +62,13 @@ pub enum Side {
 pub enum Recovery {
     /// TROL's default: the host repeats the request under the same number (exactly once).
     Api,
-    /// The manual's method: repeats off; after a failure, GetStatus decides whether to send
-    /// the move again.
+    /// trol.h's method: repeats off; after a failure, GetStatus with the transaction it
+    /// speaks of (TROLGetStatusOf, TROLLastTransaction) decides whether to send the move
+    /// again.
     Getstatus,
+    /// The manual's plain method: repeats off; after a failure, GetStatus's BIOSCalled alone
+    /// decides (called: it ran, its result is lastBIOSRetVal; not called: send it again).
+    Manual,
 }
 
 /// One experiment.
@@ -329,7 +333,7 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
     // repeats a version handshake would grant, without one over the noisy line.
     robot.set_repeats(match plan.recovery {
         Recovery::Api => trol_comm::DEFAULT_REPEATS,
-        Recovery::Getstatus => 0,
+        Recovery::Getstatus | Recovery::Manual => 0,
     });
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let mut asked: Vec<Asked> = Vec::new();
@@ -452,8 +456,12 @@ pub fn run(plan: &Plan) -> Result<Report, String> {
         let mut accepted = result.as_ref().ok().cloned();
         if result.is_err() {
             report.failed_calls += 1;
-            if relative && plan.recovery == Recovery::Getstatus {
-                accepted = getstatus_method(&mut robot, def, &args, number_before, &mut report)?;
+            if relative && plan.recovery != Recovery::Api {
+                accepted = if plan.recovery == Recovery::Manual {
+                    manual_method(&mut robot, def, &args, &mut report)?
+                } else {
+                    getstatus_method(&mut robot, def, &args, number_before, &mut report)?
+                };
                 // Its GetStatus requests were sent by the host too.
                 asked.push(Asked {
                     request: record::encode(&table::GET_STATUS, &[]).map_err(|e| e.to_string())?,
@@ -534,6 +542,40 @@ fn getstatus_method(
                 report.failed_calls += 1;
                 sent = robot.last_transaction();
             }
+        }
+    }
+    Err("the line did not come back for the GetStatus method".into())
+}
+
+/// The manual's GetStatus method after a failed call: BIOSCalled says whether it ran (then
+/// lastBIOSRetVal is its result), else it is sent again. TROL_ERR_ROBOT_UNSURE (the
+/// controller cannot place it) stops the run: the manual's method would have to read the
+/// arm, and this bench has no restarts.
+fn manual_method(
+    robot: &mut Robot,
+    def: &CommandDef,
+    args: &[Value],
+    report: &mut Report,
+) -> Result<Option<Vec<u8>>, String> {
+    for _ in 0..20 {
+        std::thread::sleep(Duration::from_millis(150));
+        let _ = robot.flush_input();
+        report.transactions += 1;
+        let Ok((called, last)) = robot.status() else {
+            report.failed_calls += 1;
+            continue;
+        };
+        if last == trol::code::TROL_ERR_ROBOT_UNSURE {
+            return Err("GetStatus answered TROL_ERR_ROBOT_UNSURE with no restart".into());
+        }
+        if called {
+            return Ok(Some(Reply::Code(last).encode()));
+        }
+        report.transactions += 1;
+        match robot.call(def, args) {
+            Ok(r) => return Ok(Some(r.encode())),
+            Err(trol::Error::Refused { code, .. }) => return Ok(Some(Reply::Code(code).encode())),
+            Err(_) => report.failed_calls += 1,
         }
     }
     Err("the line did not come back for the GetStatus method".into())

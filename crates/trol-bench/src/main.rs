@@ -618,7 +618,8 @@ pub struct FaultsArgs {
     /// Which direction a cut hits (cut).
     #[arg(long, value_enum, default_value_t = crate::faults::Side::Request)]
     side: crate::faults::Side,
-    /// How the application recovers: the API's repeats, or the manual's GetStatus method.
+    /// How the application recovers: the API's repeats, trol.h's GetStatus method (with the
+    /// transaction), or the manual's plain GetStatus method.
     #[arg(long, value_enum, default_value_t = crate::faults::Recovery::Api)]
     recovery: crate::faults::Recovery,
     /// The block check: crc16 (TROL's default) or lrc (the manual's).

@@ -415,12 +415,22 @@ fn too_many(conn: &mut TcpStream) {
     );
 }
 
-/// Refuse a request in words: JSON for the pendant's paths (as its other answers), text for
-/// the others.
-fn refuse(conn: &mut TcpStream, target: &str, status: &str, why: &str) -> std::io::Result<()> {
-    if target == "/control" || target.starts_with("/control/") || target.starts_with("/control?") {
-        let body = json!({"ok": false, "error": why}).to_string();
-        respond(conn, status, "application/json", body.as_bytes())
+/// Refuse a request in words: the pendant's JSON for its paths (as its other answers), text
+/// for the others.
+fn refuse(
+    conn: &mut TcpStream,
+    target: &str,
+    status: &'static str,
+    why: &str,
+) -> std::io::Result<()> {
+    if matches!(Kind::of(target), Kind::Control | Kind::Halt) {
+        let (status, body) = pendant::refusal(status, why);
+        respond(
+            conn,
+            status,
+            "application/json",
+            body.to_string().as_bytes(),
+        )
     } else {
         respond(conn, status, "text/plain", format!("{why}\n").as_bytes())
     }

@@ -87,7 +87,7 @@ fn new_token() -> String {
 /// An answer: HTTP status and a JSON body.
 pub type Answer = (&'static str, serde_json::Value);
 
-fn refusal(status: &'static str, why: impl Into<String>) -> Answer {
+pub(crate) fn refusal(status: &'static str, why: impl Into<String>) -> Answer {
     (status, json!({"ok": false, "error": why.into()}))
 }
 

@@ -182,7 +182,8 @@ TINT TROLGetStatus(int *lastBIOSRetVal);
  * TROL_ERR_ROBOT_UNSURE from a repeat the controller could not place), GetStatus and
  * GetStatusOf speak of that call, never of an older one (docs/reliability.md, "Exactly
  * once"):
- *   n = TROLLastTransaction();
+ *   n = TROLLastTransaction();                     at once after the failed call: every
+ *                                                  request, GetStatus too, takes a number
  *   called = TROLGetStatusOf(&last, &t, &e);      t == n: the failed call's status
  *   called == 0                    it never ran: send it again
  *   called == 1, last == TROL_ERR_ROBOT_UNSURE    it may have run (the controller restarted

@@ -13,6 +13,7 @@ mod mars;
 mod pick;
 mod pty;
 mod relay;
+mod restarts;
 mod view;
 mod watch;
 
@@ -197,6 +198,15 @@ enum Bench {
     ///           trol bench faults --mode cut --side reply --count 1000 --recovery getstatus
     ///           trol bench faults --mode soak --seconds 120
     Faults(FaultsArgs),
+    /// `trol gateway` (in front of a simulated MARS 8 served here) killed at a random
+    /// instant of each relative move and started again on the same address (and journal),
+    /// the application recovering trol.h's way or the manual's; where the arm went (read
+    /// from the unit, not through TROL) counts each move as run once, lost, run twice or
+    /// gone elsewhere.
+    ///
+    /// Examples: trol bench restarts --moves 500 --recovery getstatus --json
+    ///           trol bench restarts --moves 500 --recovery manual --no-journal
+    Restarts(restarts::RestartsArgs),
     /// The whole path to a C500, on lines paced at a baud rate: an application's Robot, TROL's
     /// link, the PCP server with the RAPL-II backend, the RAPL-II line, and the simulated
     /// C500 in real time. Times a small command's round trip (TROLSpeed), GetPosition, and
@@ -786,6 +796,7 @@ fn run(b: Bench) -> Result<(), String> {
         Bench::Moves(a) => moves(a),
         Bench::Lines(a) => lines::run(a),
         Bench::Faults(a) => faults(a),
+        Bench::Restarts(a) => restarts::restarts(a),
         Bench::Gateway(a) => gateway(a),
         Bench::Mars(a) => mars::mars(a),
         Bench::C500c(a) => c500c::c500c(a),

@@ -814,7 +814,8 @@ impl Robot {
         })
     }
 
-    /// The number of the last request this connection sent (0..255).
+    /// The number of the last request this connection sent (0..255). Take it at once after
+    /// the call that failed: every request takes a number, status()'s too.
     fn last_transaction(&self, py: Python<'_>) -> PyResult<u8> {
         self.with(py, |r| Ok(r.last_transaction()))
     }

@@ -559,7 +559,8 @@ impl Robot {
     }
 
     /// The transaction number of the last request sent (the PCI's low byte; GetStatus's
-    /// [`StatusRecord::transaction`] names the one its status belongs to).
+    /// [`StatusRecord::transaction`] names the one its status belongs to). Take it at once
+    /// after the call that failed: every request takes a number, GetStatus's too.
     pub fn last_transaction(&self) -> u8 {
         self.transactor.transaction_number()
     }

@@ -175,18 +175,62 @@ fn a_gateway_that_works_long_is_waited_for_and_one_that_froze_is_not() {
     signal(pid, "-CONT");
 }
 
-/// The controller's end of a pty that freezes once armed and the next request's EOT came:
-/// the request complete, no reply, nothing read or sent any more.
-struct FrozenAfterRequest<P> {
+/// Where, in the first exchange after it is armed, the controller's end of a line freezes
+/// (nothing read or sent any more, the line open).
+#[derive(Clone, Copy, Debug)]
+enum FreezeAt {
+    /// Once this many bytes of the request arrived (1: its ENQ, not yet acknowledged).
+    Received(usize),
+    /// Once the request's EOT arrived and this many bytes went back after it (0: the request
+    /// whole, no reply; 1: the reply's first byte; 3: part of the reply).
+    AfterEot(usize),
+}
+
+/// The controller's end of a pty that freezes once armed, at `at`.
+struct Frozen<P> {
     inner: P,
     armed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    at: FreezeAt,
+    received: usize,
+    eot: bool,
+    sent_after_eot: usize,
     frozen: bool,
 }
 
-impl<P: trol_port::Port> trol_port::Port for FrozenAfterRequest<P> {
+impl<P> Frozen<P> {
+    fn new(inner: P, armed: std::sync::Arc<std::sync::atomic::AtomicBool>, at: FreezeAt) -> Self {
+        Frozen {
+            inner,
+            armed,
+            at,
+            received: 0,
+            eot: false,
+            sent_after_eot: 0,
+            frozen: false,
+        }
+    }
+
+    fn armed(&self) -> bool {
+        self.armed.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+impl<P: trol_port::Port> trol_port::Port for Frozen<P> {
     fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         if self.frozen {
             return Ok(());
+        }
+        if let (FreezeAt::AfterEot(k), true) = (self.at, self.eot) {
+            let n = (k - self.sent_after_eot).min(bytes.len());
+            self.sent_after_eot += n;
+            if self.sent_after_eot == k {
+                self.frozen = true;
+            }
+            return if n > 0 {
+                self.inner.send(&bytes[..n])
+            } else {
+                Ok(())
+            };
         }
         self.inner.send(bytes)
     }
@@ -196,9 +240,23 @@ impl<P: trol_port::Port> trol_port::Port for FrozenAfterRequest<P> {
             return Ok(0);
         }
         let n = self.inner.recv(&mut buf[..1], deadline)?;
-        if n == 1 && buf[0] == 0x87 && self.armed.load(std::sync::atomic::Ordering::SeqCst) {
-            self.frozen = true;
-            return Ok(0);
+        if n == 1 && self.armed() {
+            self.received += 1;
+            match self.at {
+                FreezeAt::Received(k) if self.received >= k => self.frozen = true,
+                FreezeAt::AfterEot(k) if buf[0] == 0x87 => {
+                    self.eot = true;
+                    if k == 0 {
+                        self.frozen = true;
+                        return Ok(0);
+                    }
+                }
+                _ => {}
+            }
+            if self.frozen {
+                // The byte is swallowed: the controller never saw it.
+                return Ok(0);
+            }
         }
         Ok(n)
     }
@@ -217,8 +275,76 @@ impl<P: trol_port::Port> trol_port::Port for FrozenAfterRequest<P> {
         }
     }
     fn name(&self) -> String {
-        "frozen after a request".into()
+        format!("frozen at {:?}", self.at)
     }
+}
+
+/// The simulated A465's server (started active) on a new pty, its end frozen at `at` once
+/// `armed`; the pty's path for the host.
+fn frozen_server(
+    at: FreezeAt,
+    armed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> (
+    trol_controller::Embedded,
+    trol_port::serial::SerialLine,
+    String,
+) {
+    let (line, other, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
+    let mut settings = trol_sim::SimSettings::default();
+    settings.arm.homed = true;
+    let controller = trol_controller::Controller::new(
+        Frozen::new(line, armed, at),
+        trol_proto::link::LinkConfig::default(),
+        trol_controller::Pcp::new(trol_sim::SimBackend::new(settings)),
+        trol_controller::Mode::Server,
+    );
+    (trol_controller::Embedded::spawn(controller), other, path)
+}
+
+/// A TROL host on a pty to a TROL server that freezes at each phase of a GetPosition: its
+/// ENQ arrived and not acknowledged, part of its header, the request whole, the reply's first
+/// byte sent, part of the reply (issue 67, item 2; every byte, in virtual time, is
+/// `a_controller_frozen_at_any_byte_costs_a_call_at_most_3_s` in crates/trol/tests/api/waits.rs).
+/// Each call fails with TROL_ERR_COMM within the 3 s of docs/reliability.md; the times are
+/// printed, the bound asserted is 8 s (a loaded machine; the defect was 16 s).
+#[test]
+fn a_controller_frozen_at_each_phase_of_a_call_on_a_pty_fails_it_within_seconds() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let phases = [
+        FreezeAt::Received(1),
+        FreezeAt::Received(5),
+        FreezeAt::AfterEot(0),
+        FreezeAt::AfterEot(1),
+        FreezeAt::AfterEot(3),
+    ];
+    std::thread::scope(|s| {
+        let runs: Vec<_> = phases
+            .into_iter()
+            .map(|at| {
+                s.spawn(move || {
+                    let armed = Arc::new(AtomicBool::new(false));
+                    let (_server, _keep, path) = frozen_server(at, armed.clone());
+                    let mut robot = trol::Connect::port(&path).connect().unwrap();
+                    robot.position(Tag::Joint, PosMode::Actual).unwrap();
+                    armed.store(true, Ordering::SeqCst);
+                    let t = Instant::now();
+                    let r = robot.position(Tag::Joint, PosMode::Actual);
+                    (at, t.elapsed(), r.map(drop))
+                })
+            })
+            .collect();
+        for run in runs {
+            let (at, took, r) = run.join().unwrap();
+            eprintln!("frozen at {at:?}: the call ended after {took:?}: {r:?}");
+            let e = r.expect_err("a frozen controller cannot answer");
+            assert_eq!(e.code(), trol::code::TROL_ERR_COMM, "{at:?}: {e}");
+            assert!(
+                took < Duration::from_secs(8),
+                "{at:?}: the call waited {took:?}"
+            );
+        }
+    });
 }
 
 /// A 1998 program (InitTROL(1), the manual's three-line trol.cfg) on a TROL server started
@@ -233,22 +359,8 @@ fn a_1998_program_on_a_frozen_controller_fails_its_call_within_seconds() {
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
     let dir = scratch("frozen-1998-program");
-    let (line, _other, path) = trol_port::serial::SerialLine::pty_pair().unwrap();
     let armed = Arc::new(AtomicBool::new(false));
-    let port = FrozenAfterRequest {
-        inner: line,
-        armed: armed.clone(),
-        frozen: false,
-    };
-    let mut settings = trol_sim::SimSettings::default();
-    settings.arm.homed = true;
-    let controller = trol_controller::Controller::new(
-        port,
-        trol_proto::link::LinkConfig::default(),
-        trol_controller::Pcp::new(trol_sim::SimBackend::new(settings)),
-        trol_controller::Mode::Server,
-    );
-    let _serving = trol_controller::Embedded::spawn(controller);
+    let (_serving, _other, path) = frozen_server(FreezeAt::AfterEot(0), armed.clone());
     std::fs::write(dir.join("trol.cfg"), format!("9600\n{path}\n0 0 0 0 0 0\n")).unwrap();
     let exe = cbuild::compile(
         &cbuild::root().join("crates/trol-cli/tests/c/frozen_1998_style.c"),

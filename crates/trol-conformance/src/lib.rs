@@ -27,6 +27,8 @@ use std::time::{Duration, Instant};
 
 use trol::{PosMode, Robot, Tag};
 use trol_proto::application::code::{TROL_ERR_NOT_STOPPED, TROL_ERR_ROBOT_UNSURE};
+use trol_proto::application::record::Value;
+use trol_proto::application::{Reply, table};
 
 /// The twin's own arm: the truth the suite checks TROL's answers against.
 pub trait Twin: Send {
@@ -335,6 +337,82 @@ fn trajectory(s: &mut Subject, f: &mut Findings, t: &Targets) {
     }
 }
 
+/// When, after the arm is seen homing, the suite halts it (issue 62, item 2: every instant of
+/// a Home on a homed arm was reported a success).
+const HOME_HALTS: [Duration; 2] = [Duration::from_millis(0), Duration::from_millis(300)];
+
+/// A Home halted on its way, on an arm that was homed and stands away from the home pose:
+/// TROLHome and the Finish after it may report success only with the arm seen at the home
+/// pose (where the first Home left it); then the next Home works.
+fn halted_home(s: &mut Subject, f: &mut Findings, home_pose: &[f64; 6]) {
+    for after in HOME_HALTS {
+        if near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
+            f.step("the arm is at the home pose: a halted Home not checked".into());
+            return;
+        }
+        // The Home request alone (Robot::home waits for its end, as TROLHome and Finish).
+        let h = match s.robot.call(&table::HOME, &[Value::Int(0)]) {
+            Ok(Reply::Code(c)) => c.0,
+            Ok(other) => {
+                f.broke(format!("TROLHome answered {other:?}"));
+                return;
+            }
+            Err(e) => e.code().0,
+        };
+        if h != 0 || !wait_moving(s.twin.as_ref(), STEP) {
+            f.step(format!(
+                "TROLHome(0) -> {h}, the arm not seen moving: not halted"
+            ));
+            let _ = s.robot.finish();
+            continue;
+        }
+        std::thread::sleep(after);
+        let stop = code(s.robot.halt());
+        let until = Instant::now() + STEP;
+        while s.twin.moving() && Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let hf = code(s.robot.finish());
+        let at = s.twin.joints();
+        f.step(format!(
+            "TROLHome(0) -> {h}, Halt after {after:?} -> {stop}, Finish -> {hf}, the arm at {}",
+            fmt(&at)
+        ));
+        if h == 0 && hf == 0 && !near(&at, home_pose, s.differences.arrive_rad) {
+            f.broke(format!(
+                "a Home halted after {after:?} was reported done with the arm at {}, not at \
+                 the home pose {}",
+                fmt(&at),
+                fmt(home_pose)
+            ));
+        }
+        let again = code(s.robot.home(0));
+        let again_f = if again == 0 {
+            code(s.robot.finish())
+        } else {
+            again
+        };
+        f.step(format!("TROLHome(0) again -> {again_f}"));
+        if again_f != 0 {
+            f.broke(format!("the Home after a halted Home failed ({again_f})"));
+            return;
+        }
+        if !near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
+            f.broke(format!(
+                "the Home after a halted Home was reported done with the arm at {}",
+                fmt(&s.twin.joints())
+            ));
+            return;
+        }
+        // Away from the home pose again, for the next instant.
+        let away = Targets::for_subject(s).q1;
+        if !motion(s, f, "a motion after a halted Home", away) {
+            f.broke("a motion after a halted Home and a Home failed".into());
+            return;
+        }
+    }
+}
+
 /// Run every check on `s`.
 pub fn run(s: &mut Subject) -> Findings {
     let mut f = Findings::default();
@@ -370,6 +448,7 @@ pub fn run(s: &mut Subject) -> Findings {
             "TROLHome and Finish succeeded with the arm still moving: {e}"
         ));
     }
+    let home_pose = s.twin.joints();
     let t = Targets::for_subject(s);
     let (q1, q2) = (t.q1, t.q2);
 
@@ -507,6 +586,7 @@ pub fn run(s: &mut Subject) -> Findings {
         if !motion(s, &mut f, "the motion after the Halt", q2) {
             f.broke("the motion after a Halt did not work".into());
         }
+        halted_home(s, &mut f, &home_pose);
     }
     // A line nobody asked for (last: a controller may send nothing further after it): the
     // next call is UNSURE and moves nothing; the one after works, or is UNSURE too where the

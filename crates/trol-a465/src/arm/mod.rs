@@ -595,8 +595,10 @@ impl Arm {
 
     /// Home one axis (1..6) or all (0, in the groups of [`HOME_GROUPS`], one after the
     /// other): the arm drives the axes to their zero (the home switches) at the homing speed,
-    /// at least HOME_TIME per axis. A group's axes count as homed when its motion ends; a
-    /// Halt before then leaves them unhomed.
+    /// at least HOME_TIME per axis. Its axes are unhomed from the moment it is accepted (it
+    /// references them anew) and count as homed when their group's motion ends; a Halt before
+    /// then leaves them unhomed, whether or not they were homed before (issue 62: a halted
+    /// Home on a homed arm was reported done), so the Finish after it fails.
     pub fn home(&mut self, axis: u8, now: f64) -> i16 {
         if axis > 6 {
             return code::BAD_ARGUMENT;
@@ -609,6 +611,9 @@ impl Arm {
         };
         if self.motions.len() + groups.len() > MOTION_QUEUE {
             return code::QUEUE_FULL;
+        }
+        for &a in groups.iter().flatten() {
+            self.homed[a] = false;
         }
         for axes in groups {
             let from = self.planned_end();

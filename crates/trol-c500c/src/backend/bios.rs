@@ -135,6 +135,14 @@ impl Backend for C500cBackend {
         self.read_gripper()
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
+        if std::mem::take(&mut self.homing_halted) {
+            self.note(
+                "Home was halted before ash said done: the arm is not homed as asked, wherever \
+                 armstat says; call TROLHome again"
+                    .into(),
+            );
+            return Err(BackendError::Refused(code::NOT_HOMED));
+        }
         if self.jaws_wait.is_some() {
             self.clean()?;
             return self.look_jaws();
@@ -162,8 +170,14 @@ impl Backend for C500cBackend {
             halt_within: HALT_WITHIN,
             stop_within: STOP_WITHIN,
         };
+        let homing = self
+            .outstanding
+            .as_ref()
+            .is_some_and(|o| matches!(o.motion.kind, Kind::Home))
+            || self.queue.iter().any(|q| matches!(q.kind, Kind::Home));
         match real::halt(self, &[()], times) {
             real::Halted::Standing { at, note } => {
+                self.homing_halted |= homing;
                 let n = self.queue.drop_all();
                 self.outstanding = None;
                 self.jaws_wait = None;

@@ -218,6 +218,9 @@ pub struct C500cBackend {
     /// What `armstat` said, while it may stand in for the gate's `armstat` before a motion:
     /// as read, or as a motion that ash ran to its end and the arm was seen to end found it.
     stat_seen: real::Recent<ArmStat>,
+    /// A Home was halted on its way: the next Finish fails with BIOS_NOT_HOMED (issue 62: a
+    /// halted Home on a homed arm was reported done).
+    homing_halted: bool,
     speed: u8,
     unasked: Vec<String>,
     broken: Option<String>,
@@ -295,6 +298,7 @@ impl C500cBackend {
             rest: [0.0; 6],
             rest_seen: real::Recent::new(),
             stat_seen: real::Recent::new(),
+            homing_halted: false,
             speed: 0,
             unasked: Vec::new(),
             broken: None,

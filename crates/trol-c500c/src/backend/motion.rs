@@ -250,6 +250,22 @@ impl C500cBackend {
                 Err(e) => return Err(self.fail(e)),
             };
             self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+            if !self.stat.power {
+                // ash said done, and the arm has no power: the homing stopped where the
+                // power left it, whatever armstat says of the axes (issue 62: a silent power
+                // loss during Home was reported a success).
+                self.outstanding = None;
+                let n = self.queue.drop_all();
+                self.note(format!(
+                    "`home`: ash says done, and armstat says `Arm power is OFF`: the homing \
+                     stopped where the power left the arm{}; switch the arm power on and call \
+                     TROLHome again",
+                    real::MotionQueue::<Motion>::dropped_note(n, "home")
+                        .map(|n| format!("; {n}"))
+                        .unwrap_or_default()
+                ));
+                return Err(BackendError::Refused(ARM_POWER));
+            }
             self.stat.homing == Homing::Homed
         } else {
             true

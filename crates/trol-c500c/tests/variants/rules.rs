@@ -44,6 +44,42 @@ fn power_lost_mid_motion_is_never_success() {
     }
 }
 
+/// The arm's power lost during a Home, announced by ash or silent, on an arm homed before and
+/// on one not yet homed: TROLHome is never success (issue 62, item 1: a silent loss was
+/// reported done, the arm 36.5 deg from home with its power off).
+#[test]
+fn power_lost_during_home_is_never_success() {
+    for name in ["default", "power-loss-silent", "return-at-end"] {
+        for homed in [true, false] {
+            let sw = c500c::variant(name).unwrap();
+            let mut r = rig_at(sw.clone(), homed, c500c::matching_profile(&sw), 1.0);
+            if homed {
+                // Away from the home pose, so that the Home moves.
+                r.robot.joint(1, 0.5).unwrap();
+                r.robot.finish().unwrap();
+            }
+            let cut = {
+                let unit = r.unit.clone();
+                std::thread::spawn(move || {
+                    let until = std::time::Instant::now() + Duration::from_secs(20);
+                    while !unit.lock().unwrap().is_moving() {
+                        assert!(std::time::Instant::now() < until, "the Home never moved");
+                        std::thread::sleep(Duration::from_millis(2));
+                    }
+                    std::thread::sleep(Duration::from_millis(100));
+                    unit.lock().unwrap().set_power_off();
+                })
+            };
+            let got = r.robot.home(0);
+            cut.join().unwrap();
+            let e = got.expect_err(&format!("{name}, homed {homed}: Home with the power lost"));
+            assert_ne!(e.code().0, 0, "{name}, homed {homed}");
+            assert!(!r.moving(), "{name}, homed {homed}");
+            eprintln!("{name}, homed {homed}: {e}");
+        }
+    }
+}
+
 /// A line nobody asked for: the next call is UNSURE and sends nothing.
 #[test]
 fn an_unasked_line_makes_the_next_call_unsure() {

@@ -87,10 +87,28 @@ fn start_trol_sim(args: &[&str], markers: &[&str]) -> Result<(SimProcess, Vec<St
         .env_remove("TROL_CONFIG")
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .map_err(|e| format!("cannot start trol {}: {e}", args.join(" ")))?;
     let out = child.stdout.take().expect("piped");
+    // Its error output, kept (the last 4 KiB) to say why it did not start.
+    let said: std::sync::Arc<std::sync::Mutex<String>> = Default::default();
+    {
+        let (err, said) = (child.stderr.take().expect("piped"), said.clone());
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(err).lines() {
+                let Ok(line) = line else { break };
+                let mut s = said.lock().unwrap_or_else(|e| e.into_inner());
+                s.push_str(&line);
+                s.push('\n');
+                if s.len() > 4096 {
+                    let cut = s.len() - 4096;
+                    let cut = (cut..s.len()).find(|&i| s.is_char_boundary(i)).unwrap_or(0);
+                    s.drain(..cut);
+                }
+            }
+        });
+    }
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         for line in std::io::BufReader::new(out).lines() {
@@ -106,9 +124,17 @@ fn start_trol_sim(args: &[&str], markers: &[&str]) -> Result<(SimProcess, Vec<St
     while found.iter().any(Option::is_none) {
         let left = deadline.saturating_duration_since(Instant::now());
         let Ok(line) = rx.recv_timeout(left) else {
+            // Its output ended (it exited) or 20 s passed: what it said on stderr tells why.
+            std::thread::sleep(Duration::from_millis(100));
+            let said = said.lock().unwrap_or_else(|e| e.into_inner()).clone();
             return Err(format!(
-                "trol {} did not say where it serves within 20 s",
-                args.join(" ")
+                "trol {} did not say where it serves within 20 s{}",
+                args.join(" "),
+                if said.trim().is_empty() {
+                    String::new()
+                } else {
+                    format!("; it said: {}", said.trim())
+                }
             ));
         };
         for (m, f) in markers.iter().zip(found.iter_mut()) {

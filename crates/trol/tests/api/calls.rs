@@ -466,8 +466,7 @@ impl<P: Port> Port for Tap<P> {
 /// Both with a request of three frames (600 bytes) and with an added CAT1 command.
 #[test]
 pub(super) fn with_the_lrc_a_command_the_controller_lacks_is_answered_unknown() {
-    use trol_controller::{Controller, Embedded, Mode};
-    use trol_proto::link::BlockCheck;
+    use trol_controller::{Embedded, Mode};
     use trol_proto::link::control::NAK;
     const ADDED: CommandDef = CommandDef {
         code: trol::table::LAST_CAT1_CODE + 1,
@@ -483,17 +482,14 @@ pub(super) fn with_the_lrc_a_command_the_controller_lacks_is_answered_unknown() 
     };
     let fid = [NAK, trol_proto::link::NakCode::Fid.byte()];
     for activated in [true, false] {
-        let cfg = LinkConfig {
-            check: BlockCheck::Lrc,
-            ..steady()
-        };
+        let cfg = lrc_steady();
         let (host, ctl) = trol_port::memory::pair(None);
         let mode = if activated {
             Mode::Terminal
         } else {
             Mode::Server
         };
-        let controller = Controller::new(ctl, cfg, Pcp::new(SimBackend::new(settings())), mode);
+        let controller = sim_controller(ctl, cfg, mode);
         let handle = Embedded::spawn(controller);
         let heard = Arc::new(std::sync::Mutex::new(Vec::new()));
         let tap = Tap {

@@ -149,21 +149,12 @@ pub(super) fn activation_agrees_on_the_block_check() {
 /// try, 0 of 4 activations at a 50 ms start). Each pause of the issue, and none.
 #[test]
 pub(super) fn a_1998_controller_that_starts_slowly_is_activated() {
-    use trol_controller::{Controller, Embedded, Mode};
-    use trol_proto::link::BlockCheck;
+    use trol_controller::{Embedded, Mode};
     use trol_proto::transaction::ManualLayer3;
     for pause_ms in [0u64, 50, 200, 1000] {
-        let cfg = LinkConfig {
-            check: BlockCheck::Lrc,
-            ..steady()
-        };
+        let cfg = lrc_steady();
         let (host, ctl) = trol_port::memory::pair(None);
-        let mut controller = Controller::new(
-            ctl,
-            cfg,
-            Pcp::new(SimBackend::new(settings())),
-            Mode::Terminal,
-        );
+        let mut controller = sim_controller(ctl, cfg, Mode::Terminal);
         controller.speak_manual_only(ManualLayer3::ZeroPci);
         controller.set_start_pause(Duration::from_millis(pause_ms));
         let handle = Embedded::spawn(controller);

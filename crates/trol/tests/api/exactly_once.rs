@@ -252,8 +252,7 @@ pub(super) fn after_a_restart_the_call_in_doubt_may_have_run_never_did_not() {
 /// repeated relative move would run twice there (shown with repeats forced on).
 #[test]
 pub(super) fn repeats_go_only_to_a_controller_that_announced_its_memory() {
-    use trol_controller::{Controller, Embedded, Mode};
-    use trol_proto::link::BlockCheck;
+    use trol_controller::{Embedded, Mode};
     use trol_proto::transaction::ManualLayer3;
     for manual in [
         None,
@@ -261,17 +260,9 @@ pub(super) fn repeats_go_only_to_a_controller_that_announced_its_memory() {
         Some(ManualLayer3::EchoPci),
     ] {
         for forced in [None, Some(1)] {
-            let cfg = LinkConfig {
-                check: BlockCheck::Lrc,
-                ..steady()
-            };
+            let cfg = lrc_steady();
             let (host, ctl) = trol_port::memory::pair(None);
-            let mut controller = Controller::new(
-                ctl,
-                cfg,
-                Pcp::new(SimBackend::new(settings())),
-                Mode::Server,
-            );
+            let mut controller = sim_controller(ctl, cfg, Mode::Server);
             if let Some(pci) = manual {
                 controller.speak_manual_only(pci);
             }

@@ -38,6 +38,23 @@ fn steady() -> LinkConfig {
     }
 }
 
+/// The manual's LRC on [`steady`] timeouts.
+fn lrc_steady() -> LinkConfig {
+    LinkConfig {
+        check: trol_proto::link::BlockCheck::Lrc,
+        ..steady()
+    }
+}
+
+/// The simulated A465 ([`settings`]) behind the PCP server on `port`, in `mode`.
+fn sim_controller<P: Port>(
+    port: P,
+    cfg: LinkConfig,
+    mode: trol_controller::Mode,
+) -> trol_controller::Controller<P, SimBackend> {
+    trol_controller::Controller::new(port, cfg, Pcp::new(SimBackend::new(settings())), mode)
+}
+
 fn settings() -> SimSettings {
     SimSettings {
         time_scale: 50.0,

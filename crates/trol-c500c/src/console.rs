@@ -102,6 +102,17 @@ impl Console {
         text(&self.buf)
     }
 
+    /// What was echoed of a line being typed: the bytes of the partial line, after any
+    /// prompt that came before them (raw, to be compared byte for byte with what was typed).
+    pub fn echo(&self) -> &[u8] {
+        let mut at = 0;
+        // A prompt is printable ASCII, so its length as text is its length in bytes.
+        while let Some((_, len)) = leading_prompt(&text(&self.buf[at..])) {
+            at += len;
+        }
+        &self.buf[at..]
+    }
+
     /// Forget a partial line.
     pub fn clear(&mut self) {
         self.buf.clear();
@@ -202,6 +213,20 @@ mod tests {
             all(&mut Console::default(), &single)[1..],
             [Said::Line("y".into()), Said::Prompt("test".into())]
         );
+    }
+
+    #[test]
+    fn the_echo_of_a_line_being_typed_is_what_follows_the_prompt() {
+        let mut c = Console::default();
+        assert!(c.feed(b"test> joi").is_empty());
+        assert_eq!(c.echo(), b"joi");
+        c.feed(b"nt 3,\xb0");
+        assert_eq!(c.echo(), b"joint 3,\xb0");
+        let mut c = Console::default();
+        assert_eq!(c.feed(b"test> "), vec![Said::Prompt("test".into())]);
+        assert_eq!(c.echo(), b"");
+        c.feed(b"w2");
+        assert_eq!(c.echo(), b"w2");
     }
 
     #[test]

@@ -302,7 +302,13 @@ pub fn mars(name: &str) -> Subject {
 pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
     (
         "echo-off",
-        "a console that echoes nothing cannot be typed to: every call is UNSURE",
+        "a console that echoes nothing: TROL cannot see a line whole before ash runs it, and \
+         types only reads; every other call is BIOS_UNSUPPORTED",
+    ),
+    (
+        "ctrl-c-keeps-line",
+        "Ctrl-C keeps a typed line: TROL could not take a damaged line back, and types only \
+         reads; every other call is BIOS_UNSUPPORTED",
     ),
     (
         "pendant-holds",

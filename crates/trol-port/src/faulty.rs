@@ -220,3 +220,176 @@ impl<P: Port> Port for Faulty<P> {
         format!("faulty({})", self.inner.name())
     }
 }
+
+/// Which way a byte goes through a [`Flip`]ped port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Way {
+    /// Sent by the port's owner.
+    Out,
+    /// Received by the port's owner.
+    In,
+}
+
+/// One bit of one byte to damage, once: bit `bit` of the byte at `at` of the next `pattern`
+/// that passes `way` (a byte of a known line, as the tests of a console need: "flip bit 3 of
+/// the 7th byte of `joint 3,0.500`").
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FlipPlan {
+    /// Which way.
+    pub way: Way,
+    /// The bytes looked for.
+    pub pattern: Vec<u8>,
+    /// The byte of them damaged (from 0).
+    pub at: usize,
+    /// The bit flipped (0..8).
+    pub bit: u8,
+}
+
+#[derive(Debug, Default)]
+struct FlipState {
+    plan: Option<FlipPlan>,
+    /// How much of the pattern has passed.
+    matched: usize,
+    /// The plan was carried out.
+    done: bool,
+}
+
+impl FlipState {
+    fn apply(&mut self, way: Way, bytes: &mut [u8]) {
+        let Some(plan) = self.plan.as_ref().filter(|p| p.way == way && !self.done) else {
+            return;
+        };
+        let (pattern, at, mask) = (plan.pattern.clone(), plan.at, 1u8 << (plan.bit & 7));
+        for b in bytes {
+            if self.matched == at && *b == pattern[at] {
+                *b ^= mask;
+                self.done = true;
+                return;
+            }
+            self.matched = if *b == pattern[self.matched] {
+                self.matched + 1
+            } else {
+                // Restart, the byte perhaps the pattern's first (the lines TROL types repeat
+                // no prefix of their own inside them, so this is exact for them).
+                usize::from(*b == pattern[0])
+            };
+        }
+    }
+}
+
+/// The switch of a [`Flip`]: arm a plan, and see whether it was carried out. Clone it to keep
+/// a handle while the port is served elsewhere.
+#[derive(Clone, Debug, Default)]
+pub struct FlipSwitch(std::sync::Arc<std::sync::Mutex<FlipState>>);
+
+impl FlipSwitch {
+    /// Damage as `plan` says, once (a plan whose `at` is outside its pattern, or whose
+    /// pattern is empty, is ignored).
+    pub fn arm(&self, plan: FlipPlan) {
+        let mut s = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let valid = plan.at < plan.pattern.len();
+        *s = FlipState {
+            plan: valid.then_some(plan),
+            matched: 0,
+            done: false,
+        };
+    }
+
+    /// The armed plan was carried out.
+    pub fn done(&self) -> bool {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).done
+    }
+
+    /// Disarm.
+    pub fn clear(&self) {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = FlipState::default();
+    }
+}
+
+/// A port that damages one bit of one chosen byte when its [`FlipSwitch`] says so: the
+/// simulated controllers' switch for a flipped bit on their console, either way.
+#[derive(Debug)]
+pub struct Flip<P> {
+    inner: P,
+    switch: FlipSwitch,
+    scratch: Vec<u8>,
+}
+
+impl<P: Port> Flip<P> {
+    /// Wrap `inner`; `switch` arms it.
+    pub fn new(inner: P, switch: FlipSwitch) -> Self {
+        Flip {
+            inner,
+            switch,
+            scratch: Vec::new(),
+        }
+    }
+}
+
+impl<P: Port> Port for Flip<P> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.scratch.clear();
+        self.scratch.extend_from_slice(bytes);
+        self.switch
+            .0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .apply(Way::Out, &mut self.scratch);
+        self.inner.send(&self.scratch)
+    }
+
+    fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        let n = self.inner.recv(buf, deadline)?;
+        self.switch
+            .0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .apply(Way::In, &mut buf[..n]);
+        Ok(n)
+    }
+
+    fn available(&mut self) -> io::Result<usize> {
+        self.inner.available()
+    }
+
+    fn flush_input(&mut self) -> io::Result<()> {
+        self.inner.flush_input()
+    }
+
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_flip_damages_the_chosen_bit_of_the_chosen_byte_once() {
+        let mut s = FlipState {
+            plan: Some(FlipPlan {
+                way: Way::Out,
+                pattern: b"joint 3,0.500".to_vec(),
+                at: 8,
+                bit: 2,
+            }),
+            ..FlipState::default()
+        };
+        // Another way: untouched.
+        let mut other = b"joint 3,0.500".to_vec();
+        s.apply(Way::In, &mut other);
+        assert_eq!(other, b"joint 3,0.500");
+        // A near miss first, then the line split over two writes.
+        let mut a = b"w2\rjoint 3,1\rjoint 3,".to_vec();
+        let mut b = b"0.500\r".to_vec();
+        s.apply(Way::Out, &mut a);
+        s.apply(Way::Out, &mut b);
+        assert_eq!(a, b"w2\rjoint 3,1\rjoint 3,");
+        assert_eq!(b, b"4.500\r");
+        assert!(s.done);
+        let mut again = b"joint 3,0.500".to_vec();
+        s.apply(Way::Out, &mut again);
+        assert_eq!(again, b"joint 3,0.500");
+    }
+}

@@ -46,10 +46,7 @@ impl real::Stopping for C500cBackend {
     }
 
     fn reading(&mut self) -> Result<Option<[f64; 6]>, String> {
-        let lines = self.exchange("w2").map_err(|e| match e {
-            Fail::Io(e) => e.to_string(),
-            Fail::Silent(s) | Fail::Unsure(s) => s,
-        })?;
+        let lines = self.exchange("w2").map_err(|e| e.text())?;
         // Halt's readings: the arm may still move, and the two rows of a moving arm need not
         // be one instant's, so they are not held against the profile's pulses.
         reports::position(&lines, true)

@@ -153,8 +153,8 @@ impl C500cBackend {
             }
             _ => {}
         }
-        if let Err(e) = self.send(format!("{line}\r").as_bytes()) {
-            return Err(self.unsure(format!("`{line}`: the console failed: {e}")));
+        if let Err(e) = self.type_line(&line) {
+            return Err(self.fail(e));
         }
         let since = Instant::now();
         // ash may give the prompt back at once, or once the jaws stand: a refusal comes

@@ -152,6 +152,12 @@ enum Fail {
     Silent(String),
     /// A line or question TROL cannot place.
     Unsure(String),
+    /// The echo of a line differed from what was typed, and Ctrl-C took the line back before
+    /// its line end: nothing ran.
+    Damaged(String),
+    /// A line that is not a read, on a console where TROL cannot check a line before it
+    /// runs (no echo, or Ctrl-C does not take a typed line back): not sent.
+    Unchecked(String),
 }
 
 impl Fail {
@@ -159,6 +165,15 @@ impl Fail {
         match self {
             Fail::Io(e) => BackendError::Unsure(format!("the console failed: {e}")),
             Fail::Silent(s) | Fail::Unsure(s) => BackendError::Unsure(s),
+            Fail::Damaged(s) => BackendError::Link(s),
+            Fail::Unchecked(_) => BackendError::Refused(UNSUPPORTED),
+        }
+    }
+
+    fn text(&self) -> String {
+        match self {
+            Fail::Io(e) => format!("the console failed: {e}"),
+            Fail::Silent(s) | Fail::Unsure(s) | Fail::Damaged(s) | Fail::Unchecked(s) => s.clone(),
         }
     }
 }
@@ -239,6 +254,11 @@ pub struct C500cBackend {
     pulses_seen: [bool; 6],
     /// A `w2` read this session that disagreed with the profile's pulses.
     pulses_wrong: Option<String>,
+    /// The console echoes what is typed (seen at connect).
+    echo: bool,
+    /// Ctrl-C takes a typed line back (seen at connect: `w`, Ctrl-C, and `robotver` printed
+    /// the version, not an error of `wrobotver`).
+    cancels: bool,
 }
 
 impl std::fmt::Debug for C500cBackend {
@@ -257,6 +277,22 @@ fn said(lines: &[String]) -> Vec<&str> {
         .map(|l| l.trim())
         .filter(|l| !l.is_empty())
         .collect()
+}
+
+/// `got` is as long as the echo of `typed` at least, and differs from it in at most half its
+/// bytes: the echo, damaged (a line of the console's own differs from it almost everywhere).
+fn alike(got: &[u8], typed: &[u8]) -> bool {
+    got.len() >= typed.len()
+        && 2 * got.iter().zip(typed).filter(|(a, b)| a != b).count() <= typed.len()
+}
+
+/// What the console said, in words for a message.
+fn said_text(s: &Said) -> String {
+    match s {
+        Said::Line(l) => format!("the line `{l}`"),
+        Said::Prompt(p) => format!("the prompt of `{p}`"),
+        Said::Question(q) => format!("the question `{q}`"),
+    }
 }
 
 /// A value as TROL types it into ash: three decimals, and no `-0.000`.
@@ -310,6 +346,8 @@ impl C500cBackend {
             angles_seen: false,
             pulses_seen: [false; 6],
             pulses_wrong: None,
+            echo: true,
+            cancels: true,
             profile,
         };
         b.send(b"\x05\r\r")?;
@@ -372,7 +410,18 @@ impl C500cBackend {
             b.exchange(cmd)
                 .map_err(|e| C500cError::Unexpected(e.into_backend().to_string()))
         };
-        let lines = read(&mut b, "robotver")?;
+        b.line_checks()?;
+        let mut lines = read(&mut b, "robotver")?;
+        if reports::robotver(&lines).is_err() && b.cancels {
+            // The `w` that Ctrl-C should have taken back ran with `robotver` as one line.
+            b.cancels = false;
+            b.say(&format!(
+                "Ctrl-C did not take back a typed `w`: `robotver` after it printed `{}`; TROL \
+                 sends only reads (a damaged line could not be taken back)",
+                lines.join(" | ")
+            ));
+            lines = read(&mut b, "robotver")?;
+        }
         b.version = reports::robotver(&lines).map_err(|e| C500cError::Unexpected(e.to_string()))?;
         let lines = read(&mut b, "armstat")?;
         b.stat = reports::armstat(&lines).map_err(|e| C500cError::Unexpected(e.to_string()))?;
@@ -417,10 +466,10 @@ impl C500cBackend {
     }
 
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
-        // Anything but a read may change what the arm does: where it was seen to rest no
-        // longer stands in for a `w2`.
+        // Anything but a read (or the line end of one) may change what the arm does: where it
+        // was seen to rest no longer stands in for a `w2`.
         let line = std::str::from_utf8(bytes).unwrap_or("").trim_end();
-        if !crate::probe::READS.contains(&line) {
+        if !line.is_empty() && !crate::probe::READS.contains(&line) {
             self.rest_seen.forget();
             self.stat_seen.forget();
         }
@@ -449,9 +498,191 @@ impl C500cBackend {
         }
     }
 
+    /// At connect, at ash's prompt: whether the console echoes what is typed, and whether
+    /// Ctrl-C takes a typed line back (the public sources settle neither). `w` is typed, then
+    /// Ctrl-C; the `robotver` that follows shows whether `w` was kept.
+    fn line_checks(&mut self) -> Result<(), C500cError> {
+        self.send(b"w")?;
+        let deadline = Instant::now() + REPLY_LIMIT;
+        let before = self.rx.len();
+        while self.console.echo().is_empty() && self.rx.len() == before {
+            let mut buf = [0u8; 64];
+            let n = self.port.recv(&mut buf, deadline)?;
+            if n == 0 {
+                break;
+            }
+            let said = self.console.feed(&buf[..n]);
+            self.rx.extend(said);
+        }
+        let echo = self.console.echo().to_vec();
+        match echo.as_slice() {
+            b"w" => self.echo = true,
+            b"" if self.rx.len() == before => {
+                self.echo = false;
+                self.say(
+                    "the console echoes nothing typed: TROL cannot see a line whole before ash \
+                     runs it, and sends only reads (docs/c500c.md, The line)",
+                );
+            }
+            other => {
+                let _ = self.send(b"\x03");
+                return Err(C500cError::Unexpected(format!(
+                    "`w` typed at ash's prompt came back as `{}`: a noisy line? Check the \
+                     cable, then connect again",
+                    console::text(other)
+                )));
+            }
+        }
+        self.send(b"\x03")?;
+        self.back_to_prompt()
+            .map_err(|e| C500cError::Unexpected(e.text()))
+    }
+
+    /// After a Ctrl-C at ash's prompt: its prompt again, with nothing before it but blank
+    /// lines, `^C` and the echo of what was typed. A line of another form: UNSURE.
+    fn back_to_prompt(&mut self) -> Result<(), Fail> {
+        let app = self.profile.app.clone();
+        let deadline = Instant::now() + REPLY_LIMIT;
+        loop {
+            match self.next(deadline).map_err(Fail::Io)? {
+                Some(Said::Prompt(p)) if p == app => return Ok(()),
+                Some(Said::Line(l))
+                    if console::bracketed(&l).is_some() && reports::known_error(&l).is_none() =>
+                {
+                    self.say(&format!("unasked: {l}"));
+                    self.unasked.push(l);
+                }
+                Some(Said::Line(l)) if reports::known_error(&l).is_none() && !l.contains(':') => {}
+                Some(other) => {
+                    return Err(Fail::Unsure(format!(
+                        "after Ctrl-C the console said {}, not only ash's prompt",
+                        said_text(&other)
+                    )));
+                }
+                None => {
+                    return Err(Fail::Unsure(format!(
+                        "Ctrl-C got no prompt of ash's back within {REPLY_LIMIT:?}"
+                    )));
+                }
+            }
+        }
+    }
+
+    /// Type `cmd` and commit it with its line end only once its echo is seen whole and equal
+    /// (issue 62: ash's console has no check sum; the echo is the only check there is). An
+    /// echo that differs, or none, and the line is taken back with Ctrl-C before its line
+    /// end: nothing ran. On a console where a line cannot be checked so, only reads are
+    /// typed.
+    fn type_line(&mut self, cmd: &str) -> Result<(), Fail> {
+        let read = crate::probe::READS.contains(&cmd);
+        let checked = self.echo && self.cancels;
+        if !read && !checked {
+            return Err(Fail::Unchecked(format!(
+                "refused before sending `{cmd}`: {} so TROL cannot make sure a line runs as \
+                 typed (ash's console has no check sum) and sends only reads (docs/c500c.md, \
+                 The line)",
+                if self.echo {
+                    "Ctrl-C did not take back a typed line at connect,"
+                } else {
+                    "the console does not echo what is typed,"
+                }
+            )));
+        }
+        self.send(cmd.as_bytes()).map_err(Fail::Io)?;
+        if self.echo {
+            self.see_echo(cmd)?;
+        }
+        self.send(b"\r").map_err(Fail::Io)
+    }
+
+    /// Read until the echo of `cmd` is whole; one that differs, or none: take the line back.
+    /// A line the console prints of its own before the echo (unasked, or a motion's end) is
+    /// kept for the reply's reading: what is not the start of the echo is waited on to its
+    /// line end, unless it is as long as the echo and alike (a damaged echo). A line end
+    /// within the echo is damage.
+    fn see_echo(&mut self, cmd: &str) -> Result<(), Fail> {
+        let cmd_bytes = cmd.as_bytes();
+        let deadline = Instant::now() + REPLY_LIMIT;
+        loop {
+            let got = self.console.echo();
+            if got == cmd_bytes {
+                return Ok(());
+            }
+            if !cmd_bytes.starts_with(got) && alike(got, cmd_bytes) {
+                let what = format!("`{}`", console::text(got));
+                return Err(self.take_back(cmd, what, false));
+            }
+            let mut buf = [0u8; 512];
+            let n = self.port.recv(&mut buf, deadline).map_err(Fail::Io)?;
+            if n == 0 {
+                let what = format!(
+                    "`{}` and no more within {REPLY_LIMIT:?}",
+                    console::text(got)
+                );
+                return Err(self.take_back(cmd, what, false));
+            }
+            let mut within = Vec::new();
+            for &byte in &buf[..n] {
+                let echoing = {
+                    let e = self.console.echo();
+                    !e.is_empty() && cmd_bytes.starts_with(e)
+                };
+                let said = self.console.feed(&[byte]);
+                if echoing {
+                    within.extend(said.iter().map(said_text));
+                }
+                self.rx.extend(said);
+            }
+            if !within.is_empty() {
+                within.push(format!("`{}`", console::text(self.console.echo())));
+                return Err(self.take_back(cmd, within.join(", then "), true));
+            }
+        }
+    }
+
+    /// The echo of `cmd` came back as `what`: Ctrl-C before its line end, and ash's prompt.
+    /// `ended`: a line end or a prompt came within the echo (a byte damaged into a line end
+    /// may have run part of the line): UNSURE. A motion under way is stopped by the Ctrl-C:
+    /// UNSURE too.
+    fn take_back(&mut self, cmd: &str, what: String, ended: bool) -> Fail {
+        let moving = self.outstanding.is_some() || self.jaws_wait.is_some();
+        if let Err(e) = self.send(b"\x03") {
+            return Fail::Io(e);
+        }
+        if ended {
+            // What the console said within the echo is not read again as an answer.
+            self.rx.clear();
+        }
+        if let Err(e) = self.back_to_prompt() {
+            return Fail::Unsure(format!(
+                "`{cmd}` came back from the console as {what}; TROL typed Ctrl-C before its \
+                 line end, and {}: whether the line is gone is not known",
+                e.text()
+            ));
+        }
+        if ended {
+            return Fail::Unsure(format!(
+                "`{cmd}` came back from the console as {what}: a line end within the echo may \
+                 have run part of the line; Ctrl-C sent, and TROL sends nothing further (check \
+                 the arm and the cable, then reconnect)"
+            ));
+        }
+        if moving {
+            return Fail::Unsure(format!(
+                "`{cmd}`, typed while a motion or the gripper ran, came back from the console \
+                 as {what}: TROL took it back with Ctrl-C, which stops the motion; check the \
+                 arm, then reconnect"
+            ));
+        }
+        Fail::Damaged(format!(
+            "`{cmd}` came back from the console as {what}: TROL took the line back with Ctrl-C \
+             before its line end, so nothing ran; call again (more of this: check the cable)"
+        ))
+    }
+
     /// Send `cmd` and read to ash's prompt: the lines between (the echo taken off).
     fn exchange(&mut self, cmd: &str) -> Result<Vec<String>, Fail> {
-        self.send(format!("{cmd}\r").as_bytes()).map_err(Fail::Io)?;
+        self.type_line(cmd)?;
         self.read_to_prompt(cmd, Instant::now() + REPLY_LIMIT)
             .and_then(|got| {
                 got.ok_or_else(|| {
@@ -568,6 +799,9 @@ impl C500cBackend {
     }
 
     fn fail(&mut self, e: Fail) -> BackendError {
+        if let Fail::Damaged(why) | Fail::Unchecked(why) = &e {
+            self.note(why.clone());
+        }
         match e.into_backend() {
             BackendError::Unsure(why) => self.unsure(why),
             other => other,

@@ -125,8 +125,8 @@ impl C500cBackend {
             }
             Kind::Home | Kind::Named(_) | Kind::Pose(..) | Kind::Pending(_) => None,
         };
-        if let Err(e) = self.send(format!("{}\r", m.line).as_bytes()) {
-            return Err(self.unsure(format!("`{}`: the console failed: {e}", m.line)));
+        if let Err(e) = self.type_line(&m.line) {
+            return Err(self.fail(e));
         }
         let sent = Instant::now();
         // ash gives the prompt back as the motion starts (`start`): it is waited for as any
@@ -229,8 +229,8 @@ impl C500cBackend {
             }
         } else if !o.done {
             // The motion started with the prompt: ash's `finish` says when it ends.
-            if let Err(e) = self.send(b"finish\r") {
-                return Err(self.unsure(format!("`finish`: the console failed: {e}")));
+            if let Err(e) = self.type_line("finish") {
+                return Err(self.fail(e));
             }
             let o = self.outstanding.as_mut().expect("a motion under way");
             o.prompt_due = true;

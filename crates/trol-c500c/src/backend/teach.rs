@@ -155,8 +155,8 @@ impl C500cBackend {
         cmd: &str,
         answers: &[(&str, &str)],
     ) -> Result<Vec<String>, BackendError> {
-        if let Err(e) = self.send(format!("{cmd}\r").as_bytes()) {
-            return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
+        if let Err(e) = self.type_line(cmd) {
+            return Err(self.fail(e));
         }
         let app = self.profile.app.clone();
         let mut deadline = Instant::now() + REPLY_LIMIT;
@@ -181,8 +181,14 @@ impl C500cBackend {
                             "after `{cmd}` ash asked `{q}`: not answered (Ctrl-C sent)"
                         )));
                     };
-                    if let Err(e) = self.send(answer.as_bytes()) {
-                        return Err(self.unsure(format!("`{cmd}`: the console failed: {e}")));
+                    // A line's answer is typed as a line (its echo seen first); a key alone
+                    // (the pager's) as it is.
+                    let sent = match answer.strip_suffix('\r') {
+                        Some(line) => self.type_line(line),
+                        None => self.send(answer.as_bytes()).map_err(Fail::Io),
+                    };
+                    if let Err(e) = sent {
+                        return Err(self.fail(e));
                     }
                     answered.push(answer);
                     deadline = Instant::now() + REPLY_LIMIT;

@@ -84,6 +84,9 @@ pub struct Switches {
     pub pendant_holds: bool,
     /// Ctrl-C stops a motion under way (assumed: ash's own way to stop is not public).
     pub ctrl_c_stops: bool,
+    /// Ctrl-C keeps a partly typed line (its prompt printed again all the same), so what is
+    /// typed next is added to it (not public: whether ash's line editor drops the line).
+    pub ctrl_c_keeps_line: bool,
     /// A power loss prints `[test: Lost robot power]`.
     pub power_loss_line: bool,
     /// A homing the power cut short leaves armstat's word as it was before the Home: an arm
@@ -116,6 +119,7 @@ impl Default for Switches {
             lf_only: false,
             pendant_holds: false,
             ctrl_c_stops: true,
+            ctrl_c_keeps_line: false,
             power_loss_line: true,
             cut_home_keeps_homed: false,
             loc_print: LocPrint::Row,
@@ -170,6 +174,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "unstoppable",
         "Ctrl-C does not stop a motion: a fault, for the rule that Halt never says done unseen",
+    ),
+    (
+        "ctrl-c-keeps-line",
+        "Ctrl-C keeps a partly typed line: what is typed next is added to it",
     ),
     (
         "power-loss-silent",
@@ -234,6 +242,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "unstoppable" => Switches {
             ctrl_c_stops: false,
+            ..d
+        },
+        "ctrl-c-keeps-line" => Switches {
+            ctrl_c_keeps_line: true,
             ..d
         },
         "power-loss-silent" => Switches {
@@ -546,7 +558,9 @@ impl C500c {
     }
 
     fn interrupt(&mut self, b: u8) {
-        self.typed.clear();
+        if !(b == 0x03 && self.sw.ctrl_c_keeps_line) {
+            self.typed.clear();
+        }
         self.held.clear();
         if self.sw.echo {
             self.out

@@ -13,6 +13,7 @@ use trol_c500c::c500c::{self, Return, Switches};
 use trol_c500c::profile::{Angles, MotionReturn, Profile};
 use trol_c500c::{C500C_CODES, C500c, C500cBackend, backend};
 use trol_controller::Pcp;
+use trol_port::faulty::{Flip, FlipSwitch};
 use trol_port::memory;
 use trol_proto::application::code::{TROL_ERR_NOT_STOPPED, TROL_ERR_ROBOT_UNSURE};
 use trol_proto::link::LinkConfig;
@@ -60,7 +61,13 @@ fn rig(sw: Switches, homed: bool, profile: Profile) -> Rig {
 /// A rig whose twin runs `scale` times real time (1: as TROL plans, for the tests that need
 /// a motion's planned end to be the twin's).
 fn rig_at(sw: Switches, homed: bool, profile: Profile, scale: f64) -> Rig {
+    rig_on(sw, homed, profile, scale, FlipSwitch::default())
+}
+
+/// A rig whose twin's console line damages a bit when `flip` says so.
+fn rig_on(sw: Switches, homed: bool, profile: Profile, scale: f64, flip: FlipSwitch) -> Rig {
     let (host, ctl) = memory::pair(Some(57600));
+    let ctl = Flip::new(ctl, flip);
     let unit = Arc::new(Mutex::new(C500c::new(sw, homed, scale)));
     let stop = Arc::new(AtomicBool::new(false));
     let thread = {
@@ -186,6 +193,34 @@ fn run_variant(name: &str) {
     // The profile that agrees: the motion works, unless the pendant holds the control, which
     // is said with its code.
     let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
+    if !sw.echo || sw.ctrl_c_keeps_line {
+        // A console where TROL cannot see a line whole before ash runs it (issue 62): reads
+        // work; anything else is refused before sending, and nothing moves.
+        let q = r.robot.position(Tag::Joint, PosMode::Actual).unwrap();
+        assert!(close(q.to_array6()[0], r.joints()[0]), "{name}");
+        let typed = r.received();
+        for e in [
+            r.robot.speed(100).unwrap_err(),
+            r.robot.joint(1, 0.3).unwrap_err(),
+        ] {
+            assert_eq!(e.code().0, backend::UNSUPPORTED, "{name}: {e}");
+        }
+        assert!(
+            r.said().contains("sends only reads"),
+            "{name}: {}",
+            r.said()
+        );
+        let reads = trol_c500c::probe::READS;
+        assert!(
+            r.received()[typed.len()..]
+                .iter()
+                .all(|l| reads.contains(&l.as_str())),
+            "{name}: only reads typed: {:?}",
+            r.received()
+        );
+        assert!(!r.moving(), "{name}");
+        return;
+    }
     r.robot.speed(100).unwrap();
     if sw.pendant_holds {
         let e = r.robot.joint(1, 0.3).unwrap_err();
@@ -305,6 +340,7 @@ fn run_variant(name: &str) {
     }
 }
 
+mod flips;
 mod rounds;
 mod rules;
 
@@ -335,6 +371,7 @@ each! {
     error_prefixed => "error-prefixed",
     error_bracketed => "error-bracketed",
     echo_off => "echo-off",
+    ctrl_c_keeps_line => "ctrl-c-keeps-line",
     lf_only => "lf-only",
     pendant_holds => "pendant-holds",
     unstoppable => "unstoppable",

@@ -9,7 +9,7 @@ use std::thread::JoinHandle;
 
 use trol_a465::arm::{Arm, ArmSettings, Stored};
 use trol_port::Port;
-use trol_port::faulty::{FaultConfig, Faulty};
+use trol_port::faulty::{FaultConfig, Faulty, Flip, FlipSwitch};
 use trol_port::memory;
 use trol_rapl::{C500, Profile};
 
@@ -89,7 +89,19 @@ pub fn start_scaled(
     faults: Option<FaultConfig>,
     scale: f64,
 ) -> (Box<dyn Port>, Sim) {
+    start_flipped(profile, homed, faults, scale, FlipSwitch::default())
+}
+
+/// Like [`start_scaled`], the controller's line damaging a bit when `flip` says so.
+pub fn start_flipped(
+    profile: Profile,
+    homed: bool,
+    faults: Option<FaultConfig>,
+    scale: f64,
+    flip: FlipSwitch,
+) -> (Box<dyn Port>, Sim) {
     let (host, ctl) = memory::pair(Some(profile.baud));
+    let ctl = Flip::new(ctl, flip);
     let stop = Arc::new(AtomicBool::new(false));
     let lines = Arc::new(Mutex::new(Vec::new()));
     let end = Arc::new(Mutex::new([0.0; 6]));

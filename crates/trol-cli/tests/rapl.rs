@@ -207,6 +207,16 @@ fn the_pick_example_runs_through_trol_gateway_with_init_and_cleanup() {
     let init = trol(&dir, &["init", "--port", &gw.name], "");
     let (o, e) = text(&init);
     assert!(init.status.success(), "{o}{e}");
+    // A 1998 program's Close then Depart with no Finish between: the Depart waits for the
+    // fingers and runs (issue 62, item 6: it was BIOS_BUSY).
+    let run = trol(
+        &dir,
+        &["interp", "-k"],
+        "close 60\ndepart c(-20)\nfinish\nopen 60\njoint 1 0.05\nfinish\n",
+    );
+    let (o, e) = text(&run);
+    assert!(run.status.success(), "{o}{e}");
+    assert!(!o.contains("BIOS_BUSY"), "{o}");
     let cleanup = trol(&dir, &["cleanup", "--port", &gw.name], "");
     let (o, e) = text(&cleanup);
     let log = gw.output_until("back in terminal mode", 2, 30).join("\n");

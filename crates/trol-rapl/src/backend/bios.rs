@@ -46,6 +46,7 @@ impl Backend for RaplBackend {
         self.report_unasked()?;
         let r = self.command(&format!("CLOSE {force}"))?;
         self.last_poll = None;
+        self.gripping |= r == 0;
         Ok(r)
     }
     fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
@@ -88,6 +89,7 @@ impl Backend for RaplBackend {
         };
         let r = self.command(&format!("GRIP {}", text::num(d)))?;
         self.last_poll = None;
+        self.gripping |= r == 0;
         Ok(r)
     }
     fn halt(&mut self) -> BiosResult {
@@ -344,6 +346,7 @@ impl Backend for RaplBackend {
         self.report_unasked()?;
         let r = self.command(&format!("OPEN {force}"))?;
         self.last_poll = None;
+        self.gripping |= r == 0;
         Ok(r)
     }
     fn ready(&mut self) -> BiosResult {

@@ -67,6 +67,9 @@ impl RaplBackend {
             return Ok(false);
         }
         let done = st.done.iter().all(|d| *d);
+        if done && self.outstanding.is_none() {
+            self.gripping = false;
+        }
         let Some(o) = self.outstanding.as_mut() else {
             if done {
                 return self.next_in_queue();

@@ -136,8 +136,10 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: BUSY,
             name: "BIOS_BUSY",
-            meaning: "a tool change while a motion has not ended (it would change what a \
-                      queued motion's target means): call TROLFinish(FINISH_WAIT) first",
+            meaning: "the arm moves, and not by TROL (the pendant, a program of the \
+                      controller's), or a tool change while a motion has not ended (it would \
+                      change what a queued motion's target means): call TROLFinish(FINISH_WAIT) \
+                      first",
         },
         CodeInfo {
             value: NOT_AT_TARGET,
@@ -359,6 +361,10 @@ pub struct RaplBackend {
     epoch: std::time::Instant,
     tool: [f64; 6],
     last_poll: Option<(std::time::Instant, bool)>,
+    /// An OPEN, CLOSE or GRIP was taken and STATUS has not yet shown everything done: a
+    /// motion called meanwhile waits in the queue for the fingers, as one behind a motion
+    /// waits for it (issue 62: the manual's TROLClose then TROLDepart got BIOS_BUSY).
+    gripping: bool,
     outstanding: Option<Outstanding>,
     /// Where W2 last saw the arm at rest (a motion's confirmed end, a Halt's stop).
     rest: Option<[f64; 6]>,
@@ -439,6 +445,7 @@ impl RaplBackend {
             epoch: std::time::Instant::now(),
             tool: [0.0; 6],
             last_poll: None,
+            gripping: false,
             outstanding: None,
             rest: None,
             queue: real::MotionQueue::new(QUEUE),

@@ -43,7 +43,9 @@ impl RaplBackend {
             homed: st.homed.iter().all(|h| *h),
             in_control: true,
             moving,
-            ours: self.outstanding.is_some() || !self.queue.is_empty(),
+            // The fingers of a grip command of TROL's count as its own motion: what comes
+            // next waits for them in the queue.
+            ours: self.outstanding.is_some() || !self.queue.is_empty() || (moving && self.gripping),
             homing: self.outstanding.as_ref().is_some_and(|o| home(&o.motion))
                 || self
                     .queue

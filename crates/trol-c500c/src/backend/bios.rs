@@ -11,28 +11,70 @@ fn array6(v: &[f64]) -> Result<[f64; 6], BackendError> {
     }
 }
 
-/// Ctrl-C for [`real::halt`], and `w2` for its readings.
-impl real::Stopping for C500cBackend {
-    type Stop = ();
+/// The ways TROL stops the arm from ash's console, in the order a Halt tries them (issue
+/// 62, item 4): the next is tried where one gets no prompt of ash's back within
+/// [`STOP_PROMPT`] (the arm's readings need it) or the arm is not seen standing.
+pub const HALT_STOPS: [HaltStop; 3] = [HaltStop::CtrlC, HaltStop::CtrlE, HaltStop::PowerOff];
 
-    fn stop_name(&self, _: ()) -> String {
-        "Ctrl-C".into()
+/// One of [`HALT_STOPS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HaltStop {
+    /// Ctrl-C: ash's interrupt (assumed to stop a motion: ash's own way is not public).
+    CtrlC,
+    /// Ctrl-E, which ends ash's continuous reports (`w1`, `w3`) and brings its prompt back
+    /// (the public scripts send it first).
+    CtrlE,
+    /// `armpower off`: the arm's power cut (it must then be switched on, and homed where
+    /// the controller asks).
+    PowerOff,
+}
+
+/// Ctrl-C, Ctrl-E and `armpower off` for [`real::halt`], and `w2` for its readings.
+impl real::Stopping for C500cBackend {
+    type Stop = HaltStop;
+
+    fn stop_name(&self, stop: HaltStop) -> String {
+        match stop {
+            HaltStop::CtrlC => "Ctrl-C",
+            HaltStop::CtrlE => "Ctrl-E",
+            HaltStop::PowerOff => "`armpower off`",
+        }
+        .into()
     }
 
-    fn send_stop(&mut self, _: ()) -> Result<String, String> {
-        self.send(b"\x03").map_err(|e| e.to_string())?;
-        self.console.clear();
-        self.rx.clear();
-        // ash's prompt after the interrupt; what it printed before is kept for the log.
+    fn send_stop(&mut self, stop: HaltStop) -> Result<String, String> {
+        match stop {
+            HaltStop::CtrlC | HaltStop::CtrlE => {
+                let key: &[u8] = if stop == HaltStop::CtrlC { b"\x03" } else { b"\x05" };
+                self.send(key).map_err(|e| e.to_string())?;
+                self.console.clear();
+                self.rx.clear();
+            }
+            HaltStop::PowerOff => {
+                self.type_line("armpower off").map_err(|e| e.text())?;
+            }
+        }
+        // ash's prompt after it; what it printed before is kept for the log.
         let app = self.profile.app.clone();
-        let deadline = Instant::now() + REPLY_LIMIT;
+        let deadline = Instant::now() + STOP_PROMPT;
         let mut said = Vec::new();
         loop {
             match self.next(deadline).map_err(|e| e.to_string())? {
                 Some(Said::Prompt(p)) if p == app => break,
-                Some(Said::Line(l)) if l.trim().is_empty() || l.trim() == "^C" => {}
-                Some(s) => said.push(format!("{s:?}")),
-                None => return Err("no prompt after Ctrl-C".into()),
+                Some(Said::Line(l))
+                    if l.trim().is_empty()
+                        || ["^C", "^E", "armpower off"].contains(&l.trim()) => {}
+                Some(s) => said.push(said_text(&s)),
+                None => {
+                    return Err(format!(
+                        "no prompt of ash's within {STOP_PROMPT:?}{}",
+                        if said.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" (it printed {})", said.join(", "))
+                        }
+                    ));
+                }
             }
         }
         if let Some(o) = self.outstanding.as_mut() {
@@ -172,7 +214,7 @@ impl Backend for C500cBackend {
             .as_ref()
             .is_some_and(|o| matches!(o.motion.kind, Kind::Home))
             || self.queue.iter().any(|q| matches!(q.kind, Kind::Home));
-        match real::halt(self, &[()], times) {
+        match real::halt(self, &HALT_STOPS, times) {
             real::Halted::Standing { at, note } => {
                 self.homing_halted |= homing;
                 let n = self.queue.drop_all();
@@ -191,6 +233,7 @@ impl Backend for C500cBackend {
                 self.outstanding = None;
                 self.jaws_wait = None;
                 self.broken = Some(format!("Halt: {why}"));
+                self.note(format!("Halt: {why}"));
                 Err(BackendError::NotStopped(why))
             }
         }

@@ -42,6 +42,7 @@ mod precision;
 mod teach;
 
 pub use backup::{Backup, Restored, Saved};
+pub use bios::{HALT_STOPS, HaltStop};
 pub use cartesian::{AGREE_DEG, AGREE_MM, ARRIVE_MM, ARRIVE_TURN_DEG, SCRATCH};
 pub use gripper::{JAWS_AT_MM, JAWS_STILL_FOR, JAWS_WITHIN};
 pub use teach::ARRIVE_PULSES;
@@ -108,8 +109,11 @@ pub const STOP_WITHIN: Duration = Duration::from_millis(1500);
 /// At connect: how long the console must stay quiet after a prompt before the last one is
 /// taken as the shell's (one prompt per CR sent).
 pub const CONNECT_QUIET: Duration = Duration::from_millis(500);
-/// The longest a Halt takes.
-pub const HALT_WITHIN: Duration = Duration::from_millis(2500);
+/// The longest a Halt takes: each of its stops ([`bios::HALT_STOPS`]) with its prompt and the
+/// readings that show the arm standing.
+pub const HALT_WITHIN: Duration = Duration::from_millis(5500);
+/// How long ash's prompt may take after one of Halt's stops before the next is tried.
+pub const STOP_PROMPT: Duration = Duration::from_millis(1000);
 /// How long a reading of where the arm rests serves a motion computed from it, with nothing
 /// but reads ([`crate::probe::READS`]) typed since: the rule of [`real::Recent`], shared by
 /// every real controller. Any other line (a motion, `speed p`, `finish`, Ctrl-C) forgets it.

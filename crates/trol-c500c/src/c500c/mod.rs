@@ -82,8 +82,12 @@ pub struct Switches {
     /// The pendant holds the point of control at power-on (the factory startup script
     /// starts it).
     pub pendant_holds: bool,
-    /// Ctrl-C stops a motion under way (assumed: ash's own way to stop is not public).
+    /// Ctrl-C stops a motion under way (assumed: ash's own way to stop is not public); off,
+    /// no stop of the console stops the arm (`armpower off` neither: a drive fault).
     pub ctrl_c_stops: bool,
+    /// Ctrl-C during a motion gives ash's prompt back (not public; off, only `^C` is
+    /// printed, and Ctrl-E brings the prompt).
+    pub ctrl_c_prompt: bool,
     /// Ctrl-C keeps a partly typed line (its prompt printed again all the same), so what is
     /// typed next is added to it (not public: whether ash's line editor drops the line).
     pub ctrl_c_keeps_line: bool,
@@ -119,6 +123,7 @@ impl Default for Switches {
             lf_only: false,
             pendant_holds: false,
             ctrl_c_stops: true,
+            ctrl_c_prompt: true,
             ctrl_c_keeps_line: false,
             power_loss_line: true,
             cut_home_keeps_homed: false,
@@ -173,7 +178,12 @@ pub const VARIANTS: &[(&str, &str)] = &[
     ),
     (
         "unstoppable",
-        "Ctrl-C does not stop a motion: a fault, for the rule that Halt never says done unseen",
+        "no stop of the console stops a motion (Ctrl-C, `armpower off`): a fault, for the rule \
+         that Halt never says done unseen",
+    ),
+    (
+        "ctrl-c-no-prompt",
+        "Ctrl-C stops a motion but gives no prompt back (Ctrl-E does)",
     ),
     (
         "ctrl-c-keeps-line",
@@ -242,6 +252,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "unstoppable" => Switches {
             ctrl_c_stops: false,
+            ..d
+        },
+        "ctrl-c-no-prompt" => Switches {
+            ctrl_c_prompt: false,
             ..d
         },
         "ctrl-c-keeps-line" => Switches {
@@ -568,13 +582,16 @@ impl C500c {
         }
         let eol = self.eol();
         self.out.extend_from_slice(eol);
+        let moving = self.busy || self.is_moving();
         if b == 0x03 && self.sw.ctrl_c_stops {
             let t = self.now();
             self.arm.halt(t);
         }
         self.asking = None;
         self.busy = false;
-        self.prompt();
+        if !(b == 0x03 && moving && !self.sw.ctrl_c_prompt) {
+            self.prompt();
+        }
     }
 
     /// The next page of `list`'s rows, and the pager's question if rows remain.
@@ -701,8 +718,10 @@ impl C500c {
             (Shell::Ash, "armpower") => match args {
                 "on" => self.power = true,
                 "off" => {
-                    let t = self.now();
-                    self.arm.halt(t);
+                    if self.sw.ctrl_c_stops {
+                        let t = self.now();
+                        self.arm.halt(t);
+                    }
                     self.power = false;
                 }
                 _ => self.line("error: missing argument."),

@@ -375,6 +375,7 @@ each! {
     lf_only => "lf-only",
     pendant_holds => "pendant-holds",
     unstoppable => "unstoppable",
+    ctrl_c_no_prompt => "ctrl-c-no-prompt",
     power_loss_silent => "power-loss-silent",
     print_braced => "print-braced",
     gripper_air => "gripper-air",

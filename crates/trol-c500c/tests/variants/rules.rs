@@ -595,3 +595,47 @@ fn reaches(r: &mut Rig, name: &str, target: &[f64; 6]) {
     r.robot.finish().unwrap();
     assert!(unmoved(target, &r.joints()), "{name}: at {:?}", r.joints());
 }
+
+/// Halt when ash does not answer as expected (issue 62, item 4): where Ctrl-C stops the arm
+/// but gives no prompt back, Ctrl-E brings it, the arm is seen standing, and Halt is done;
+/// where no stop of the console stops the arm, each is tried in turn (Ctrl-C, Ctrl-E,
+/// `armpower off`) and Halt is TROL_ERR_NOT_STOPPED naming them, within its time.
+#[test]
+fn halt_tries_the_other_stops_where_ctrl_c_gets_no_prompt_or_does_not_stop() {
+    for name in ["ctrl-c-no-prompt", "unstoppable"] {
+        let sw = c500c::variant(name).unwrap();
+        let mut r = rig(sw.clone(), true, c500c::matching_profile(&sw));
+        r.robot.speed(1).unwrap();
+        r.robot.joint(1, -2.0).unwrap();
+        wait_until("the motion starts", || r.moving());
+        let result = r.robot.halt();
+        let said = r.said();
+        match name {
+            "ctrl-c-no-prompt" => {
+                result.unwrap_or_else(|e| panic!("{name}: {e}\n{said}"));
+                assert!(!r.moving(), "{name}");
+                assert!(said.contains("after Ctrl-E"), "{name}: {said}");
+                assert!(said.contains("Ctrl-C: no prompt"), "{name}: {said}");
+                // The session goes on: the next motion runs.
+                r.robot.speed(100).unwrap();
+                assert!(one_motion(&mut r, name), "{name}: after the Halt");
+            }
+            _ => {
+                let e = result.unwrap_err();
+                assert_eq!(e.code(), TROL_ERR_NOT_STOPPED, "{name}: {e}");
+                let text = e.to_string();
+                for stop in ["Ctrl-C", "Ctrl-E", "armpower off"] {
+                    assert!(
+                        said.contains(stop) || text.contains(stop),
+                        "{stop}: {text}\n{said}"
+                    );
+                }
+                assert!(
+                    r.received().iter().any(|l| l == "armpower off"),
+                    "{:?}",
+                    r.received()
+                );
+            }
+        }
+    }
+}

@@ -342,6 +342,12 @@ void trol_connect_versions(TUINT *ours, TUINT *theirs);
 void trol_disconnect(TROL *c);
 const char *trol_strerror(int code);
 const char *trol_strerror_for(const TROL *c, int code);
+/* trol_last_error_text: why connection c's last failed call failed, in words (NULL c: the
+ * default connection, the manual's functions'): the code's name and meaning, and what an
+ * in-process controller's backend said (which profile key a BIOS_UNSETTLED needs, what the
+ * controller printed). "" before any failure; valid until c's next failed call. Set
+ * TROL_VERBOSE=1 to have the backend's lines printed on stderr as they come. */
+const char *trol_last_error_text(const TROL *c);
 /* In an error handler shared by several connections: trol_current() is the connection whose
  * call failed (NULL: the default one), and trol_get_user(c) the pointer the application kept
  * with it by trol_set_user(c, user) (NULL c: the default connection's). */

@@ -213,6 +213,24 @@ pub unsafe extern "C" fn trol_strerror_for(
     strerror_of(c, code)
 }
 
+/// trol_last_error_text: why connection `c`'s last failed call failed, in words (NULL: the
+/// default connection, the manual's functions'): the code's name and meaning, and what an
+/// in-process controller's backend said about it (which profile key a BIOS_UNSETTLED needs,
+/// what the controller printed). "" before any failure. The text lives until that
+/// connection's next failed call.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn trol_last_error_text(c: *const TROL) -> *const std::ffi::c_char {
+    // SAFETY: a handle from trol_connect that the caller has not disconnected, or NULL.
+    let c = unsafe { c.as_ref() }.unwrap_or(&STATE);
+    guard(c"".as_ptr(), || {
+        c.last_text
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .as_ref()
+            .map_or(c"".as_ptr(), |t| t.as_ptr())
+    })
+}
+
 pub(crate) fn strerror_of(c: &TROL, code: std::ffi::c_int) -> *const std::ffi::c_char {
     type Texts = Vec<(std::ffi::c_int, usize, std::ffi::CString)>;
     static TEXTS: Mutex<Texts> = Mutex::new(Vec::new());

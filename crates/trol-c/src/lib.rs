@@ -171,6 +171,9 @@ pub struct TROL {
     /// The application's pointer for this connection (trol_set_user), for a handler
     /// shared by several connections to tell them apart.
     user: std::sync::atomic::AtomicPtr<std::ffi::c_void>,
+    /// Why this connection's last call failed, in words (trol_last_error_text): outside the
+    /// call's lock, as `told`.
+    last_text: Mutex<Option<std::ffi::CString>>,
 }
 
 impl TROL {
@@ -181,6 +184,7 @@ impl TROL {
             last_side: AtomicU16::new(0),
             told: Mutex::new(None),
             user: std::sync::atomic::AtomicPtr::new(std::ptr::null_mut()),
+            last_text: Mutex::new(None),
         }
     }
 }
@@ -408,8 +412,18 @@ fn run(
                 not_connected(def.name);
                 return fatal_or(fatal, def.code, NOT_INIT);
             };
+            // What the controller logs from here on is this call's.
+            robot.take_controller_said();
             let r = robot.call(def, &args);
             note_comm(robot.last_comm_error());
+            if let Err(e) = &r {
+                let said = robot.take_controller_said();
+                set_last_text(if said.is_empty() {
+                    e.to_string()
+                } else {
+                    format!("{e}; the controller said: {}", said.join(" | "))
+                });
+            }
             (r, fatal)
         };
         match result {
@@ -422,6 +436,12 @@ fn run(
             Err(e) => fatal_or(fatal, def.code, e.code().0),
         }
     })
+}
+
+/// Keep `text` as why this connection's last call failed (trol_last_error_text).
+fn set_last_text(text: String) {
+    let text = std::ffi::CString::new(text.replace('\0', " ")).unwrap_or_default();
+    *conn().last_text.lock().unwrap_or_else(|p| p.into_inner()) = Some(text);
 }
 
 /// A call with no connection (before InitTROL, after CleanupTROL, or on a handle not

@@ -36,6 +36,38 @@ pub enum Said {
     Question(String),
 }
 
+impl std::fmt::Display for Said {
+    /// In words for a message: ``the line `x` ``, ``the prompt of `test` ``.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Said::Line(l) if l.trim().is_empty() => write!(f, "an empty line"),
+            Said::Line(l) => write!(f, "the line `{l}`"),
+            Said::Prompt(p) => write!(f, "the prompt of `{p}`"),
+            Said::Question(q) => write!(f, "the question `{q}`"),
+        }
+    }
+}
+
+/// What the console said, or that it said nothing in time, in words for a message.
+pub fn heard(said: &Option<Said>) -> String {
+    match said {
+        Some(s) => s.to_string(),
+        None => "nothing in time".into(),
+    }
+}
+
+/// Lines in words for a message: each in backquotes, or "no line".
+pub fn lines_said(lines: &[String]) -> String {
+    if lines.is_empty() {
+        return "no line".into();
+    }
+    lines
+        .iter()
+        .map(|l| format!("`{l}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Splits what the console prints into lines, prompts and questions.
 #[derive(Debug, Default)]
 pub struct Console {

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use trol_port::Port;
 
-use crate::console::{Console, Said};
+use crate::console::{self, Console, Said};
 use crate::profile::MotionReturn;
 use crate::reports;
 
@@ -127,7 +127,13 @@ impl Probe<'_> {
                 let (more, _) = self.step("y")?;
                 self.record("exit", Ok([lines, vec![q], more].concat()));
             }
-            other => self.record("exit", Err(format!("no question after exit: {other:?}"))),
+            other => self.record(
+                "exit",
+                Err(format!(
+                    "no question after exit: {}",
+                    console::heard(&other)
+                )),
+            ),
         }
         Ok(())
     }
@@ -160,7 +166,12 @@ impl Probe<'_> {
             }
             match end {
                 Some(Said::Prompt(a)) if a == app => return Ok(true),
-                other => return Err(format!("`{cmd}` did not give ash's prompt: {other:?}")),
+                other => {
+                    return Err(format!(
+                        "`{cmd}` did not give ash's prompt: {}",
+                        console::heard(&other)
+                    ));
+                }
             }
         } else if shell != app {
             return Err(format!(
@@ -189,7 +200,11 @@ pub fn first_contact(port: &mut dyn Port, app: &str, wait: Duration) -> Contact 
         for cmd in READS {
             let r = p.step(cmd).and_then(|(lines, end)| match end {
                 Some(Said::Prompt(a)) if a == app => Ok(lines),
-                other => Err(format!("no prompt after `{cmd}`: {other:?} ({lines:?})")),
+                other => Err(format!(
+                    "no prompt after `{cmd}`: {} (before it {})",
+                    console::heard(&other),
+                    console::lines_said(&lines)
+                )),
             });
             if let Ok(lines) = &r {
                 let finding = match cmd {
@@ -546,7 +561,9 @@ fn quiet(p: &mut Probe, app: &str, cmd: &str) -> Result<(), String> {
             ))
         }
         other => Err(format!(
-            "`{cmd}` printed {lines:?} ({other:?}): nothing settled"
+            "`{cmd}` printed {}, then {}: nothing settled",
+            console::lines_said(&lines),
+            console::heard(&other)
         )),
     }
 }
@@ -556,7 +573,11 @@ fn read_at(p: &mut Probe, app: &str, cmd: &str) -> Result<Vec<String>, String> {
     p.record(cmd, Ok(lines.clone()));
     match end {
         Some(Said::Prompt(a)) if a == app => Ok(lines),
-        other => Err(format!("no prompt after `{cmd}`: {other:?} ({lines:?})")),
+        other => Err(format!(
+            "no prompt after `{cmd}`: {} (before it {})",
+            console::heard(&other),
+            console::lines_said(&lines)
+        )),
     }
 }
 

@@ -296,13 +296,13 @@ pub const ERRORS: &[(&str, Known)] = &[
 /// counts, `$1` matching one axis number.
 pub fn known_error(line: &str) -> Option<Known> {
     let l = line.trim();
-    if l.starts_with("error: ") {
-        return Some(Known::Parse);
-    }
+    // A text of CRS's tables keeps its own code behind any prefix (`error: Joint 2 limit
+    // exceeded` is a joint limit: issue 62); another `error: ` line is ash's parser's.
     ERRORS
         .iter()
         .find(|(pattern, _)| matches(l, pattern))
         .map(|&(_, k)| k)
+        .or_else(|| l.starts_with("error: ").then_some(Known::Parse))
 }
 
 fn matches(line: &str, pattern: &str) -> bool {
@@ -322,6 +322,16 @@ mod tests {
 
     fn lines(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_table_error_keeps_its_code_behind_ash_s_error_prefix() {
+        assert_eq!(
+            known_error("error: Joint 2 limit exceeded"),
+            Some(Known::JointLimit)
+        );
+        assert_eq!(known_error("error: missing comma."), Some(Known::Parse));
+        assert_eq!(known_error("Arm power is OFF"), Some(Known::NoPower));
     }
 
     #[test]

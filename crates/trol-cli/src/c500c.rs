@@ -225,10 +225,28 @@ fn restore(a: RestoreArgs) -> Result<(), String> {
             );
         }
     };
+    // What a restore cannot write: said, and the exit status says it (issue 62: a partial
+    // restore exited 0).
+    let partial = |r: &trol_c500c::backend::Restored| {
+        if r.to_teach.is_empty() {
+            Ok(())
+        } else {
+            let names: Vec<&str> = r.to_teach.iter().map(|(n, _)| n.as_str()).collect();
+            Err(format!(
+                "restore is partial: the precision point(s) {} differ from the file and were \
+                 not restored (ash cannot set a precision point's pulses): teach each again on \
+                 the arm",
+                names.join(", ")
+            ))
+        }
+    };
     say!("trol c500c restore {}:", a.file.display());
     show(&plan, false);
-    if a.dry_run || (plan.written.is_empty() && plan.created.is_empty()) {
+    if a.dry_run {
         return Ok(());
+    }
+    if plan.written.is_empty() && plan.created.is_empty() {
+        return partial(&plan);
     }
     if !a.yes {
         say!("Write these into the application's variables and save? Type yes to go on:");
@@ -243,7 +261,7 @@ fn restore(a: RestoreArgs) -> Result<(), String> {
         .map_err(|e| format!("restore: {e}"))?;
     say!("done:");
     show(&done, true);
-    Ok(())
+    partial(&done)
 }
 
 fn list(v: &[String]) -> String {

@@ -256,10 +256,10 @@ impl C500cBackend {
         &mut self,
         base: &str,
         var: &str,
-        got: &dyn std::fmt::Debug,
+        got: &dyn std::fmt::Display,
     ) -> BackendError {
         self.unsure(format!(
-            "`list {base}` has {var} taught, and `print {var}` reads {got:?}"
+            "`list {base}` has {var} taught, and `print {var}` reads {got}"
         ))
     }
 
@@ -282,20 +282,24 @@ impl C500cBackend {
         if !lines.is_empty() {
             return Err(self.refusal(&cmd, &lines));
         }
+        // Read back before it is made valid (issue 62: `setvalid` came first).
+        match self.print_cloc(name)? {
+            Cloc::At(got) if (0..6).all(|j| (got[j] - w[j]).abs() <= 0.0015) => {}
+            other => {
+                return Err(self.unsure(format!(
+                    "`set _{name}` taken, and `print {name}` then reads {other}, not the values \
+                     set ({}); not made valid",
+                    values.join(", ")
+                )));
+            }
+        }
         let cmd = format!("setvalid {name}");
         let lines = self.converse(&cmd, &[("Set the valid flag anyway (y/n) ?", "y\r")])?;
         let warned = "WARNING: moving to an incorrect location can damage the robot.";
         if said(&lines).iter().any(|l| *l != warned) {
             return Err(self.refusal(&cmd, &lines));
         }
-        match self.print_cloc(name)? {
-            Cloc::At(got) if (0..6).all(|j| (got[j] - w[j]).abs() <= 0.0015) => Ok(()),
-            other => Err(self.unsure(format!(
-                "`set _{name}` taken, and `print {name}` then reads {other:?}, not the values \
-                 set ({})",
-                values.join(", ")
-            ))),
-        }
+        Ok(())
     }
 }
 

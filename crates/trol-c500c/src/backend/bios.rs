@@ -45,7 +45,11 @@ impl real::Stopping for C500cBackend {
     fn send_stop(&mut self, stop: HaltStop) -> Result<String, String> {
         match stop {
             HaltStop::CtrlC | HaltStop::CtrlE => {
-                let key: &[u8] = if stop == HaltStop::CtrlC { b"\x03" } else { b"\x05" };
+                let key: &[u8] = if stop == HaltStop::CtrlC {
+                    b"\x03"
+                } else {
+                    b"\x05"
+                };
                 self.send(key).map_err(|e| e.to_string())?;
                 self.console.clear();
                 self.rx.clear();
@@ -62,9 +66,8 @@ impl real::Stopping for C500cBackend {
             match self.next(deadline).map_err(|e| e.to_string())? {
                 Some(Said::Prompt(p)) if p == app => break,
                 Some(Said::Line(l))
-                    if l.trim().is_empty()
-                        || ["^C", "^E", "armpower off"].contains(&l.trim()) => {}
-                Some(s) => said.push(said_text(&s)),
+                    if l.trim().is_empty() || ["^C", "^E", "armpower off"].contains(&l.trim()) => {}
+                Some(s) => said.push(s.to_string()),
                 None => {
                     return Err(format!(
                         "no prompt of ash's within {STOP_PROMPT:?}{}",

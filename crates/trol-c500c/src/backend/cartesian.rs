@@ -48,6 +48,16 @@ pub(super) enum Cloc {
     At([f64; 6]),
 }
 
+impl std::fmt::Display for Cloc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Cloc::Missing => write!(f, "no such variable"),
+            Cloc::Untaught => write!(f, "a location not yet taught"),
+            Cloc::At(w) => write!(f, "{}", join(w)),
+        }
+    }
+}
+
 /// `print`'s lines of a cartesian location: one row of six numbers (two more, the extra
 /// axes, may follow on a second row).
 pub(super) fn read_cloc(lines: &[String]) -> Option<Cloc> {
@@ -242,8 +252,15 @@ impl C500cBackend {
         straight: bool,
     ) -> BiosResult {
         self.clean()?;
-        if teach::ash_var(&name).is_none() {
+        let Some(var) = teach::ash_var(&name) else {
             return Err(BackendError::UnknownLocation(name));
+        };
+        // A name ash does not have is TROL_ERR_LOCATION whatever the arm's state (issue 62:
+        // with the power off it was BIOS_ARM_POWER): looked up before the gate, where the
+        // motion would go now (one queued is looked up when its turn comes).
+        if self.outstanding.is_none() && self.queue.is_empty() && !self.console_busy() {
+            let base = if name.is_precision() { "ploc" } else { "cloc" };
+            self.taught_in(base, &var, name)?;
         }
         if !name.is_precision() || disp.is_some() {
             self.cart_keys()?;
@@ -334,8 +351,18 @@ impl C500cBackend {
         if !lines.is_empty() {
             return Err(self.refusal(&cmd, &lines));
         }
-        // TROL asked: it has planned the motion on the arm's model and reads the values back
-        // before moving.
+        // What was set is read back before it is made valid (issue 62: `setvalid` came first);
+        // TROL asked for the flag: it has planned the motion on the arm's model.
+        match self.print_cloc(SCRATCH)? {
+            Cloc::At(got) if (0..6).all(|j| (got[j] - v[j]).abs() <= 0.0015) => {}
+            other => {
+                return Err(self.unsure(format!(
+                    "`{cmd}` taken, and `print {SCRATCH}` then reads {other}, not the values \
+                     set ({}): nothing moved",
+                    values.join(", ")
+                )));
+            }
+        }
         let cmd = format!("setvalid {SCRATCH}");
         let lines = self.converse(&cmd, &[("Set the valid flag anyway (y/n) ?", "y\r")])?;
         let warned = "WARNING: moving to an incorrect location can damage the robot.";
@@ -344,16 +371,6 @@ impl C500cBackend {
             .any(|l| !l.trim().is_empty() && l.trim() != warned)
         {
             return Err(self.refusal(&cmd, &lines));
-        }
-        match self.print_cloc(SCRATCH)? {
-            Cloc::At(got) if (0..6).all(|j| (got[j] - v[j]).abs() <= 0.0015) => {}
-            other => {
-                return Err(self.unsure(format!(
-                    "`{cmd}` taken, and `print {SCRATCH}` then reads {other:?}, not the values \
-                     set ({}): nothing moved",
-                    values.join(", ")
-                )));
-            }
         }
         Ok(Motion {
             line: format!("{} {SCRATCH}", if straight { "moves" } else { "move" }),

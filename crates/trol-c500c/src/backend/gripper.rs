@@ -168,7 +168,7 @@ impl C500cBackend {
             Some(lines) => return Err(self.refusal(&line, &lines)),
             None if self.rx.is_empty() => true,
             None => {
-                let seen: Vec<String> = self.rx.drain(..).map(|s| format!("{s:?}")).collect();
+                let seen: Vec<String> = self.rx.drain(..).map(|s| s.to_string()).collect();
                 return Err(self.unsure(format!(
                     "`{line}`: ash printed {} and no prompt: whether the gripper moves is not \
                      known",

@@ -290,15 +290,6 @@ fn alike(got: &[u8], typed: &[u8]) -> bool {
         && 2 * got.iter().zip(typed).filter(|(a, b)| a != b).count() <= typed.len()
 }
 
-/// What the console said, in words for a message.
-fn said_text(s: &Said) -> String {
-    match s {
-        Said::Line(l) => format!("the line `{l}`"),
-        Said::Prompt(p) => format!("the prompt of `{p}`"),
-        Said::Question(q) => format!("the question `{q}`"),
-    }
-}
-
 /// A value as TROL types it into ash: three decimals, and no `-0.000`.
 fn fmt3(x: f64) -> String {
     let x = if x.abs() < 0.0005 { 0.0 } else { x };
@@ -398,8 +389,9 @@ impl C500cBackend {
                     Some(Said::Line(l)) => b.say(&format!("ash: {l}")),
                     other => {
                         return Err(C500cError::Unexpected(format!(
-                            "`{cmd}` did not start ash (the console said {other:?}): start it \
-                             at a terminal to see why"
+                            "`{cmd}` did not start ash (the console said {}): start it at a \
+                             terminal to see why",
+                            console::heard(&other)
                         )));
                     }
                 }
@@ -560,7 +552,7 @@ impl C500cBackend {
                 Some(other) => {
                     return Err(Fail::Unsure(format!(
                         "after Ctrl-C the console said {}, not only ash's prompt",
-                        said_text(&other)
+                        other
                     )));
                 }
                 None => {
@@ -633,7 +625,7 @@ impl C500cBackend {
                 };
                 let said = self.console.feed(&[byte]);
                 if echoing {
-                    within.extend(said.iter().map(said_text));
+                    within.extend(said.iter().map(Said::to_string));
                 }
                 self.rx.extend(said);
             }
@@ -756,7 +748,7 @@ impl C500cBackend {
                         self.unasked.push(l);
                     }
                     Said::Line(_) => {}
-                    other => self.unasked.push(format!("{other:?}")),
+                    other => self.unasked.push(other.to_string()),
                 }
             }
         }

@@ -147,7 +147,7 @@ impl C500cBackend {
                 true
             }
             None => {
-                let seen: Vec<String> = self.rx.drain(..).map(|s| format!("{s:?}")).collect();
+                let seen: Vec<String> = self.rx.drain(..).map(|s| s.to_string()).collect();
                 return Err(self.unsure(format!(
                     "`{}`: no prompt within {wait:?} ({}), and the profile says ash gives it \
                      back as a motion starts: whether the motion runs is not known",
@@ -321,6 +321,20 @@ impl C500cBackend {
                         .map(|n| format!("; {n}"))
                         .unwrap_or_default()
                 ));
+                // Why it stopped, where ash can say: a power loss that printed nothing is a
+                // power code, not "short of the target" (issue 62).
+                let lines = match self.exchange("armstat") {
+                    Ok(l) => l,
+                    Err(e) => return Err(self.fail(e)),
+                };
+                self.stat = reports::armstat(&lines).map_err(|e| self.unsure(e.to_string()))?;
+                if !self.stat.power {
+                    self.note(format!(
+                        "`{line}` stopped short: armstat says `Arm power is OFF` (switch it on, \
+                         then TROLHome where the controller asks)"
+                    ));
+                    return Err(BackendError::Refused(ARM_POWER));
+                }
                 Err(BackendError::Refused(NOT_AT_TARGET))
             }
             real::End::TimedOut => {

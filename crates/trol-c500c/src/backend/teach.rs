@@ -26,6 +26,16 @@ pub(super) enum Ploc {
     At([i64; 6]),
 }
 
+impl std::fmt::Display for Ploc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Ploc::Missing => write!(f, "no such variable"),
+            Ploc::Untaught => write!(f, "a point not yet taught"),
+            Ploc::At(p) => write!(f, "pulses {}", p.map(|v| v.to_string()).join(" ")),
+        }
+    }
+}
+
 /// The lines ash prints for a name it does not have (`print`, `erase`; CRS's texts).
 pub(super) fn not_found(line: &str) -> bool {
     let l = line.trim();
@@ -253,7 +263,13 @@ impl C500cBackend {
             let got = self.print_ploc(&var)?;
             let ok = matches!(got, Ploc::At(v)
                 if (0..6).all(|j| (v[j] - p.pulses[j]).abs() <= ARRIVE_PULSES));
-            (ok, format!("{got:?} with the arm at pulses {:?}", p.pulses))
+            (
+                ok,
+                format!(
+                    "{got} with the arm at pulses {}",
+                    p.pulses.map(|v| v.to_string()).join(" ")
+                ),
+            )
         } else {
             let got = self.print_cloc(&var)?;
             // The same place as the WORLD row read just after (the arm's dither apart), in
@@ -268,7 +284,7 @@ impl C500cBackend {
             }));
             (
                 ok,
-                format!("{got:?} with the WORLD row at {}", join(&p.world)),
+                format!("{got} with the WORLD row at {}", join(&p.world)),
             )
         };
         if !agrees {

@@ -33,6 +33,10 @@ fn power_lost_mid_motion_is_never_success() {
         r.unit.lock().unwrap().set_power_off();
         let e = r.robot.finish().unwrap_err();
         assert_ne!(e.code().0, 0, "{name}");
+        if name == "power-loss-silent" {
+            // Silent: the stop is read as what it is (issue 62: it was BIOS_NOT_AT_TARGET).
+            assert_eq!(e.code().0, backend::ARM_POWER, "{name}: {e}");
+        }
         assert!(!r.moving(), "{name}");
         let sent = r.received().len();
         let e = r.robot.joint(1, 0.1).unwrap_err();
@@ -637,5 +641,38 @@ fn halt_tries_the_other_stops_where_ctrl_c_gets_no_prompt_or_does_not_stop() {
                 );
             }
         }
+    }
+}
+
+/// Codes at their cause (issue 62, item 5): GetPosition while ash runs a motion to its end
+/// is BIOS_BUSY; a joint limit printed after `error: ` is BIOS_JOINT_LIMIT; a motion to a
+/// name ash does not have is TROL_ERR_LOCATION, with the power on or off.
+#[test]
+fn codes_at_their_cause() {
+    let sw = c500c::variant("return-at-end").unwrap();
+    let mut r = rig_at(sw.clone(), true, c500c::matching_profile(&sw), 1.0);
+    r.robot.speed(5).unwrap();
+    r.robot.joint(1, 0.2).unwrap();
+    wait_until("the motion starts", || r.moving());
+    let e = r
+        .robot
+        .position(Tag::Joint, PosMode::Actual)
+        .expect_err("BUSY while ash runs the motion");
+    assert_eq!(e.code().0, backend::BUSY, "{e}");
+    r.robot.finish().unwrap();
+    for power in [true, false] {
+        if !power {
+            r.unit.lock().unwrap().set_power_off();
+            // The line it printed makes the next call UNSURE: a new session.
+            r = rig(sw.clone(), true, c500c::matching_profile(&sw));
+            r.unit.lock().unwrap().set_power_off();
+            let _ = r.unit.lock().unwrap().tick();
+        }
+        let e = r.robot.move_to("nowhere", false).unwrap_err();
+        assert_eq!(
+            e.code(),
+            trol_proto::application::code::TROL_ERR_LOCATION,
+            "power {power}: {e}"
+        );
     }
 }

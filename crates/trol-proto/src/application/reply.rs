@@ -224,7 +224,11 @@ impl Reply {
             ReplyKind::Code if rest.is_empty() => Ok(Reply::Code(value)),
             ReplyKind::Code => Err(bad()),
             // A CAT2 command that failed may answer with its value alone.
-            ReplyKind::Reals { .. } | ReplyKind::Bytes if rest.is_empty() && value.0 != 0 => {
+            // And GetPosition refused by the robot (BIOS_BUSY while a controller runs a motion
+            // and reads nothing: issue 62) answers with that BIOS code alone.
+            ReplyKind::Reals { .. } | ReplyKind::Bytes | ReplyKind::Position
+                if rest.is_empty() && value.0 != 0 =>
+            {
                 Ok(Reply::Code(value))
             }
             ReplyKind::Reals { min, max } => {

@@ -361,6 +361,43 @@ pub struct Robot {
     reply_timeout_set: bool,
     /// What the user should hear once about this connection ([`Robot::take_notice`]).
     notice: Option<String>,
+    /// What an embedded real controller's backend logged (its reasons), for
+    /// [`Robot::take_controller_said`].
+    said: Option<ControllerSaid>,
+}
+
+/// The lines an embedded controller's backend logs (why it refused, what its controller
+/// said), kept for the application: the last 32 ([`Robot::take_controller_said`]). Each also
+/// goes to the log (target `trol::<backend>`), and to stderr where `TROL_VERBOSE` is set to
+/// anything but `0` (issue 62: a C program could not learn why a call got BIOS_UNSETTLED).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ControllerSaid(
+    std::sync::Arc<std::sync::Mutex<std::collections::VecDeque<String>>>,
+);
+
+impl ControllerSaid {
+    /// Keep `line` (the backend's, as `who` prints it: `c500c: ...`).
+    pub(crate) fn keep(&self, line: &str) {
+        static VERBOSE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        let verbose = *VERBOSE
+            .get_or_init(|| std::env::var("TROL_VERBOSE").is_ok_and(|v| !v.is_empty() && v != "0"));
+        if verbose {
+            eprintln!("TROL: {line}");
+        }
+        let mut q = self.0.lock().unwrap_or_else(|p| p.into_inner());
+        if q.len() >= 32 {
+            q.pop_front();
+        }
+        q.push_back(line.to_string());
+    }
+
+    fn take(&self) -> Vec<String> {
+        self.0
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .drain(..)
+            .collect()
+    }
 }
 
 /// What a connection says once when the controller speaks only the manual's protocol.
@@ -820,6 +857,16 @@ impl Robot {
             _ if def.is_success(reply.value().0) => Ok(reply),
             _ => Err(self.refused(def.name, reply.value())),
         }
+    }
+
+    /// What an embedded real controller's backend logged since this was last asked (the
+    /// reasons of its refusals: which profile key a BIOS_UNSETTLED needs, what the controller
+    /// printed), oldest first; empty for a controller in another process (its log has them).
+    pub fn take_controller_said(&mut self) -> Vec<String> {
+        self.said
+            .as_ref()
+            .map(ControllerSaid::take)
+            .unwrap_or_default()
     }
 
     fn refused(&self, command: &'static str, code: Code) -> Error {

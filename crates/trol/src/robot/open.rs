@@ -127,17 +127,23 @@ impl Robot {
         };
         let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
         // The controller's texts (refusals, what it says unasked, resynchronisations) go to the
-        // log as the gateway prints them: `-v` in the utilities, RUST_LOG=trol=info elsewhere.
+        // log as the gateway prints them: `-v` in the utilities, RUST_LOG=trol=info elsewhere;
+        // and to the application ([`Robot::take_controller_said`]).
+        let said = super::ControllerSaid::default();
+        let keep = said.clone();
         let backend = trol_rapl::RaplBackend::connect_with(
             port,
             profile,
-            Some(Box::new(
-                |line: &str| tracing::info!(target: "trol::rapl", "c500: {line}"),
-            )),
+            Some(Box::new(move |line: &str| {
+                tracing::info!(target: "trol::rapl", "c500: {line}");
+                keep.keep(&format!("c500: {line}"));
+            })),
             None,
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
-        Ok(Robot::embed(backend, trol_rapl::RAPL_CODES, link))
+        let mut robot = Robot::embed(backend, trol_rapl::RAPL_CODES, link);
+        robot.said = Some(said);
+        Ok(robot)
     }
 
     #[cfg(feature = "c500c")]
@@ -154,15 +160,20 @@ impl Robot {
             ..PortSettings::default()
         };
         let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let said = super::ControllerSaid::default();
+        let keep = said.clone();
         let backend = trol_c500c::C500cBackend::connect(
             port,
             profile,
-            Some(Box::new(
-                |line: &str| tracing::info!(target: "trol::c500c", "c500c: {line}"),
-            )),
+            Some(Box::new(move |line: &str| {
+                tracing::info!(target: "trol::c500c", "c500c: {line}");
+                keep.keep(&format!("c500c: {line}"));
+            })),
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
-        Ok(Robot::embed(backend, trol_c500c::C500C_CODES, link))
+        let mut robot = Robot::embed(backend, trol_c500c::C500C_CODES, link);
+        robot.said = Some(said);
+        Ok(robot)
     }
 
     #[cfg(feature = "mars")]
@@ -187,19 +198,24 @@ impl Robot {
             ..PortSettings::default()
         };
         let port = trol_port::open(device, &settings).map_err(SetupError::Port)?;
+        let said = super::ControllerSaid::default();
+        let keep = said.clone();
         let backend = trol_mars::MarsBackend::connect(
             port,
             profile,
-            Some(Box::new(
-                |line: &str| tracing::info!(target: "trol::mars", "mars: {line}"),
-            )),
+            Some(Box::new(move |line: &str| {
+                tracing::info!(target: "trol::mars", "mars: {line}");
+                keep.keep(&format!("mars: {line}"));
+            })),
             None,
             locations,
         )
         .map_err(|e| SetupError::NoServer(e.to_string()))?;
         let mut backend = backend;
         backend.set_locations_file(file);
-        Ok(Robot::embed(backend, trol_mars::MARS_CODES, link))
+        let mut robot = Robot::embed(backend, trol_mars::MARS_CODES, link);
+        robot.said = Some(said);
+        Ok(robot)
     }
 
     /// Start an embedded controller (simulated A465) whose live 3D view is served at `addr`
@@ -288,6 +304,7 @@ impl Robot {
             prompt: None,
             reply_timeout_set: false,
             notice: None,
+            said: None,
         };
         robot.default_handlers();
         robot

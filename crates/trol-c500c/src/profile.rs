@@ -46,6 +46,12 @@ pub struct Profile {
     /// `w2`'s PULSES row with every joint at 0 degrees (set with `pulses-per-degree`, by the
     /// same step).
     pub pulses_at_zero: Option<[i64; 6]>,
+    /// Where the arm stands once homed, joints in degrees (not public for an A465 on a
+    /// C500C): set, a Home is done only with the arm read there; unset, on armstat's word,
+    /// the arm homed and standing.
+    pub home_joints: Option<[f64; 6]>,
+    /// How far (degrees) each joint may stand from `home-joints` and be home (0.1, assumed).
+    pub home_within_deg: f64,
 }
 
 impl Default for Profile {
@@ -59,6 +65,8 @@ impl Default for Profile {
             world_angles: None,
             pulses_per_degree: None,
             pulses_at_zero: None,
+            home_joints: None,
+            home_within_deg: 0.1,
         }
     }
 }
@@ -122,6 +130,19 @@ impl Profile {
         }
         if !(1..=120).contains(&p.end_margin_s) {
             return Err(format!("end-margin-s = {}: 1 to 120", p.end_margin_s));
+        }
+        if !(0.01..=5.0).contains(&p.home_within_deg) {
+            return Err(format!(
+                "home-within-deg = {}: 0.01 to 5 degrees",
+                p.home_within_deg
+            ));
+        }
+        if let Some(h) = p.home_joints {
+            if h.iter().any(|v| !v.is_finite() || v.abs() > 360.0) {
+                return Err(format!(
+                    "home-joints = {h:?}: six joint angles in degrees, each within 360"
+                ));
+            }
         }
         match (p.pulses_per_degree, p.pulses_at_zero) {
             (None, None) => {}

@@ -270,6 +270,11 @@ impl C500cBackend {
         } else {
             true
         };
+        // A home's pose, where the profile has it (issue 62: a Home is done only with the arm
+        // seen there): each joint within `home-within-deg` of `home-joints`.
+        let at_home = self.profile.home_joints.is_none_or(|h| {
+            (0..6).all(|j| (p.joints_deg[j] - h[j]).abs() <= self.profile.home_within_deg)
+        });
         let times = self.end_times();
         let o = self.outstanding.as_mut().expect("a motion under way");
         // ash gives no moving flag: the arm read away from where it rested is the motion
@@ -289,8 +294,10 @@ impl C500cBackend {
             (Some(t), _) => (0..6).all(|j| (p.joints_deg[j] - t[j]).abs() <= ARRIVE_DEG),
             (None, Kind::Named(at)) => (0..6).all(|j| (p.pulses[j] - at[j]).abs() <= ARRIVE_PULSES),
             (None, Kind::Pose(end, _)) => cartesian::at_pose(&p.joints_deg, &end),
-            // A home: homed, and read standing twice.
-            (None, _) => homed && standing_before.is_some() && o.watch.stood_for(now).is_some(),
+            // A home: homed, read standing twice, and at the profile's home pose.
+            (None, _) => {
+                homed && at_home && standing_before.is_some() && o.watch.stood_for(now).is_some()
+            }
         };
         match o.watch.verdict(now, at_end, times) {
             real::End::Arrived => {

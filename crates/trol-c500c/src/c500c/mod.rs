@@ -148,6 +148,8 @@ pub fn matching_profile(sw: &Switches) -> crate::Profile {
         world_angles: Some(sw.world_angles),
         pulses_per_degree: Some(sw.pulses.per_degree),
         pulses_at_zero: Some(sw.pulses.at_zero),
+        // The simulated A465 homes every joint to 0 degrees.
+        home_joints: Some([0.0; 6]),
         ..crate::Profile::default()
     }
 }

@@ -676,3 +676,29 @@ fn codes_at_their_cause() {
         );
     }
 }
+
+/// A Home is done only with the arm seen at the profile's home pose (issue 62, item 1): with
+/// `home-joints` that agree with the controller, Home and its Finish succeed; with a pose a
+/// degree off on joint 2, the same Home ends in BIOS_NOT_AT_TARGET, never success.
+#[test]
+fn home_is_done_only_at_the_profile_s_home_pose() {
+    let sw = Switches::default();
+    for off in [0.0, 1.0] {
+        let mut profile = c500c::matching_profile(&sw);
+        profile.home_joints = Some([0.0, off, 0.0, 0.0, 0.0, 0.0]);
+        let mut r = rig(sw.clone(), true, profile);
+        r.robot.joint(2, 0.2).unwrap();
+        r.robot.finish().unwrap();
+        let done = r.robot.home(0).and_then(|_| r.robot.finish());
+        wait_until("the arm stands", || !r.moving());
+        assert!(unmoved(&r.joints(), &[0.0; 6]), "homed: {:?}", r.joints());
+        match (off, done) {
+            (0.0, Ok(())) => {}
+            (0.0, Err(e)) => panic!("the agreeing profile: {e}"),
+            (_, Ok(())) => panic!("Home done with the arm off the profile's home pose"),
+            (_, Err(e)) => {
+                assert_eq!(e.code().0, backend::NOT_AT_TARGET, "{e}");
+            }
+        }
+    }
+}

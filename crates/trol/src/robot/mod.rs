@@ -377,6 +377,7 @@ pub(crate) struct ControllerSaid(
 
 impl ControllerSaid {
     /// Keep `line` (the backend's, as `who` prints it: `c500c: ...`).
+    #[cfg(any(feature = "rapl", feature = "mars", feature = "c500c"))]
     pub(crate) fn keep(&self, line: &str) {
         static VERBOSE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
         let verbose = *VERBOSE

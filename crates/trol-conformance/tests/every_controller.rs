@@ -101,5 +101,6 @@ each! {
     error_bracketed => "error-bracketed",
     lf_only => "lf-only",
     unstoppable => "unstoppable",
+    ctrl_c_no_prompt => "ctrl-c-no-prompt",
     power_loss_silent => "power-loss-silent",
 }

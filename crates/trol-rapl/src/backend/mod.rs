@@ -136,10 +136,8 @@ pub static RAPL_CODES: &CodeTable = &{
         CodeInfo {
             value: BUSY,
             name: "BIOS_BUSY",
-            meaning: "the arm moves, and not by TROL (the pendant, a program of the \
-                      controller's), or a tool change while a motion has not ended (it would \
-                      change what a queued motion's target means): call TROLFinish(FINISH_WAIT) \
-                      first",
+            meaning: "the arm moves, not by TROL (the pendant?), or a tool change while a \
+                      motion has not ended: call TROLFinish(FINISH_WAIT) first",
         },
         CodeInfo {
             value: NOT_AT_TARGET,

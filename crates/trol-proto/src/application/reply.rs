@@ -512,6 +512,18 @@ mod tests {
         }
     }
 
+    /// GetPosition refused by the robot answers with its BIOS code alone (issue 62: BIOS_BUSY
+    /// was TROL_ERR_BAD_RSIZE); a success with no position, or a short record, is still
+    /// the wrong size.
+    #[test]
+    fn a_getposition_refused_by_the_robot_is_its_bios_code() {
+        let def = &crate::application::table::GET_POSITION;
+        let busy = (-16i16).to_le_bytes();
+        assert_eq!(Reply::decode(def, &busy), Ok(Reply::Code(Code(-16))));
+        assert!(Reply::decode(def, &0i16.to_le_bytes()).is_err());
+        assert!(Reply::decode(def, &[0, 0, 2, 6]).is_err());
+    }
+
     /// Reals read to 1e-6 without an exponent (issue 44, item 2).
     #[test]
     fn reals_read_to_a_millionth() {

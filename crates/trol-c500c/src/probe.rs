@@ -323,18 +323,27 @@ fn in_ash<T>(
 pub struct AnglesRead {
     /// The commands, the transcript and the findings, as first contact's.
     pub contact: Contact,
-    /// The reading of the WORLD row's angles that puts the flange where TROL's kinematics
-    /// put it from the JOINTS row, where exactly one does.
-    pub angles: Option<crate::world::Angles>,
+    /// The reading of the WORLD row (the angles' order and the frame they turn) that puts
+    /// the flange where TROL's kinematics put it from the JOINTS row, where exactly one does.
+    pub reading: Option<crate::world::Reading>,
 }
 
+/// How far a reading's rotation may be from a right-angle turn of TROL's tool frame and be
+/// that turn, degrees (the rows' three decimals).
+const FRAME_FITS_DEG: f64 = 0.1;
+/// How far the other order must be from any right-angle turn for the pose to tell the
+/// orders apart, degrees.
+const FRAME_APART_DEG: f64 = 1.0;
+
 /// The step `world-angles`, which only reads: `w2` where the arm stands, and which reading
-/// of the WORLD row's Z-Rot, Y-Rot and X-Rot puts the flange where TROL's A465 kinematics
-/// put it from the JOINTS row (within 0.5 mm and 0.1 degrees), where the other is more than
-/// a degree off. Where both agree (the arm stands where the readings coincide, as at READY)
-/// or neither does (a tool or base transform set in ash), it settles nothing and says so.
+/// of the WORLD row's Z-Rot, Y-Rot and X-Rot (their order, and the frame they turn: TROL's
+/// tool frame, or it turned by right angles, as public A465 models' flange frame is) puts
+/// the flange where TROL's A465 kinematics put it from the JOINTS row (within 0.5 mm and 0.1
+/// degrees), where the other order fits no such frame within a degree. Where both fit (the
+/// arm stands where the orders coincide, as at READY) or neither does (a tool or base
+/// transform set in ash), it settles nothing and says so.
 pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> AnglesRead {
-    use crate::world::{self, Angles};
+    use crate::world::{self, Angles, Reading};
     let (mut contact, read) = in_ash(port, app, wait, |p| {
         let lines = read_at(p, app, "w2")?;
         reports::position(&lines, true).map_err(|e| e.to_string())
@@ -342,55 +351,79 @@ pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> Angl
     let Some(pos) = read else {
         return AnglesRead {
             contact,
-            angles: None,
+            reading: None,
         };
     };
     let flange =
         trol_a465::kinematics::Kinematics::new([0.0; 6]).fk(&pos.joints_deg.map(f64::to_radians));
-    let gaps: Vec<(Angles, f64, f64)> = Angles::ALL
+    // For each order: the right-angle frame nearest to what the row turns, and how far off.
+    let fits: Vec<(Angles, f64, Option<world::Fit>)> = Angles::ALL
         .iter()
         .map(|&a| {
-            let (mm, deg) = world::gap(&world::from_ash(&pos.world, a), &flange);
-            (a, mm, deg)
+            let printed = world::from_ash(&pos.world, a);
+            let mm = (printed.pos - flange.pos).length();
+            let turn = flange.rot.transpose() * printed.rot;
+            (a, mm, world::nearest_right_angles(&turn))
         })
         .collect();
-    for (a, mm, deg) in &gaps {
-        contact.findings.push(format!(
-            "read as `{}`, the WORLD row is {mm:.2} mm and {deg:.2} degrees from TROL's flange",
-            a.word()
-        ));
+    for (a, mm, fit) in &fits {
+        contact.findings.push(match fit {
+            Some((frame, deg)) => format!(
+                "read as `{}`, the WORLD row is {mm:.2} mm from TROL's flange, and its frame \
+                 is TROL's tool frame turned by [{}, {}, {}] degrees to {deg:.2} degrees",
+                a.word(),
+                frame[0],
+                frame[1],
+                frame[2]
+            ),
+            None => format!(
+                "read as `{}`, the WORLD row is {mm:.2} mm from TROL's flange, and its frame \
+                 is no right-angle turn of TROL's tool frame",
+                a.word()
+            ),
+        });
     }
-    let agree: Vec<Angles> = gaps
+    let agree: Vec<Reading> = fits
         .iter()
-        .filter(|(_, mm, deg)| *mm <= 0.5 && *deg <= 0.1)
-        .map(|g| g.0)
+        .filter_map(|(a, mm, fit)| match fit {
+            Some((frame, deg)) if *mm <= 0.5 && *deg <= FRAME_FITS_DEG => Some(Reading {
+                angles: *a,
+                frame: *frame,
+            }),
+            _ => None,
+        })
         .collect();
-    let apart = gaps.iter().any(|(_, _, deg)| *deg > 1.0);
-    let angles = match agree[..] {
-        [a] if apart => {
-            contact
-                .findings
-                .push(format!("world-angles: {} (settled)", a.word()));
-            Some(a)
+    let apart = fits.iter().any(|(_, _, fit)| match fit {
+        Some((_, deg)) => *deg > FRAME_APART_DEG,
+        None => true,
+    });
+    let reading = match agree[..] {
+        [r] if apart => {
+            contact.findings.push(format!("{} (settled)", r.words()));
+            Some(r)
         }
-        [_, _] => {
-            contact.findings.push(
-                "both readings agree where the arm stands: turn joint 4 and joint 5 by 20 \
-                 degrees or more (the pendant, or TROLJoint), then run the step again"
-                    .into(),
-            );
+        [_, _] | [_] => {
+            contact.findings.push(format!(
+                "{} where the arm stands: turn joint 4 and joint 5 by 20 degrees or more \
+                 (the pendant, or TROLJoint), then run the step again",
+                if agree.len() == 2 {
+                    "both orders fit"
+                } else {
+                    "the orders are less than a degree apart"
+                }
+            ));
             None
         }
         _ => {
             contact.findings.push(
-                "neither reading puts the flange where TROL's kinematics do: ash has a tool or \
+                "no reading puts the flange where TROL's kinematics do: ash has a tool or \
                  base transform set (`tool`, `base`), or its units are not millimetres"
                     .into(),
             );
             None
         }
     };
-    AnglesRead { contact, angles }
+    AnglesRead { contact, reading }
 }
 
 /// What the step `pulses` saw (`trol c500c step pulses`).
@@ -765,20 +798,25 @@ mod tests {
         assert!(!f.contains("stopped"), "{f}");
     }
 
-    /// The step `world-angles` on a simulated C500C of each reading, the arm at `q`: it
-    /// reads only, settles the twin's reading where the arm stands where they differ, and
-    /// nothing where they coincide.
+    /// The step `world-angles` on a simulated C500C of each reading (both orders, TROL's tool
+    /// frame and the public models' flange frame), the arm at `q`: it reads only, settles the
+    /// twin's reading where the arm stands where the orders differ, and nothing where they
+    /// coincide.
     #[test]
     fn the_world_angles_step_reads_only_and_settles_only_where_it_can_tell() {
-        use crate::world::Angles;
+        use crate::world::{Angles, Reading};
         let turned = [0.3, -0.2, 0.4, 0.5, -0.6, 0.2];
-        for (angles, q, want) in [
-            (Angles::Zyx, turned, Some(Angles::Zyx)),
-            (Angles::Xyz, turned, Some(Angles::Xyz)),
-            (Angles::Zyx, [0.0; 6], None),
+        let flange = [0.0, 90.0, 0.0];
+        for (angles, frame, q, settles) in [
+            (Angles::Zyx, [0.0; 3], turned, true),
+            (Angles::Xyz, [0.0; 3], turned, true),
+            (Angles::Zyx, flange, turned, true),
+            (Angles::Xyz, flange, turned, true),
+            (Angles::Zyx, [0.0; 3], [0.0; 6], false),
         ] {
             let sw = Switches {
                 world_angles: angles,
+                world_frame: frame,
                 ..Switches::default()
             };
             let mut twin = C500c::new(sw, true, 10.0);
@@ -787,9 +825,10 @@ mod tests {
             let s = served(&unit, |host| {
                 world_angles_step(host, "test", Duration::from_secs(3))
             });
+            let want = settles.then_some(Reading { angles, frame });
             assert_eq!(
-                s.angles, want,
-                "{angles:?} at {q:?}: {:?}",
+                s.reading, want,
+                "{angles:?} {frame:?} at {q:?}: {:?}",
                 s.contact.findings
             );
             let typed = unit.lock().unwrap().received().to_vec();

@@ -40,6 +40,14 @@ pub struct Profile {
     /// How the WORLD row's and a cartesian location's three angles compose (unset:
     /// cartesian motions are refused; `trol c500c step world-angles` reads it off the arm).
     pub world_angles: Option<Angles>,
+    /// The frame the WORLD row's angles turn: TROL's tool frame turned by these right
+    /// angles, yaw pitch roll in degrees (R_ash = R_TROL · R(tool-rotation); [0, 90, 0] where
+    /// ash's flange frame has the world's axes with every joint at 0, as public A465 models
+    /// do). Unset with `world-angles` set: TROL's tool frame itself (what the step settled
+    /// before it read the frame). Either way each cartesian motion first checks the WORLD row
+    /// against TROL's kinematics and refuses when they disagree; `trol c500c step
+    /// world-angles` reads both off the arm.
+    pub tool_rotation: Option<[f64; 3]>,
     /// The A465's encoder pulses per degree, joints 1 to 6, on this C500C (unset: an
     /// approach to a precision point is refused; `trol c500c step pulses` measures it).
     pub pulses_per_degree: Option<[f64; 6]>,
@@ -63,6 +71,7 @@ impl Default for Profile {
             settle_ms: 300,
             end_margin_s: 10,
             world_angles: None,
+            tool_rotation: None,
             pulses_per_degree: None,
             pulses_at_zero: None,
             home_joints: None,
@@ -137,6 +146,15 @@ impl Profile {
                 p.home_within_deg
             ));
         }
+        if let Some(r) = p.tool_rotation {
+            if r.iter()
+                .any(|a| !a.is_finite() || a.abs() > 180.0 || a % 90.0 != 0.0)
+            {
+                return Err(format!(
+                    "tool-rotation = {r:?}: yaw, pitch and roll in right angles (-180, -90, 0,                      90 or 180 degrees each); `trol c500c step world-angles` writes it"
+                ));
+            }
+        }
         if let Some(h) = p.home_joints {
             if h.iter().any(|v| !v.is_finite() || v.abs() > 360.0) {
                 return Err(format!(
@@ -163,6 +181,15 @@ impl Profile {
         Some(Pulses {
             per_degree: self.pulses_per_degree?,
             at_zero: self.pulses_at_zero?,
+        })
+    }
+
+    /// How the WORLD row reads, where the profile says (`world-angles`, with
+    /// `tool-rotation`).
+    pub fn reading(&self) -> Option<crate::world::Reading> {
+        self.world_angles.map(|angles| crate::world::Reading {
+            angles,
+            frame: self.tool_rotation.unwrap_or([0.0; 3]),
         })
     }
 

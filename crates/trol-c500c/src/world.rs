@@ -31,9 +31,91 @@ impl Angles {
     }
 }
 
+/// How ash's WORLD row and a cartesian location's values read: the order of the three
+/// angles, and the frame they turn. That frame is the flange's as ash's kinematics set its
+/// axes: TROL's tool frame turned by a fixed rotation (`frame`, yaw pitch roll in degrees,
+/// right angles; R_ash = R_TROL · R(frame)). Public kinematic models of the A465 have their
+/// flange frame's axes along the world's with every joint at 0, where TROL's tool frame is
+/// pitched by -90 degrees: such a controller's frame is [0, 90, 0]. Which one ash uses is not
+/// public (docs/c500c.md): `trol c500c step world-angles` reads it off the arm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reading {
+    /// The angles' order.
+    pub angles: Angles,
+    /// The frame's turn against TROL's tool frame, yaw pitch roll, degrees.
+    pub frame: [f64; 3],
+}
+
+impl From<Angles> for Reading {
+    fn from(angles: Angles) -> Reading {
+        Reading {
+            angles,
+            frame: [0.0; 3],
+        }
+    }
+}
+
+impl Reading {
+    fn turn(&self) -> glam::DMat3 {
+        Pose::from_xyzypr([
+            0.0,
+            0.0,
+            0.0,
+            self.frame[0].to_radians(),
+            self.frame[1].to_radians(),
+            self.frame[2].to_radians(),
+        ])
+        .rot
+    }
+
+    /// In words, as the profile writes it.
+    pub fn words(&self) -> String {
+        format!(
+            "world-angles = \"{}\", tool-rotation = [{}, {}, {}]",
+            self.angles.word(),
+            self.frame[0],
+            self.frame[1],
+            self.frame[2]
+        )
+    }
+}
+
+/// A right-angle turn (yaw pitch roll, degrees) and how far a rotation is from it (degrees).
+pub type Fit = ([f64; 3], f64);
+
+/// The right-angle rotation nearest `r` (each element rounded to -1, 0 or 1), where that is
+/// a rotation, and the angle between the two (degrees).
+pub fn nearest_right_angles(r: &glam::DMat3) -> Option<Fit> {
+    let snap = |v: glam::DVec3| glam::DVec3::new(v.x.round(), v.y.round(), v.z.round());
+    let s = glam::DMat3::from_cols(snap(r.x_axis), snap(r.y_axis), snap(r.z_axis));
+    let unit = |v: glam::DVec3| (v.length() - 1.0).abs() < 1e-9;
+    if !(unit(s.x_axis) && unit(s.y_axis) && unit(s.z_axis)) || (s.determinant() - 1.0).abs() > 1e-9
+    {
+        return None;
+    }
+    let d = s.transpose() * *r;
+    let cos = ((d.x_axis.x + d.y_axis.y + d.z_axis.z - 1.0) / 2.0).clamp(-1.0, 1.0);
+    let ypr = Pose {
+        rot: s,
+        pos: glam::DVec3::ZERO,
+    }
+    .to_xyzypr();
+    // Right angles, in whole degrees (and never -0).
+    let deg = |a: f64| ((a.to_degrees() / 90.0).round() * 90.0) + 0.0;
+    Some((
+        [deg(ypr[3]), deg(ypr[4]), deg(ypr[5])],
+        cos.acos().to_degrees(),
+    ))
+}
+
 /// A pose as ash prints it: x, y, z (mm), the angles in degrees.
-pub fn to_ash(p: &Pose, angles: Angles) -> [f64; 6] {
-    let v = match angles {
+pub fn to_ash(p: &Pose, reading: impl Into<Reading>) -> [f64; 6] {
+    let r = reading.into();
+    let p = &Pose {
+        rot: p.rot * r.turn(),
+        pos: p.pos,
+    };
+    let v = match r.angles {
         Angles::Zyx => p.to_xyzypr(),
         Angles::Xyz => {
             // Rx(c)·Ry(b)·Rz(a) is the transpose of Rz(-a)·Ry(-b)·Rx(-c).
@@ -55,10 +137,11 @@ pub fn to_ash(p: &Pose, angles: Angles) -> [f64; 6] {
     ]
 }
 
-/// The pose of values as ash prints them.
-pub fn from_ash(v: &[f64; 6], angles: Angles) -> Pose {
+/// The pose (TROL's tool frame) of values as ash prints them.
+pub fn from_ash(v: &[f64; 6], reading: impl Into<Reading>) -> Pose {
+    let r = reading.into();
     let (a, b, c) = (v[3].to_radians(), v[4].to_radians(), v[5].to_radians());
-    match angles {
+    let printed = match r.angles {
         Angles::Zyx => Pose::from_xyzypr([v[0], v[1], v[2], a, b, c]),
         Angles::Xyz => {
             let t = Pose::from_xyzypr([v[0], v[1], v[2], -a, -b, -c]);
@@ -67,6 +150,10 @@ pub fn from_ash(v: &[f64; 6], angles: Angles) -> Pose {
                 pos: t.pos,
             }
         }
+    };
+    Pose {
+        rot: printed.rot * r.turn().transpose(),
+        pos: printed.pos,
     }
 }
 
@@ -90,7 +177,31 @@ mod tests {
             let v = to_ash(&p, a);
             let (d, deg) = gap(&from_ash(&v, a), &p);
             assert!(d < 1e-9 && deg < 1e-6, "{a:?}: {d} {deg}");
+            // And in a frame turned by right angles: the printed values differ, the pose
+            // read back is the same, and the turn is found again from the two.
+            for frame in [[0.0, 90.0, 0.0], [90.0, 0.0, 180.0], [-90.0, 0.0, 90.0]] {
+                let r = Reading { angles: a, frame };
+                let turned = to_ash(&p, r);
+                let (d, deg) = gap(&from_ash(&turned, r), &p);
+                assert!(d < 1e-9 && deg < 1e-6, "{r:?}: {d} {deg}");
+                assert!(gap(&from_ash(&turned, a), &p).1 > 1.0, "{r:?}");
+                let (found, off) =
+                    nearest_right_angles(&(p.rot.transpose() * from_ash(&turned, a).rot))
+                        .expect("a right-angle turn");
+                let again = Reading {
+                    angles: a,
+                    frame: found,
+                };
+                assert!(off < 1e-6, "{r:?}: {off}");
+                assert!(
+                    gap(&from_ash(&turned, again), &p).1 < 1e-6,
+                    "{r:?} as {found:?}"
+                );
+            }
         }
+        // A turn that is no right angle has none.
+        let odd = Pose::from_xyzypr([0.0, 0.0, 0.0, 0.3, 0.0, 0.0]).rot;
+        assert!(nearest_right_angles(&odd).is_none_or(|(_, off)| off > 10.0));
         // The readings differ where two angles are not 0, and agree where one alone is.
         let (_, deg) = gap(
             &from_ash(&[0.0, 0.0, 0.0, 30.0, 20.0, 0.0], Angles::Zyx),

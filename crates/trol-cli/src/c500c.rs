@@ -329,8 +329,11 @@ fn step(a: StepArgs) -> Result<(), String> {
         StepName::WorldAngles => {
             say!("trol c500c step world-angles: reading the C500C at {device} (nothing moves)");
             let s = trol_c500c::probe::world_angles_step(port.as_mut(), &a.app, wait);
-            profile.world_angles = s.angles.or(profile.world_angles);
-            (s.contact, s.angles.is_some())
+            if let Some(r) = s.reading {
+                profile.world_angles = Some(r.angles);
+                profile.tool_rotation = Some(r.frame);
+            }
+            (s.contact, s.reading.is_some())
         }
         StepName::Pulses => {
             say!("trol c500c step pulses: on the C500C at {device}");

@@ -228,6 +228,7 @@ pick_on_variants! {
     pick_gripper_none => "gripper-none",
     pick_grip_return_at_end => "grip-return-at-end",
     pick_world_xyz => "world-xyz",
+    pick_world_flange => "world-flange",
     pick_pulses_offset => "pulses-offset",
     pick_rows_apart => "rows-apart",
 }
@@ -268,6 +269,7 @@ position_on_variants! {
     position_gripper_none => "gripper-none",
     position_grip_return_at_end => "grip-return-at-end",
     position_world_xyz => "world-xyz",
+    position_world_flange => "world-flange",
     position_pulses_offset => "pulses-offset",
     position_rows_apart => "rows-apart",
 }
@@ -484,6 +486,7 @@ gateway_on_variants! {
     gateway_gripper_none => "gripper-none",
     gateway_grip_return_at_end => "grip-return-at-end",
     gateway_world_xyz => "world-xyz",
+    gateway_world_flange => "world-flange",
     gateway_pulses_offset => "pulses-offset",
     gateway_rows_apart => "rows-apart",
 }
@@ -710,17 +713,37 @@ fn the_pulses_step_asks_first_and_its_profile_approaches_a_precision_point() {
     assert!((gap - 10.0).abs() < 0.5, "{gap} mm from the point: {out}");
 }
 
-/// `trol c500c step world-angles` reads only: where the arm stands so that both readings of
+/// `trol c500c step world-angles` reads only: where the arm stands so that both orders of
 /// the WORLD row's angles coincide (READY) it settles nothing and says what to do; with a
-/// wrist joint turned it writes the controller's reading, the profile's other keys kept.
+/// wrist joint turned it writes the controller's reading (the order, and the frame the
+/// angles turn), the profile's other keys kept.
 #[test]
 fn the_world_angles_step_reads_only_and_writes_what_it_saw() {
-    let dir = scratch("c500c-angles");
+    world_angles_step_on(
+        "world-xyz",
+        "world-angles = \"xyz\"",
+        "tool-rotation = [0.0, 0.0, 0.0]",
+    );
+}
+
+/// The same on a controller whose angles turn the public A465 models' flange frame (issue
+/// 62, item 3: no cartesian motion was possible there).
+#[test]
+fn the_world_angles_step_reads_the_frame_the_angles_turn() {
+    world_angles_step_on(
+        "world-flange",
+        "world-angles = \"zyx\"",
+        "tool-rotation = [0.0, 90.0, 0.0]",
+    );
+}
+
+fn world_angles_step_on(variant: &str, angles: &str, frame: &str) {
+    let dir = scratch(&format!("c500c-angles-{variant}"));
     let args = [
         "sim",
         "--c500c",
         "--variant",
-        "world-xyz",
+        variant,
         "--homed",
         "--time-scale",
         "10",
@@ -751,7 +774,7 @@ fn the_world_angles_step_reads_only_and_writes_what_it_saw() {
     let o = step();
     let (out, err) = text(&o);
     assert!(!o.status.success(), "{out}");
-    assert!(out.contains("both readings agree"), "{out}\n{err}");
+    assert!(out.contains("both orders fit"), "{out}\n{err}");
     assert!(err.contains("nothing settled"), "{err}");
     assert!(
         !std::fs::read_to_string(dir.join("c500c.toml"))
@@ -770,7 +793,8 @@ fn the_world_angles_step_reads_only_and_writes_what_it_saw() {
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
     let profile = std::fs::read_to_string(dir.join("c500c.toml")).unwrap();
-    assert!(profile.contains("world-angles = \"xyz\""), "{profile}");
+    assert!(profile.contains(angles), "{profile}");
+    assert!(profile.contains(frame), "{profile}");
     assert!(profile.contains("settle-ms = 400"), "{profile}");
     let typed: Vec<String> = sim
         .output()

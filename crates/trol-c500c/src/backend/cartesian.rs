@@ -14,7 +14,7 @@
 use trol_a465::kinematics::Pose;
 
 use super::*;
-use crate::world::{self, Angles};
+use crate::world::{self, Angles, Reading};
 
 /// TROL's own cartesian location in the application (a `cloc`).
 pub const SCRATCH: &str = "trolgo";
@@ -121,7 +121,7 @@ fn refused(c: i16) -> BackendError {
 impl C500cBackend {
     /// What the profile must state for a cartesian motion, and metric units. `Err`: refused
     /// before sending (noted).
-    fn cart_keys(&mut self) -> Result<Angles, BackendError> {
+    fn cart_keys(&mut self) -> Result<Reading, BackendError> {
         if self.profile.motion_return.is_none() {
             self.unsettled(
                 "a motion needs to know when ash gives its prompt back: set `motion-return` in \
@@ -129,7 +129,7 @@ impl C500cBackend {
             )?;
             return Err(refused(UNSETTLED));
         }
-        let Some(angles) = self.profile.world_angles else {
+        let Some(angles) = self.profile.reading() else {
             self.unsettled(
                 "a cartesian motion needs how the WORLD row's Z-Rot, Y-Rot and X-Rot compose: \
                  set `world-angles = \"zyx\"` or `\"xyz\"` in the C500C profile (`trol c500c \
@@ -149,18 +149,19 @@ impl C500cBackend {
 
     /// Where the arm rests (`w2`): its WORLD row, read in the profile's reading, must put the
     /// flange where TROL's kinematics put it from the JOINTS row.
-    fn world_check(&mut self, angles: Angles) -> Result<(), BackendError> {
+    fn world_check(&mut self, angles: Reading) -> Result<(), BackendError> {
         let p = self.read_position(true)?;
         self.rests_at(p.joints_deg);
         let (mm, deg) = world::gap(&world::from_ash(&p.world, angles), &flange(&p.joints_deg));
         if mm > AGREE_MM || deg > AGREE_DEG {
             self.unsettled(&format!(
-                "ash's WORLD row ({}) read as `world-angles = \"{}\"` is {mm:.2} mm and \
-                 {deg:.2} degrees from where TROL's A465 kinematics put the flange for the \
-                 JOINTS row ({}): a tool or base transform set in ash (`tool`, `base`), or a \
-                 `world-angles` that is not the arm's",
+                "ash's WORLD row ({}) read as `{}` is {mm:.2} mm and {deg:.2} degrees from \
+                 where TROL's A465 kinematics put the flange for the JOINTS row ({}): a tool \
+                 or base transform set in ash (`tool`, `base`), or a `world-angles` or \
+                 `tool-rotation` that is not the arm's (`trol c500c step world-angles` reads \
+                 both)",
                 join(&p.world),
-                angles.word(),
+                angles.words(),
                 join(&p.joints_deg)
             ))?;
             return Err(refused(UNSETTLED));

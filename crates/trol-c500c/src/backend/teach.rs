@@ -389,7 +389,7 @@ impl C500cBackend {
                 }
                 // The flange as ash keeps it; TROL's tool centre point there, in TROL's
                 // angles (which needs the profile's reading of ash's).
-                Saved::Cloc(Some(w)) => match self.profile.world_angles {
+                Saved::Cloc(Some(w)) => match self.profile.reading() {
                     Some(angles) => {
                         let tcp = crate::world::from_ash(&w, angles)
                             .then(&trol_a465::kinematics::Pose::from_xyzypr(self.tool))

@@ -105,6 +105,10 @@ pub struct Switches {
     pub grip_return: Return,
     /// How the WORLD row's and a cartesian location's three angles compose.
     pub world_angles: Angles,
+    /// The frame those angles turn: TROL's tool frame turned by these right angles (yaw
+    /// pitch roll, degrees; [`crate::world::Reading`]). Not public: [0, 0, 0] by default,
+    /// [0, 90, 0] on the variant `world-flange` (the public A465 models' flange frame).
+    pub world_frame: [f64; 3],
     /// How the PULSES row relates to the JOINTS row (the A465 model's counts by default).
     pub pulses: Pulses,
     /// How long (s of the controller's time) before the JOINTS and WORLD rows of `w0` and
@@ -112,6 +116,16 @@ pub struct Switches {
     /// 0 by default (one instant), 40 ms on the variant `rows-apart` (assumed), where a
     /// moving arm's rows disagree and only an arm at rest shows how they relate.
     pub rows_apart: f64,
+}
+
+impl Switches {
+    /// How this controller prints the WORLD row's angles.
+    pub fn reading(&self) -> world::Reading {
+        world::Reading {
+            angles: self.world_angles,
+            frame: self.world_frame,
+        }
+    }
 }
 
 impl Default for Switches {
@@ -131,6 +145,7 @@ impl Default for Switches {
             grip_type: GripType::Servo,
             grip_return: Return::AtStart,
             world_angles: Angles::Zyx,
+            world_frame: [0.0; 3],
             pulses: Pulses::a465_model(),
             rows_apart: 0.0,
         }
@@ -146,6 +161,7 @@ pub fn matching_profile(sw: &Switches) -> crate::Profile {
             Return::AtEnd => crate::profile::MotionReturn::End,
         }),
         world_angles: Some(sw.world_angles),
+        tool_rotation: Some(sw.world_frame),
         pulses_per_degree: Some(sw.pulses.per_degree),
         pulses_at_zero: Some(sw.pulses.at_zero),
         // The simulated A465 homes every joint to 0 degrees.
@@ -209,6 +225,11 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "world-xyz",
         "the WORLD row's angles compose as Rx(c)·Ry(b)·Rz(a), not Rz(a)·Ry(b)·Rx(c)",
+    ),
+    (
+        "world-flange",
+        "the WORLD row's angles turn the flange frame of public A465 models (its axes the \
+         world's with every joint at 0), not TROL's tool frame",
     ),
     (
         "pulses-offset",
@@ -287,6 +308,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "world-xyz" => Switches {
             world_angles: Angles::Xyz,
+            ..d
+        },
+        "world-flange" => Switches {
+            world_frame: [0.0, 90.0, 0.0],
             ..d
         },
         "pulses-offset" => Switches {
@@ -462,6 +487,11 @@ impl C500c {
         let t = self.now();
         self.arm.halt(t);
         self.error(&format!("Collision error on axis {axis}"));
+    }
+
+    /// The switches this controller runs with.
+    pub fn switches(&self) -> &Switches {
+        &self.sw
     }
 
     /// Give the arm its power back (as `armpower on` or the panel's button).
@@ -859,7 +889,7 @@ impl C500c {
                         self.arm.move_to(Target::Joints(q), straight, t)
                     }
                     Var::Cloc(Some(w), true) => {
-                        let pose = world::from_ash(&w, self.sw.world_angles);
+                        let pose = world::from_ash(&w, self.sw.reading());
                         self.arm
                             .move_to(Target::Cart(pose.to_xyzypr()), straight, t)
                     }

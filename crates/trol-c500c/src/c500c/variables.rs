@@ -212,7 +212,7 @@ impl C500c {
 
     /// Where the tool is, as the WORLD row prints it (ash's tool transform is the null one).
     pub(super) fn world(&self, q: &[f64; 6]) -> [f64; 6] {
-        world::to_ash(&self.arm.kinematics().fk(q), self.sw.world_angles)
+        world::to_ash(&self.arm.kinematics().fk(q), self.sw.reading())
     }
 
     /// `erase NAME`: asks first. True when the question waits.
@@ -318,7 +318,7 @@ impl C500c {
         let v = pose.map(|p| {
             world::to_ash(
                 &trol_a465::kinematics::Pose::from_xyzypr(p),
-                self.sw.world_angles,
+                self.sw.reading(),
             )
         });
         self.vars

@@ -116,6 +116,8 @@ fn contrary_profile(sw: &Switches) -> Profile {
             Angles::Zyx => Angles::Xyz,
             Angles::Xyz => Angles::Zyx,
         }),
+        // TROL's tool frame where the controller's angles turn another (`world-flange`).
+        tool_rotation: Some([0.0; 3]),
         ..Profile::default()
     }
 }
@@ -382,6 +384,7 @@ each! {
     gripper_none => "gripper-none",
     grip_return_at_end => "grip-return-at-end",
     world_xyz => "world-xyz",
+    world_flange => "world-flange",
     pulses_offset => "pulses-offset",
     rows_apart => "rows-apart",
 }

@@ -321,6 +321,13 @@ pub struct Profile {
     /// Finish, for a motion whose end pose is not known beforehand (READY, HOME) and that was
     /// never seen moving: how long W2 must stay still before the motion counts as ended, ms.
     pub settle_ms: u64,
+    /// Where HOME leaves the arm, the JOINTS row in the profile's joint units (RAPL-II puts
+    /// the calibrated home position in the command registers when it gets there; the A465's
+    /// values are not public). With it, a HOME is done only with W2 reading each joint
+    /// within `arrive_deg` of it (issue 62: a Home is a home, seen on the arm); without it,
+    /// only STATUS's HOMED row and the arm seen standing say so. `trol rapl probe` records
+    /// the row once the person at the arm confirms it stands at its home marks.
+    pub home_joints: Option<[f64; 6]>,
     /// Error numbers (three digits) and the code each means (one of [`ERROR_TARGETS`]);
     /// numbers not listed give BIOS_RAPL_ERROR, and their text is logged.
     pub errors: BTreeMap<String, String>,
@@ -549,6 +556,7 @@ impl Default for Profile {
             arrive_mm: 1.0,
             arrive_deg: 0.2,
             settle_ms: 1000,
+            home_joints: None,
             errors: SIM_ERRORS
                 .iter()
                 .map(|(n, _, to)| (format!("{n:03}"), to.to_string()))
@@ -582,6 +590,7 @@ impl Profile {
                 .map(|c| c * std::f64::consts::PI / 180.0)
                 .to_vec(),
             jog_frame: "world".into(),
+            home_joints: Some([0.0; 6]),
             ..Profile::default()
         }
     }
@@ -657,6 +666,12 @@ impl Profile {
             && self.arrive_deg > 0.0)
         {
             return Err("`arrive_mm` (0 to 50) and `arrive_deg` (0 to 10) must be above 0".into());
+        }
+        if self
+            .home_joints
+            .is_some_and(|h| h.iter().any(|a| !a.is_finite() || a.abs() > 400.0))
+        {
+            return Err("`home_joints`: six joint values, each -400 to 400".into());
         }
         if !(1..=60_000).contains(&self.settle_ms) {
             return Err(format!(

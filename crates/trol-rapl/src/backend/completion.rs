@@ -385,10 +385,17 @@ impl RaplBackend {
                     .status
                     .as_ref()
                     .is_some_and(|s| s.homed.iter().all(|h| *h));
+                // A HOME ends at the profile's home pose where it has one (issue 62).
+                let at_home = expect != Expect::Homed
+                    || self
+                        .profile
+                        .home_joints
+                        .is_none_or(|h| p.joints.iter().zip(&h).all(|(a, b)| (a - b).abs() <= tol));
                 // No end to compare with: it ran (the controller said it moves), or it has
                 // stood for settle_ms where it is.
                 let o = self.outstanding.as_ref().expect("a motion under way");
                 (expect != Expect::Homed || homed)
+                    && at_home
                     && (o.watch.seen_moving()
                         || o.watch.stood_for(now).is_some_and(|d| d >= times.settle))
             }

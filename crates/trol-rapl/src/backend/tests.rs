@@ -419,3 +419,26 @@ fn a_refusal_in_the_profile_s_form_is_a_refusal_with_its_code() {
     assert_eq!(r, RAPL_ERROR, "{:?}", b.log_lines());
     assert!(b.log_lines().iter().any(|l| l.contains("***")));
 }
+
+/// A HOME is done only with W2 reading the arm at the profile's `home_joints` (issue 62,
+/// item 1): the matching profile (every joint's zero) ends it in success; a profile whose home
+/// pose is a degree off sees the arm stand elsewhere and ends it in BIOS_NOT_AT_TARGET, however
+/// STATUS's HOMED row reads.
+#[test]
+fn home_is_done_only_at_the_profile_s_home_pose() {
+    for (off, want) in [(0.0, None), (1.0, Some(NOT_AT_TARGET))] {
+        let (mut b, _log) = on("default", true);
+        b.profile.home_joints = Some([0.0, off, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(code(b.joint(2, 0.2)), 0);
+        finish(&mut b).unwrap();
+        assert_eq!(code(b.home(0)), 0);
+        let got = finish(&mut b);
+        match want {
+            None => assert!(got.is_ok(), "home pose {off} off: {got:?}"),
+            Some(c) => assert!(
+                matches!(got, Err(BackendError::Refused(x)) if x == c),
+                "home pose {off} off: {got:?}"
+            ),
+        }
+    }
+}

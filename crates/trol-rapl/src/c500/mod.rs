@@ -196,6 +196,10 @@ impl C500 {
         if p.jog_frame.is_empty() {
             p.jog_frame = "world".into();
         }
+        if p.home_joints.is_none() {
+            // HOME puts this arm at every joint's zero.
+            p.home_joints = Some([0.0; 6]);
+        }
         if !p.refusal.contains(&p.twin.refusal) {
             p.refusal = vec![p.twin.refusal.clone()];
         }
@@ -537,6 +541,11 @@ impl C500 {
             self.out.extend(l.bytes());
             self.prompt();
         }
+    }
+
+    /// Give the arm its power back (the panel's button; NOLIMP on the line).
+    pub fn power_on(&mut self) {
+        self.limp = false;
     }
 
     /// Whether the arm has power.

@@ -13,7 +13,7 @@ use trol_controller::{BackendError, BiosResult, Target};
 /// names them in its own words in its table): one number each, on every backend.
 pub mod real {
     /// The arm has no power (LIMP, an e-stop, the unit's power bit).
-    pub const ARM_POWER: i16 = -8;
+    pub const ARM_POWER: i16 = crate::arm::code::ARM_POWER;
     /// The call has no form on this controller.
     pub const UNSUPPORTED: i16 = -11;
     /// A call that needs the arm at rest while a motion or homing has not ended.

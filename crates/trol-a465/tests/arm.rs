@@ -46,6 +46,36 @@ fn a_halt_during_homing_leaves_the_axes_unhomed() {
     assert_eq!(arm.joint(1, 0.1, stopped + 1.0), code::NOT_HOMED);
 }
 
+/// The power lost during a Home (an e-stop; issue 62, item 1): the arm stops where it is,
+/// the homing's axes stay unhomed (on an arm homed before too), and the Finish after it says
+/// BIOS_ARM_POWER; with the power off every motion, Home and gripper motion is refused and
+/// nothing moves; with it back the Home runs to its end, and the Finish is success.
+#[test]
+fn a_power_loss_during_home_is_the_power_s_failure() {
+    let mut arm = homed_arm();
+    arm.ma([0.3, 0.2, 0.4, 0.0, 0.0, 0.0], 0.0);
+    let t0 = arm.done_at(0.0);
+    assert_eq!(arm.home(0, t0), code::OK);
+    arm.power_off(t0 + 1.0);
+    assert!(!arm.has_power());
+    let stopped = arm.done_at(t0 + 1.0);
+    let at = arm.commanded(stopped);
+    assert_ne!(at, [0.0; 6], "stopped on its way");
+    assert_eq!(arm.finish_status(stopped + 1e-9), code::ARM_POWER);
+    assert!(!arm.homed()[1]);
+    let later = stopped + 1.0;
+    assert_eq!(arm.home(0, later), code::ARM_POWER);
+    assert_eq!(arm.ma([0.0; 6], later), code::ARM_POWER);
+    assert_eq!(arm.close(10.0, later), code::ARM_POWER);
+    assert_eq!(arm.commanded(later + 10.0), at, "nothing moved");
+    arm.power_on();
+    assert_eq!(arm.home(0, later), code::OK);
+    let end = arm.done_at(later);
+    assert_eq!(arm.finish_status(end + 1e-9), code::OK);
+    assert_eq!(arm.homed(), [true; 6]);
+    assert_eq!(arm.commanded(end), [0.0; 6]);
+}
+
 /// Home(0) homes in CTU's groups, one after the other (issue 37, item 6): joint 2, then
 /// joints 1 and 3, then 4, 5 and 6, each group's axes homed when its motion ends; halted
 /// in the second group, joint 2 stays homed and the rest do not.

@@ -13,7 +13,11 @@
 //! - **the rule for real controllers**: no call reports success for a motion the arm did not
 //!   make (no false success); nothing moves that was not asked for (a refused call, a line
 //!   the controller printed unasked); a Halt reports success only with the arm standing;
-//!   after a failure the next call works.
+//!   after a failure the next call works;
+//! - **a Home is a home** (issue 62, item 1): a Home halted at several instants, on a homed
+//!   and on an unhomed arm, or cut by a power loss (announced, silent, in each form the
+//!   controller has), is never reported done unless the arm stands at the home pose; a power
+//!   loss is named as such; the next Home works.
 //!
 //! Where a controller may differ, the difference is named once, in [`Differences`], with
 //! the reason; [`subjects`] builds each controller with its differences.
@@ -39,6 +43,16 @@ pub trait Twin: Send {
     /// Make the controller print a line nobody asked for; `false` where this controller
     /// has no line to print on (the simulated A465).
     fn say_unasked(&self, text: &str) -> bool;
+    /// Whether this controller's arm can lose its power in this form: `announced`, the
+    /// controller tells of it on its own (a line it prints, a status bit, the embedded
+    /// simulator's own arm); otherwise it says nothing, and only what TROL reads of the arm
+    /// can show it.
+    fn can_lose_power(&self, announced: bool) -> bool;
+    /// Cut the arm's power now in that form (an e-stop, a power failure): the axes stop
+    /// where they are. Only where [`Twin::can_lose_power`] says so.
+    fn cut_power(&self, announced: bool);
+    /// Give the arm its power back.
+    fn power_on(&self);
 }
 
 /// How a controller may differ from the others, each with its reason.
@@ -341,67 +355,105 @@ fn trajectory(s: &mut Subject, f: &mut Findings, t: &Targets) {
 /// a Home on a homed arm was reported a success).
 const HOME_HALTS: [Duration; 2] = [Duration::from_millis(0), Duration::from_millis(300)];
 
-/// A Home halted on its way, on an arm that was homed and stands away from the home pose:
-/// TROLHome and the Finish after it may report success only with the arm seen at the home
-/// pose (where the first Home left it); then the next Home works.
+/// Send TROLHome(0) alone (not waiting for its end, as a 1998 program's TROLHome then its
+/// TROLFinish) and see the arm start: whether it did (the step says why not).
+fn start_home(s: &mut Subject, f: &mut Findings, what: &str) -> bool {
+    let h = match s.robot.call(&table::HOME, &[Value::Int(0)]) {
+        Ok(Reply::Code(c)) => c.0,
+        Ok(other) => {
+            f.broke(format!("{what}: TROLHome answered {other:?}"));
+            return false;
+        }
+        Err(e) => e.code().0,
+    };
+    if h != 0 || !wait_moving(s.twin.as_ref(), STEP) {
+        f.step(format!(
+            "{what}: TROLHome(0) -> {h}, the arm not seen moving"
+        ));
+        let _ = s.robot.finish();
+        return false;
+    }
+    true
+}
+
+/// Wait (bounded) for the twin's arm to stand.
+fn wait_standing(twin: &dyn Twin) {
+    let until = Instant::now() + STEP;
+    while twin.moving() && Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A Home halted `after` it was seen to start, on an arm `was` (homed, not homed): TROLHome
+/// and the Finish after it may report success only with the arm seen at the home pose.
+/// Whether the Home was halted (false: it was not seen to start).
+fn halt_a_home(
+    s: &mut Subject,
+    f: &mut Findings,
+    home_pose: &[f64; 6],
+    after: Duration,
+    was: &str,
+) -> bool {
+    let what = format!("a Home on an arm {was}, halted after {after:?}");
+    if near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
+        f.step(format!("{what}: the arm is at the home pose, not checked"));
+        return false;
+    }
+    if !start_home(s, f, &what) {
+        return false;
+    }
+    std::thread::sleep(after);
+    let stop = code(s.robot.halt());
+    wait_standing(s.twin.as_ref());
+    let hf = code(s.robot.finish());
+    let at = s.twin.joints();
+    f.step(format!(
+        "{what}: Halt -> {stop}, Finish -> {hf}, the arm at {}",
+        fmt(&at)
+    ));
+    if hf == 0 && !near(&at, home_pose, s.differences.arrive_rad) {
+        f.broke(format!(
+            "{what}: reported done with the arm at {}, not at the home pose {}",
+            fmt(&at),
+            fmt(home_pose)
+        ));
+    }
+    true
+}
+
+/// A whole Home: success, and the arm at the home pose. Whether both.
+fn home_again(s: &mut Subject, f: &mut Findings, home_pose: &[f64; 6], after: &str) -> bool {
+    let again = code(s.robot.home(0));
+    let again_f = if again == 0 {
+        code(s.robot.finish())
+    } else {
+        again
+    };
+    f.step(format!("TROLHome(0) after {after} -> {again_f}"));
+    if again_f != 0 {
+        f.broke(format!("the Home after {after} failed ({again_f})"));
+        return false;
+    }
+    if !near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
+        f.broke(format!(
+            "the Home after {after} was reported done with the arm at {}",
+            fmt(&s.twin.joints())
+        ));
+        return false;
+    }
+    true
+}
+
+/// Homes halted on their way at each of [`HOME_HALTS`], first on an arm that was homed and
+/// stands away from the home pose, then (the halt having left it unhomed) on the same arm
+/// not homed; then a whole Home works, and a motion takes the arm away for the next instant.
 fn halted_home(s: &mut Subject, f: &mut Findings, home_pose: &[f64; 6]) {
     for after in HOME_HALTS {
-        if near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
-            f.step("the arm is at the home pose: a halted Home not checked".into());
-            return;
-        }
-        // The Home request alone (Robot::home waits for its end, as TROLHome and Finish).
-        let h = match s.robot.call(&table::HOME, &[Value::Int(0)]) {
-            Ok(Reply::Code(c)) => c.0,
-            Ok(other) => {
-                f.broke(format!("TROLHome answered {other:?}"));
-                return;
-            }
-            Err(e) => e.code().0,
-        };
-        if h != 0 || !wait_moving(s.twin.as_ref(), STEP) {
-            f.step(format!(
-                "TROLHome(0) -> {h}, the arm not seen moving: not halted"
-            ));
-            let _ = s.robot.finish();
+        if !halt_a_home(s, f, home_pose, after, "homed") {
             continue;
         }
-        std::thread::sleep(after);
-        let stop = code(s.robot.halt());
-        let until = Instant::now() + STEP;
-        while s.twin.moving() && Instant::now() < until {
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let hf = code(s.robot.finish());
-        let at = s.twin.joints();
-        f.step(format!(
-            "TROLHome(0) -> {h}, Halt after {after:?} -> {stop}, Finish -> {hf}, the arm at {}",
-            fmt(&at)
-        ));
-        if h == 0 && hf == 0 && !near(&at, home_pose, s.differences.arrive_rad) {
-            f.broke(format!(
-                "a Home halted after {after:?} was reported done with the arm at {}, not at \
-                 the home pose {}",
-                fmt(&at),
-                fmt(home_pose)
-            ));
-        }
-        let again = code(s.robot.home(0));
-        let again_f = if again == 0 {
-            code(s.robot.finish())
-        } else {
-            again
-        };
-        f.step(format!("TROLHome(0) again -> {again_f}"));
-        if again_f != 0 {
-            f.broke(format!("the Home after a halted Home failed ({again_f})"));
-            return;
-        }
-        if !near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
-            f.broke(format!(
-                "the Home after a halted Home was reported done with the arm at {}",
-                fmt(&s.twin.joints())
-            ));
+        halt_a_home(s, f, home_pose, after, "not homed (the Home before halted)");
+        if !home_again(s, f, home_pose, "a halted Home") {
             return;
         }
         // Away from the home pose again, for the next instant.
@@ -411,6 +463,77 @@ fn halted_home(s: &mut Subject, f: &mut Findings, home_pose: &[f64; 6]) {
             return;
         }
     }
+}
+
+/// The arm's power lost during a Home, in each form this controller has (announced,
+/// silent), on a homed arm away from the home pose: TROLHome's Finish is never success and
+/// names the power (BIOS_ARM_POWER), or says TROL cannot tell (UNSURE); with the power off
+/// a motion is refused and nothing moves; with the power back a Home works. Whether the
+/// controller still takes calls (false: it sends nothing further until reconnect).
+fn power_lost_home(s: &mut Subject, f: &mut Findings, home_pose: &[f64; 6]) -> bool {
+    for announced in [true, false] {
+        if !s.twin.can_lose_power(announced) {
+            continue;
+        }
+        let form = if announced { "announced" } else { "silent" };
+        let what = format!("a power loss ({form}) during Home");
+        if near(&s.twin.joints(), home_pose, s.differences.arrive_rad) {
+            let away = Targets::for_subject(s).q1;
+            if !motion(s, f, "a motion away from home", away) {
+                f.broke(format!("{what}: the motion before it failed"));
+                return true;
+            }
+        }
+        if !start_home(s, f, &what) {
+            continue;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        s.twin.cut_power(announced);
+        wait_standing(s.twin.as_ref());
+        let hf = code(s.robot.finish());
+        let name = trol::Code(hf).name(s.robot.codes()).unwrap_or("?");
+        let at = s.twin.joints();
+        f.step(format!(
+            "{what}: Finish -> {hf} ({name}), the arm at {}",
+            fmt(&at)
+        ));
+        let unsure = hf == TROL_ERR_ROBOT_UNSURE.0;
+        if hf == 0 {
+            f.broke(format!(
+                "{what}: reported done with the power off, the arm at {}",
+                fmt(&at)
+            ));
+        } else if name != "BIOS_ARM_POWER" && !unsure {
+            f.broke(format!(
+                "{what}: the Finish said {hf} ({name}), not the power (BIOS_ARM_POWER)"
+            ));
+        }
+        // With the power off: a motion is refused, nothing moves.
+        let before = s.twin.joints();
+        let c = code(s.robot.ma(&Targets::for_subject(s).q2));
+        std::thread::sleep(Duration::from_millis(200));
+        f.step(format!("{what}: MA with the power off -> {c}"));
+        if c == 0 {
+            let cf = code(s.robot.finish());
+            f.broke(format!(
+                "{what}: a motion with the power off was accepted (Finish {cf})"
+            ));
+        }
+        if let Err(e) = unmoved(s.twin.as_ref(), &before) {
+            f.broke(format!("{what}: the arm moved with its power off: {e}"));
+        }
+        s.twin.power_on();
+        if (unsure || c == TROL_ERR_ROBOT_UNSURE.0) && s.differences.unsure_until_reconnect {
+            f.step(format!(
+                "{what}: UNSURE, and this controller sends nothing further until reconnect"
+            ));
+            return false;
+        }
+        if !home_again(s, f, home_pose, &format!("{what} and the power back")) {
+            return true;
+        }
+    }
+    true
 }
 
 /// Run every check on `s`.
@@ -587,6 +710,10 @@ pub fn run(s: &mut Subject) -> Findings {
             f.broke("the motion after a Halt did not work".into());
         }
         halted_home(s, &mut f, &home_pose);
+        if !power_lost_home(s, &mut f, &home_pose) {
+            f.steps.insert(0, format!("{label}:"));
+            return f;
+        }
     }
     // A line nobody asked for (last: a controller may send nothing further after it): the
     // next call is UNSURE and moves nothing; the one after works, or is UNSURE too where the

@@ -48,7 +48,18 @@ fn robot_over<B: trol_controller::Backend + 'static>(
 
 // ---- the simulated A465 (port `sim`) ----
 
-struct SimTwin(trol_sim::SharedArm);
+struct SimTwin(trol_sim::SharedArm, trol_sim::PowerSwitch);
+
+impl SimTwin {
+    /// Switch the power and wait (bounded) until the simulator has taken it.
+    fn power(&self, on: bool) {
+        let n = self.1.set(on);
+        let until = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while self.1.applied() < n && std::time::Instant::now() < until {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+    }
+}
 
 impl Twin for SimTwin {
     fn joints(&self) -> [f64; 6] {
@@ -66,6 +77,16 @@ impl Twin for SimTwin {
     fn say_unasked(&self, _text: &str) -> bool {
         false
     }
+    fn can_lose_power(&self, announced: bool) -> bool {
+        // The embedded simulator is its own controller: it always knows.
+        announced
+    }
+    fn cut_power(&self, _announced: bool) {
+        self.power(false);
+    }
+    fn power_on(&self) {
+        self.power(true);
+    }
 }
 
 /// The simulated A465, not homed at start (the differences: none; it has no line of its
@@ -80,10 +101,11 @@ pub fn sim() -> Subject {
         ..Default::default()
     });
     let view = b.share();
+    let power = b.power_switch();
     Subject {
         label: "the simulated A465".into(),
         robot: robot_over(b, trol_sim::SIM_CODES),
-        twin: Box::new(SimTwin(view)),
+        twin: Box::new(SimTwin(view, power)),
         differences: Differences {
             starts_unhomed: true,
             ..Differences::default()
@@ -114,7 +136,21 @@ pub const C500_FAIL_SAFE: &[(&str, &str)] = &[
 struct C500Twin {
     joints: Arc<Mutex<[f64; 6]>>,
     moving: Arc<AtomicBool>,
+    /// Power switched by the suite, taken by the serving thread (Some(on)).
+    power: Arc<Mutex<Option<bool>>>,
+    /// Whether the variant prints a line when the power goes.
+    announces: bool,
     _runs: Runs,
+}
+
+impl C500Twin {
+    fn power(&self, on: bool) {
+        *self.power.lock().unwrap() = Some(on);
+        let until = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while self.power.lock().unwrap().is_some() && std::time::Instant::now() < until {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+    }
 }
 
 impl Twin for C500Twin {
@@ -128,6 +164,16 @@ impl Twin for C500Twin {
         // The simulated C500 prints unasked only where its variant does (estop-line).
         false
     }
+    fn can_lose_power(&self, announced: bool) -> bool {
+        // A variant either prints its e-stop line or says nothing (STATUS's LIMP row shows it).
+        announced == self.announces
+    }
+    fn cut_power(&self, _announced: bool) {
+        self.power(false);
+    }
+    fn power_on(&self) {
+        self.power(true);
+    }
 }
 
 /// A simulated C500 of variant `name` (`trol_rapl::c500::VARIANTS`), driven with the
@@ -140,14 +186,17 @@ pub fn c500(name: &str) -> Subject {
         homed,
         ..Default::default()
     });
+    let announces = !twin.twin.estop_line.is_empty();
     let mut c = trol_rapl::C500::new(twin, arm, Vec::new());
     let matching = c.describe();
+    let power = Arc::new(Mutex::new(None::<bool>));
     let (host, ctl) = memory::pair(Some(BAUD));
     let stop = Arc::new(AtomicBool::new(false));
     let joints = Arc::new(Mutex::new([0.0; 6]));
     let moving = Arc::new(AtomicBool::new(false));
     let thread = {
-        let (stop, joints, moving) = (stop.clone(), joints.clone(), moving.clone());
+        let (stop, joints, moving, power) =
+            (stop.clone(), joints.clone(), moving.clone(), power.clone());
         std::thread::spawn(move || {
             let mut port = ctl;
             let _ = trol_rapl::c500::serve_with(
@@ -157,6 +206,11 @@ pub fn c500(name: &str) -> Subject {
                 &stop,
                 &mut |_| {},
                 &mut |c, now| {
+                    match power.lock().unwrap().take() {
+                        Some(false) => c.power_off(now),
+                        Some(true) => c.power_on(),
+                        None => {}
+                    }
                     *joints.lock().unwrap() = c.arm_mut().actual(now);
                     moving.store(c.arm_moving(now), Ordering::SeqCst);
                 },
@@ -175,6 +229,8 @@ pub fn c500(name: &str) -> Subject {
         twin: Box::new(C500Twin {
             joints,
             moving,
+            power,
+            announces,
             _runs: runs,
         }),
         differences: Differences {
@@ -194,6 +250,8 @@ trait Unit: Send + 'static {
     fn joints(&mut self) -> [f64; 6];
     fn is_moving(&mut self) -> bool;
     fn say(&mut self, text: &str);
+    fn can_lose_power(&self, announced: bool) -> bool;
+    fn set_power(&mut self, on: bool);
 }
 
 impl Unit for trol_mars::Mars8 {
@@ -206,6 +264,13 @@ impl Unit for trol_mars::Mars8 {
     fn say(&mut self, text: &str) {
         trol_mars::Mars8::say(self, text)
     }
+    fn can_lose_power(&self, announced: bool) -> bool {
+        // The unit's status word has the power bit, which TROL reads: always told.
+        announced
+    }
+    fn set_power(&mut self, on: bool) {
+        self.set_power_off(!on)
+    }
 }
 
 impl Unit for trol_c500c::C500c {
@@ -217,6 +282,17 @@ impl Unit for trol_c500c::C500c {
     }
     fn say(&mut self, text: &str) {
         trol_c500c::C500c::say(self, text)
+    }
+    fn can_lose_power(&self, announced: bool) -> bool {
+        // ash prints `Lost robot power` or, on power-loss-silent, nothing (armstat shows it).
+        announced == self.switches().power_loss_line
+    }
+    fn set_power(&mut self, on: bool) {
+        if on {
+            self.set_power_on()
+        } else {
+            self.set_power_off()
+        }
     }
 }
 
@@ -259,6 +335,15 @@ impl<U: Unit> Twin for UnitTwin<U> {
     fn say_unasked(&self, text: &str) -> bool {
         self.unit.lock().unwrap().say(text);
         true
+    }
+    fn can_lose_power(&self, announced: bool) -> bool {
+        self.unit.lock().unwrap().can_lose_power(announced)
+    }
+    fn cut_power(&self, _announced: bool) {
+        self.unit.lock().unwrap().set_power(false);
+    }
+    fn power_on(&self) {
+        self.unit.lock().unwrap().set_power(true);
     }
 }
 
@@ -334,6 +419,11 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
     (
         "world-xyz",
         "differs only in the WORLD row's angles, which only cartesian motions read",
+    ),
+    (
+        "world-flange",
+        "differs only in the frame the WORLD row's angles turn, which only cartesian motions \
+         read",
     ),
     (
         "pulses-offset",

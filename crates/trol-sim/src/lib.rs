@@ -21,11 +21,21 @@ use trol_controller::{
 };
 use trol_port::memory::MemoryLine;
 use trol_proto::application::record::{MM_DECIMALS, format_fixed};
-use trol_proto::application::{CodeTable, Gripper, Held, LocName, Location, Tag, Waypoint};
+use trol_proto::application::{
+    CodeInfo, CodeTable, Gripper, Held, LocName, Location, Tag, Waypoint,
+};
 use trol_proto::link::LinkConfig;
 
-/// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's.
-pub const SIM_CODES: &CodeTable = A465_CODES;
+/// The BIOS codes of the simulated A465 (docs/a465.md, "BIOS codes"): the planner's, and
+/// the arm's power.
+pub static SIM_CODES: &CodeTable = &{
+    const EXTRA: [CodeInfo; 1] = [CodeInfo {
+        value: code::ARM_POWER,
+        name: "BIOS_ARM_POWER",
+        meaning: "the arm has no power (an e-stop): switch it on, then TROLHome",
+    }];
+    trol_a465::backend::with_a465_codes::<{ A465_CODES.len() + EXTRA.len() }>(&EXTRA)
+};
 
 /// Start the embedded controller (port `sim`): the simulated A465 behind the PCP server, in
 /// server mode, on a thread, over an in-memory line. Returns the host's end of the line.
@@ -70,6 +80,51 @@ pub struct SimBackend {
     locations_file: Option<std::path::PathBuf>,
     /// The axes of the last Home accepted, until a Finish has seen it end.
     homing: Option<Vec<usize>>,
+    /// The arm's power switch, where a test holds it ([`SimBackend::power_switch`]).
+    power: Option<PowerSwitch>,
+}
+
+/// The simulated arm's power, switched by a test as an e-stop or a power failure would
+/// switch it: the backend applies each change before anything else it does, and when the
+/// line is quiet.
+#[derive(Clone, Debug, Default)]
+pub struct PowerSwitch(std::sync::Arc<std::sync::Mutex<PowerChanges>>);
+
+#[derive(Debug, Default)]
+struct PowerChanges {
+    pending: Vec<bool>,
+    asked: u64,
+    applied: u64,
+}
+
+impl PowerSwitch {
+    /// Switch the power on or off; returns the change's number for [`PowerSwitch::applied`].
+    pub fn set(&self, on: bool) -> u64 {
+        let mut c = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        c.pending.push(on);
+        c.asked += 1;
+        c.asked
+    }
+
+    /// How many changes the arm has taken.
+    pub fn applied(&self) -> u64 {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).applied
+    }
+
+    fn pending(&self) -> bool {
+        !self
+            .0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .pending
+            .is_empty()
+    }
+
+    fn take(&self) -> Vec<bool> {
+        let mut c = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        c.applied = c.asked;
+        std::mem::take(&mut c.pending)
+    }
 }
 
 /// A copy of the simulated arm for a view (a browser page): the arm's motions are planned,
@@ -109,7 +164,28 @@ impl SimBackend {
             view: None,
             locations_file: settings.locations_file,
             homing: None,
+            power: None,
         }
+    }
+
+    /// The arm's power switch, for a test that plays an e-stop or a power failure.
+    pub fn power_switch(&mut self) -> PowerSwitch {
+        self.power.get_or_insert_with(PowerSwitch::default).clone()
+    }
+
+    /// Simulation time now, after the power changes a test made (each at this instant).
+    fn at(&mut self) -> f64 {
+        let now = self.now();
+        if let Some(p) = &self.power {
+            for on in p.take() {
+                if on {
+                    self.arm.power_on();
+                } else {
+                    self.arm.power_off(now);
+                }
+            }
+        }
+        now
     }
 
     /// Share a copy of the arm with a test or a conformance check: it is renewed after every
@@ -163,20 +239,26 @@ impl Backend for SimBackend {
     }
     fn appro(&mut self, target: &Target, disp: [f64; 6], straight: bool) -> BiosResult {
         let t = self.target(target)?;
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.appro(t, disp, straight, now))
     }
     fn close(&mut self, force: u8) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.close(force as f64, now))
     }
     fn depart(&mut self, disp: [f64; 6], straight: bool) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.depart(disp, straight, now))
     }
     fn moving(&mut self) -> Result<bool, BackendError> {
-        let now = self.now();
-        let moving = self.arm.finish_status(now) == code::MOVING;
+        let now = self.at();
+        let status = self.arm.finish_status(now);
+        let moving = status == code::MOVING;
+        // A motion or a Home the power cut short fails its Finish with the power's code.
+        if status == code::ARM_POWER {
+            self.homing = None;
+            return Err(BackendError::Refused(code::ARM_POWER));
+        }
         // A Home that ended with its axes not homed (halted on the way) fails the Finish
         // after it, once (issue 37: a halted Home is a failure, not a success).
         if !moving {
@@ -190,19 +272,19 @@ impl Backend for SimBackend {
         Ok(moving)
     }
     fn stands(&mut self) -> Result<bool, BackendError> {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.finish_status(now) != code::MOVING)
     }
     fn grip(&mut self, dist: u8) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.grip(dist as f64, now))
     }
     fn halt(&mut self) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.halt(now))
     }
     fn home(&mut self, axis: u8) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         let c = self.arm.home(axis, now);
         if c == code::OK {
             self.homing = Some(if axis == 0 {
@@ -214,37 +296,37 @@ impl Backend for SimBackend {
         Ok(c)
     }
     fn jog(&mut self, d: [f64; 3], straight: bool) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.jog(d, straight, now))
     }
     fn joint(&mut self, joint: u8, radians: f64) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.joint(joint, radians, now))
     }
     fn ma(&mut self, q: [f64; 6]) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.ma(q, now))
     }
     fn mi(&mut self, dq: [f64; 6]) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.mi(dq, now))
     }
     fn trajectory(&mut self, points: &[Waypoint]) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         let points: Vec<(f64, [f64; 6])> = points.iter().map(|p| (p.time, p.joints)).collect();
         Ok(self.arm.trajectory(&points, now))
     }
     fn move_to(&mut self, target: &Target, straight: bool) -> BiosResult {
         let t = self.target(target)?;
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.move_to(t, straight, now))
     }
     fn open(&mut self, force: u8) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.open(force as f64, now))
     }
     fn ready(&mut self) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         Ok(self.arm.ready(now))
     }
     fn set_tool(&mut self, tool: [f64; 6]) -> BiosResult {
@@ -254,7 +336,7 @@ impl Backend for SimBackend {
         Ok(self.arm.set_speed(percent as f64))
     }
     fn here(&mut self, name: LocName, tag: Tag) -> BiosResult {
-        let now = self.now();
+        let now = self.at();
         trol_a465::backend::table::here(&mut self.arm, name, tag, now)
     }
     fn define(&mut self, name: LocName, loc: &Location) -> BiosResult {
@@ -270,13 +352,20 @@ impl Backend for SimBackend {
         trol_a465::backend::table::save(&self.arm, self.locations_file.as_deref())
     }
     fn after_request(&mut self) {
+        self.at();
         self.publish();
+    }
+    fn idle(&mut self) {
+        if self.power.as_ref().is_some_and(PowerSwitch::pending) {
+            self.at();
+            self.publish();
+        }
     }
     fn take_note(&mut self) -> Option<String> {
         self.arm.take_refusal()
     }
     fn world(&mut self) -> Option<String> {
-        let now = self.now();
+        let now = self.at();
         let held = self.arm.held().map(str::to_string);
         let objects = self.arm.objects(now);
         if objects.is_empty() {
@@ -309,7 +398,7 @@ impl Backend for SimBackend {
     }
     fn report(&mut self) -> Option<ArmReport> {
         // Read from the arm where it is now: no copy of it (issue 39, item 4).
-        let now = self.now();
+        let now = self.at();
         let arm = &mut self.arm;
         let moving = arm.is_moving(now);
         let held = arm.held().map(str::to_string);
@@ -339,7 +428,7 @@ impl Backend for SimBackend {
         })
     }
     fn gripper(&mut self) -> Result<Gripper, BackendError> {
-        let now = self.now();
+        let now = self.at();
         Ok(Gripper {
             opening_mm: self.arm.fingers(now),
             held: match self.arm.held() {
@@ -349,7 +438,7 @@ impl Backend for SimBackend {
         })
     }
     fn position(&mut self, tag: Tag, mode: PosMode) -> Result<Location, BackendError> {
-        let now = self.now();
+        let now = self.at();
         let which = match mode {
             PosMode::Commanded => Which::Commanded,
             PosMode::Actual => Which::Actual,

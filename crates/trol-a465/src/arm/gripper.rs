@@ -73,6 +73,9 @@ impl Arm {
     }
 
     pub(super) fn fingers_to(&mut self, target: f64, now: f64) -> i16 {
+        if !self.powered {
+            return code::ARM_POWER;
+        }
         let from = self.fingers.at(now);
         let q = self.commanded(now);
         let tcp = self.kin.fk(&q);

@@ -56,9 +56,13 @@ pub mod code {
     pub const QUEUE_FULL: i16 = -7;
     /// Closing the fingers on an object at the tool centre point that is wider than their
     /// opening: they are not around it and cannot pass through it. Nothing moves; open the
-    /// gripper wider than the object before moving onto it. (-8 to -16 and -20 to -22 are
+    /// gripper wider than the object before moving onto it. (-9 to -16 and -20 to -22 are
     /// the real controllers' backends' own codes.)
     pub const GRIPPER_BLOCKED: i16 = -17;
+    /// The arm has no power (an e-stop, a power failure; [`super::Arm::power_off`]): every
+    /// motion is refused, and the Finish after a motion the power cut short says so. The
+    /// same number on every controller's backend.
+    pub const ARM_POWER: i16 = -8;
     /// Here or Define with the location table full (docs/teach.md).
     pub const TABLE_FULL: i16 = -18;
     /// Save without a locations file to write (the simulator started without one).
@@ -260,6 +264,11 @@ pub struct Arm {
     refusal: Option<String>,
     /// What the planner found for the last straight line.
     last_line: Option<LineOutcome>,
+    /// Whether the arm has power (an e-stop, a power cut: [`Arm::power_off`]).
+    powered: bool,
+    /// A motion or homing was under way when the power went: the Finish after it says so
+    /// (BIOS_ARM_POWER) until the next motion is accepted.
+    cut_short: bool,
 }
 
 impl Arm {
@@ -283,6 +292,8 @@ impl Arm {
             held: None,
             refusal: None,
             last_line: None,
+            powered: true,
+            cut_short: false,
         };
         for o in arm.settings.objects.clone() {
             arm.objects.push(o);
@@ -539,9 +550,33 @@ impl Arm {
     pub fn finish_status(&mut self, now: f64) -> i16 {
         if self.is_moving(now) {
             code::MOVING
+        } else if self.cut_short {
+            code::ARM_POWER
         } else {
             code::OK
         }
+    }
+
+    /// Cut the arm's power at `now` (an e-stop, a power failure): the motion under way stops
+    /// where it is (as a Halt, so a homing on its way leaves its axes unhomed), the fingers
+    /// stop, and every motion, homing and gripper motion is refused (BIOS_ARM_POWER) until
+    /// [`Arm::power_on`]. The Finish after a motion so cut short says BIOS_ARM_POWER.
+    pub fn power_off(&mut self, now: f64) {
+        if self.is_moving(now) {
+            self.cut_short = true;
+        }
+        self.halt(now);
+        self.powered = false;
+    }
+
+    /// Give the arm its power back: it stands where the power left it.
+    pub fn power_on(&mut self) {
+        self.powered = true;
+    }
+
+    /// Whether the arm has power.
+    pub fn has_power(&self) -> bool {
+        self.powered
     }
 
     /// Halt: the motion under way brakes at the limits along its own path (a straight line
@@ -603,6 +638,9 @@ impl Arm {
         if axis > 6 {
             return code::BAD_ARGUMENT;
         }
+        if !self.powered {
+            return code::ARM_POWER;
+        }
         self.retire(now);
         let groups: Vec<Vec<usize>> = if axis == 0 {
             HOME_GROUPS.iter().map(|g| g.to_vec()).collect()
@@ -615,6 +653,7 @@ impl Arm {
         for &a in groups.iter().flatten() {
             self.homed[a] = false;
         }
+        self.cut_short = false;
         for axes in groups {
             let from = self.planned_end();
             let mut to = from;
@@ -635,9 +674,12 @@ impl Arm {
         code::OK
     }
 
-    /// Every axis homed, or being homed by a homing already accepted (a motion then queues
-    /// behind it; a Halt drops both).
+    /// The arm powered, and every axis homed or being homed by a homing already accepted (a
+    /// motion then queues behind it; a Halt drops both).
     fn need_homed(&mut self, now: f64) -> Result<(), i16> {
+        if !self.powered {
+            return Err(code::ARM_POWER);
+        }
         self.retire(now);
         let mut will_be = self.homed;
         for m in &self.motions {
@@ -717,6 +759,7 @@ impl Arm {
     }
 
     fn push_timed(&mut self, path: Path, profile: Profile) {
+        self.cut_short = false;
         self.motions.push_back(Motion {
             profile,
             path,

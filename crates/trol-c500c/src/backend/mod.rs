@@ -6,7 +6,9 @@
 //!   text of CRS's tables is a refusal with its code and text; any other line, a question
 //!   TROL did not ask, a silence where the prompt was due: TROL_ERR_ROBOT_UNSURE, and
 //!   nothing further is sent;
-//! - a line nobody asked for (`[test: Lost robot power]`) makes the next call UNSURE;
+//! - a line nobody asked for (`[test: Caught SIGABRT]`) makes the next call UNSURE; ash's
+//!   `[test: Lost robot power]` drops the queue and leaves the power's code to the gate and
+//!   the motion's end;
 //! - before a motion, the gate on a fresh `armstat` (power, homed), the point of control
 //!   from ash's own refusal; a motion behind one of TROL's waits in the bounded queue;
 //! - a motion has ended when ash says so (its prompt, or `finish`'s) *and* `w2` reads the arm
@@ -545,8 +547,7 @@ impl C500cBackend {
                 Some(Said::Line(l))
                     if console::bracketed(&l).is_some() && reports::known_error(&l).is_none() =>
                 {
-                    self.say(&format!("unasked: {l}"));
-                    self.unasked.push(l);
+                    self.unasked_line(l);
                 }
                 Some(Said::Line(l)) if reports::known_error(&l).is_none() && !l.contains(':') => {}
                 Some(other) => {
@@ -722,8 +723,7 @@ impl C500cBackend {
                 Some(Said::Line(l))
                     if console::bracketed(&l).is_some() && reports::known_error(&l).is_none() =>
                 {
-                    self.say(&format!("unasked: {l}"));
-                    self.unasked.push(l);
+                    self.unasked_line(l);
                 }
                 Some(Said::Line(l)) => {
                     echo_seen = true;
@@ -731,6 +731,31 @@ impl C500cBackend {
                 }
             }
         }
+    }
+
+    /// A line ash printed of its own. `[<app>: Lost robot power]` (ash's, public) says what
+    /// happened: the arm stands without power. Motions queued behind one under way are
+    /// dropped unsent, the last `armstat` is forgotten (the next motion's gate reads it
+    /// again: BIOS_ARM_POWER until the power is back), and a motion under way ends in the
+    /// power's code when its end is looked for; nothing is UNSURE for it. Any other line
+    /// makes the next call UNSURE.
+    fn unasked_line(&mut self, l: String) {
+        let lost = console::bracketed(&l)
+            .is_some_and(|b| b.trim() == format!("{}: Lost robot power", self.profile.app));
+        if lost {
+            self.say(&format!("the arm lost its power: {l}"));
+            if !self.queue.is_empty() {
+                let n = self.queue.len();
+                self.queue.drop_all();
+                self.note(format!(
+                    "{n} queued motion(s) dropped, not sent: the arm lost its power"
+                ));
+            }
+            self.stat_seen.forget();
+            return;
+        }
+        self.say(&format!("unasked: {l}"));
+        self.unasked.push(l);
     }
 
     /// Before a call: what came unasked makes it UNSURE, as does an earlier call that could
@@ -743,10 +768,7 @@ impl C500cBackend {
                 .map_err(|e| BackendError::Unsure(format!("the console failed: {e}")))?
             {
                 match s {
-                    Said::Line(l) if !l.trim().is_empty() => {
-                        self.say(&format!("unasked: {l}"));
-                        self.unasked.push(l);
-                    }
+                    Said::Line(l) if !l.trim().is_empty() => self.unasked_line(l),
                     Said::Line(_) => {}
                     other => self.unasked.push(other.to_string()),
                 }

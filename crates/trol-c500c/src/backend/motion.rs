@@ -29,8 +29,16 @@ impl C500cBackend {
         // itself where the arm lost power meanwhile (`Arm power is OFF`), which is then the
         // refusal with its code.
         if !self.console_busy() {
-            match self.stat_seen.get(Instant::now()) {
-                Some(stat) => self.stat = stat.clone(),
+            // A reading of a moment ago stands for the arm only where it lets the motion
+            // go: one that would refuse it (no power, not homed) is read again, so that an
+            // arm whose power came back is not refused on a stale word.
+            let fresh = self
+                .stat_seen
+                .get(Instant::now())
+                .filter(|s| s.power && s.homing == Homing::Homed)
+                .cloned();
+            match fresh {
+                Some(stat) => self.stat = stat,
                 None => {
                     let lines = match self.exchange("armstat") {
                         Ok(l) => l,

@@ -19,8 +19,10 @@ fn home_is_success_only_once_armstat_says_homed() {
     assert!(one_motion(&mut r, "after Home"));
 }
 
-/// The arm's power lost during a motion: Finish is never success; with ash's line the next
-/// call says UNSURE, and nothing further is sent.
+/// The arm's power lost during a motion: Finish is never success and names the power, ash's
+/// line `Lost robot power` or not (issue 62: with it, every call after was UNSURE until
+/// reconnect); the next motion is BIOS_ARM_POWER and nothing is sent; with the power back it
+/// goes.
 #[test]
 fn power_lost_mid_motion_is_never_success() {
     for name in ["default", "power-loss-silent", "return-at-end"] {
@@ -32,19 +34,22 @@ fn power_lost_mid_motion_is_never_success() {
         wait_until("the motion starts", || r.moving());
         r.unit.lock().unwrap().set_power_off();
         let e = r.robot.finish().unwrap_err();
-        assert_ne!(e.code().0, 0, "{name}");
-        if name == "power-loss-silent" {
-            // Silent: the stop is read as what it is (issue 62: it was BIOS_NOT_AT_TARGET).
-            assert_eq!(e.code().0, backend::ARM_POWER, "{name}: {e}");
-        }
+        // Silent or said, the stop is read as what it is (issue 62: it was
+        // BIOS_NOT_AT_TARGET).
+        assert_eq!(e.code().0, backend::ARM_POWER, "{name}: {e}");
         assert!(!r.moving(), "{name}");
+        // ash's line, where it prints one, has come by now.
+        std::thread::sleep(Duration::from_millis(50));
         let sent = r.received().len();
         let e = r.robot.joint(1, 0.1).unwrap_err();
-        assert_ne!(e.code().0, 0, "{name}: {e}");
+        assert_eq!(e.code().0, backend::ARM_POWER, "{name}: {e}");
         assert!(
             !r.received()[sent..].iter().any(|l| l.starts_with("joint")),
             "{name}: a motion went out after the power loss"
         );
+        r.unit.lock().unwrap().set_power_on();
+        r.robot.joint(1, 0.1).unwrap();
+        r.robot.finish().unwrap();
     }
 }
 

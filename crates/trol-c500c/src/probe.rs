@@ -426,6 +426,79 @@ pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> Angl
     AnglesRead { contact, reading }
 }
 
+/// What the supervised step `home-pose` saw (`trol c500c step home-pose`).
+#[derive(Debug, Default)]
+pub struct HomeRead {
+    /// The commands, the transcript and the findings, as first contact's.
+    pub contact: Contact,
+    /// Where the arm stood once homed, joints in degrees, read twice alike (the caller
+    /// writes it as `home-joints` once the person at the arm has seen it at its home marks).
+    pub joints: Option<[f64; 6]>,
+}
+
+/// How long a Home may take before the step gives up on it (assumed: six axes, each
+/// searching its switch at the homing speed).
+pub const HOME_WAIT: Duration = Duration::from_secs(180);
+/// How far two readings of the homed arm may differ and be one pose, degrees (the rows' last
+/// decimal and the encoders' dither).
+const HOME_STILL_DEG: f64 = 0.01;
+
+/// The supervised step `home-pose`: after the person at the arm has confirmed it is clear,
+/// with the arm powered (armstat), `home` and `finish` (waited for up to [`HOME_WAIT`]);
+/// then `armstat` must say `Robot is calibrated and homed` and two `w2` a quarter second
+/// apart must put every joint within 0.01 degrees of each other: that pose is where ash
+/// homes this arm. Anything else settles nothing and says why. Whether the arm stands at its
+/// home marks only the person at it can see: the caller asks before writing. The caller has
+/// the confirmation to move; this sends.
+pub fn home_pose_step(port: &mut dyn Port, app: &str, wait: Duration) -> HomeRead {
+    let (mut contact, joints) = in_ash(port, app, wait, |p| {
+        let stat = reports::armstat(&read_at(p, app, "armstat")?).map_err(|e| e.to_string())?;
+        if !stat.power {
+            return Err(
+                "arm power is off: switch it on at the controller, then run the step again".into(),
+            );
+        }
+        let short = p.wait;
+        p.wait = p.wait.max(HOME_WAIT);
+        let homed = (|| {
+            quiet(p, app, "home")?;
+            read_at(p, app, "finish").map(|_| ())
+        })();
+        p.wait = short;
+        homed.map_err(|e| format!("{e} (the arm may stand part way home; check it)"))?;
+        let stat = reports::armstat(&read_at(p, app, "armstat")?).map_err(|e| e.to_string())?;
+        if !stat.power || stat.homing != reports::Homing::Homed {
+            return Err(format!(
+                "after `home` and `finish`, armstat says power {} and {:?}: not homed, nothing \
+                 settled",
+                if stat.power { "on" } else { "off" },
+                stat.homing
+            ));
+        }
+        let a = w2(p, app)?;
+        std::thread::sleep(Duration::from_millis(250));
+        let b = w2(p, app)?;
+        if (0..6).any(|j| (a[j] - b[j]).abs() > HOME_STILL_DEG) {
+            return Err(format!(
+                "the homed arm read {a:?} then {b:?} degrees a quarter second later: it does \
+                 not stand; nothing settled"
+            ));
+        }
+        Ok(b)
+    });
+    if let Some(q) = joints {
+        contact.findings.push(format!(
+            "ash homed the arm to joints {} degrees (home-joints, once you have seen it stand \
+             at its home marks)",
+            q.iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    HomeRead { contact, joints }
+}
+
 /// What the step `pulses` saw (`trol c500c step pulses`).
 #[derive(Debug, Default)]
 pub struct PulsesRead {
@@ -839,6 +912,36 @@ mod tests {
                 "{typed:?}"
             );
         }
+    }
+
+    /// The step `home-pose` on a simulated C500C away from home, not homed and homed: it
+    /// homes the arm and reads where ash homed it (every joint 0 on the twin); with the
+    /// power off it sends nothing that moves, and settles nothing.
+    #[test]
+    fn the_home_pose_step_homes_and_reads_where_the_arm_stands() {
+        for homed in [false, true] {
+            let mut twin = C500c::new(Switches::default(), homed, 20.0);
+            twin.move_by_hand([0.3, -0.2, 0.4, 0.5, -0.6, 0.2]);
+            let unit = Arc::new(Mutex::new(twin));
+            let s = served(&unit, |host| {
+                home_pose_step(host, "test", Duration::from_secs(3))
+            });
+            let q = s
+                .joints
+                .unwrap_or_else(|| panic!("homed {homed}: {:?}", s.contact.findings));
+            assert!(q.iter().all(|v| v.abs() < 0.01), "homed {homed}: {q:?}");
+            let at = unit.lock().unwrap().joints();
+            assert!(at.iter().all(|v| v.abs() < 1e-3), "{at:?}");
+        }
+        let mut twin = C500c::new(Switches::default(), true, 20.0);
+        twin.set_power_off();
+        let unit = Arc::new(Mutex::new(twin));
+        let s = served(&unit, |host| {
+            home_pose_step(host, "test", Duration::from_secs(3))
+        });
+        assert_eq!(s.joints, None);
+        let typed = unit.lock().unwrap().received().to_vec();
+        assert!(!typed.iter().any(|l| l == "home"), "{typed:?}");
     }
 
     /// The simulated C500C of `sw` in real time (the step compares the prompt's time with

@@ -55,8 +55,8 @@ pub struct Profile {
     /// same step).
     pub pulses_at_zero: Option<[i64; 6]>,
     /// Where the arm stands once homed, joints in degrees (not public for an A465 on a
-    /// C500C): set, a Home is done only with the arm read there; unset, on armstat's word,
-    /// the arm homed and standing.
+    /// C500C): a Home is done only with the arm read there; unset, a Home is refused
+    /// (BIOS_UNSETTLED) before anything is sent (`trol c500c step home-pose` reads it).
     pub home_joints: Option<[f64; 6]>,
     /// How far (degrees) each joint may stand from `home-joints` and be home (0.1, assumed).
     pub home_within_deg: f64,

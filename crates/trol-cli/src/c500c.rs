@@ -26,7 +26,10 @@ Examples:
     /// is read from where w2 puts the arm right then; it asks for `yes` first (--yes: already
     /// confirmed). `pulses` (supervised: the arm moves): each joint in turn by 3 degrees at
     /// 5 % speed and back, `w2` after each; its pulses per degree and where it counts from
-    /// (`pulses-per-degree`, `pulses-at-zero`); it asks for `yes` first. `world-angles` (reads
+    /// (`pulses-per-degree`, `pulses-at-zero`); it asks for `yes` first. `home-pose`
+    /// (supervised: the arm moves): ash's `home`, then where the arm stands homed
+    /// (`home-joints`), written once you confirm it stands at its home marks (--yes: both
+    /// confirmed); a Home is refused until it is set. `world-angles` (reads
     /// only): which reading of the WORLD row's angles puts the flange where TROL's kinematics
     /// put it from the JOINTS row, with the arm standing where the readings differ (a wrist
     /// joint turned). Every byte goes to --out.
@@ -35,6 +38,7 @@ Examples:
   trol c500c step motion-return --controller /dev/ttyUSB0 --profile c500c.toml --out step.txt
   trol c500c step world-angles --controller /dev/ttyUSB0 --profile c500c.toml --out angles.txt
   trol c500c step pulses --controller /dev/ttyUSB0 --profile c500c.toml --out pulses.txt
+  trol c500c step home-pose --controller /dev/ttyUSB0 --profile c500c.toml --out home.txt
   trol sim --c500c --homed &    # a simulated C500C; then:
   trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
     Step(StepArgs),
@@ -103,6 +107,9 @@ pub enum StepName {
     /// Each joint's pulses per degree and where it counts from (`pulses-per-degree`,
     /// `pulses-at-zero`).
     Pulses,
+    /// Where ash homes the arm (`home-joints`): a Home, then two readings; written once you
+    /// have seen the arm at its home marks.
+    HomePose,
 }
 
 #[derive(Args, Debug)]
@@ -297,6 +304,11 @@ fn step(a: StepArgs) -> Result<(), String> {
             trol_c500c::probe::STEP_DEG,
             trol_c500c::probe::STEP_SPEED
         )),
+        StepName::HomePose => Some(
+            "trol c500c step home-pose moves the arm: ash's `home` drives every axis to its \
+             home switch (bring the arm near its home position by pendant first)"
+                .to_string(),
+        ),
         StepName::WorldAngles => None,
     };
     if let Some(what) = moves
@@ -334,6 +346,31 @@ fn step(a: StepArgs) -> Result<(), String> {
                 profile.tool_rotation = Some(r.frame);
             }
             (s.contact, s.reading.is_some())
+        }
+        StepName::HomePose => {
+            say!("trol c500c step home-pose: on the C500C at {device}");
+            let s = trol_c500c::probe::home_pose_step(port.as_mut(), &a.app, wait);
+            let seen = match s.joints {
+                Some(q) if a.yes => Some(q),
+                Some(q) => {
+                    if let Some(f) = s.contact.findings.last() {
+                        say!("  {f}");
+                    }
+                    say!(
+                        "Does the arm stand at its home marks (each joint's alignment marks \
+                         meet)? Type yes to write home-joints:"
+                    );
+                    let mut answer = String::new();
+                    let _ = std::io::stdin().read_line(&mut answer);
+                    (answer.trim() == "yes").then_some(q)
+                }
+                None => None,
+            };
+            if let Some(q) = seen {
+                // Three decimals, as w2 prints them.
+                profile.home_joints = Some(q.map(|v| (v * 1e3).round() / 1e3 + 0.0));
+            }
+            (s.contact, seen.is_some())
         }
         StepName::Pulses => {
             say!("trol c500c step pulses: on the C500C at {device}");

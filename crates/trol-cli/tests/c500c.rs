@@ -713,6 +713,71 @@ fn the_pulses_step_asks_first_and_its_profile_approaches_a_precision_point() {
     assert!((gap - 10.0).abs() < 0.5, "{gap} mm from the point: {out}");
 }
 
+/// `trol c500c step home-pose` (issue 62, item 1): a Home is refused until the profile says
+/// where ash homes the arm; the step homes it after `yes`, shows the joints, and writes
+/// `home-joints` only once the person at the arm answers `yes` again (a `no` writes
+/// nothing); then the interpreter's Home works, and ends with the arm there.
+#[test]
+fn the_home_pose_step_writes_where_ash_homes_the_arm_once_confirmed() {
+    let dir = scratch("c500c-home-pose");
+    let sim = Background::start(
+        &dir,
+        &["sim", "--c500c", "--time-scale", "10"],
+        "serving on ",
+    );
+    let out = trol(&dir, &["sim", "--c500c", "--print-profile"], "");
+    let printed = String::from_utf8_lossy(&out.stdout).to_string();
+    let without: String = printed
+        .lines()
+        .filter(|l| !l.starts_with("home-joints"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("c500c.toml"), &without).unwrap();
+    c500c_cfg(&dir, &sim.name, true);
+    let o = trol(&dir, &["interp"], "home 0\n");
+    let (out, err) = text(&o);
+    assert!(out.contains("-28 (BIOS_UNSETTLED)"), "{out}");
+    // The interpreter says why, in the backend's words.
+    assert!(err.contains("home-joints"), "{err}");
+    let step = |answers: &str| {
+        trol(
+            &dir,
+            &[
+                "c500c",
+                "step",
+                "home-pose",
+                "--controller",
+                sim.name.as_str(),
+                "--profile",
+                "c500c.toml",
+                "--out",
+                "home.txt",
+            ],
+            answers,
+        )
+    };
+    // Homed, but the person at the arm does not confirm the marks: nothing written.
+    let o = step("yes\nno\n");
+    let (out, err) = text(&o);
+    assert!(!o.status.success(), "{out}");
+    assert!(out.contains("home marks"), "{out}\n{err}");
+    let profile = std::fs::read_to_string(dir.join("c500c.toml")).unwrap();
+    assert!(!profile.contains("home-joints"), "{profile}");
+    let o = step("yes\nyes\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+    let profile = std::fs::read_to_string(dir.join("c500c.toml")).unwrap();
+    // Where the simulated C500C homes (every joint 0), to the encoders' dither.
+    let home = trol_c500c::Profile::parse(&profile)
+        .unwrap()
+        .home_joints
+        .unwrap_or_else(|| panic!("{profile}"));
+    assert!(home.iter().all(|v| v.abs() < 0.01), "{profile}");
+    let o = trol(&dir, &["interp"], "home 0\nfinish\n");
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{out}\n{err}");
+}
+
 /// `trol c500c step world-angles` reads only: where the arm stands so that both orders of
 /// the WORLD row's angles coincide (READY) it settles nothing and says what to do; with a
 /// wrist joint turned it writes the controller's reading (the order, and the frame the

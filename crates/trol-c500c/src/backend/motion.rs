@@ -22,6 +22,15 @@ impl C500cBackend {
                  `motion-return` measures it)",
             );
         }
+        if matches!(m.kind, Kind::Home) && self.profile.home_joints.is_none() {
+            // A Home is done only with the arm seen at its home pose (issue 62): without it
+            // in the profile TROL could only take ash's word.
+            return self.unsettled(
+                "a Home is done only with the arm seen at its home pose, which is not public \
+                 for an A465 on a C500C: set `home-joints` in the C500C profile (`trol c500c \
+                 step home-pose` homes the arm under supervision and reads it)",
+            );
+        }
         // While ash runs a motion of TROL's to its end it reads no command: the gate then
         // takes the status read before that motion (a fault meanwhile ends it with a line).
         // Else `armstat`, unless it was read, or a motion of TROL's was seen to end, a moment

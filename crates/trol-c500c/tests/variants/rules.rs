@@ -706,4 +706,19 @@ fn home_is_done_only_at_the_profile_s_home_pose() {
             }
         }
     }
+    // Without the home pose in the profile a Home is refused before anything is sent: ash's
+    // word alone would be all TROL had.
+    let mut profile = c500c::matching_profile(&sw);
+    profile.home_joints = None;
+    let mut r = rig(sw.clone(), false, profile);
+    let sent = r.received().len();
+    let e = r.robot.home(0).unwrap_err();
+    assert_eq!(e.code().0, backend::UNSETTLED, "{e}");
+    assert!(r.said().contains("home-joints"), "{}", r.said());
+    assert!(
+        !r.received()[sent..].iter().any(|l| l == "home"),
+        "{:?}",
+        r.received()
+    );
+    assert!(!r.moving());
 }

@@ -340,6 +340,16 @@ impl Session {
                         say!("{}  ->  {text}", line.trim());
                     }
                     eprintln!("{}error: {} failed: {text}", prefix(origin), def.name);
+                    // Why, in the words of an embedded real controller's backend (the
+                    // profile key a BIOS_UNSETTLED needs, what the controller printed).
+                    let why = self
+                        .robot
+                        .as_mut()
+                        .map(|r| r.take_controller_said())
+                        .unwrap_or_default();
+                    for l in why {
+                        eprintln!("  {l}");
+                    }
                     if let Some(hint) = next_step(&text) {
                         eprintln!("  hint: {hint}");
                     }
@@ -368,6 +378,8 @@ impl Session {
                 return Err((e, j));
             }
         };
+        // What the backend said before this call is not this call's reason.
+        robot.take_controller_said();
         let codes = robot.codes();
         let plain = !(def.code == table::HOME.code
             || (def.code == table::FINISH.code

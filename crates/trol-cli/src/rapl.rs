@@ -25,7 +25,9 @@ Examples:
   trol rapl probe --controller /dev/ttyUSB0 --out first.txt --profile-out contact.toml
   trol rapl probe --controller /dev/ttyUSB0 --profile contact.toml --out poses.txt --poses 4 \\
     --profile-out poses.toml
-  trol rapl probe --controller /dev/ttyUSB0 --profile poses.toml --out steps.txt --measure \\
+  trol rapl probe --controller /dev/ttyUSB0 --profile poses.toml --out home.txt --home-pose \\
+    --profile-out homed.toml
+  trol rapl probe --controller /dev/ttyUSB0 --profile homed.toml --out steps.txt --measure \\
     --profile-out c500.toml
 
 At each pose the probe waits for Enter (end of input stops the poses early). Keep the
@@ -56,6 +58,12 @@ pub struct ProbeArgs {
     /// Ask for this many poses by pendant and fit the conventions from them.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=20))]
     poses: u16,
+    /// Right after HOME (typed in `trol rapl term`), with the arm not moved since: record
+    /// where it stands as `home_joints` once you confirm it stands at its home marks (reads
+    /// only: STATUS, and W2 twice). A Home through TROL is refused until the profile has
+    /// them.
+    #[arg(long)]
+    home_pose: bool,
     /// After first contact (and the poses), settle by supervised motions what no reading
     /// tells: MA/MI's units (MI of 0.05 on joint 6), JOG's frame (JOG 0,0,1, where the tool
     /// does not point up), when a motion's ACK comes (JOINT 6,20) and which stop (HALT,
@@ -149,6 +157,34 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
         let mut line = String::new();
         Ok(input.read_line(&mut line)? > 0)
     });
+    // Where HOME leaves the arm (issue 62: a Home is done only with the arm seen there),
+    // recorded once the person at it has seen it at its home marks.
+    let home_pose = if a.home_pose {
+        say!(
+            "Does the arm stand where HOME left it (not moved since), each joint at its home \
+             marks? Type yes to record where it stands as home_joints (a Home is refused \
+             until the profile has them), anything else to skip:"
+        );
+        let mut line = String::new();
+        let yes = input.read_line(&mut line).is_ok() && line.trim().eq_ignore_ascii_case("yes");
+        if yes {
+            match trol_rapl::probe::home_pose(&mut b) {
+                Ok(q) => {
+                    say!("home_joints = {q:?}");
+                    Some(q)
+                }
+                Err(e) => {
+                    say!("home_joints not recorded: {e}");
+                    None
+                }
+            }
+        } else {
+            say!("home_joints not recorded: a Home stays refused until the profile has them");
+            None
+        }
+    } else {
+        None
+    };
     let measured = if a.measure {
         say!(
             "the arm will move: SPEED 5, then MI 0,0,0,0,0,0.05 and back, JOG 0,0,1 and back, \
@@ -236,6 +272,10 @@ fn probe(a: ProbeArgs) -> Result<(), String> {
     if let Some(m) = &measured {
         profile = m.apply(&profile);
         learned.push("joint_units, jog_frame, motion_ack (supervised steps)".into());
+    }
+    if let Some(q) = home_pose {
+        profile.home_joints = Some(q);
+        learned.push("home_joints (where HOME left the arm, confirmed at its marks)".into());
     }
     if learned.is_empty() {
         return Err("nothing was learned: no profile written".into());

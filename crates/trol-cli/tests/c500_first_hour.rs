@@ -81,8 +81,14 @@ fn the_first_hour_runs_as_written_against_the_simulated_c500() {
             let run = trol(&dir, &argv, "HOME\n");
             let (o, e) = text(&run);
             assert!(run.status.success(), "{command}:\n{o}\n{e}");
+        } else if args.contains(&"--home-pose".to_string()) {
+            // The arm where HOME left it, at its marks: yes.
+            let run = trol(&dir, &argv, "yes\n");
+            let (o, e) = text(&run);
+            assert!(run.status.success(), "{command}:\n{o}\n{e}");
+            assert!(o.contains("home_joints = ["), "{command}:\n{o}");
             // Then the operator brings the arm into free space by pendant, the tool not
-            // pointing up (the pendant's motion queues behind the homing).
+            // pointing up.
             sim.type_line("10 20 40 30 -50 -20");
             sim.wait_for("pendant: at", 120);
         } else if args.contains(&"--measure".to_string()) {
@@ -105,6 +111,9 @@ fn the_first_hour_runs_as_written_against_the_simulated_c500() {
     assert_eq!(p.joint_units, "degrees");
     assert_eq!(p.jog_frame, "world");
     assert_eq!(p.halt, trol_rapl::profile::Halt::Halt);
+    // Where HOME left the simulated arm: every joint 0, to the encoders' dither.
+    let home = p.home_joints.expect("home_joints recorded");
+    assert!(home.iter().all(|v| v.abs() < 0.01), "{home:?}");
     // Step 6: the first supervised moves through TROL.
     std::fs::write(
         dir.join("trol.cfg"),

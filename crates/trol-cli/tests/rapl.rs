@@ -650,8 +650,8 @@ fn c_connections_keep_their_own_codes_and_errors() {
     std::io::Read::read_to_string(&mut out, &mut rest).unwrap();
     text.push_str(&rest);
     assert!(child.wait().unwrap().success(), "{text}");
-    assert!(text.contains("a -8: BIOS_ARM_POWER"), "{text}");
-    assert!(text.contains("b -8: code -8: not one of TROL's"), "{text}");
+    assert!(text.contains("a -9: BIOS_NO_ANGLES"), "{text}");
+    assert!(text.contains("b -9: code -9: not one of TROL's"), "{text}");
     assert!(text.contains("b -1: BIOS_NOT_HOMED"), "{text}");
     assert!(
         text.contains("b: -32001, last comm error 0x0008 (side 1), changed 0 times"),

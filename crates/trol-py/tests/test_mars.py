@@ -98,9 +98,9 @@ def test_a_python_script_drives_the_mars8_through_trol_gateway(tmp_path: Path) -
             assert robot.version()[1] == "MARS 8"
             # The unit's codes came with the version check (TROLGetCodes), not from a table
             # this end picked by the kind's words.
-            assert robot.codes()[-8][0] == "BIOS_ARM_POWER"
-            assert robot.describe(-8).startswith("-8 (BIOS_ARM_POWER): ")
-            assert trol.describe(-8) == "-8 (BIOS code)"
+            assert robot.codes()[-21][0] == "BIOS_MOTION_STOP"
+            assert robot.describe(-21).startswith("-21 (BIOS_MOTION_STOP): ")
+            assert trol.describe(-21) == "-21 (BIOS code)"
             robot.home()
             robot.ma([0.2, 0.1, 0.8, 0.0, 0.6, 0.0])
             robot.finish()

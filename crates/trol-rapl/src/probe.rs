@@ -483,6 +483,47 @@ pub const MEASURE: &[&str] = &[
     "ABORT",
 ];
 
+/// Where the arm stands homed: STATUS must show it powered, homed and at rest (a HOME under
+/// way is waited for), and two W2 a quarter
+/// second apart must put each joint within 0.01 of each other (the JOINTS row, in the
+/// controller's units). Reads only. Whether that is where HOME left it, at the arm's home
+/// marks, only the person at the arm can say: the caller asks before recording it as
+/// `home_joints`.
+pub fn home_pose(b: &mut RaplBackend) -> Result<[f64; 6], String> {
+    // A HOME still under way (a terminal's HOME returns at its ACK) is waited for, within
+    // the profile's motion timeout.
+    let until =
+        std::time::Instant::now() + std::time::Duration::from_secs(b.profile().motion_timeout_s);
+    loop {
+        let st = b.read_only("STATUS").map_err(|e| e.to_string())?;
+        let st = crate::text::read_status(&st.text)?;
+        if st.limp.iter().any(|l| *l) {
+            return Err("the arm has no power (LIMP): nothing read".into());
+        }
+        if st.homed.iter().all(|h| *h) && st.done.iter().all(|d| *d) {
+            break;
+        }
+        if std::time::Instant::now() >= until {
+            return Err(format!(
+                "the arm was not homed and at rest within {} s (STATUS's HOMED and DONE rows): \
+                 HOME it first",
+                b.profile().motion_timeout_s
+            ));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+    let a = read_position(&b.read_only("W2").map_err(|e| e.to_string())?.text)?;
+    std::thread::sleep(std::time::Duration::from_millis(250));
+    let p = read_position(&b.read_only("W2").map_err(|e| e.to_string())?.text)?;
+    if (0..6).any(|j| (a.joints[j] - p.joints[j]).abs() > 0.01) {
+        return Err(format!(
+            "the arm read {:?} then {:?} a quarter second later: it does not stand",
+            a.joints, p.joints
+        ));
+    }
+    Ok(p.joints)
+}
+
 /// Settle by supervised motions what no reading tells (c500-rapl.md §1.6; docs/c500.md step
 /// 5), once the operator has confirmed the arm is free to move: at SPEED 5, `MI` of 0.05 on
 /// joint 6 (0.05 degrees or 2.9: the units of MA and MI), `JOG 0,0,1` (one unit: along the

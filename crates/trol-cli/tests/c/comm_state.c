@@ -55,8 +55,8 @@ int main(int argc, char **argv)
     trol_set_user(b, "b");
     trol_set_err_on_send(a, on_send);
     trol_set_err_on_send(b, on_send);
-    printf("a -8: %s\n", trol_strerror_for(a, -8));
-    printf("b -8: %s\n", trol_strerror_for(b, -8));
+    printf("a -9: %s\n", trol_strerror_for(a, -9));
+    printf("b -9: %s\n", trol_strerror_for(b, -9));
     printf("b -1: %s\n", trol_strerror_for(b, -1));
     printf("stop b\n");
     fflush(stdout);

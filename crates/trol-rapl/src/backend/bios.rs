@@ -120,6 +120,17 @@ impl Backend for RaplBackend {
             ));
             return Ok(UNSUPPORTED);
         }
+        if self.profile.home_joints.is_none() {
+            // A Home is done only with the arm seen at its home pose (issue 62): without it
+            // in the profile TROL could only take STATUS's word.
+            self.note(
+                "refused before sending: a Home is done only with the arm seen at its home \
+                 pose, which is not public for an A465: set `home_joints` in the RAPL-II \
+                 profile (`trol rapl probe --measure` reads it once HOME has run; docs/c500.md)"
+                    .into(),
+            );
+            return Ok(UNSETTLED);
+        }
         self.motion_with(true, |b, busy| {
             b.submit(
                 Motion {

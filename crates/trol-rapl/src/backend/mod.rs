@@ -81,10 +81,13 @@ pub const NO_UNITS: i16 = -13;
 pub const NO_PULSES: i16 = -14;
 /// A straight Jog needs JOG's frame.
 pub const NO_JOG_FRAME: i16 = -15;
+/// A call needs a profile key that is not set (the log names it): a Home needs the arm's
+/// home pose (`home_joints`). The C500C's BIOS_UNSETTLED, the same number.
+pub const UNSETTLED: i16 = -28;
 
 /// The BIOS codes of the RAPL-II backend: the simulator's, and those of a real controller.
 pub static RAPL_CODES: &CodeTable = &{
-    const EXTRA: [CodeInfo; 10] = [
+    const EXTRA: [CodeInfo; 11] = [
         CodeInfo {
             value: ARM_POWER,
             name: "BIOS_ARM_POWER",
@@ -132,6 +135,12 @@ pub static RAPL_CODES: &CodeTable = &{
             name: "BIOS_NO_JOG_FRAME",
             meaning: "a straight Jog needs JOG's frame: set `jog_frame` (world or tool) in the \
                       RAPL-II profile (docs/c500.md, section Settle the conventions)",
+        },
+        CodeInfo {
+            value: UNSETTLED,
+            name: "BIOS_UNSETTLED",
+            meaning: "a Home needs the arm's home pose: set `home_joints` in the RAPL-II profile \
+                      (`trol rapl probe --measure` reads it after HOME)",
         },
         CodeInfo {
             value: BUSY,

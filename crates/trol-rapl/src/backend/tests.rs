@@ -441,4 +441,9 @@ fn home_is_done_only_at_the_profile_s_home_pose() {
             ),
         }
     }
+    // Without it, refused before anything is typed: STATUS's word alone is not the arm seen.
+    let (mut b, log) = on("not-homed", false);
+    b.profile.home_joints = None;
+    assert_eq!(code(b.home(0)), UNSETTLED);
+    assert!(!ran(&log).iter().any(|l| l == "HOME"), "{:?}", ran(&log));
 }

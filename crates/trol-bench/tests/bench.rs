@@ -172,7 +172,9 @@ fn the_relay_carries_the_protocols_bytes_and_turns_at_the_line_rate() {
 
 /// The whole path to a C500 through real processes (`trol gateway` between two relay
 /// processes): every completion's Finish after the arm stood (the bench fails if it
-/// returned before), and FINISH's answer sooner than STATUS and W2, as in one process.
+/// returned before), each timed. Which completion is sooner is a figure of the bench
+/// (docs/performance.md), not a check: two samples on a loaded machine may come either
+/// way (it failed so under CI's load, 174 ms against 159 ms).
 #[test]
 fn the_gateway_bench_runs_through_real_processes() {
     let dir = scratch("bench-gateway-processes");
@@ -196,8 +198,11 @@ fn the_gateway_bench_runs_through_real_processes() {
     assert_eq!(v["through_processes"], true, "{out}");
     let finish = v["finish"].as_array().unwrap();
     assert_eq!(finish.len(), 4, "{out}");
-    let median = |i: usize| finish[i]["after_motion_end"]["median_ms"].as_f64().unwrap();
-    assert!(median(3) >= 0.0 && median(3) < median(0), "{out}");
+    for f in finish {
+        let median = f["after_motion_end"]["median_ms"].as_f64();
+        assert!(median.is_some_and(|m| m.is_finite() && m >= 0.0), "{out}");
+        assert_eq!(f["moves"], 2, "{out}");
+    }
 }
 
 /// The pick example's cycle through a paced line, against the arm's own limit: the

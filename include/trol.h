@@ -52,7 +52,7 @@ typedef uint8_t  TUCCHAR;
 #define TROL_ERR_NOT_INIT  (-32004) /* called before InitTROL succeeded, or after CleanupTROL: nothing was sent (not in the manual) */
 #define TROL_ERR_UNKNOWN   (-32051)
 #define TROL_ERR_BAD_CSIZE (-32052)
-#define TROL_ERR_ROBOT     (-32053) /* the controller lost its link to the robot; the command did not run (not in the manual) */
+#define TROL_ERR_ROBOT     (-32053) /* the command did not reach the robot (link failed, answer unreadable); it did not run (not in the manual) */
 #define TROL_ERR_ROBOT_UNSURE (-32054) /* the link to the robot failed after the command was sent: it may have run (not in the manual) */
 #define TROL_ERR_NOT_STOPPED (-32055) /* Halt: every stop was sent and the arm was not seen standing: it may still move (not in the manual) */
 #define TROL_ERR_HALTED    (-32056) /* Finish: the motion was halted by someone else (pendant, another program, watchdog) (not in the manual) */

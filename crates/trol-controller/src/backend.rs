@@ -137,9 +137,10 @@ pub enum BackendError {
     /// The controller's table has no location of this name (TROL_ERR_LOCATION).
     #[error("no location named {0} in the controller's table")]
     UnknownLocation(LocName),
-    /// The link to the robot failed before the command reached it: it did not run
-    /// (TROL_ERR_ROBOT).
-    #[error("the link to the robot failed: {0}")]
+    /// The command did not reach the robot, and did not run (TROL_ERR_ROBOT): the link
+    /// failed, the robot's answer to a read before it was not in the form the backend reads,
+    /// or the command's line came back damaged and was taken back. The text says which.
+    #[error("the command did not reach the robot, and did not run: {0}")]
     Link(String),
     /// The link to the robot failed after the command was sent: it may have run
     /// (TROL_ERR_ROBOT_UNSURE; GetStatus reports the BIOS as called).

@@ -70,8 +70,10 @@ pub const TROL_ERR_NOT_INIT: Code = Code(-32004);
 pub const TROL_ERR_UNKNOWN: Code = Code(-32051);
 /// The request has not the size its command expects (controller).
 pub const TROL_ERR_BAD_CSIZE: Code = Code(-32052);
-/// The controller lost its link to the robot's firmware before the command reached it: it
-/// did not run (controller; not in the manual, whose PCP called the BIOS directly).
+/// The controller could not get the command to the robot's firmware: its link failed, the
+/// robot's answer to a read before it was not in the form the controller reads, or the
+/// command line came back damaged and was taken back. It did not run (controller; not in
+/// the manual, whose PCP called the BIOS directly).
 pub const TROL_ERR_ROBOT: Code = Code(-32053);
 /// The controller lost its link to the robot's firmware after the command was sent: it may
 /// have run, and GetStatus reports the BIOS as called (controller; not in the manual).
@@ -127,8 +129,8 @@ pub const TROL_CODES: &CodeTable = &[
     CodeInfo {
         value: TROL_ERR_ROBOT.0,
         name: "TROL_ERR_ROBOT",
-        meaning: "the controller lost its link to the robot before the command reached it: \
-                  it did not run",
+        meaning: "the controller could not get the command to the robot (its link failed, \
+                  or the robot answered in a form it cannot read): it did not run",
     },
     CodeInfo {
         value: TROL_ERR_ROBOT_UNSURE.0,

@@ -27,8 +27,9 @@ Examples:
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]
 pub struct GatewayArgs {
-    /// The C500's host port: a serial device (or socket://HOST:PORT to a networked one),
-    /// opened at the profile's baud rate; or mars:DEVICE for an A465 on a MARS 8; or
+    /// The C500's host port: a serial device (or socket://HOST:PORT to a networked one;
+    /// `rapl:DEVICE` as in trol.cfg is the same), opened at the profile's baud rate; or
+    /// mars:DEVICE for an A465 on a MARS 8; or
     /// c500c:DEVICE for an A465 on its C500C (the front console).
     #[arg(long, value_name = "DEVICE")]
     controller: String,
@@ -95,7 +96,9 @@ pub fn run(a: GatewayArgs) -> Result<(), String> {
         baud: profile.baud,
         ..Default::default()
     };
-    let port = trol_port::open(&a.controller, &settings).map_err(|e| e.to_string())?;
+    // `rapl:DEVICE`, as trol.cfg names a C500, is the same device.
+    let device = a.controller.strip_prefix("rapl:").unwrap_or(&a.controller);
+    let port = trol_port::open(device, &settings).map_err(|e| e.to_string())?;
     let backend = trol_rapl::RaplBackend::connect_with(
         port,
         profile,

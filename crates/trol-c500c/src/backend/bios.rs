@@ -187,7 +187,10 @@ impl Backend for C500cBackend {
         }
         if self.jaws_wait.is_some() {
             self.clean()?;
-            return self.look_jaws();
+            if self.look_jaws()? {
+                return Ok(true);
+            }
+            // The jaws stand: a motion queued behind them goes now.
         }
         if self.outstanding.is_none() {
             self.clean()?;

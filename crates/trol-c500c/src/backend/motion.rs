@@ -7,14 +7,6 @@ impl C500cBackend {
     /// The gate and the queue, then the motion.
     pub(super) fn motion(&mut self, m: Motion) -> BiosResult {
         self.clean()?;
-        // The arm does not move while the gripper's jaws do (the manual: TROLFinish after a
-        // grip command).
-        if self.jaws_wait.is_some() && self.look_jaws()? {
-            self.note(
-                "refused: the gripper has not ended: call TROLFinish(FINISH_WAIT) first".into(),
-            );
-            return Ok(BUSY);
-        }
         if self.profile.motion_return.is_none() {
             return self.unsettled(
                 "a motion needs to know when ash gives its prompt back: set `motion-return = \
@@ -58,7 +50,10 @@ impl C500cBackend {
                 }
             }
         }
-        let ours = self.outstanding.is_some() || !self.queue.is_empty();
+        // The arm does not move while the gripper's jaws do: a motion behind a grip command
+        // of TROL's waits in the queue until they stand, as behind a motion (the manual's
+        // TROLClose then TROLDepart runs both; issue 62: it was BIOS_BUSY).
+        let ours = self.outstanding.is_some() || !self.queue.is_empty() || self.jaws_wait.is_some();
         if !ours {
             // Where the arm rests now: the pendant or another program may have moved it
             // since TROL last looked, and the motion's end is computed from it.

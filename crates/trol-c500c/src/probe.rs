@@ -919,8 +919,14 @@ mod tests {
     /// power off it sends nothing that moves, and settles nothing.
     #[test]
     fn the_home_pose_step_homes_and_reads_where_the_arm_stands() {
-        for homed in [false, true] {
-            let mut twin = C500c::new(Switches::default(), homed, 20.0);
+        for (name, homed) in [
+            ("default", false),
+            ("default", true),
+            ("home-elsewhere", false),
+        ] {
+            let sw = crate::c500c::variant(name).unwrap();
+            let want = sw.home_deg;
+            let mut twin = C500c::new(sw, homed, 20.0);
             twin.move_by_hand([0.3, -0.2, 0.4, 0.5, -0.6, 0.2]);
             let unit = Arc::new(Mutex::new(twin));
             let s = served(&unit, |host| {
@@ -928,10 +934,16 @@ mod tests {
             });
             let q = s
                 .joints
-                .unwrap_or_else(|| panic!("homed {homed}: {:?}", s.contact.findings));
-            assert!(q.iter().all(|v| v.abs() < 0.01), "homed {homed}: {q:?}");
+                .unwrap_or_else(|| panic!("{name}, homed {homed}: {:?}", s.contact.findings));
+            assert!(
+                (0..6).all(|j| (q[j] - want[j]).abs() < 0.01),
+                "{name}, homed {homed}: {q:?}"
+            );
             let at = unit.lock().unwrap().joints();
-            assert!(at.iter().all(|v| v.abs() < 1e-3), "{at:?}");
+            assert!(
+                (0..6).all(|j| (at[j] - want[j].to_radians()).abs() < 1e-3),
+                "{at:?}"
+            );
         }
         let mut twin = C500c::new(Switches::default(), true, 20.0);
         twin.set_power_off();

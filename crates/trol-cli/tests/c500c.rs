@@ -231,6 +231,7 @@ pick_on_variants! {
     pick_world_flange => "world-flange",
     pick_pulses_offset => "pulses-offset",
     pick_rows_apart => "rows-apart",
+    pick_home_elsewhere => "home-elsewhere",
 }
 
 macro_rules! position_on_variants {
@@ -272,6 +273,7 @@ position_on_variants! {
     position_world_flange => "world-flange",
     position_pulses_offset => "pulses-offset",
     position_rows_apart => "rows-apart",
+    position_home_elsewhere => "home-elsewhere",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; with one that
@@ -489,6 +491,7 @@ gateway_on_variants! {
     gateway_world_flange => "world-flange",
     gateway_pulses_offset => "pulses-offset",
     gateway_rows_apart => "rows-apart",
+    gateway_home_elsewhere => "home-elsewhere",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

@@ -133,6 +133,7 @@ c_examples_on_variants! {
     c_examples_nul_after_digit => "nul-after-digit",
     c_examples_no_echo => "no-echo",
     c_examples_not_homed => "not-homed",
+    c_examples_home_elsewhere => "home-elsewhere",
     c_examples_jog_tool => "jog-tool",
     c_examples_halt_ignored => "halt-ignored",
     c_examples_ctrl_c_cancels_line => "ctrl-c-cancels-line",

@@ -384,6 +384,10 @@ pub struct Twin {
     /// Whether it names itself in its refusal of the probe's word (false: it plays a real
     /// C500, for the test that a simulator's profile is refused there).
     pub names_itself: bool,
+    /// Where HOME leaves each joint, degrees (the JOINTS row there). Not public for an A465:
+    /// every joint's 0 by default, [0, 0, 90, 0, 90, 0] on the variant `home-elsewhere` (an
+    /// assumed figure: a profile that takes the default's pose must fail there).
+    pub home_deg: [f64; 6],
 }
 
 /// How the simulated C500 takes FINISH typed in immediate mode.
@@ -415,6 +419,7 @@ impl Default for Twin {
             ctrl_c_stops: None,
             names_itself: true,
             jog_tool: false,
+            home_deg: [0.0; 6],
         }
     }
 }

@@ -52,6 +52,8 @@ struct Run<'a> {
     halt_cannot: bool,
     /// This controller's JOG moves along the tool's axes.
     jog_tool: bool,
+    /// Where this controller's HOME leaves the arm (radians).
+    home: [f64; 6],
     false_success: Vec<String>,
     unasked: Vec<String>,
     missed: Vec<String>,
@@ -231,7 +233,7 @@ impl Run<'_> {
 
     fn script(&mut self) {
         self.plain("speed 50", |r| r.speed(50));
-        self.motion("home", Want::Joints([0.0; 6]), |r| r.home(0));
+        self.motion("home", Want::Joints(self.home), |r| r.home(0));
         self.motion("move test_001", Want::Pose(TEST_001), |r| {
             r.move_to("test_001", false)
         });
@@ -600,6 +602,7 @@ fn run_variant(name: &str, given: Given) {
                 && !UNSTOPPABLE.contains(&name),
             halt_cannot: UNSTOPPABLE.contains(&name),
             jog_tool: twin.twin.jog_tool,
+            home: twin.twin.home_deg.map(f64::to_radians),
             false_success: Vec::new(),
             unasked: Vec::new(),
             missed: Vec::new(),
@@ -685,6 +688,7 @@ variants! {
     nul_after_digit => "nul-after-digit",
     no_echo => "no-echo",
     not_homed => "not-homed",
+    home_elsewhere => "home-elsewhere",
     jog_tool => "jog-tool",
     halt_ignored => "halt-ignored",
     ctrl_c_cancels_line => "ctrl-c-cancels-line",

@@ -269,6 +269,9 @@ pub struct Arm {
     /// A motion or homing was under way when the power went: the Finish after it says so
     /// (BIOS_ARM_POWER) until the next motion is accepted.
     cut_short: bool,
+    /// Where homing leaves each axis (its home switch), radians: every joint's 0 unless a
+    /// controller's twin says otherwise ([`Arm::set_home_pose`]).
+    home_pose: Joints,
 }
 
 impl Arm {
@@ -294,6 +297,7 @@ impl Arm {
             last_line: None,
             powered: true,
             cut_short: false,
+            home_pose: [0.0; 6],
         };
         for o in arm.settings.objects.clone() {
             arm.objects.push(o);
@@ -569,6 +573,13 @@ impl Arm {
         self.powered = false;
     }
 
+    /// Where homing leaves each axis, radians (a controller whose home switches are not at
+    /// every joint's 0: a twin's switch for an open point, issue 62). Every joint's 0 by
+    /// default, as the simulated A465's.
+    pub fn set_home_pose(&mut self, q: Joints) {
+        self.home_pose = q;
+    }
+
     /// Give the arm its power back: it stands where the power left it.
     pub fn power_on(&mut self) {
         self.powered = true;
@@ -629,8 +640,9 @@ impl Arm {
     }
 
     /// Home one axis (1..6) or all (0, in the groups of [`HOME_GROUPS`], one after the
-    /// other): the arm drives the axes to their zero (the home switches) at the homing speed,
-    /// at least HOME_TIME per axis. Its axes are unhomed from the moment it is accepted (it
+    /// other): the arm drives the axes to their home switches (every joint's 0 unless
+    /// [`Arm::set_home_pose`] says otherwise) at the homing speed, at least HOME_TIME per
+    /// axis. Its axes are unhomed from the moment it is accepted (it
     /// references them anew) and count as homed when their group's motion ends; a Halt before
     /// then leaves them unhomed, whether or not they were homed before (issue 62: a halted
     /// Home on a homed arm was reported done), so the Finish after it fails.
@@ -658,7 +670,7 @@ impl Arm {
             let from = self.planned_end();
             let mut to = from;
             for &a in &axes {
-                to[a] = 0.0;
+                to[a] = self.home_pose[a];
             }
             let path = Path::Joint { from, to };
             let (speeds, accels) = self.joint_limits_at(HOME_SPEED);

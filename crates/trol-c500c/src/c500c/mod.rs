@@ -116,6 +116,10 @@ pub struct Switches {
     /// 0 by default (one instant), 40 ms on the variant `rows-apart` (assumed), where a
     /// moving arm's rows disagree and only an arm at rest shows how they relate.
     pub rows_apart: f64,
+    /// Where ash's `home` leaves each joint, degrees. Not public for an A465 on a C500C:
+    /// every joint's 0 by default, [0, 0, 90, 0, 90, 0] on the variant `home-elsewhere`
+    /// (an assumed figure: a profile that takes the default's pose must fail there).
+    pub home_deg: [f64; 6],
 }
 
 impl Switches {
@@ -148,6 +152,7 @@ impl Default for Switches {
             world_frame: [0.0; 3],
             pulses: Pulses::a465_model(),
             rows_apart: 0.0,
+            home_deg: [0.0; 6],
         }
     }
 }
@@ -164,8 +169,8 @@ pub fn matching_profile(sw: &Switches) -> crate::Profile {
         tool_rotation: Some(sw.world_frame),
         pulses_per_degree: Some(sw.pulses.per_degree),
         pulses_at_zero: Some(sw.pulses.at_zero),
-        // The simulated A465 homes every joint to 0 degrees.
-        home_joints: Some([0.0; 6]),
+        // Where this controller homes the arm (what `trol c500c step home-pose` reads).
+        home_joints: Some(sw.home_deg),
         ..crate::Profile::default()
     }
 }
@@ -225,6 +230,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "world-xyz",
         "the WORLD row's angles compose as Rx(c)·Ry(b)·Rz(a), not Rz(a)·Ry(b)·Rx(c)",
+    ),
+    (
+        "home-elsewhere",
+        "ash's `home` leaves joints 3 and 5 at 90 degrees, not every joint at 0",
     ),
     (
         "world-flange",
@@ -310,6 +319,10 @@ pub fn variant(name: &str) -> Option<Switches> {
             world_angles: Angles::Xyz,
             ..d
         },
+        "home-elsewhere" => Switches {
+            home_deg: [0.0, 0.0, 90.0, 0.0, 90.0, 0.0],
+            ..d
+        },
         "world-flange" => Switches {
             world_frame: [0.0, 90.0, 0.0],
             ..d
@@ -392,10 +405,11 @@ impl C500c {
     /// A controller just switched on, in the system shell, the arm at READY with its power on;
     /// `homed` starts it homed and calibrated.
     pub fn new(sw: Switches, homed: bool, time_scale: f64) -> C500c {
-        let arm = Arm::new(ArmSettings {
+        let mut arm = Arm::new(ArmSettings {
             homed,
             ..ArmSettings::default()
         });
+        arm.set_home_pose(sw.home_deg.map(f64::to_radians));
         let mut c = C500c {
             pendant: sw.pendant_holds,
             grip_type: sw.grip_type,

@@ -118,6 +118,8 @@ fn contrary_profile(sw: &Switches) -> Profile {
         }),
         // TROL's tool frame where the controller's angles turn another (`world-flange`).
         tool_rotation: Some([0.0; 3]),
+        // A home pose the controller's is not.
+        home_joints: Some(sw.home_deg.map(|d| if d == 0.0 { 10.0 } else { 0.0 })),
         ..Profile::default()
     }
 }
@@ -387,4 +389,5 @@ each! {
     world_flange => "world-flange",
     pulses_offset => "pulses-offset",
     rows_apart => "rows-apart",
+    home_elsewhere => "home-elsewhere",
 }

@@ -687,25 +687,45 @@ fn codes_at_their_cause() {
 /// degree off on joint 2, the same Home ends in BIOS_NOT_AT_TARGET, never success.
 #[test]
 fn home_is_done_only_at_the_profile_s_home_pose() {
-    let sw = Switches::default();
-    for off in [0.0, 1.0] {
-        let mut profile = c500c::matching_profile(&sw);
-        profile.home_joints = Some([0.0, off, 0.0, 0.0, 0.0, 0.0]);
-        let mut r = rig(sw.clone(), true, profile);
-        r.robot.joint(2, 0.2).unwrap();
-        r.robot.finish().unwrap();
-        let done = r.robot.home(0).and_then(|_| r.robot.finish());
-        wait_until("the arm stands", || !r.moving());
-        assert!(unmoved(&r.joints(), &[0.0; 6]), "homed: {:?}", r.joints());
-        match (off, done) {
-            (0.0, Ok(())) => {}
-            (0.0, Err(e)) => panic!("the agreeing profile: {e}"),
-            (_, Ok(())) => panic!("Home done with the arm off the profile's home pose"),
-            (_, Err(e)) => {
-                assert_eq!(e.code().0, backend::NOT_AT_TARGET, "{e}");
+    // On a controller that homes every joint to 0 and on one that homes elsewhere (its twin's
+    // switch for the open point), with the profile that agrees, one a degree off, and the
+    // other controller's.
+    for name in ["default", "home-elsewhere"] {
+        let sw = c500c::variant(name).unwrap();
+        let other = if name == "default" {
+            c500c::variant("home-elsewhere").unwrap().home_deg
+        } else {
+            [0.0; 6]
+        };
+        let mut off = sw.home_deg;
+        off[1] += 1.0;
+        for (profile_home, agrees) in [(sw.home_deg, true), (off, false), (other, false)] {
+            let mut profile = c500c::matching_profile(&sw);
+            profile.home_joints = Some(profile_home);
+            let mut r = rig(sw.clone(), true, profile);
+            r.robot.joint(2, 0.2).unwrap();
+            r.robot.finish().unwrap();
+            let done = r.robot.home(0).and_then(|_| r.robot.finish());
+            wait_until("the arm stands", || !r.moving());
+            let home = sw.home_deg.map(f64::to_radians);
+            assert!(
+                unmoved(&r.joints(), &home),
+                "{name}: homed at {:?}",
+                r.joints()
+            );
+            match (agrees, done) {
+                (true, Ok(())) => {}
+                (true, Err(e)) => panic!("{name}: the agreeing profile: {e}"),
+                (false, Ok(())) => panic!(
+                    "{name}: Home done with the arm off the profile's home pose {profile_home:?}"
+                ),
+                (false, Err(e)) => {
+                    assert_eq!(e.code().0, backend::NOT_AT_TARGET, "{name}: {e}");
+                }
             }
         }
     }
+    let sw = Switches::default();
     // Without the home pose in the profile a Home is refused before anything is sent: ash's
     // word alone would be all TROL had.
     let mut profile = c500c::matching_profile(&sw);

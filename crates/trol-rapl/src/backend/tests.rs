@@ -426,9 +426,25 @@ fn a_refusal_in_the_profile_s_form_is_a_refusal_with_its_code() {
 /// STATUS's HOMED row reads.
 #[test]
 fn home_is_done_only_at_the_profile_s_home_pose() {
-    for (off, want) in [(0.0, None), (1.0, Some(NOT_AT_TARGET))] {
-        let (mut b, _log) = on("default", true);
-        b.profile.home_joints = Some([0.0, off, 0.0, 0.0, 0.0, 0.0]);
+    // On a controller that homes every joint to 0, and on one whose HOME leaves the arm
+    // elsewhere (the twin's switch for the open point): the profile that agrees, one a
+    // degree off, and the other controller's.
+    let elsewhere = c500::variant("home-elsewhere").unwrap().0.twin.home_deg;
+    let cases = [
+        ("default", [0.0; 6], None),
+        (
+            "default",
+            [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+            Some(NOT_AT_TARGET),
+        ),
+        ("default", elsewhere, Some(NOT_AT_TARGET)),
+        ("home-elsewhere", elsewhere, None),
+        ("home-elsewhere", [0.0; 6], Some(NOT_AT_TARGET)),
+    ];
+    for (name, home, want) in cases {
+        let off = format!("{name} with {home:?}");
+        let (mut b, _log) = on(name, true);
+        b.profile.home_joints = Some(home);
         assert_eq!(code(b.joint(2, 0.2)), 0);
         finish(&mut b).unwrap();
         assert_eq!(code(b.home(0)), 0);

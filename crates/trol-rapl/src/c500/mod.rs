@@ -107,7 +107,8 @@ fn is_numeric(b: u8) -> bool {
 
 impl C500 {
     /// A C500 as `profile` describes it, with `arm`, and the locations (names upper-cased).
-    pub fn new(profile: Profile, arm: Arm, locations: Vec<(String, Stored)>) -> C500 {
+    pub fn new(profile: Profile, mut arm: Arm, locations: Vec<(String, Stored)>) -> C500 {
+        arm.set_home_pose(profile.twin.home_deg.map(f64::to_radians));
         let mut frames = Frames::of(&profile);
         frames.mm = frames.mm.or(Some(1.0));
         frames.angles = frames
@@ -196,10 +197,9 @@ impl C500 {
         if p.jog_frame.is_empty() {
             p.jog_frame = "world".into();
         }
-        if p.home_joints.is_none() {
-            // HOME puts this arm at every joint's zero.
-            p.home_joints = Some([0.0; 6]);
-        }
+        // Where HOME puts this arm (the JOINTS row, degrees), whatever the profile it was
+        // made from said.
+        p.home_joints = Some(p.twin.home_deg);
         if !p.refusal.contains(&p.twin.refusal) {
             p.refusal = vec![p.twin.refusal.clone()];
         }

@@ -57,6 +57,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
     ("no-echo", "echo off (RAPL-II's CONFIG ECHO)"),
     ("not-homed", "the arm is not homed at power-up"),
     (
+        "home-elsewhere",
+        "HOME leaves joints 3 and 5 at 90 degrees, not every joint at 0",
+    ),
+    (
         "finish",
         "completion = \"finish\": FINISH waits in immediate mode, Ctrl-C ends it",
     ),
@@ -127,6 +131,13 @@ pub fn variant(name: &str) -> Option<(Profile, bool)> {
         "ack-at-end" => Profile {
             motion_ack: crate::profile::MotionAck::End,
             halt: Halt::CtrlC,
+            ..base
+        },
+        "home-elsewhere" => Profile {
+            twin: crate::profile::Twin {
+                home_deg: [0.0, 0.0, 90.0, 0.0, 90.0, 0.0],
+                ..twin
+            },
             ..base
         },
         "done-lag" => Profile {

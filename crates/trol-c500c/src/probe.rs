@@ -326,6 +326,10 @@ pub struct AnglesRead {
     /// The reading of the WORLD row (the angles' order and the frame they turn) that puts
     /// the flange where TROL's kinematics put it from the JOINTS row, where exactly one does.
     pub reading: Option<crate::world::Reading>,
+    /// Whether a cartesian location's constant holds the WORLD row's values in its order,
+    /// where the step could tell (`here trolgo`, `print trolgo`, the WORLD row's first and
+    /// last angles apart).
+    pub cloc_world_order: Option<bool>,
 }
 
 /// How far a reading's rotation may be from a right-angle turn of TROL's tool frame and be
@@ -346,14 +350,37 @@ pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> Angl
     use crate::world::{self, Angles, Reading};
     let (mut contact, read) = in_ash(port, app, wait, |p| {
         let lines = read_at(p, app, "w2")?;
-        reports::position(&lines, true).map_err(|e| e.to_string())
+        let pos = reports::position(&lines, true).map_err(|e| e.to_string())?;
+        // How a location holds its angles: TROL's own `trolgo` set where the arm stands,
+        // printed, against the WORLD row, where its first and last angles tell.
+        let order = if crate::backend::cartesian::cloc_order_tells(&pos.world) {
+            cloc_order_at(p, app, &pos.world)?
+        } else {
+            None
+        };
+        Ok((pos, order))
     });
-    let Some(pos) = read else {
+    let Some((pos, cloc_world_order)) = read else {
         return AnglesRead {
             contact,
             reading: None,
+            cloc_world_order: None,
         };
     };
+    match cloc_world_order {
+        Some(true) => contact.findings.push(
+            "`here trolgo`, then `print trolgo`, reads the WORLD row in its order: \
+             cloc-world-order = true"
+                .into(),
+        ),
+        Some(false) => contact.findings.push(
+            "`here trolgo`, then `print trolgo`, does not read the WORLD row in its order: \
+             ash's cartesian locations hold their values otherwise, and TROL writes and reads \
+             none there"
+                .into(),
+        ),
+        None => {}
+    }
     let flange =
         trol_a465::kinematics::Kinematics::new([0.0; 6]).fk(&pos.joints_deg.map(f64::to_radians));
     // For each order: the right-angle frame nearest to what the row turns, and how far off.
@@ -423,7 +450,26 @@ pub fn world_angles_step(port: &mut dyn Port, app: &str, wait: Duration) -> Angl
             None
         }
     };
-    AnglesRead { contact, reading }
+    AnglesRead {
+        contact,
+        reading,
+        cloc_world_order,
+    }
+}
+
+/// `here trolgo` (made with `new _trolgo` where it does not exist: TROL's own location,
+/// nothing moves) and `print trolgo`: whether it reads the WORLD row `world` in its order.
+fn cloc_order_at(p: &mut Probe, app: &str, world: &[f64; 6]) -> Result<Option<bool>, String> {
+    use crate::backend::cartesian::{Cloc, SCRATCH, read_cloc};
+    let print = format!("print {SCRATCH}");
+    if read_cloc(&read_at(p, app, &print)?) == Some(Cloc::Missing) {
+        quiet(p, app, &format!("new _{SCRATCH}"))?;
+    }
+    quiet(p, app, &format!("here {SCRATCH}"))?;
+    Ok(match read_cloc(&read_at(p, app, &print)?) {
+        Some(Cloc::At(got)) => Some(crate::backend::cartesian::same_values(&got, world)),
+        _ => None,
+    })
 }
 
 /// What the supervised step `home-pose` saw (`trol c500c step home-pose`).
@@ -904,14 +950,36 @@ mod tests {
                 "{angles:?} {frame:?} at {q:?}: {:?}",
                 s.contact.findings
             );
+            // Nothing that moves: reads, and TROL's own location set where the arm stands.
             let typed = unit.lock().unwrap().received().to_vec();
+            let reads = [
+                "",
+                "crosver",
+                "ash test",
+                "w2",
+                "exit",
+                "y",
+                "print trolgo",
+                "new _trolgo",
+                "here trolgo",
+            ];
             assert!(
-                typed
-                    .iter()
-                    .all(|l| ["", "crosver", "ash test", "w2", "exit", "y"].contains(&l.as_str())),
+                typed.iter().all(|l| reads.contains(&l.as_str())),
                 "{typed:?}"
             );
+            if settles {
+                assert_eq!(s.cloc_world_order, Some(true), "{:?}", s.contact.findings);
+            }
         }
+        // A controller whose locations hold the angles reversed: seen, and said.
+        let sw = crate::c500c::variant("cloc-reversed").unwrap();
+        let mut twin = C500c::new(sw, true, 10.0);
+        twin.move_by_hand(turned);
+        let unit = Arc::new(Mutex::new(twin));
+        let s = served(&unit, |host| {
+            world_angles_step(host, "test", Duration::from_secs(3))
+        });
+        assert_eq!(s.cloc_world_order, Some(false), "{:?}", s.contact.findings);
     }
 
     /// The step `home-pose` on a simulated C500C away from home, not homed and homed: it

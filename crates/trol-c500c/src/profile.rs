@@ -48,6 +48,12 @@ pub struct Profile {
     /// against TROL's kinematics and refuses when they disagree; `trol c500c step
     /// world-angles` reads both off the arm.
     pub tool_rotation: Option<[f64; 3]>,
+    /// A cartesian location's constant holds the WORLD row's values in the row's order, as
+    /// `trol c500c step world-angles` saw on this arm (`here trolgo`, then `print trolgo`,
+    /// where the first and last angles differ). Unset, TROL sees it itself at the first
+    /// pose that tells, and refuses a cartesian motion that depends on it before then; set or
+    /// not, a pose that tells otherwise refuses every cartesian motion.
+    pub cloc_world_order: bool,
     /// The A465's encoder pulses per degree, joints 1 to 6, on this C500C (unset: an
     /// approach to a precision point is refused; `trol c500c step pulses` measures it).
     pub pulses_per_degree: Option<[f64; 6]>,
@@ -72,6 +78,7 @@ impl Default for Profile {
             end_margin_s: 10,
             world_angles: None,
             tool_rotation: None,
+            cloc_world_order: false,
             pulses_per_degree: None,
             pulses_at_zero: None,
             home_joints: None,

@@ -345,6 +345,9 @@ fn step(a: StepArgs) -> Result<(), String> {
                 profile.world_angles = Some(r.angles);
                 profile.tool_rotation = Some(r.frame);
             }
+            if let Some(seen) = s.cloc_world_order {
+                profile.cloc_world_order = seen;
+            }
             (s.contact, s.reading.is_some())
         }
         StepName::HomePose => {

@@ -232,6 +232,7 @@ pick_on_variants! {
     pick_pulses_offset => "pulses-offset",
     pick_rows_apart => "rows-apart",
     pick_home_elsewhere => "home-elsewhere",
+    pick_cloc_reversed => "cloc-reversed",
 }
 
 macro_rules! position_on_variants {
@@ -274,6 +275,7 @@ position_on_variants! {
     position_pulses_offset => "pulses-offset",
     position_rows_apart => "rows-apart",
     position_home_elsewhere => "home-elsewhere",
+    position_cloc_reversed => "cloc-reversed",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; with one that
@@ -492,6 +494,7 @@ gateway_on_variants! {
     gateway_pulses_offset => "pulses-offset",
     gateway_rows_apart => "rows-apart",
     gateway_home_elsewhere => "home-elsewhere",
+    gateway_cloc_reversed => "cloc-reversed",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

@@ -421,6 +421,11 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
         "differs only in the WORLD row's angles, which only cartesian motions read",
     ),
     (
+        "cloc-reversed",
+        "differs only in how a cartesian location holds its angles, which only cartesian \
+         motions write and read",
+    ),
+    (
         "world-flange",
         "differs only in the frame the WORLD row's angles turn, which only cartesian motions \
          read",

@@ -29,6 +29,31 @@ pub const ARRIVE_TURN_DEG: f64 = 0.1;
 /// How far apart the two readings of the angles must put a pose for the WORLD row there to
 /// tell them apart, degrees.
 pub const TELLS_APART_DEG: f64 = 1.0;
+/// How far apart the WORLD row's first and last angle must be for `print` of a location
+/// `here` set to tell their order, degrees.
+const CLOC_APART_DEG: f64 = 1.0;
+/// How far a location `here` set just now may read from the WORLD row read just before
+/// (the rows' three decimals and the resting arm's dither).
+const CLOC_SAME: f64 = 0.05;
+
+/// An angle's difference as a turn, -180 to 180 degrees (ash may print -180 or 180 for the
+/// same angle).
+fn turn_deg(d: f64) -> f64 {
+    (d + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// Whether a location `here` set where the arm rests tells the order of its angles: the
+/// WORLD row's first and last angle apart, and its middle one away from ±90 degrees (where
+/// the first and last are not one pose's alone, and the encoders' dither moves them).
+pub(crate) fn cloc_order_tells(world: &[f64; 6]) -> bool {
+    turn_deg(world[3] - world[5]).abs() > CLOC_APART_DEG && world[4].abs() < 80.0
+}
+
+/// Whether two rows of values as ash prints them are one pose's, as read a moment apart.
+pub(crate) fn same_values(a: &[f64; 6], b: &[f64; 6]) -> bool {
+    (0..3).all(|j| (a[j] - b[j]).abs() <= CLOC_SAME)
+        && (3..6).all(|j| turn_deg(a[j] - b[j]).abs() <= CLOC_SAME)
+}
 
 /// How far apart the two readings put values as ash prints them, degrees.
 fn readings_differ(v: &[f64; 6]) -> f64 {
@@ -41,7 +66,7 @@ fn readings_differ(v: &[f64; 6]) -> f64 {
 
 /// What `print NAME` said of a cartesian location.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Cloc {
+pub(crate) enum Cloc {
     Missing,
     Untaught,
     /// x, y, z (mm), the three angles (degrees), as ash prints them.
@@ -60,7 +85,7 @@ impl std::fmt::Display for Cloc {
 
 /// `print`'s lines of a cartesian location: one row of six numbers (two more, the extra
 /// axes, may follow on a second row).
-pub(super) fn read_cloc(lines: &[String]) -> Option<Cloc> {
+pub(crate) fn read_cloc(lines: &[String]) -> Option<Cloc> {
     let said = said(lines);
     let nums = |l: &str| -> Option<Vec<f64>> {
         let v: Vec<f64> = l
@@ -149,7 +174,7 @@ impl C500cBackend {
 
     /// Where the arm rests (`w2`): its WORLD row, read in the profile's reading, must put the
     /// flange where TROL's kinematics put it from the JOINTS row.
-    fn world_check(&mut self, angles: Reading) -> Result<(), BackendError> {
+    fn world_check(&mut self, angles: Reading) -> Result<[f64; 6], BackendError> {
         let p = self.read_position(true)?;
         self.rests_at(p.joints_deg);
         let (mm, deg) = world::gap(&world::from_ash(&p.world, angles), &flange(&p.joints_deg));
@@ -171,7 +196,65 @@ impl C500cBackend {
             // profile's agrees: it is the arm's.
             self.angles_seen = true;
         }
-        Ok(())
+        Ok(p.world)
+    }
+
+    /// A cartesian location's constant holds the WORLD row's values in the row's order (not
+    /// public: `help constants` names `{x, y, z, yaw, pitch, roll, e1, e2}`, the WORLD row
+    /// heads its angles Z-Rot Y-Rot X-Rot). Seen once a session, reading only what TROL's own
+    /// `trolgo` holds: where the arm rests with its first and last angle apart, `here
+    /// trolgo`, then `print trolgo` must read the WORLD row just read (`world`) in its order.
+    /// In the reverse order (the twin's variant `cloc-reversed`), or any other, every
+    /// location TROL would write or read is refused (BIOS_UNSETTLED), nothing moved. Until
+    /// seen, a motion whose end (`v`, in the WORLD row's order) has its first and last angle
+    /// apart is refused too, with what to do.
+    fn cloc_order(&mut self, world: &[f64; 6], v: &[f64; 6]) -> Result<(), BackendError> {
+        if self.cloc_order_seen {
+            return Ok(());
+        }
+        if cloc_order_tells(world) {
+            if self.print_cloc(SCRATCH)? == Cloc::Missing {
+                let cmd = format!("new _{SCRATCH}");
+                let lines = self.exchange(&cmd).map_err(|e| self.fail(e))?;
+                if !lines.is_empty() {
+                    return Err(self.refusal(&cmd, &lines));
+                }
+            }
+            let cmd = format!("here {SCRATCH}");
+            let lines = self.exchange(&cmd).map_err(|e| self.fail(e))?;
+            if !lines.is_empty() {
+                return Err(self.refusal(&cmd, &lines));
+            }
+            let got = match self.print_cloc(SCRATCH)? {
+                Cloc::At(w) => w,
+                other => return Err(self.misread("cloc", SCRATCH, &other)),
+            };
+            if same_values(&got, world) {
+                self.cloc_order_seen = true;
+                return Ok(());
+            }
+            self.unsettled(&format!(
+                "`here {SCRATCH}` then `print {SCRATCH}` reads {} where the WORLD row read {}: \
+                 ash's cartesian locations do not hold the WORLD row's values in its order, \
+                 and TROL writes and reads none there (cartesian motions and named cartesian \
+                 locations stay refused; joint motions and precision points work)",
+                join(&got),
+                join(world)
+            ))?;
+            return Err(refused(UNSETTLED));
+        }
+        if turn_deg(v[3] - v[5]).abs() <= CLOC_SAME || self.profile.cloc_world_order {
+            // Its order does not matter for this end, or the step saw it on this arm.
+            return Ok(());
+        }
+        self.unsettled(&format!(
+            "this motion's end ({}) depends on the order of a cartesian location's angles, \
+             which TROL has not yet seen on this controller: turn a wrist joint by 0.3 rad \
+             (TROLJoint 4) so that the WORLD row's first and last angles differ, and try again \
+             (`trol c500c step world-angles` sees it once and writes `cloc-world-order`)",
+            join(v)
+        ))?;
+        Err(refused(UNSETTLED))
     }
 
     /// A motion's end, as ash will read it: where the two readings of the angles differ,
@@ -293,12 +376,13 @@ impl C500cBackend {
                 let var = teach::ash_var(&name).ok_or(BackendError::UnknownLocation(name))?;
                 self.taught_in("cloc", &var, name)?;
                 let angles = self.cart_keys()?;
-                self.world_check(angles)?;
+                let world = self.world_check(angles)?;
                 let w = match self.print_cloc(&var)? {
                     Cloc::At(w) => w,
                     other => return Err(self.misread("cloc", &var, &other)),
                 };
                 self.reading_settled(&w)?;
+                self.cloc_order(&world, &w)?;
                 // The location is the flange (ash's tool is the null one: the check saw
                 // it); TROL's tool centre point there.
                 let tcp = world::from_ash(&w, angles)
@@ -330,7 +414,7 @@ impl C500cBackend {
         straight: bool,
     ) -> Result<Motion, BackendError> {
         let angles = self.cart_keys()?;
-        self.world_check(angles)?;
+        let world = self.world_check(angles)?;
         let (end, planned) = self.cart_plan(call, straight).map_err(|c| {
             self.note(format!(
                 "refused before sending: the A465 model refuses the motion ({c})"
@@ -339,6 +423,7 @@ impl C500cBackend {
         })?;
         let v = world::to_ash(&end, angles);
         self.reading_settled(&v)?;
+        self.cloc_order(&world, &v)?;
         if self.print_cloc(SCRATCH)? == Cloc::Missing {
             let cmd = format!("new _{SCRATCH}");
             let lines = self.exchange(&cmd).map_err(|e| self.fail(e))?;

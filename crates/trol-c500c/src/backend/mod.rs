@@ -37,7 +37,7 @@ use crate::reports::{self, ArmStat, Homing, Known};
 
 mod backup;
 mod bios;
-mod cartesian;
+pub(crate) mod cartesian;
 mod gripper;
 mod motion;
 mod precision;
@@ -255,6 +255,9 @@ pub struct C500cBackend {
     /// The WORLD row was seen, this session, to agree with the profile's `world-angles` at
     /// a pose where the two readings differ.
     angles_seen: bool,
+    /// A cartesian location's constant was seen to hold the WORLD row's values in the row's
+    /// order ([`C500cBackend::cloc_order`]).
+    cloc_order_seen: bool,
     /// Per joint: a `w2` read this session agreed with the profile's pulses with the joint a
     /// degree or more from its zero.
     pulses_seen: [bool; 6],
@@ -341,6 +344,7 @@ impl C500cBackend {
             grip_kind: None,
             jaws_wait: None,
             angles_seen: false,
+            cloc_order_seen: false,
             pulses_seen: [false; 6],
             pulses_wrong: None,
             echo: true,

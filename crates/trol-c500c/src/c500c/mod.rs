@@ -120,6 +120,10 @@ pub struct Switches {
     /// every joint's 0 by default, [0, 0, 90, 0, 90, 0] on the variant `home-elsewhere`
     /// (an assumed figure: a profile that takes the default's pose must fail there).
     pub home_deg: [f64; 6],
+    /// A cartesian location's constant holds the angles in the reverse order of the WORLD
+    /// row's (`{x, y, z, X-Rot, Y-Rot, Z-Rot}`). Not public which: false by default, true on
+    /// the variant `cloc-reversed`.
+    pub cloc_reversed: bool,
 }
 
 impl Switches {
@@ -153,6 +157,7 @@ impl Default for Switches {
             pulses: Pulses::a465_model(),
             rows_apart: 0.0,
             home_deg: [0.0; 6],
+            cloc_reversed: false,
         }
     }
 }
@@ -167,6 +172,7 @@ pub fn matching_profile(sw: &Switches) -> crate::Profile {
         }),
         world_angles: Some(sw.world_angles),
         tool_rotation: Some(sw.world_frame),
+        cloc_world_order: !sw.cloc_reversed,
         pulses_per_degree: Some(sw.pulses.per_degree),
         pulses_at_zero: Some(sw.pulses.at_zero),
         // Where this controller homes the arm (what `trol c500c step home-pose` reads).
@@ -230,6 +236,11 @@ pub const VARIANTS: &[(&str, &str)] = &[
     (
         "world-xyz",
         "the WORLD row's angles compose as Rx(c)·Ry(b)·Rz(a), not Rz(a)·Ry(b)·Rx(c)",
+    ),
+    (
+        "cloc-reversed",
+        "a cartesian location's constant holds the angles in the reverse order of the WORLD \
+         row's",
     ),
     (
         "home-elsewhere",
@@ -317,6 +328,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "world-xyz" => Switches {
             world_angles: Angles::Xyz,
+            ..d
+        },
+        "cloc-reversed" => Switches {
+            cloc_reversed: true,
             ..d
         },
         "home-elsewhere" => Switches {
@@ -903,7 +918,7 @@ impl C500c {
                         self.arm.move_to(Target::Joints(q), straight, t)
                     }
                     Var::Cloc(Some(w), true) => {
-                        let pose = world::from_ash(&w, self.sw.reading());
+                        let pose = world::from_ash(&self.world_of_cloc(w), self.sw.reading());
                         self.arm
                             .move_to(Target::Cart(pose.to_xyzypr()), straight, t)
                     }

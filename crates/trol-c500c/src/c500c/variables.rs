@@ -107,7 +107,7 @@ impl C500c {
         let q = self.arm.position(t, Which::Actual);
         let value = match self.vars[&name] {
             Var::Ploc(_) => Var::Ploc(Some(self.sw.pulses.pulses(&q.map(f64::to_degrees)))),
-            Var::Cloc(..) => Var::Cloc(Some(self.world(&q)), true),
+            Var::Cloc(..) => Var::Cloc(Some(self.cloc_of_world(self.world(&q))), true),
             _ => {
                 self.line("Not a location variable.");
                 return false;
@@ -208,6 +208,22 @@ impl C500c {
             .extend_from_slice(b"Set the valid flag anyway (y/n) ? ");
         self.asking = Some(Ask::Valid(name));
         true
+    }
+
+    /// A cartesian location's constant of the WORLD row's values (the angles reversed on
+    /// [`Switches::cloc_reversed`]).
+    pub(super) fn cloc_of_world(&self, w: [f64; 6]) -> [f64; 6] {
+        if self.sw.cloc_reversed {
+            [w[0], w[1], w[2], w[5], w[4], w[3]]
+        } else {
+            w
+        }
+    }
+
+    /// The WORLD row's values of a cartesian location's constant.
+    pub(super) fn world_of_cloc(&self, c: [f64; 6]) -> [f64; 6] {
+        // Reversing is its own inverse.
+        self.cloc_of_world(c)
     }
 
     /// Where the tool is, as the WORLD row prints it (ash's tool transform is the null one).
@@ -316,10 +332,10 @@ impl C500c {
     /// yaw pitch roll), or untaught.
     pub fn set_cloc(&mut self, name: &str, pose: Option<[f64; 6]>) {
         let v = pose.map(|p| {
-            world::to_ash(
+            self.cloc_of_world(world::to_ash(
                 &trol_a465::kinematics::Pose::from_xyzypr(p),
                 self.sw.reading(),
-            )
+            ))
         });
         self.vars
             .insert(name.to_string(), Var::Cloc(v, v.is_some()));

@@ -390,4 +390,5 @@ each! {
     pulses_offset => "pulses-offset",
     rows_apart => "rows-apart",
     home_elsewhere => "home-elsewhere",
+    cloc_reversed => "cloc-reversed",
 }

@@ -109,6 +109,37 @@ pub(crate) fn cart_round(r: &mut Rig, sw: &Switches, name: &str) {
         res.and_then(|_| r.robot.finish())
             .unwrap_or_else(|e| panic!("{name}: {what}: {e}"));
     };
+    if sw.cloc_reversed {
+        // A location's constant holds the angles in another order than the WORLD row: TROL
+        // sees it (`here`, `print` of its own location) and writes none, nothing moved.
+        // A wrist turned, and the tool away from pointing straight down (the WORLD row's
+        // middle angle away from 90 degrees): where the arm stands tells the order.
+        let res = r.robot.joint(4, 0.3);
+        go(r, "Joint 4", res);
+        let res = r.robot.joint(5, -0.6);
+        go(r, "Joint 5", res);
+        let before = r.joints();
+        let sent = r.received().len();
+        let turned = [420.0, -30.0, 200.0, 0.3, 1.3, 0.2];
+        let e = r
+            .robot
+            .move_ii(&Location::Cart(turned.to_vec()), false)
+            .unwrap_err();
+        assert_eq!(e.code().0, backend::UNSETTLED, "{name}: {e}");
+        assert!(r.said().contains("do not hold"), "{name}: {}", r.said());
+        assert!(unmoved(&before, &r.joints()), "{name}");
+        assert!(
+            !r.received()[sent..]
+                .iter()
+                .any(|l| l.starts_with("set _") || l.starts_with("move")),
+            "{name}: {:?}",
+            &r.received()[sent..]
+        );
+        let e = r.robot.move_to("test_001", false).unwrap_err();
+        assert_ne!(e.code().0, 0, "{name}");
+        assert!(unmoved(&before, &r.joints()), "{name}");
+        return;
+    }
     let res = r.robot.move_ii(&Location::Cart(down.to_vec()), false);
     go(r, "MoveII above the place", res);
     assert!(at(r, &down), "{name}: at {:?}", tcp(r));

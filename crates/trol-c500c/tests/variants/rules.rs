@@ -397,6 +397,10 @@ fn an_approach_to_a_precision_point_trusts_the_pulses_only_as_far_as_seen() {
         r.robot.joint(j, 0.05).unwrap();
         r.robot.finish().unwrap();
     }
+    // A wrist turned, so that the WORLD row's first and last angles differ: TROL sees how
+    // a location holds its angles before it writes one (its own `trolgo`, for the approach).
+    r.robot.joint(4, 0.3).unwrap();
+    r.robot.finish().unwrap();
     approach(&mut r)
         .and_then(|_| r.robot.finish())
         .unwrap_or_else(|e| panic!("Appro #bin: {e}"));

@@ -233,6 +233,7 @@ pick_on_variants! {
     pick_rows_apart => "rows-apart",
     pick_home_elsewhere => "home-elsewhere",
     pick_cloc_reversed => "cloc-reversed",
+    pick_setvalid_silent => "setvalid-silent",
 }
 
 macro_rules! position_on_variants {
@@ -276,6 +277,7 @@ position_on_variants! {
     position_rows_apart => "rows-apart",
     position_home_elsewhere => "home-elsewhere",
     position_cloc_reversed => "cloc-reversed",
+    position_setvalid_silent => "setvalid-silent",
 }
 
 /// Without a profile nothing moves, and the interpreter says which key to set; with one that
@@ -495,6 +497,7 @@ gateway_on_variants! {
     gateway_rows_apart => "rows-apart",
     gateway_home_elsewhere => "home-elsewhere",
     gateway_cloc_reversed => "cloc-reversed",
+    gateway_setvalid_silent => "setvalid-silent",
 }
 
 /// First contact reads only: the findings are said, every byte is in the transcript, and

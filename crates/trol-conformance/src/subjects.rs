@@ -421,6 +421,10 @@ pub const C500C_FAIL_SAFE: &[(&str, &str)] = &[
         "differs only in the WORLD row's angles, which only cartesian motions read",
     ),
     (
+        "setvalid-silent",
+        "differs only in how `setvalid` answers, which only cartesian motions type",
+    ),
+    (
         "cloc-reversed",
         "differs only in how a cartesian location holds its angles, which only cartesian \
          motions write and read",

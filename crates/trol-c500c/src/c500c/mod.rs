@@ -124,6 +124,10 @@ pub struct Switches {
     /// row's (`{x, y, z, X-Rot, Y-Rot, Z-Rot}`). Not public which: false by default, true on
     /// the variant `cloc-reversed`.
     pub cloc_reversed: bool,
+    /// `setvalid` warns and asks before it sets the flag (ash's strings have the question;
+    /// whether it always asks is not public): true by default, false on the variant
+    /// `setvalid-silent`, which sets it at once and says nothing.
+    pub setvalid_asks: bool,
 }
 
 impl Switches {
@@ -158,6 +162,7 @@ impl Default for Switches {
             rows_apart: 0.0,
             home_deg: [0.0; 6],
             cloc_reversed: false,
+            setvalid_asks: true,
         }
     }
 }
@@ -241,6 +246,10 @@ pub const VARIANTS: &[(&str, &str)] = &[
         "cloc-reversed",
         "a cartesian location's constant holds the angles in the reverse order of the WORLD \
          row's",
+    ),
+    (
+        "setvalid-silent",
+        "`setvalid` sets the flag at once, without its warning and question",
     ),
     (
         "home-elsewhere",
@@ -332,6 +341,10 @@ pub fn variant(name: &str) -> Option<Switches> {
         },
         "cloc-reversed" => Switches {
             cloc_reversed: true,
+            ..d
+        },
+        "setvalid-silent" => Switches {
+            setvalid_asks: false,
             ..d
         },
         "home-elsewhere" => Switches {

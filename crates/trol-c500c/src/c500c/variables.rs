@@ -203,6 +203,13 @@ impl C500c {
             self.line("Not a location variable.");
             return false;
         }
+        if !self.sw.setvalid_asks {
+            // Sets the flag at once, with nothing said.
+            if let Some(Var::Cloc(v, _)) = self.vars.get(&name).cloned() {
+                self.vars.insert(name, Var::Cloc(v, true));
+            }
+            return false;
+        }
         self.line("WARNING: moving to an incorrect location can damage the robot.");
         self.out
             .extend_from_slice(b"Set the valid flag anyway (y/n) ? ");

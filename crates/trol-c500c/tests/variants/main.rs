@@ -391,4 +391,5 @@ each! {
     rows_apart => "rows-apart",
     home_elsewhere => "home-elsewhere",
     cloc_reversed => "cloc-reversed",
+    setvalid_silent => "setvalid-silent",
 }

@@ -69,6 +69,9 @@ fn a_power_loss_during_home_is_the_power_s_failure() {
     assert_eq!(arm.close(10.0, later), code::ARM_POWER);
     assert_eq!(arm.commanded(later + 10.0), at, "nothing moved");
     arm.power_on();
+    // The next call works: a gripper motion, then the Home.
+    assert_eq!(arm.open(50.0, later), code::OK);
+    assert_eq!(arm.finish_status(later + 5.0), code::OK);
     assert_eq!(arm.home(0, later), code::OK);
     let end = arm.done_at(later);
     assert_eq!(arm.finish_status(end + 1e-9), code::OK);

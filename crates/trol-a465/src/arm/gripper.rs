@@ -123,6 +123,8 @@ impl Arm {
             to: stop,
             start: now,
         };
+        // A motion the power cut short is the Finish's news no longer.
+        self.cut_short = false;
         code::OK
     }
 

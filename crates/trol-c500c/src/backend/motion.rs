@@ -282,9 +282,10 @@ impl C500cBackend {
         } else {
             true
         };
-        // A home's pose, where the profile has it (issue 62: a Home is done only with the arm
-        // seen there): each joint within `home-within-deg` of `home-joints`.
-        let at_home = self.profile.home_joints.is_none_or(|h| {
+        // A home's pose (issue 62: a Home is done only with the arm seen there): each joint
+        // within `home-within-deg` of `home-joints`; without them (a Home is refused before
+        // it is sent then) never.
+        let at_home = self.profile.home_joints.is_some_and(|h| {
             (0..6).all(|j| (p.joints_deg[j] - h[j]).abs() <= self.profile.home_within_deg)
         });
         let times = self.end_times();

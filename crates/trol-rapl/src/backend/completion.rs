@@ -385,12 +385,12 @@ impl RaplBackend {
                     .status
                     .as_ref()
                     .is_some_and(|s| s.homed.iter().all(|h| *h));
-                // A HOME ends at the profile's home pose where it has one (issue 62).
+                // A HOME ends at the profile's home pose, never without one (issue 62; a HOME
+                // is refused before it is typed then).
                 let at_home = expect != Expect::Homed
-                    || self
-                        .profile
-                        .home_joints
-                        .is_none_or(|h| p.joints.iter().zip(&h).all(|(a, b)| (a - b).abs() <= tol));
+                    || self.profile.home_joints.is_some_and(|h| {
+                        p.joints.iter().zip(&h).all(|(a, b)| (a - b).abs() <= tol)
+                    });
                 // No end to compare with: it ran (the controller said it moves), or it has
                 // stood for settle_ms where it is.
                 let o = self.outstanding.as_ref().expect("a motion under way");

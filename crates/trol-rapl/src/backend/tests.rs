@@ -457,6 +457,16 @@ fn home_is_done_only_at_the_profile_s_home_pose() {
             ),
         }
     }
+    // The pose gone from the profile while the HOME runs: never done on STATUS's word.
+    let (mut b, _log) = on("default", true);
+    assert_eq!(code(b.joint(2, 0.2)), 0);
+    finish(&mut b).unwrap();
+    assert_eq!(code(b.home(0)), 0);
+    b.profile.home_joints = None;
+    assert!(
+        finish(&mut b).is_err(),
+        "a HOME done with no home pose to see"
+    );
     // Without it, refused before anything is typed: STATUS's word alone is not the arm seen.
     let (mut b, log) = on("not-homed", false);
     b.profile.home_joints = None;

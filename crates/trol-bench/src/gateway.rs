@@ -194,11 +194,24 @@ pub(super) fn robwork_anchor(baud: u32, moves: u32) -> Result<Spread, String> {
     Ok(Spread::of(after))
 }
 
+/// The echo and reply limits of the path through processes, ms.
+const PROCESS_LIMIT_MS: u64 = 15_000;
+
 /// The whole path through real processes: the simulated C500 here, on one end of a relay
 /// paced at the baud rate (the RAPL-II line); `trol gateway` as a process of its own between
 /// that relay's other end and a second relay (TROL's line); the application's `Robot` here,
 /// on the second relay's other end.
 fn gateway_processes(profile: trol_rapl::Profile) -> Result<GatewayPath, String> {
+    // The echo and reply limits are a real C500's: it answers within a character time and
+    // never stalls. Here the controller, both lines and the gateway are processes sharing
+    // the machine's cores; on a busy machine one of them can sit unscheduled for seconds
+    // (a CI run saw NOHELP's CR go 2 s without its echo). The bench times what happens
+    // and does not test the limits, so its processes get room to be late.
+    let profile = trol_rapl::Profile {
+        echo_timeout_ms: profile.echo_timeout_ms.max(PROCESS_LIMIT_MS),
+        reply_timeout_ms: profile.reply_timeout_ms.max(PROCESS_LIMIT_MS),
+        ..profile
+    };
     let baud = profile.baud;
     let rapl_line = super::relay::Relay::start(baud)?;
     let trol_line = super::relay::Relay::start(baud)?;

@@ -77,13 +77,44 @@ pub struct Reply {
     pub extra: Vec<u8>,
 }
 
+/// A typed character as a person reads it: the line's end by its name.
+fn shown(c: char) -> String {
+    match c {
+        '\r' => "CR".into(),
+        '\n' => "LF".into(),
+        c => format!("`{c}`"),
+    }
+}
+
+/// Where in a line a character was typed (`at` counts from 0; the line's terminator comes
+/// after its last character).
+fn place(line: &str, at: usize) -> String {
+    if at >= line.chars().count() {
+        format!("the end of `{line}`")
+    } else {
+        format!("character {} of `{line}`", at + 1)
+    }
+}
+
+/// What became of a line whose echo went wrong: cancelled before its end, or, once its end
+/// was typed, perhaps taken by the controller.
+fn fate(cancelled_before_its_end: bool) -> &'static str {
+    if cancelled_before_its_end {
+        "the line was cancelled and did not run"
+    } else {
+        "the controller may have taken the line, so whether it ran is not known"
+    }
+}
+
 /// Why a command has no answer.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SessionError {
     /// The echo differed from what was typed; the line was cancelled before it ran.
     #[error(
-        "the controller echoed {got:#04x} where `{want}` was typed (character {at} of `{line}`); \
-         the line was cancelled and did not run{hint}"
+        "the controller echoed {got:#04x} where {} was typed ({}); {}{hint}",
+        shown(*.want),
+        place(.line, *.at),
+        fate(*.at < .line.chars().count() && *.got != b'\r' && *.got != b'\n')
     )]
     Echo {
         /// The line.
@@ -99,7 +130,9 @@ pub enum SessionError {
     },
     /// No echo in time; the line was cancelled before it ran.
     #[error(
-        "no echo of character {at} of `{line}` within {ms} ms; the line was cancelled and did not run"
+        "no echo of {} within {ms} ms; {}",
+        place(.line, *.at),
+        fate(*.at < .line.chars().count())
     )]
     EchoTimeout {
         /// The line.
@@ -719,6 +752,43 @@ mod tests {
             s.handle_timeout(now);
         }
         panic!("no event");
+    }
+
+    #[test]
+    fn an_echo_failure_names_the_place_and_whether_the_line_may_have_run() {
+        let e = SessionError::EchoTimeout {
+            line: "NOH".into(),
+            at: 3,
+            ms: 2000,
+        };
+        assert_eq!(
+            e.to_string(),
+            "no echo of the end of `NOH` within 2000 ms; the controller may have taken the \
+             line, so whether it ran is not known"
+        );
+        assert!(!e.surely_not_run());
+        let e = SessionError::EchoTimeout {
+            line: "NOH".into(),
+            at: 0,
+            ms: 2000,
+        };
+        assert_eq!(
+            e.to_string(),
+            "no echo of character 1 of `NOH` within 2000 ms; the line was cancelled and did not run"
+        );
+        assert!(e.surely_not_run());
+        let e = SessionError::Echo {
+            line: "W2".into(),
+            at: 2,
+            want: '\r',
+            got: b' ',
+            hint: String::new(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "the controller echoed 0x20 where CR was typed (the end of `W2`); the controller may \
+             have taken the line, so whether it ran is not known"
+        );
     }
 
     #[test]

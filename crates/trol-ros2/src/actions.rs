@@ -21,17 +21,17 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use ros2_client::action::{
-    ActionServer, ActionServerQosPolicies, GetResultResponse, SendGoalResponse,
-};
+use ros2_client::action::{GetResultResponse, SendGoalResponse};
 use ros2_client::action_msgs::{
     CancelGoalRequest, CancelGoalResponse, CancelGoalResponseEnum, GoalId, GoalInfo, GoalStatus,
     GoalStatusArray, GoalStatusEnum,
 };
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Message, QosProfile, RmwRequestId};
+use ros2_client::{Message, QosProfile};
 use trol::{PosMode, Robot, Tag};
 
+use crate::action_server::{ActionQos, AnyActionServer};
+use crate::mapping::Asker;
 use crate::msgs::{
     self, FollowFeedback, FollowGoal, FollowResult, GripperFeedback, GripperGoal, GripperResult,
     Header, JointTrajectoryPoint, Time, follow_code,
@@ -41,17 +41,15 @@ use crate::{JOINTS, follow, words};
 
 /// The QoS of an action's parts, as ROS 2's defaults have them: its services and feedback
 /// reliable and volatile, its status transient local (a late client still learns it).
-pub fn action_qos() -> ActionServerQosPolicies {
+pub fn action_qos() -> ActionQos {
     let service = QosProfile::publisher_default()
         .reliability_reliable(WhenFull::DEFAULT)
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 10 });
-    ActionServerQosPolicies {
-        goal_service: service.clone(),
-        result_service: service.clone(),
-        cancel_service: service.clone(),
-        feedback_publisher: service,
-        status_publisher: QosProfile::publisher_default()
+    ActionQos {
+        services: service.clone(),
+        feedback: service,
+        status: QosProfile::publisher_default()
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::TransientLocal)
             .history(History::KeepLast { depth: 1 }),
@@ -75,7 +73,7 @@ pub struct Book<R> {
     /// The goal under way.
     running: Option<GoalInfo>,
     ended: VecDeque<(GoalInfo, GoalStatusEnum, R)>,
-    waiting: Vec<(RmwRequestId, GoalId)>,
+    waiting: Vec<(Asker, GoalId)>,
     last_status: Option<Instant>,
     goal_replies: Replies<SendGoalResponse>,
     cancel_replies: Replies<CancelGoalResponse>,
@@ -121,7 +119,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
     /// Send the answers whose clients can hear them now (or that waited long enough).
     fn flush<G: Message + Clone + 'static, F: Message + 'static>(
         &mut self,
-        server: &ActionServer<G, R, F>,
+        server: &AnyActionServer<G, R, F>,
         matches: &Matches,
     ) {
         let now = Instant::now();
@@ -130,7 +128,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
             |s| matches.hear(s),
             |id, resp| {
                 if let Err(e) = server.send_goal_response(id, resp) {
-                    tracing::warn!("send_goal's response: {e:?}");
+                    tracing::warn!("send_goal's response: {e}");
                 }
             },
         );
@@ -139,7 +137,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
             |s| matches.hear(s),
             |id, resp| {
                 if let Err(e) = server.send_cancel_response(id, resp) {
-                    tracing::warn!("cancel's response: {e:?}");
+                    tracing::warn!("cancel's response: {e}");
                 }
             },
         );
@@ -148,7 +146,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
             |s| matches.hear(s),
             |id, resp| {
                 if let Err(e) = server.send_result(id, resp) {
-                    tracing::warn!("get_result's response: {e:?}");
+                    tracing::warn!("get_result's response: {e}");
                 }
             },
         );
@@ -158,8 +156,8 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
     /// a refusal found afterwards reaches the client with its code.
     fn take_goal<G: Message + Clone + 'static, F: Message + 'static>(
         &mut self,
-        server: &ActionServer<G, R, F>,
-        req_id: RmwRequestId,
+        server: &AnyActionServer<G, R, F>,
+        req_id: Asker,
         goal_id: GoalId,
     ) -> Option<GoalInfo> {
         let info = GoalInfo {
@@ -206,12 +204,12 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
     /// running goal then ends canceled with `canceled`, or aborted with `failed(why)`.
     fn cancels<G: Message + Clone + 'static, F: Message + 'static>(
         &mut self,
-        server: &ActionServer<G, R, F>,
+        server: &AnyActionServer<G, R, F>,
         halt: &mut dyn FnMut() -> Result<(), String>,
         canceled: &dyn Fn() -> R,
         failed: &dyn Fn(String) -> R,
     ) {
-        while let Ok(Some((req_id, req))) = server.receive_cancel_request() {
+        while let Some((req_id, req)) = crate::mapping::next(|| server.receive_cancel_request()) {
             let id = cancel_goal_id(&req);
             let answer = match self.running.clone() {
                 Some(info) if id.is_none_or(|id| id == info.goal_id || id.uuid.is_nil()) => {
@@ -256,9 +254,9 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
     /// Result requests (answered once their goal has ended), and the status array.
     fn results_and_status<G: Message + Clone + 'static, F: Message + 'static>(
         &mut self,
-        server: &ActionServer<G, R, F>,
+        server: &AnyActionServer<G, R, F>,
     ) {
-        while let Ok(Some((req_id, req))) = server.receive_result_request() {
+        while let Some((req_id, req)) = crate::mapping::next(|| server.receive_result_request()) {
             self.waiting.push((req_id, req.goal_id));
         }
         let mut still = Vec::new();
@@ -298,7 +296,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
                 });
             }
             if let Err(e) = server.send_goal_statuses(GoalStatusArray { status_list: list }) {
-                tracing::warn!("status: {e:?}");
+                tracing::warn!("status: {e}");
             }
             self.last_status = Some(Instant::now());
         }
@@ -366,12 +364,12 @@ impl<A: Goals> Served<A> {
     /// read), the goal under way.
     pub fn serve(
         &mut self,
-        server: &ActionServer<A::Goal, A::Result, A::Feedback>,
+        server: &AnyActionServer<A::Goal, A::Result, A::Feedback>,
         arm: &Arm<'_>,
         tick: bool,
         matches: &Matches,
     ) {
-        while let Ok(Some((req_id, req))) = server.receive_goal() {
+        while let Some((req_id, req)) = crate::mapping::next(|| server.receive_goal()) {
             if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
                 match self.goals.start(arm, &req.goal) {
                     Ok(run) => {
@@ -396,7 +394,7 @@ impl<A: Goals> Served<A> {
             let id = info.goal_id;
             let mut send = |f: A::Feedback| {
                 if let Err(e) = server.send_feedback(id, f) {
-                    tracing::warn!("feedback of {}: {e:?}", server.name());
+                    tracing::warn!("feedback of {}: {e}", server.name());
                 }
             };
             if let Some((status, result)) = self.goals.progress(arm, run, &mut send) {

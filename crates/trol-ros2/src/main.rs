@@ -18,8 +18,10 @@
 //! `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` (or `--localhost-only`) keep every packet on
 //! 127.0.0.1.
 
+mod action_server;
 mod actions;
 mod follow;
+mod mapping;
 mod msgs;
 mod replies;
 
@@ -30,8 +32,7 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use ros2_client::{
-    ActionTypeName, Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile,
-    ServiceMapping, ServiceTypeName,
+    Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile,
     qos::{Durability, History, WhenFull},
 };
 use rustdds::DomainParticipantBuilder;
@@ -219,42 +220,63 @@ fn run(args: Args) -> Result<(), String> {
     description
         .publish(trol_a465::urdf::urdf())
         .map_err(|e| format!("robot_description: {e:?}"))?;
-    let trigger = ServiceTypeName::new("std_srvs", "Trigger");
-    let home = node
-        .create_server::<TriggerRequest, TriggerResponse>(
-            ServiceMapping::Cyclone,
-            &name("home")?,
-            &trigger,
-            service_qos.clone(),
-            service_qos.clone(),
-        )
-        .map_err(create)?;
-    let halt = node
-        .create_server::<TriggerRequest, TriggerResponse>(
-            ServiceMapping::Cyclone,
-            &name("halt")?,
-            &trigger,
-            service_qos.clone(),
-            service_qos,
-        )
-        .map_err(create)?;
-
-    let follow = node
-        .create_action_server::<FollowGoal, FollowResult, FollowFeedback>(
-            ServiceMapping::Cyclone,
-            &name("follow_joint_trajectory")?,
-            &ActionTypeName::new("control_msgs", "FollowJointTrajectory"),
-            actions::action_qos(),
-        )
-        .map_err(create)?;
-    let gripper = node
-        .create_action_server::<GripperGoal, GripperResult, GripperFeedback>(
-            ServiceMapping::Cyclone,
-            &name("gripper_cmd")?,
-            &ActionTypeName::new("control_msgs", "GripperCommand"),
-            actions::action_qos(),
-        )
-        .map_err(create)?;
+    // Services answer each client in its middleware's mapping (mapping.rs); their reply
+    // writers are the DDS's own, in a publisher of their own.
+    let dds = context.domain_participant();
+    let writers = dds
+        .create_publisher(&rustdds::QosPolicies::from(&service_qos))
+        .map_err(|e| format!("ROS 2: {e:?}"))?;
+    let vendors = matches.vendors();
+    let trigger = "std_srvs::srv::dds_::Trigger";
+    let home = mapping::AnyServer::<TriggerRequest, TriggerResponse>::new(
+        &mut node,
+        &dds,
+        &writers,
+        &service("home")?,
+        trigger,
+        &service_qos,
+        vendors.clone(),
+    )?;
+    let halt = mapping::AnyServer::<TriggerRequest, TriggerResponse>::new(
+        &mut node,
+        &dds,
+        &writers,
+        &service("halt")?,
+        trigger,
+        &service_qos,
+        vendors.clone(),
+    )?;
+    let action_qos = actions::action_qos();
+    fn place<'a>(
+        node: &'a mut ros2_client::Node,
+        node_name: &'a NodeName,
+        participant: &'a rustdds::DomainParticipant,
+        writers: &'a rustdds::Publisher,
+        vendors: &mapping::SharedVendors,
+    ) -> action_server::Place<'a> {
+        action_server::Place {
+            node,
+            node_name,
+            participant,
+            writers,
+            vendors: vendors.clone(),
+        }
+    }
+    let follow = action_server::AnyActionServer::<FollowGoal, FollowResult, FollowFeedback>::new(
+        place(&mut node, &node_name, &dds, &writers, &vendors),
+        &ns,
+        "follow_joint_trajectory",
+        ("control_msgs", "FollowJointTrajectory"),
+        &action_qos,
+    )?;
+    let gripper =
+        action_server::AnyActionServer::<GripperGoal, GripperResult, GripperFeedback>::new(
+            place(&mut node, &node_name, &dds, &writers, &vendors),
+            &ns,
+            "gripper_cmd",
+            ("control_msgs", "GripperCommand"),
+            &action_qos,
+        )?;
     // The embedded simulator runs its clock `time_scale` times faster: the desired path of a
     // trajectory is read on the arm's clock.
     let mut trajectories = actions::Served::follow(
@@ -284,8 +306,7 @@ fn run(args: Args) -> Result<(), String> {
     // Halts served: a Home during which one came is not reported homed.
     let halts = Arc::new(std::sync::atomic::AtomicU64::new(0));
     // Homes under way: their answers come back on a channel, so joint_states keeps going.
-    let (done_tx, done_rx) =
-        mpsc::channel::<(ros2_client::service::RmwRequestId, TriggerResponse)>();
+    let (done_tx, done_rx) = mpsc::channel::<(mapping::Asker, TriggerResponse)>();
     let mut reading_failed = false;
     while !trol_cli::common::interrupted().load(std::sync::atomic::Ordering::SeqCst) {
         // The arm is read, and the actions follow it, once a period; requests are taken
@@ -340,7 +361,8 @@ fn run(args: Args) -> Result<(), String> {
             }
         }
         // Services.
-        while let Ok(Some((id, _))) = home.receive_request() {
+        matches.refresh();
+        while let Some((id, _)) = mapping::next(|| home.receive_request()) {
             let robot = robot.clone();
             let done = done_tx.clone();
             let halts = halts.clone();
@@ -348,7 +370,7 @@ fn run(args: Args) -> Result<(), String> {
                 let _ = done.send((id, home_arm(&robot, &halts)));
             });
         }
-        while let Ok(Some((id, _))) = halt.receive_request() {
+        while let Some((id, _)) = mapping::next(|| halt.receive_request()) {
             halts.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
             let answer = match robot.lock() {
                 Ok(mut r) => match r.halt() {
@@ -386,7 +408,7 @@ fn run(args: Args) -> Result<(), String> {
             |s| matches.hear(s),
             |id, answer| {
                 if let Err(e) = halt.send_response(id, answer) {
-                    tracing::warn!("halt's response: {e:?}");
+                    tracing::warn!("halt's response: {e}");
                 }
             },
         );
@@ -395,7 +417,7 @@ fn run(args: Args) -> Result<(), String> {
             |s| matches.hear(s),
             |id, answer| {
                 if let Err(e) = home.send_response(id, answer) {
-                    tracing::warn!("home's response: {e:?}");
+                    tracing::warn!("home's response: {e}");
                 }
             },
         );

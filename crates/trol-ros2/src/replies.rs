@@ -18,8 +18,10 @@
 use std::collections::{HashSet, VecDeque};
 use std::time::{Duration, Instant};
 
-use ros2_client::{Name, NodeName, RmwRequestId};
+use ros2_client::{Name, NodeName};
 use rustdds::{DomainParticipant, DomainParticipantStatusEvent, GUID, StatusEvented};
+
+use crate::mapping::{Asker, SharedVendors};
 
 /// How long a reply waits for its asker's reader before it goes anyway.
 pub const READER_WAIT: Duration = Duration::from_secs(5);
@@ -66,9 +68,19 @@ pub fn askers_hear<P: PartialEq, R: Eq + std::hash::Hash>(
 
 /// The remote readers this participant's writers have matched, from its status events (read
 /// by nothing else: the node runs no ros2-client spinner).
+/// The same events say each participant's DDS vendor, which decides how its service calls
+/// are answered ([`crate::mapping`]).
 pub struct Matches {
     participant: DomainParticipant,
     matched: HashSet<GUID>,
+    vendors: SharedVendors,
+}
+
+/// The GUID prefix of an entity's GUID, as bytes.
+fn prefix_bytes(guid: GUID) -> [u8; 12] {
+    let mut p = [0u8; 12];
+    p.copy_from_slice(&guid.to_bytes()[..12]);
+    p
 }
 
 impl Matches {
@@ -76,7 +88,13 @@ impl Matches {
         Matches {
             participant,
             matched: HashSet::new(),
+            vendors: SharedVendors::default(),
         }
+    }
+
+    /// The participants' vendors, for the node's servers.
+    pub fn vendors(&self) -> SharedVendors {
+        self.vendors.clone()
     }
 
     /// Take the status events that came since the last call.
@@ -89,6 +107,19 @@ impl Matches {
                 }
                 DomainParticipantStatusEvent::ReaderLost { guid, .. } => {
                     self.matched.remove(&guid);
+                }
+                DomainParticipantStatusEvent::ParticipantDiscovered { dpd } => {
+                    if let Ok(mut v) = self.vendors.lock() {
+                        v.note(prefix_bytes(dpd.guid), dpd.vendor_id.vendor_id);
+                    }
+                }
+                DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
+                    // The prefix's type is rustdds's own; a GUID carries it out.
+                    let mut guid = GUID::from_bytes([0; 16]);
+                    guid.prefix = id;
+                    if let Ok(mut v) = self.vendors.lock() {
+                        v.forget(&prefix_bytes(guid));
+                    }
                 }
                 _ => {}
             }
@@ -121,7 +152,7 @@ impl Matches {
 /// One service's replies not yet sent, in the order they were made.
 pub struct Replies<T> {
     service: Service,
-    held: VecDeque<(RmwRequestId, T, Instant)>,
+    held: VecDeque<(Asker, T, Instant)>,
 }
 
 impl<T> Replies<T> {
@@ -133,7 +164,7 @@ impl<T> Replies<T> {
     }
 
     /// A reply, made at `now`, to go as soon as its asker can hear it.
-    pub fn push(&mut self, id: RmwRequestId, answer: T, now: Instant) {
+    pub fn push(&mut self, id: Asker, answer: T, now: Instant) {
         self.held.push_back((id, answer, now));
     }
 
@@ -150,7 +181,7 @@ impl<T> Replies<T> {
         &mut self,
         now: Instant,
         hear: impl FnOnce(&Service) -> bool,
-        mut send: impl FnMut(RmwRequestId, T),
+        mut send: impl FnMut(&Asker, T),
     ) {
         if self.held.is_empty() {
             return;
@@ -169,7 +200,7 @@ impl<T> Replies<T> {
                 );
             }
             if let Some((id, answer, _)) = self.held.pop_front() {
-                send(id, answer);
+                send(&id, answer);
             }
         }
     }
@@ -227,11 +258,17 @@ mod tests {
         assert!(askers_hear(&[1u8, 2], &[(1, 10), (2, 20)], &matched));
     }
 
-    fn id(seq: i64) -> RmwRequestId {
-        RmwRequestId {
-            sequence_number: seq,
-            ..RmwRequestId::default()
-        }
+    fn id(seq: i64) -> Asker {
+        crate::mapping::split(
+            ros2_client::RmwRequestId {
+                sequence_number: seq,
+                ..Default::default()
+            },
+            crate::mapping::FAST_DDS,
+            &[],
+        )
+        .unwrap()
+        .0
     }
 
     #[test]

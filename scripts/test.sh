@@ -275,7 +275,22 @@ ros2_dds() {
   local workers=()
   [ "${SIDE_BY_SIDE:-0}" = 1 ] && workers=(-n 2)
   "$PY" -m pip install --quiet cyclonedds==11.0.1 &&
-    TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q "${workers[@]}" tests/ros2
+    TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" "$PY" -m pytest -q "${workers[@]}" tests/ros2 \
+      --ignore=tests/ros2/rclpy
+}
+
+# `trol ros2` against ROS 2's own rclpy on ROS 2's default middleware, Fast DDS (ROS 2
+# Jazzy's packages from PyPI, in a virtual environment of their own, about 250 MB; control_msgs's
+# actions generated there by rosidl once), on loopback only (tests/ros2/rclpy, docs/ros2.md).
+ROS2_PY="$PWD/target/ros2py/bin/python"
+ros2_rclpy() {
+  local workers=()
+  [ "${SIDE_BY_SIDE:-0}" = 1 ] && workers=(-n 2)
+  { [ -x "$ROS2_PY" ] || python3 -m venv target/ros2py; } &&
+    "$ROS2_PY" -m pip install --quiet --disable-pip-version-check -r tests/ros2/rclpy/requirements.txt &&
+    bash tests/ros2/rclpy/control_msgs.sh target/ros2py &&
+    env -u RMW_IMPLEMENTATION TROL_ROS2_BIN="$PWD/target/debug/trol-ros2" TROL_BIN="$PWD/target/debug/trol" \
+      "$ROS2_PY" -m pytest -q -p no:cacheprovider "${workers[@]}" tests/ros2/rclpy
 }
 
 # What the two lanes run is built first, while nothing else runs: the workspace's test
@@ -347,6 +362,7 @@ processes() {
   stage "cargo test --workspace: the tests that start processes (one test per core)" the_rest
   stage "cargo test -p trol --features view" client_view
   stage "the client's features one by one" client_features
+  stage "trol ros2 against ROS 2's rclpy on Fast DDS" ros2_rclpy
 }
 in_process_then_python() {
   stage "cargo test --workspace: the in-process controllers (six tests at a time)" \

@@ -96,8 +96,36 @@ fn rate(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Set by SIGTERM or SIGHUP: the node halts the arm and ends, as on Ctrl-C (a second such
+/// signal ends it at once).
+static TERMINATED: std::sync::LazyLock<Arc<std::sync::atomic::AtomicBool>> =
+    std::sync::LazyLock::new(|| Arc::new(std::sync::atomic::AtomicBool::new(false)));
+
+/// Catch SIGTERM and SIGHUP into [`TERMINATED`].
+fn catch_termination() {
+    use signal_hook::consts::{SIGHUP, SIGTERM};
+    for signal in [SIGTERM, SIGHUP] {
+        // The shutdown first: it ends the process only when the flag was set before.
+        let caught =
+            signal_hook::flag::register_conditional_shutdown(signal, 143, TERMINATED.clone())
+                .and_then(|_| signal_hook::flag::register(signal, TERMINATED.clone()));
+        if let Err(e) = caught {
+            trol_cli::tell!(
+                "trol-ros2: signal {signal} will end the node without halting the arm: {e}"
+            );
+        }
+    }
+}
+
+/// Whether the node is asked to end (Ctrl-C, SIGTERM, SIGHUP).
+fn ending() -> bool {
+    use std::sync::atomic::Ordering::SeqCst;
+    trol_cli::common::interrupted().load(SeqCst) || TERMINATED.load(SeqCst)
+}
+
 fn main() {
     trol_cli::common::catch_interrupts();
+    catch_termination();
     let args = Args::parse();
     // The DDS's own log (discovery, locators) would drown what the arm does.
     trol_cli::common::init_logging_quieting(args.verbose, "rustdds=error,ros2_client=error");
@@ -308,7 +336,7 @@ fn run(args: Args) -> Result<(), String> {
     // Homes under way: their answers come back on a channel, so joint_states keeps going.
     let (done_tx, done_rx) = mpsc::channel::<(mapping::Asker, TriggerResponse)>();
     let mut reading_failed = false;
-    while !trol_cli::common::interrupted().load(std::sync::atomic::Ordering::SeqCst) {
+    while !ending() {
         // The arm is read, and the actions follow it, once a period; requests are taken
         // every SERVE_EVERY between, so a goal or a halt waits for no period.
         let tick = Instant::now() >= next;
@@ -423,11 +451,19 @@ fn run(args: Args) -> Result<(), String> {
         );
         std::thread::sleep(next.saturating_duration_since(now).min(SERVE_EVERY));
     }
-    // Leaving: an arm that still moves by this node's doing is stopped.
+    // Leaving: an arm that still moves by this node's doing is stopped, and seen standing.
     if let Ok(mut r) = robot.lock()
         && r.is_moving().unwrap_or(false)
     {
-        let _ = r.halt();
+        match r.halt() {
+            Ok(()) => {
+                trol_cli::tell!("trol-ros2: ending: the arm was moving; it is halted and stands")
+            }
+            Err(e) => trol_cli::tell!(
+                "trol-ros2: ending: the arm was moving and its halt failed: {}",
+                words(&e)
+            ),
+        }
     }
     Ok(())
 }

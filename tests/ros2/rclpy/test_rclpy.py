@@ -1,0 +1,355 @@
+"""`trol ros2` against ROS 2's own client library: rclpy from PyPI (ROS 2 Jazzy's
+`ros-jazzy-rclpy`), on ROS 2's default middleware, Fast DDS (rmw_fastrtps_cpp), with the
+message types ROS 2 generated (sensor_msgs, std_msgs, std_srvs), as a lab's program uses them.
+
+Fast DDS answers a service the way RPC over DDS's enhanced mapping does, which `trol ros2` did
+not speak until issue 61 (its calls went unanswered); tests/ros2/test_ros2.py checks the same
+node against Cyclone DDS. Each test runs on a ROS 2 domain of its own, on loopback only.
+"""
+
+import os
+import random
+import signal
+import subprocess
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node as RosNode
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+
+ROOT = Path(__file__).resolve().parents[3]
+JOINTS = [f"joint_{i}" for i in range(1, 7)]
+
+
+def binary(var: str, name: str) -> Path:
+    given = os.environ.get(var)
+    return Path(given) if given else ROOT / "target" / "debug" / name
+
+
+class TrolNode:
+    """A `trol-ros2` process (its stdout's first line read), ended with `signal`."""
+
+    def __init__(self, domain: int, *args: str) -> None:
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+        self.proc = subprocess.Popen(
+            [str(binary("TROL_ROS2_BIN", "trol-ros2")), *args],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True, env=env,
+        )
+        assert self.proc.stdout is not None
+        self.first = self.proc.stdout.readline()
+        self.rest: list[str] = []
+        threading.Thread(target=self._drain, daemon=True).start()
+
+    def _drain(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.rest.append(line)
+
+    def end(self, sig: int = signal.SIGTERM, limit: float = 30) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            return self.proc.wait(timeout=limit)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError(f"trol-ros2 did not end within {limit} s of signal {sig}")
+
+
+class Ros:
+    """An rclpy node of the test's own, in a context on the test's domain."""
+
+    def __init__(self, domain: int) -> None:
+        os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        os.environ.pop("RMW_IMPLEMENTATION", None)
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = RosNode(f"tester_{random.randrange(1 << 30)}", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, what: str, done, limit: float = 30.0):  # type: ignore[no-untyped-def]
+        until = time.monotonic() + limit
+        while time.monotonic() < until:
+            got = done()
+            if got:
+                return got
+            self.executor.spin_once(timeout_sec=0.05)
+        raise AssertionError(f"no {what} within {limit} s")
+
+    def call(self, service: str, limit: float = 60.0) -> Trigger.Response:
+        client = self.node.create_client(Trigger, service)
+        self.spin_until(f"server of {service}", lambda: client.service_is_ready())
+        future = client.call_async(Trigger.Request())
+        return self.spin_until(f"answer from {service}", lambda: future.result() if future.done() else None, limit)
+
+    def states(self, ns: str) -> list[JointState]:
+        got: list[JointState] = []
+        self.node.create_subscription(JointState, f"/{ns}/joint_states", got.append, 10)
+        return got
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+_START = random.randrange(100)
+_handed = 0
+
+
+@pytest.fixture
+def domain() -> int:
+    """A domain per test (from 101 on: tests/ros2/test_ros2.py's Cyclone tests use 1..200 at
+    random; a worker of pytest-xdist is kept apart by its number)."""
+    global _handed
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+    _handed += 1
+    return 201 + (_START + 2 * _handed + worker) % 30
+
+
+@pytest.fixture
+def ros(domain: int) -> Iterator[Ros]:
+    r = Ros(domain)
+    try:
+        yield r
+    finally:
+        r.close()
+
+
+@pytest.fixture
+def arm1(domain: int) -> Iterator[TrolNode]:
+    node = TrolNode(domain, "--port", "sim", "--time-scale", "10", "--namespace", "arm1")
+    try:
+        assert "node /arm1/trol_a465 on ROS 2 domain" in node.first, node.first
+        yield node
+    finally:
+        node.end()
+
+
+def test_the_middleware_is_ros_2_s_default_fast_dds(ros: Ros) -> None:
+    assert rclpy.get_rmw_implementation_identifier() == "rmw_fastrtps_cpp"
+
+
+def test_joint_states_arrive_with_the_urdf_s_names(arm1: TrolNode, ros: Ros) -> None:
+    got = ros.states("arm1")
+    ros.spin_until("five joint states", lambda: len(got) >= 5)
+    assert list(got[-1].name) == JOINTS
+    assert len(got[-1].position) == 6
+
+
+def test_robot_description_reaches_a_subscriber_that_comes_late(arm1: TrolNode, ros: Ros) -> None:
+    time.sleep(1.0)
+    got: list[String] = []
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    ros.node.create_subscription(String, "/arm1/robot_description", got.append, latched)
+    ros.spin_until("robot_description", lambda: got)
+    assert "<robot" in got[0].data and 'name="joint_6"' in got[0].data
+
+
+def test_home_and_halt_answer_a_fast_dds_client(arm1: TrolNode, ros: Ros) -> None:
+    r = ros.call("/arm1/home")
+    assert r.success, r.message
+    assert "homed" in r.message
+    r = ros.call("/arm1/halt")
+    assert r.success, r.message
+    assert "stands" in r.message
+
+
+def test_the_node_is_listed_once_in_its_namespace(arm1: TrolNode, ros: Ros) -> None:
+    def listed():  # type: ignore[no-untyped-def]
+        names = ros.node.get_node_names_and_namespaces()
+        return names if any(n == "trol_a465" for n, _ in names) else None
+
+    names = ros.spin_until("trol_a465 in the node list", listed)
+    time.sleep(1.0)
+    names = ros.node.get_node_names_and_namespaces()
+    ours = [(n, ns) for n, ns in names if n == "trol_a465"]
+    assert ours == [("trol_a465", "/arm1")], names
+
+
+def moving(states: list[JointState], since: int) -> bool:
+    """Whether the joint states after the `since`-th moved."""
+    seen = [tuple(s.position) for s in states[since:]]
+    return len(seen) >= 2 and max(abs(a - b) for a, b in zip(seen[0], seen[-1])) > 1e-3
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+def test_a_signal_during_a_motion_halts_the_arm_before_the_node_ends(sig: int, tmp_path: Path, domain: int) -> None:
+    # The arm is a simulated controller of its own (`trol sim`, in real time), so that what
+    # it does after the node has ended can be seen by the next node.
+    sim = subprocess.Popen([str(binary("TROL_BIN", "trol")), "sim", "--time-scale", "1", "--server"],
+                           stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, stderr=subprocess.DEVNULL, text=True)
+    ros = Ros(domain)
+    try:
+        assert sim.stdout is not None
+        line = sim.stdout.readline()
+        assert "serving on " in line, line
+        port = line.split("serving on ", 1)[1].split()[0]
+        threading.Thread(target=sim.stdout.read, daemon=True).start()
+        # The arm away from its home pose first, so that the node's Home has a way to go.
+        away = subprocess.run([str(binary("TROL_BIN", "trol")), "interp", "--port", port],
+                              input="home 0\njoint 1 1.5\nfinish\n", capture_output=True, text=True, timeout=120)
+        assert away.returncode == 0, away.stdout + away.stderr
+        node = TrolNode(domain, "--port", port, "--namespace", "cell")
+        assert "node /cell/trol_a465" in node.first, node.first
+        states = ros.states("cell")
+        client = ros.node.create_client(Trigger, "/cell/home")
+        ros.spin_until("the home service", lambda: client.service_is_ready())
+        client.call_async(Trigger.Request())  # a Home, group by group: many seconds at 1x
+        ros.spin_until("the arm moving", lambda: moving(states, max(0, len(states) - 25)), 60)
+        code = node.end(sig)
+        said = "".join(node.rest)
+        assert "halted and stands" in said, said
+        assert code in (0, 130, 143, -sig), (code, said)
+        # The next node on the same controller finds the arm standing.
+        again = TrolNode(domain, "--port", port, "--namespace", "cell")
+        try:
+            assert "node /cell/trol_a465" in again.first, again.first + "".join(again.rest)
+            start = len(states)
+            ros.spin_until("a second of joint states", lambda: len(states) >= start + 20)
+            assert not moving(states, start), [s.position for s in states[start:start + 3]]
+        finally:
+            again.end()
+    finally:
+        ros.close()
+        sim.kill()
+        sim.wait()
+
+
+# The actions, with control_msgs generated by rosidl (tests/ros2/rclpy/control_msgs.sh).
+from builtin_interfaces.msg import Duration  # noqa: E402
+from control_msgs.action import FollowJointTrajectory, GripperCommand  # noqa: E402
+from rclpy.action import ActionClient  # noqa: E402
+from trajectory_msgs.msg import JointTrajectoryPoint  # noqa: E402
+
+# action_msgs/GoalStatus's values.
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+FAR_TARGET = [1.2, 0.6, 0.9, 0.9, 0.7, 0.9]
+
+
+def trajectory(names: list[str], points: list[tuple[float, list[float]]]) -> FollowJointTrajectory.Goal:
+    goal = FollowJointTrajectory.Goal()
+    goal.trajectory.joint_names = names
+    goal.trajectory.points = [
+        JointTrajectoryPoint(positions=q, time_from_start=Duration(sec=int(t), nanosec=int(round((t % 1) * 1e9))))
+        for t, q in points
+    ]
+    return goal
+
+
+class Goals:
+    """An rclpy ActionClient on `/<ns>/<action>`, with what came back."""
+
+    def __init__(self, ros: Ros, ns: str, action: str = "follow_joint_trajectory", kind=FollowJointTrajectory) -> None:  # type: ignore[no-untyped-def]
+        self.ros = ros
+        self.client = ActionClient(ros.node, kind, f"/{ns}/{action}")
+        self.feedback: list = []  # type: ignore[type-arg]
+        ros.spin_until(f"the action server {ns}/{action}", lambda: self.client.server_is_ready())
+
+    def send(self, goal):  # type: ignore[no-untyped-def]
+        future = self.client.send_goal_async(goal, feedback_callback=self.feedback.append)
+        return self.ros.spin_until("the goal's answer", lambda: future.result() if future.done() else None)
+
+    def outcome(self, handle, limit: float = 120.0):  # type: ignore[no-untyped-def]
+        future = handle.get_result_async()
+        return self.ros.spin_until("the goal's result", lambda: future.result() if future.done() else None, limit)
+
+
+def standing(ros: Ros, states: list[JointState]) -> list[float]:
+    """The arm's joints once twenty readings in a row agree."""
+    start = len(states)
+    ros.spin_until("twenty joint states", lambda: len(states) >= start + 20)
+    assert not moving(states, start), "the arm still moves"
+    return list(states[-1].position)
+
+
+def test_a_trajectory_goal_runs_to_its_end_with_feedback(arm1: TrolNode, ros: Ros) -> None:
+    assert ros.call("/arm1/home").success
+    states = ros.states("arm1")
+    goals = Goals(ros, "arm1")
+    end = [0.2, 0.1, 0.6, 0.1, 0.5, 0.1]
+    handle = goals.send(trajectory(JOINTS, [(3.0, [0.1, 0.05, 0.4, 0.05, 0.3, 0.05]), (6.0, end)]))
+    assert handle.accepted
+    out = goals.outcome(handle)
+    assert (out.status, out.result.error_code) == (SUCCEEDED, 0), out.result.error_string
+    assert goals.feedback, "no feedback while the trajectory ran"
+    assert list(goals.feedback[-1].feedback.joint_names) == JOINTS
+    assert standing(ros, states) == pytest.approx(end, abs=3e-3)
+
+
+def test_a_goal_with_unknown_joints_fails_and_moves_nothing(arm1: TrolNode, ros: Ros) -> None:
+    assert ros.call("/arm1/home").success
+    states = ros.states("arm1")
+    before = standing(ros, states)
+    goals = Goals(ros, "arm1")
+    handle = goals.send(trajectory(["shoulder", "elbow"], [(2.0, [0.5, 0.5])]))
+    if handle.accepted:
+        out = goals.outcome(handle)
+        assert out.status == ABORTED and out.result.error_code == -2, out.result.error_string
+    assert standing(ros, states) == pytest.approx(before, abs=1e-3)
+
+
+def test_a_cancel_halts_the_arm_short_of_its_target(domain: int, ros: Ros) -> None:
+    node = TrolNode(domain, "--port", "sim", "--time-scale", "1", "--namespace", "arm1")
+    try:
+        assert ros.call("/arm1/home").success
+        states = ros.states("arm1")
+        goals = Goals(ros, "arm1")
+        handle = goals.send(trajectory(JOINTS, [(8.0, FAR_TARGET)]))
+        assert handle.accepted
+        ros.spin_until("feedback", lambda: goals.feedback)
+        ros.spin_until("the arm moving", lambda: moving(states, max(0, len(states) - 25)))
+        cancel = handle.cancel_goal_async()
+        answer = ros.spin_until("the cancel's answer", lambda: cancel.result() if cancel.done() else None)
+        assert len(answer.goals_canceling) == 1
+        out = goals.outcome(handle)
+        assert out.status == CANCELED, out.result.error_string
+        q = standing(ros, states)
+        assert abs(q[0] - FAR_TARGET[0]) > 0.1, "the arm went on to its target"
+    finally:
+        node.end()
+
+
+def test_the_gripper_action_reaches_its_gap(arm1: TrolNode, ros: Ros) -> None:
+    goals = Goals(ros, "arm1", "gripper_cmd", GripperCommand)
+    goal = GripperCommand.Goal()
+    goal.command.position = 0.02
+    goal.command.max_effort = 10.0
+    handle = goals.send(goal)
+    assert handle.accepted
+    out = goals.outcome(handle)
+    assert out.status == SUCCEEDED
+    assert out.result.reached_goal and not out.result.stalled
+    assert out.result.position == pytest.approx(0.02, abs=1e-3)
+
+
+def test_two_arms_in_two_namespaces_run_one_goal_each(domain: int, ros: Ros) -> None:
+    left = TrolNode(domain, "--port", "sim", "--time-scale", "10", "--namespace", "left")
+    right = TrolNode(domain, "--port", "sim", "--time-scale", "10", "--namespace", "right")
+    try:
+        for ns in ("left", "right"):
+            assert ros.call(f"/{ns}/home").success
+        left_states, right_states = ros.states("left"), ros.states("right")
+        before = standing(ros, right_states)
+        goals = Goals(ros, "left")
+        end = [0.3, 0.2, 0.5, 0.1, 0.4, 0.2]
+        handle = goals.send(trajectory(JOINTS, [(4.0, end)]))
+        assert handle.accepted
+        out = goals.outcome(handle)
+        assert out.status == SUCCEEDED, out.result.error_string
+        assert standing(ros, left_states) == pytest.approx(end, abs=3e-3)
+        assert standing(ros, right_states) == pytest.approx(before, abs=1e-3), "the other arm moved"
+    finally:
+        left.end()
+        right.end()

@@ -37,7 +37,7 @@ use crate::msgs::{
     Header, JointTrajectoryPoint, Time, follow_code,
 };
 use crate::replies::{Matches, Replies, Service};
-use crate::{JOINTS, follow, words};
+use crate::{follow, words};
 
 /// The QoS of an action's parts, as ROS 2's defaults have them: its services and feedback
 /// reliable and volatile, its status transient local (a late client still learns it).
@@ -422,6 +422,8 @@ pub struct Follow {
     /// How much faster than real time the arm's clock runs (the embedded simulator's time
     /// scale; 1 for a real arm).
     clock: f64,
+    /// The arm's joint names (`--prefix` and the URDF's), in the URDF's order.
+    joints: [String; 6],
 }
 
 fn follow_result(code: i32, why: impl Into<String>) -> FollowResult {
@@ -436,9 +438,10 @@ fn aborted(code: i32, why: impl Into<String>) -> Option<(GoalStatusEnum, FollowR
 }
 
 impl Served<Follow> {
-    /// FollowJointTrajectory, no goal yet; the arm's clock runs `clock` times real time.
-    pub fn follow(clock: f64, services: ActionServices) -> Self {
-        Served::new(Follow { clock }, services)
+    /// FollowJointTrajectory, no goal yet; the arm's clock runs `clock` times real time;
+    /// `joints`: the arm's joint names as the node gives them.
+    pub fn follow(clock: f64, joints: [String; 6], services: ActionServices) -> Self {
+        Served::new(Follow { clock, joints }, services)
     }
 }
 
@@ -461,7 +464,8 @@ impl Goals for Follow {
             .position(Tag::Joint, PosMode::Commanded)
             .map_err(|e| follow_result(follow_code::INVALID_GOAL, words(&e)))?
             .to_array6();
-        let plan = follow::plan(goal, start).map_err(|no| follow_result(no.code, no.why))?;
+        let plan =
+            follow::plan(goal, start, &self.joints).map_err(|no| follow_result(no.code, no.why))?;
         match r.trajectory(&plan.waypoints) {
             Ok(timing) => Ok(FollowRun {
                 plan,
@@ -521,7 +525,7 @@ impl Goals for Follow {
                     follow_code::PATH_TOLERANCE_VIOLATED,
                     format!(
                         "{} was {e:.4} rad off the path at {elapsed:.3} s: {how}",
-                        JOINTS[j]
+                        run.plan.joints[j]
                     ),
                 );
             }

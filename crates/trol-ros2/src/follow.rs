@@ -20,7 +20,6 @@
 use trol::Waypoint;
 use trol_a465::motion::Path;
 
-use crate::JOINTS;
 use crate::msgs::{FollowGoal, JointTolerance, follow_code};
 
 /// How far (rad) a joint may end from the last point when the goal gives no tolerance
@@ -55,6 +54,8 @@ pub struct Plan {
     pub order: [usize; 6],
     /// The goal's joint names, for feedback.
     pub names: Vec<String>,
+    /// The arm's joint names, in the URDF's order.
+    pub joints: [String; 6],
     /// The path from the start, for the desired position.
     path: Path,
     /// The trajectory's time, s.
@@ -73,10 +74,11 @@ fn tolerances(
     list: &[JointTolerance],
     default: Option<f64>,
     what: &str,
+    joints: &[String; 6],
 ) -> Result<[Option<f64>; 6], Refused> {
     let mut out = [default; 6];
     for t in list {
-        let Some(i) = JOINTS.iter().position(|j| *j == t.name) else {
+        let Some(i) = joints.iter().position(|j| *j == t.name) else {
             return Err(refused(
                 follow_code::INVALID_JOINTS,
                 format!("{what} names `{}`, which this arm does not have", t.name),
@@ -99,17 +101,18 @@ fn tolerances(
     Ok(out)
 }
 
-/// Check `goal` and make its plan from `start` (the arm's commanded joints).
-pub fn plan(goal: &FollowGoal, start: [f64; 6]) -> Result<Plan, Refused> {
+/// Check `goal` and make its plan from `start` (the arm's commanded joints); `joints`: the
+/// arm's joint names, as the node gives them (`--prefix`).
+pub fn plan(goal: &FollowGoal, start: [f64; 6], joints: &[String; 6]) -> Result<Plan, Refused> {
     let t = &goal.trajectory;
     let mut order = [usize::MAX; 6];
     for (k, name) in t.joint_names.iter().enumerate() {
-        let Some(i) = JOINTS.iter().position(|j| j == name) else {
+        let Some(i) = joints.iter().position(|j| j == name) else {
             return Err(refused(
                 follow_code::INVALID_JOINTS,
                 format!(
                     "joint `{name}` is not one of this arm's ({})",
-                    JOINTS.join(", ")
+                    joints.join(", ")
                 ),
             ));
         };
@@ -126,7 +129,7 @@ pub fn plan(goal: &FollowGoal, start: [f64; 6]) -> Result<Plan, Refused> {
             follow_code::INVALID_JOINTS,
             format!(
                 "joint `{}` is missing: a trajectory names all six",
-                JOINTS[i]
+                joints[i]
             ),
         ));
     }
@@ -185,11 +188,12 @@ pub fn plan(goal: &FollowGoal, start: [f64; 6]) -> Result<Plan, Refused> {
             joints: std::array::from_fn(|i| p.positions[order[i]]),
         });
     }
-    let path_tolerance = tolerances(&goal.path_tolerance, None, "a path tolerance")?;
+    let path_tolerance = tolerances(&goal.path_tolerance, None, "a path tolerance", joints)?;
     let goal_tolerance = tolerances(
         &goal.goal_tolerance,
         Some(DEFAULT_GOAL_TOLERANCE),
         "a goal tolerance",
+        joints,
     )?;
     let gt = goal.goal_time_tolerance.seconds();
     let total = last.max(0.0);
@@ -214,6 +218,7 @@ pub fn plan(goal: &FollowGoal, start: [f64; 6]) -> Result<Plan, Refused> {
         waypoints,
         order,
         names: t.joint_names.clone(),
+        joints: joints.clone(),
         path,
         total,
         path_tolerance,
@@ -271,7 +276,7 @@ impl Plan {
                         follow_code::GOAL_TOLERANCE_VIOLATED,
                         format!(
                             "{} ended {e:.4} rad from the last point (tolerance {tol})",
-                            JOINTS[i]
+                            self.joints[i]
                         ),
                     );
                 }
@@ -315,6 +320,25 @@ mod tests {
         }
     }
 
+    /// The URDF's joint names, no prefix.
+    fn urdf() -> [String; 6] {
+        crate::joint_names("")
+    }
+
+    #[test]
+    fn a_prefixed_arm_takes_only_its_prefixed_names() {
+        let joints = crate::joint_names("arm2_");
+        let names: Vec<&str> = joints.iter().map(String::as_str).collect();
+        let g = goal(&names, vec![point(1.0, [0.1; 6])]);
+        assert!(plan(&g, [0.0; 6], &joints).is_ok());
+        // The bare names belong to no arm of this node.
+        let bare = urdf();
+        let names: Vec<&str> = bare.iter().map(String::as_str).collect();
+        let e = plan(&goal(&names, vec![point(1.0, [0.1; 6])]), [0.0; 6], &joints).unwrap_err();
+        assert_eq!(e.code, follow_code::INVALID_JOINTS);
+        assert!(e.why.contains("arm2_joint_1"), "{e:?}");
+    }
+
     fn goal(names: &[&str], points: Vec<JointTrajectoryPoint>) -> FollowGoal {
         let mut g = FollowGoal::default();
         g.trajectory.joint_names = names.iter().map(|s| s.to_string()).collect();
@@ -328,7 +352,7 @@ mod tests {
             "joint_6", "joint_5", "joint_4", "joint_3", "joint_2", "joint_1",
         ];
         let g = goal(&names, vec![point(1.0, [6.0, 5.0, 4.0, 3.0, 2.0, 1.0])]);
-        let p = plan(&g, [0.0; 6]).unwrap();
+        let p = plan(&g, [0.0; 6], &urdf()).unwrap();
         assert_eq!(p.waypoints[0].joints, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(
             p.in_goal_order(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
@@ -342,7 +366,8 @@ mod tests {
 
     #[test]
     fn bad_goals_are_refused_with_the_action_s_codes() {
-        let ok = JOINTS.to_vec();
+        let joints = urdf();
+        let ok: Vec<&str> = joints.iter().map(String::as_str).collect();
         let p = |t: f64| point(t, [0.1; 6]);
         let cases = [
             (
@@ -389,7 +414,7 @@ mod tests {
             ),
         ];
         for (g, code, words) in cases {
-            let e = plan(&g, [0.0; 6]).unwrap_err();
+            let e = plan(&g, [0.0; 6], &urdf()).unwrap_err();
             assert_eq!(e.code, code, "{e:?}");
             assert!(e.why.contains(words), "{e:?}");
         }
@@ -400,21 +425,23 @@ mod tests {
             ..Default::default()
         });
         assert_eq!(
-            plan(&tol, [0.0; 6]).unwrap_err().code,
+            plan(&tol, [0.0; 6], &urdf()).unwrap_err().code,
             follow_code::INVALID_JOINTS
         );
     }
 
     #[test]
     fn the_result_checks_the_goal_tolerance_and_the_goal_time() {
-        let mut g = goal(&JOINTS, vec![point(2.0, [0.5; 6])]);
+        let joints = urdf();
+        let names: Vec<&str> = joints.iter().map(String::as_str).collect();
+        let mut g = goal(&names, vec![point(2.0, [0.5; 6])]);
         g.goal_time_tolerance = Duration::from_seconds(0.5);
         g.path_tolerance.push(JointTolerance {
             name: "joint_2".into(),
             position: 0.05,
             ..Default::default()
         });
-        let p = plan(&g, [0.0; 6]).unwrap();
+        let p = plan(&g, [0.0; 6], &urdf()).unwrap();
         assert_eq!(p.result(&[0.5; 6], 2.1, true).0, follow_code::SUCCESSFUL);
         let (c, why) = p.result(&[0.5, 0.5, 0.5, 0.5, 0.5, 0.53], 2.1, true);
         assert_eq!(c, follow_code::GOAL_TOLERANCE_VIOLATED);

@@ -48,6 +48,11 @@ use msgs::{
 pub(crate) const JOINTS: [&str; 6] = [
     "joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6",
 ];
+
+/// The joints' names with `prefix` (`--prefix`) before each.
+pub(crate) fn joint_names(prefix: &str) -> [String; 6] {
+    JOINTS.map(|j| format!("{prefix}{j}"))
+}
 /// The node's name (in its namespace).
 const NODE: &str = "trol_a465";
 /// The longest a Home may take before the service says it failed (six axes group by group
@@ -73,6 +78,11 @@ struct Args {
     /// The node's namespace (`arm1`, or `/cell/arm1`); its topics and services live under it.
     #[arg(long, default_value = "/")]
     namespace: String,
+    /// Put before every joint and link name (`arm1_`: `arm1_joint_1` in joint_states, in the
+    /// goals it takes, and in robot_description), so one MoveIt can address each arm of a
+    /// cell; letters, digits and `_`.
+    #[arg(long, default_value = "", value_parser = prefix)]
+    prefix: String,
     /// The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long, value_parser = clap::value_parser!(u16).range(0..=232))]
     domain: Option<u16>,
@@ -87,6 +97,18 @@ struct Args {
     /// else warnings).
     #[arg(short, long, action = clap::ArgAction::Count)]
     verbose: u8,
+}
+
+fn prefix(s: &str) -> Result<String, String> {
+    if s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && !s.starts_with(|c: char| c.is_ascii_digit())
+    {
+        Ok(s.to_string())
+    } else {
+        Err(format!(
+            "`{s}` is not a name prefix: letters, digits and `_`, not starting with a digit"
+        ))
+    }
 }
 
 fn rate(s: &str) -> Result<f64, String> {
@@ -177,6 +199,76 @@ fn domain(flag: Option<u16>) -> Result<u16, String> {
     }
 }
 
+/// The URDF with `prefix` before every link's and joint's name, and so before every
+/// reference to a link (a joint's parent and child).
+fn prefixed_urdf(urdf: &str, prefix: &str) -> String {
+    if prefix.is_empty() {
+        return urdf.to_string();
+    }
+    let mut out = String::with_capacity(urdf.len() + 64 * prefix.len());
+    let mut rest = urdf;
+    // `<link name="`, `<joint name="`, `link="` (parent, child): each name after them.
+    let marks = ["<link name=\"", "<joint name=\"", " link=\""];
+    while let Some((at, mark)) = marks
+        .iter()
+        .filter_map(|m| rest.find(m).map(|i| (i, *m)))
+        .min_by_key(|(i, _)| *i)
+    {
+        let end = at + mark.len();
+        out.push_str(&rest[..end]);
+        out.push_str(prefix);
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// How long a starting node listens for another that serves its names (discovery on a
+/// loopback takes well under a second; an assumption with room).
+const DISCOVERY_WAIT: Duration = Duration::from_secs(2);
+
+/// A DDS request topic as ROS 2 names the service (`rq/arm1/homeRequest`: `/arm1/home`).
+fn ros_name(topic: &str) -> String {
+    let name = topic.strip_prefix("rq").unwrap_or(topic);
+    let name = name.strip_suffix("Request").unwrap_or(name);
+    name.strip_suffix("/_action/send_goal")
+        .unwrap_or(name)
+        .to_string()
+}
+
+/// Whether, within `wait`, another participant shows a reader of one of `requests` (a
+/// server of that service): the topic, and who it is.
+fn served_elsewhere(
+    participant: &rustdds::DomainParticipant,
+    requests: &[String],
+    wait: Duration,
+) -> Option<(String, String)> {
+    use rustdds::RTPSEntity;
+    let own = participant.guid().prefix;
+    let until = Instant::now() + wait;
+    loop {
+        let found = participant.discovered_readers().into_iter().find(|r| {
+            requests.contains(&r.subscription_topic_data.topic_name)
+                && r.reader_proxy.remote_reader_guid.prefix != own
+        });
+        if let Some(r) = found {
+            let guid = r.reader_proxy.remote_reader_guid.to_bytes();
+            let who = format!(
+                "participant {}",
+                guid[..12]
+                    .iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<String>()
+            );
+            return Some((r.subscription_topic_data.topic_name.clone(), who));
+        }
+        if Instant::now() >= until {
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
 /// The TROL error in words for a service's `message`: its code's name, and what TROL said.
 pub(crate) fn words(e: &trol::Error) -> String {
     format!("{} ({}): {e}", e.code().0, e.code())
@@ -184,10 +276,9 @@ pub(crate) fn words(e: &trol::Error) -> String {
 
 fn run(args: Args) -> Result<(), String> {
     let ns = namespace(&args.namespace)?;
+    let joints = joint_names(&args.prefix);
     let domain = domain(args.domain)?;
     let local = localhost_only(args.localhost_only);
-    let (robot, cfg) = args.conn.robot()?;
-    let robot = Arc::new(Mutex::new(robot));
 
     let mut builder = DomainParticipantBuilder::new(domain);
     if local {
@@ -196,9 +287,30 @@ fn run(args: Args) -> Result<(), String> {
     let participant = builder
         .build()
         .map_err(|e| format!("cannot join ROS 2 domain {domain}: {e:?}"))?;
+    // Another node serving these names would take the same goals and move its arm too:
+    // this one does not start then, and touches no arm.
+    let node_name = NodeName::new(&ns, NODE).map_err(|e| format!("node name: {e:?}"))?;
+    let served: Vec<String> = [
+        "home",
+        "halt",
+        "follow_joint_trajectory/_action/send_goal",
+        "gripper_cmd/_action/send_goal",
+    ]
+    .iter()
+    .map(|p| replies::Service::new(&ns, p, &node_name).map(|s| s.request))
+    .collect::<Result<_, _>>()?;
+    if let Some((topic, who)) = served_elsewhere(&participant, &served, DISCOVERY_WAIT) {
+        return Err(format!(
+            "another node already serves {} on ROS 2 domain {domain} ({who}): start this one \
+             with another --namespace, or stop that one; nothing was served and no arm was \
+             touched",
+            ros_name(&topic)
+        ));
+    }
+    let (robot, cfg) = args.conn.robot()?;
+    let robot = Arc::new(Mutex::new(robot));
     let context = Context::from_domain_participant(participant)
         .map_err(|e| format!("cannot start ROS 2: {e:?}"))?;
-    let node_name = NodeName::new(&ns, NODE).map_err(|e| format!("node name: {e:?}"))?;
     let mut node = context
         .new_node(node_name.clone(), NodeOptions::new().enable_rosout(false))
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
@@ -246,7 +358,7 @@ fn run(args: Args) -> Result<(), String> {
         .create_publisher::<String>(&description_topic, None)
         .map_err(create)?;
     description
-        .publish(trol_a465::urdf::urdf())
+        .publish(prefixed_urdf(&trol_a465::urdf::urdf(), &args.prefix))
         .map_err(|e| format!("robot_description: {e:?}"))?;
     // Services answer each client in its middleware's mapping (mapping.rs); their reply
     // writers are the DDS's own, in a publisher of their own.
@@ -313,6 +425,7 @@ fn run(args: Args) -> Result<(), String> {
         } else {
             1.0
         },
+        joints.clone(),
         action_services("follow_joint_trajectory")?,
     );
 
@@ -369,7 +482,7 @@ fn run(args: Args) -> Result<(), String> {
                             stamp: Time::now(),
                             frame_id: String::new(),
                         },
-                        name: JOINTS.iter().map(|s| s.to_string()).collect(),
+                        name: joints.to_vec(),
                         position: q.to_vec(),
                         velocity,
                         effort: Vec::new(),
@@ -452,9 +565,13 @@ fn run(args: Args) -> Result<(), String> {
         std::thread::sleep(next.saturating_duration_since(now).min(SERVE_EVERY));
     }
     // Leaving: an arm that still moves by this node's doing is stopped, and seen standing.
-    if let Ok(mut r) = robot.lock()
-        && r.is_moving().unwrap_or(false)
-    {
+    // The connection stays locked from here on: a Home's thread must not start a transaction
+    // that the end of the process would cut in half (the controller would be left answering
+    // nobody, in the way of the next program's first call).
+    let Ok(mut r) = robot.lock() else {
+        return Ok(());
+    };
+    if r.is_moving().unwrap_or(false) {
         match r.halt() {
             Ok(()) => {
                 trol_cli::tell!("trol-ros2: ending: the arm was moving; it is halted and stands")
@@ -465,6 +582,9 @@ fn run(args: Args) -> Result<(), String> {
             ),
         }
     }
+    // The lock is never given back: the node's DDS entities still end properly (its peers
+    // learn it is gone), and no other thread of it talks to the controller again.
+    std::mem::forget(r);
     Ok(())
 }
 
@@ -515,6 +635,36 @@ fn home_arm(robot: &Mutex<Robot>, halts: &std::sync::atomic::AtomicU64) -> Trigg
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_prefix_names_every_link_and_joint_and_every_reference_stays_whole() {
+        let plain = trol_a465::urdf::urdf();
+        let urdf = prefixed_urdf(&plain, "arm1_");
+        let names = |kind: &str, text: &str| -> Vec<String> {
+            text.split(&format!("<{kind} name=\""))
+                .skip(1)
+                .map(|s| s.split('"').next().unwrap().to_string())
+                .collect()
+        };
+        let links = names("link", &urdf);
+        let joints = names("joint", &urdf);
+        assert_eq!(links.len(), names("link", &plain).len());
+        assert!(
+            links.iter().chain(&joints).all(|n| n.starts_with("arm1_")),
+            "{links:?} {joints:?}"
+        );
+        for j in joint_names("arm1_") {
+            assert!(joints.contains(&j), "{j} missing from {joints:?}");
+        }
+        // Every parent and child names a link of this URDF.
+        for r in urdf.split(" link=\"").skip(1) {
+            let l = r.split('"').next().unwrap();
+            assert!(links.iter().any(|x| x == l), "{l} is no link of {links:?}");
+        }
+        // Materials keep their names.
+        assert!(urdf.contains("<material name=\"body\">"));
+        assert_eq!(prefixed_urdf(&plain, ""), plain);
+    }
 
     #[test]
     fn namespaces_are_written_as_ros_2_writes_them_and_bad_ones_are_refused() {

@@ -215,6 +215,9 @@ def test_a_signal_during_a_motion_halts_the_arm_before_the_node_ends(sig: int, t
         # The next node on the same controller finds the arm standing.
         again = TrolNode(domain, "--port", port, "--namespace", "cell")
         try:
+            if "node /cell/trol_a465" not in again.first:
+                again.proc.wait(timeout=30)
+                time.sleep(0.5)
             assert "node /cell/trol_a465" in again.first, again.first + "".join(again.rest)
             start = len(states)
             ros.spin_until("a second of joint states", lambda: len(states) >= start + 20)
@@ -353,3 +356,43 @@ def test_two_arms_in_two_namespaces_run_one_goal_each(domain: int, ros: Ros) -> 
     finally:
         left.end()
         right.end()
+
+
+def test_a_second_node_for_the_same_names_refuses_to_start_and_says_who_serves_them(arm1: TrolNode, domain: int) -> None:
+    second = TrolNode(domain, "--port", "sim", "--namespace", "arm1")
+    code = second.proc.wait(timeout=60)
+    said = second.first + "".join(second.rest)
+    assert code == 1, said
+    assert "another node already serves /arm1/" in said and "participant " in said, said
+    assert "no arm was touched" in said, said
+
+
+def test_a_prefix_names_the_joints_of_one_arm_of_a_cell(domain: int, ros: Ros) -> None:
+    node = TrolNode(domain, "--port", "sim", "--time-scale", "10", "--namespace", "cell", "--prefix", "arm2_")
+    try:
+        assert "node /cell/trol_a465" in node.first, node.first
+        names = [f"arm2_{j}" for j in JOINTS]
+        states = ros.states("cell")
+        ros.spin_until("joint states", lambda: states)
+        assert list(states[-1].name) == names
+        got: list[String] = []
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        ros.node.create_subscription(String, "/cell/robot_description", got.append, latched)
+        ros.spin_until("robot_description", lambda: got)
+        assert 'joint name="arm2_joint_1"' in got[0].data and 'link name="arm2_base_link"' in got[0].data
+        assert ros.call("/cell/home").success
+        goals = Goals(ros, "cell")
+        # The bare names are not this arm's: refused, nothing moves.
+        handle = goals.send(trajectory(JOINTS, [(2.0, [0.2] * 6)]))
+        if handle.accepted:
+            out = goals.outcome(handle)
+            assert out.status == ABORTED and "arm2_joint_1" in out.result.error_string, out.result.error_string
+        end = [0.2, 0.1, 0.3, 0.1, 0.2, 0.1]
+        handle = goals.send(trajectory(names, [(3.0, end)]))
+        out = goals.outcome(handle)
+        assert out.status == SUCCEEDED, out.result.error_string
+        assert list(goals.feedback[-1].feedback.joint_names) == names
+        assert standing(ros, states) == pytest.approx(end, abs=3e-3)
+    finally:
+        node.end()

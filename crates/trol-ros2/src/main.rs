@@ -149,8 +149,14 @@ fn main() {
     trol_cli::common::catch_interrupts();
     catch_termination();
     let args = Args::parse();
-    // The DDS's own log (discovery, locators) would drown what the arm does.
-    trol_cli::common::init_logging_quieting(args.verbose, "rustdds=error,ros2_client=error");
+    // The DDS's own log (discovery, locators) would drown what the arm does. Its UDP
+    // listener's only error is one at the end, leaving a multicast group a loopback-only
+    // participant never joined (rustdds 0.15 leaves it whether joined or not): two ERROR
+    // lines on every clean exit, which say nothing.
+    trol_cli::common::init_logging_quieting(
+        args.verbose,
+        "rustdds=error,rustdds::network::udp_listener=off,ros2_client=error",
+    );
     if let Err(e) = run(args) {
         trol_cli::tell!("trol-ros2: {e}");
         std::process::exit(1);

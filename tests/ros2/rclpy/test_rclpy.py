@@ -211,6 +211,7 @@ def test_a_signal_during_a_motion_halts_the_arm_before_the_node_ends(sig: int, t
         code = node.end(sig)
         said = "".join(node.rest)
         assert "halted and stands" in said, said
+        assert "ERROR" not in said, said
         assert code in (0, 130, 143, -sig), (code, said)
         # The next node on the same controller finds the arm standing.
         again = TrolNode(domain, "--port", port, "--namespace", "cell")

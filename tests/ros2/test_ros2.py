@@ -345,10 +345,11 @@ def node_binary() -> Path:
 class Node:
     """A `trol-ros2` process on the embedded simulator, on its own domain."""
 
-    def __init__(self, domain: int, namespace: str, time_scale: float = 10) -> None:
+    def __init__(self, domain: int, namespace: str, time_scale: float = 10, extra: tuple[str, ...] = ()) -> None:
         env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
+        env.pop("ROS_DISTRO", None)
         self.proc = subprocess.Popen(
-            [str(node_binary()), "--port", "sim", "--time-scale", str(time_scale), "--namespace", namespace],
+            [str(node_binary()), "--port", "sim", "--time-scale", str(time_scale), "--namespace", namespace, *extra],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, text=True, env=env,
         )
         assert self.proc.stdout is not None
@@ -861,3 +862,50 @@ def test_gripper_cmd_says_stalled_when_the_fingers_close_on_an_object(tmp_path: 
             node.wait(timeout=10)
         except subprocess.TimeoutExpired:
             node.kill()
+
+
+# control_msgs 6.3's feedback (ROS 2 Kilted and Rolling), field for field: `int32 index`
+# after `error`, `int32 multi_dof_index` at the end.
+@dataclass
+class FollowFeedbackKilted(IdlStruct, typename=FJT + "Feedback_"):
+    header: Header
+    joint_names: sequence[str]
+    desired: JointTrajectoryPoint
+    actual: JointTrajectoryPoint
+    error: JointTrajectoryPoint
+    index: int32
+    multi_dof_joint_names: sequence[str]
+    multi_dof_desired: MultiDOFJointTrajectoryPoint
+    multi_dof_actual: MultiDOFJointTrajectoryPoint
+    multi_dof_error: MultiDOFJointTrajectoryPoint
+    multi_dof_index: int32
+
+
+@dataclass
+class FeedbackMessageKilted(IdlStruct, typename=FJT + "FeedbackMessage_"):
+    goal_id: UUID
+    feedback: FollowFeedbackKilted
+
+
+@pytest.mark.timeout(240)
+def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) -> None:
+    node = Node(domain, "arm1", time_scale=1, extra=("--distro", "kilted"))
+    try:
+        assert "/arm1/follow_joint_trajectory" in node.first, node.first
+        dp = DomainParticipant(domain)
+        assert call_trigger(dp, "arm1", "home", 1).success
+        action = Action(dp, "arm1")
+        feedback = DataReader(dp, Topic(dp, "rt/arm1/follow_joint_trajectory/_action/feedback", FeedbackMessageKilted),
+                              qos=Qos(RELIABLE, Policy.History.KeepLast(100)))
+        gid = action.goal(trajectory_goal(JOINTS, [(0.8, [0.1] * 6), (1.6, [0.2] * 6)]))
+        r = action.outcome(gid)
+        assert (r.status, r.result.error_code) == (SUCCEEDED, 0), r.result.error_string
+        got = [m.feedback for m in feedback.take(N=100)
+               if isinstance(m, FeedbackMessageKilted) and list(m.goal_id.uuid) == list(gid.uuid)]
+        assert got, "no feedback read in Kilted's layout"
+        assert all(list(f.joint_names) == JOINTS and len(f.actual.positions) == 6 for f in got)
+        # The point in use goes from the first to the second, and the multi-DOF index stays 0.
+        assert {f.index for f in got} <= {0, 1} and got[-1].index == 1, [f.index for f in got]
+        assert all(f.multi_dof_index == 0 for f in got)
+    finally:
+        node.stop()

@@ -424,6 +424,8 @@ pub struct Follow {
     clock: f64,
     /// The arm's joint names (`--prefix` and the URDF's), in the URDF's order.
     joints: [String; 6],
+    /// Feedback in control_msgs 6.3's layout (Kilted, Rolling).
+    kilted: bool,
 }
 
 fn follow_result(code: i32, why: impl Into<String>) -> FollowResult {
@@ -440,8 +442,21 @@ fn aborted(code: i32, why: impl Into<String>) -> Option<(GoalStatusEnum, FollowR
 impl Served<Follow> {
     /// FollowJointTrajectory, no goal yet; the arm's clock runs `clock` times real time;
     /// `joints`: the arm's joint names as the node gives them.
-    pub fn follow(clock: f64, joints: [String; 6], services: ActionServices) -> Self {
-        Served::new(Follow { clock, joints }, services)
+    pub fn follow(
+        clock: f64,
+        joints: [String; 6],
+        distro: crate::Distro,
+        services: ActionServices,
+    ) -> Self {
+        let kilted = distro.feedback_has_indices();
+        Served::new(
+            Follow {
+                clock,
+                joints,
+                kilted,
+            },
+            services,
+        )
     }
 }
 
@@ -513,6 +528,8 @@ impl Goals for Follow {
                 desired: point(&desired),
                 actual: point(&q),
                 error: point(&error),
+                index: run.plan.point_in_use(elapsed),
+                kilted: self.kilted,
                 ..Default::default()
             });
             if let Some((j, e)) = run.plan.off_path(elapsed, &q).filter(|_| run.timed) {

@@ -264,6 +264,17 @@ impl Plan {
         })
     }
 
+    /// The goal's point in use `elapsed` s after the start: the first not yet due (the last
+    /// once all are).
+    pub fn point_in_use(&self, elapsed: f64) -> i32 {
+        let k = self
+            .waypoints
+            .iter()
+            .position(|w| w.time >= elapsed)
+            .unwrap_or(self.waypoints.len().saturating_sub(1));
+        i32::try_from(k).unwrap_or(i32::MAX)
+    }
+
     /// The result once the arm stands at `actual`, `elapsed` s after the start (`timed`: the
     /// controller kept the times).
     pub fn result(&self, actual: &[f64; 6], elapsed: f64, timed: bool) -> (i32, String) {

@@ -83,6 +83,10 @@ struct Args {
     /// cell; letters, digits and `_`.
     #[arg(long, default_value = "", value_parser = prefix)]
     prefix: String,
+    /// The ROS 2 distribution of the peers (default: $ROS_DISTRO, else jazzy): Kilted and
+    /// Rolling read FollowJointTrajectory's feedback in control_msgs 6.3's layout.
+    #[arg(long, value_enum)]
+    distro: Option<Distro>,
     /// The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long, value_parser = clap::value_parser!(u16).range(0..=232))]
     domain: Option<u16>,
@@ -97,6 +101,39 @@ struct Args {
     /// else warnings).
     #[arg(short, long, action = clap::ArgAction::Count)]
     verbose: u8,
+}
+
+/// A ROS 2 distribution, for the layouts that differ between them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Distro {
+    Humble,
+    Jazzy,
+    Kilted,
+    Rolling,
+}
+
+impl Distro {
+    /// `--distro`, else `$ROS_DISTRO` (set by a ROS 2 install's setup script), else Jazzy.
+    fn pick(given: Option<Distro>) -> Result<Distro, String> {
+        use clap::ValueEnum;
+        if let Some(d) = given {
+            return Ok(d);
+        }
+        match std::env::var("ROS_DISTRO") {
+            Ok(v) if !v.trim().is_empty() => Distro::from_str(v.trim(), true).map_err(|_| {
+                format!(
+                    "ROS_DISTRO `{v}` is not one this node knows (humble, jazzy, kilted, \
+                     rolling): give --distro"
+                )
+            }),
+            _ => Ok(Distro::Jazzy),
+        }
+    }
+
+    /// Whether FollowJointTrajectory's feedback has control_msgs 6.3's two indices.
+    pub(crate) fn feedback_has_indices(self) -> bool {
+        matches!(self, Distro::Kilted | Distro::Rolling)
+    }
 }
 
 fn prefix(s: &str) -> Result<String, String> {
@@ -283,6 +320,13 @@ pub(crate) fn words(e: &trol::Error) -> String {
 fn run(args: Args) -> Result<(), String> {
     let ns = namespace(&args.namespace)?;
     let joints = joint_names(&args.prefix);
+    let distro = Distro::pick(args.distro)?;
+    if distro == Distro::Humble {
+        trol_cli::tell!(
+            "trol-ros2: on Humble, `ros2 node list` does not show this node: its discovery \
+             message is written in Jazzy's layout"
+        );
+    }
     let domain = domain(args.domain)?;
     let local = localhost_only(args.localhost_only);
 
@@ -432,6 +476,7 @@ fn run(args: Args) -> Result<(), String> {
             1.0
         },
         joints.clone(),
+        distro,
         action_services("follow_joint_trajectory")?,
     );
 

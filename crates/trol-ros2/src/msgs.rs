@@ -286,8 +286,12 @@ pub struct FollowResult {
 
 impl ros2_client::Message for FollowResult {}
 
-/// FollowJointTrajectory's feedback.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// FollowJointTrajectory's feedback, in either of control_msgs's layouts: Humble's and
+/// Jazzy's (control_msgs 4 and 5), or Kilted's and Rolling's (6.3 on), which add `int32
+/// index` after `error` and `int32 multi_dof_index` at the end. CDR has no field names, so a
+/// peer of the other layout cannot read it at all: the node sends its distribution's
+/// (`--distro`).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 pub struct FollowFeedback {
     /// When.
     pub header: Header,
@@ -299,6 +303,9 @@ pub struct FollowFeedback {
     pub actual: JointTrajectoryPoint,
     /// actual - desired.
     pub error: JointTrajectoryPoint,
+    /// Kilted on: the trajectory's point in use (the first not yet due).
+    #[serde(skip)]
+    pub index: i32,
     /// Empty.
     pub multi_dof_joint_names: Vec<String>,
     /// Empty.
@@ -307,6 +314,35 @@ pub struct FollowFeedback {
     pub multi_dof_actual: MultiDofJointTrajectoryPoint,
     /// Empty.
     pub multi_dof_error: MultiDofJointTrajectoryPoint,
+    /// Kilted on: the multi-DOF point in use (0: this arm has none).
+    #[serde(skip)]
+    pub multi_dof_index: i32,
+    /// Whether to send Kilted's layout (with the two indices).
+    #[serde(skip)]
+    pub kilted: bool,
+}
+
+impl Serialize for FollowFeedback {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut st = s.serialize_struct("FollowFeedback", if self.kilted { 11 } else { 9 })?;
+        st.serialize_field("header", &self.header)?;
+        st.serialize_field("joint_names", &self.joint_names)?;
+        st.serialize_field("desired", &self.desired)?;
+        st.serialize_field("actual", &self.actual)?;
+        st.serialize_field("error", &self.error)?;
+        if self.kilted {
+            st.serialize_field("index", &self.index)?;
+        }
+        st.serialize_field("multi_dof_joint_names", &self.multi_dof_joint_names)?;
+        st.serialize_field("multi_dof_desired", &self.multi_dof_desired)?;
+        st.serialize_field("multi_dof_actual", &self.multi_dof_actual)?;
+        st.serialize_field("multi_dof_error", &self.multi_dof_error)?;
+        if self.kilted {
+            st.serialize_field("multi_dof_index", &self.multi_dof_index)?;
+        }
+        st.end()
+    }
 }
 
 impl ros2_client::Message for FollowFeedback {}
@@ -350,3 +386,34 @@ impl ros2_client::Message for GripperResult {}
 
 /// GripperCommand's feedback: the result's fields.
 pub type GripperFeedback = GripperResult;
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+
+    #[test]
+    fn kilted_s_feedback_has_the_two_indices_where_control_msgs_6_3_put_them() {
+        let jazzy = FollowFeedback {
+            index: 3,
+            ..Default::default()
+        };
+        let kilted = FollowFeedback {
+            kilted: true,
+            ..jazzy.clone()
+        };
+        let cdr = |f: &FollowFeedback| {
+            rustdds::cdr_encoding::to_vec::<FollowFeedback, byteorder::LittleEndian>(f).unwrap()
+        };
+        let (a, b) = (cdr(&jazzy), cdr(&kilted));
+        assert_eq!(b.len(), a.len() + 8, "two int32 more");
+        // Up to `error` the same bytes; then Kilted's index.
+        let at = prefix_len(&a, &b);
+        assert_eq!(&b[at..at + 4], &3i32.to_le_bytes());
+        assert_eq!(&b[b.len() - 4..], &0i32.to_le_bytes());
+    }
+
+    /// How many leading bytes two encodings share.
+    fn prefix_len(a: &[u8], b: &[u8]) -> usize {
+        a.iter().zip(b).take_while(|(x, y)| x == y).count()
+    }
+}

@@ -909,3 +909,40 @@ def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) 
         assert all(f.multi_dof_index == 0 for f in got)
     finally:
         node.stop()
+
+
+@pytest.mark.timeout(300)
+def test_a_dense_plan_is_thinned_for_a_c500_and_reaches_its_end(tmp_path: Path, domain: int) -> None:
+    # 40 points, as MoveIt plans them; a C500 runs at most 16 (one joint move each).
+    controller = Controller("--rapl", tmp_path)
+    env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
+    env.pop("ROS_DISTRO", None)
+    node = subprocess.Popen([str(node_binary()), "--config", str(controller.cfg), "--namespace", "cell"],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                            text=True, env=env)
+    try:
+        assert node.stdout is not None
+        first = node.stdout.readline()
+        assert "node /cell/trol_a465" in first, first
+        # A C500's position read is slow: joint_states says the rate it keeps, and why.
+        assert "(asked 50 Hz: a position read takes" in first, first
+        threading.Thread(target=node.stdout.read, daemon=True).start()
+        dp = DomainParticipant(domain)
+        assert call_trigger(dp, "cell", "home", 1, limit=120).success
+        action = Action(dp, "cell")
+        end = [0.3, 0.1, 0.4, 0.1, 0.3, 0.2]
+        points = [(0.1 * k, [x * k / 40 for x in end]) for k in range(1, 41)]
+        out = action.outcome(action.goal(trajectory_goal(JOINTS, points)), limit=180)
+        assert (out.status, out.result.error_code) == (SUCCEEDED, 0), out.result.error_string
+        assert "40 points were thinned to 16" in out.result.error_string, out.result.error_string
+        states = states_reader(dp, "cell")
+        s = wait_for("joint states", lambda: next(
+            (x for x in reversed(states.take(N=50)) if isinstance(x, JointState)), None))
+        assert list(s.position) == pytest.approx(end, abs=3e-3)
+    finally:
+        node.terminate()
+        try:
+            node.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            node.kill()
+        controller.stop()

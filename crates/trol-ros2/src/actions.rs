@@ -415,6 +415,9 @@ pub struct FollowRun {
     /// The count of halts (the `halt` service, a gripper's cancel) when it started: one
     /// since stopped it short.
     halts: u64,
+    /// Thinned for the controller: the goal's points, those sent, and how far (rad) the
+    /// dropped ones lay from the path sent.
+    thinned: Option<(usize, usize, f64)>,
 }
 
 /// FollowJointTrajectory's goals.
@@ -481,12 +484,30 @@ impl Goals for Follow {
             .to_array6();
         let plan =
             follow::plan(goal, start, &self.joints).map_err(|no| follow_result(no.code, no.why))?;
-        match r.trajectory(&plan.waypoints) {
+        let mut sent = r.trajectory(&plan.waypoints);
+        let mut thinned = None;
+        // A controller that runs a trajectory as one joint move per point takes at most
+        // UNTIMED_WAYPOINTS of them (a C500); MoveIt plans many more. Such a plan is thinned
+        // to that many (its corners kept), where its path tolerance allows, and sent again:
+        // nothing moved on the refusal.
+        let limit = trol_controller::UNTIMED_WAYPOINTS;
+        if let Err(e) = &sent
+            && e.code() == trol::code::TROL_ERR_ARG_RANGE
+            && plan.waypoints.len() > limit
+        {
+            let (fewer, off) = plan
+                .thinned(limit)
+                .map_err(|no| follow_result(no.code, no.why))?;
+            thinned = Some((plan.waypoints.len(), fewer.len(), off));
+            sent = r.trajectory(&fewer);
+        }
+        match sent {
             Ok(timing) => Ok(FollowRun {
                 plan,
                 started: Instant::now(),
                 timed: timing == trol::Timing::Timed,
                 halts,
+                thinned,
             }),
             Err(e) => Err(follow_result(
                 follow_code::INVALID_GOAL,
@@ -568,7 +589,13 @@ impl Goals for Follow {
                     }
                     Err(_) => return aborted(follow_code::GOAL_TOLERANCE_VIOLATED, poisoned),
                 };
-                let (code, why) = run.plan.result(&q, elapsed, run.timed);
+                let (code, mut why) = run.plan.result(&q, elapsed, run.timed);
+                if let Some((asked, sent, off)) = run.thinned {
+                    why.push_str(&format!(
+                        "; its {asked} points were thinned to {sent} for this controller, the \
+                         dropped ones within {off:.4} rad of the path sent"
+                    ));
+                }
                 let status = if code == follow_code::SUCCESSFUL {
                     GoalStatusEnum::Succeeded
                 } else {

@@ -264,6 +264,89 @@ impl Plan {
         })
     }
 
+    /// The plan thinned to at most `n` waypoints for a controller that runs no more (a C500:
+    /// one joint move per point), or why it cannot be: the last point always kept, then
+    /// greedily the point farthest from the path the kept ones make (linear between them in
+    /// time), until `n`. Returns the thinned waypoints and how far (rad) the dropped points
+    /// lie from their path at most; a path tolerance smaller than that refuses it.
+    pub fn thinned(&self, n: usize) -> Result<(Vec<Waypoint>, f64), Refused> {
+        let w = &self.waypoints;
+        if w.len() <= n {
+            return Ok((w.clone(), 0.0));
+        }
+        if n < 2 {
+            return Err(refused(
+                follow_code::INVALID_GOAL,
+                format!("{} points for a controller that takes {n}", w.len()),
+            ));
+        }
+        // The start (where the arm stands, time 0) anchors the first segment.
+        let start = Waypoint {
+            time: 0.0,
+            joints: self.desired(0.0),
+        };
+        let mut kept = vec![w.len() - 1];
+        let deviation = |kept: &[usize], k: usize| -> [f64; 6] {
+            let before = kept
+                .iter()
+                .copied()
+                .filter(|&j| j < k)
+                .max()
+                .map_or(&start, |j| &w[j]);
+            let after = &w[kept.iter().copied().filter(|&j| j > k).min().unwrap_or(k)];
+            let span = after.time - before.time;
+            let f = if span > 0.0 {
+                (w[k].time - before.time) / span
+            } else {
+                0.0
+            };
+            std::array::from_fn(|i| {
+                let on_path = before.joints[i] + f * (after.joints[i] - before.joints[i]);
+                (w[k].joints[i] - on_path).abs()
+            })
+        };
+        let worst = |kept: &[usize]| -> Option<(usize, f64)> {
+            (0..w.len())
+                .filter(|k| !kept.contains(k))
+                .map(|k| (k, deviation(kept, k).into_iter().fold(0.0, f64::max)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        while kept.len() < n {
+            let Some((k, _)) = worst(&kept) else { break };
+            kept.push(k);
+        }
+        kept.sort_unstable();
+        // How far the dropped points lie from the thinned path, per joint.
+        let mut off = [0.0f64; 6];
+        for k in (0..w.len()).filter(|k| !kept.contains(k)) {
+            let d = deviation(&kept, k);
+            for i in 0..6 {
+                off[i] = off[i].max(d[i]);
+            }
+        }
+        for (i, (off_i, tol)) in off.iter().zip(self.path_tolerance).enumerate() {
+            if let Some(tol) = tol
+                && *off_i > tol
+            {
+                return Err(refused(
+                    follow_code::INVALID_GOAL,
+                    format!(
+                        "{} points, and this controller runs at most {n}: thinned, {} would \
+                         leave the path by {:.4} rad, beyond its path tolerance {tol}; send \
+                         fewer points or a wider tolerance",
+                        w.len(),
+                        self.joints[i],
+                        off_i
+                    ),
+                ));
+            }
+        }
+        Ok((
+            kept.iter().map(|&k| w[k]).collect(),
+            off.into_iter().fold(0.0, f64::max),
+        ))
+    }
+
     /// The goal's point in use `elapsed` s after the start: the first not yet due (the last
     /// once all are).
     pub fn point_in_use(&self, elapsed: f64) -> i32 {
@@ -334,6 +417,51 @@ mod tests {
     /// The URDF's joint names, no prefix.
     fn urdf() -> [String; 6] {
         crate::joint_names("")
+    }
+
+    #[test]
+    fn a_dense_plan_is_thinned_to_the_controller_s_count_keeping_its_end_and_its_corners() {
+        let joints = urdf();
+        let names: Vec<&str> = joints.iter().map(String::as_str).collect();
+        // 40 points: joint 1 up to 1 rad at 2 s, then back to 0.5 at 4 s (a corner at 2 s).
+        let points: Vec<_> = (1..=40)
+            .map(|k| {
+                let t = k as f64 * 0.1;
+                let q1 = if t <= 2.0 {
+                    t / 2.0
+                } else {
+                    1.0 - (t - 2.0) / 4.0
+                };
+                point(t, [q1, 0.0, 0.0, 0.0, 0.0, 0.0])
+            })
+            .collect();
+        let p = plan(&goal(&names, points), [0.0; 6], &joints).unwrap();
+        let (thin, off) = p.thinned(16).unwrap();
+        assert!(thin.len() <= 16);
+        assert_eq!(thin.last().unwrap().joints, p.end(), "the end is kept");
+        assert!(
+            thin.iter().any(|w| (w.time - 2.0).abs() < 1e-9),
+            "the corner is kept"
+        );
+        assert!(thin.windows(2).all(|w| w[0].time < w[1].time));
+        assert!(off < 1e-9, "straight pieces lose nothing: {off}");
+        // A tolerance tighter than what thinning costs refuses it.
+        let wavy: Vec<_> = (1..=40)
+            .map(|k| {
+                let t = k as f64 * 0.1;
+                point(t, [0.1 * (k % 2) as f64, 0.0, 0.0, 0.0, 0.0, 0.0])
+            })
+            .collect();
+        let mut g = goal(&names, wavy);
+        g.path_tolerance.push(JointTolerance {
+            name: joints[0].clone(),
+            position: 0.01,
+            ..Default::default()
+        });
+        let p = plan(&g, [0.0; 6], &joints).unwrap();
+        let e = p.thinned(16).unwrap_err();
+        assert_eq!(e.code, follow_code::INVALID_GOAL);
+        assert!(e.why.contains("path tolerance"), "{e:?}");
     }
 
     #[test]

@@ -266,6 +266,42 @@ fn prefixed_urdf(urdf: &str, prefix: &str) -> String {
     out
 }
 
+/// How long one reading of the arm's joints takes: the slowest of three (0 when they fail:
+/// the loop says so when it reads).
+fn read_time(robot: &Mutex<Robot>) -> f64 {
+    let mut worst: f64 = 0.0;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let ok = robot
+            .lock()
+            .map(|mut r| r.position(Tag::Joint, PosMode::Actual).is_ok())
+            .unwrap_or(false);
+        if !ok {
+            return 0.0;
+        }
+        worst = worst.max(t.elapsed().as_secs_f64());
+    }
+    worst
+}
+
+/// The rate joint_states keeps: the one asked, or what reads of `read_s` s each allow with a
+/// fifth of each period left for requests.
+fn honest_rate(asked: f64, read_s: f64) -> f64 {
+    if read_s <= 0.0 {
+        return asked;
+    }
+    asked.min(0.8 / read_s).max(0.1)
+}
+
+/// A rate for words: whole where it is, else to a tenth (0.7 Hz, 50 Hz).
+fn trim_rate(hz: f64) -> String {
+    if (hz - hz.round()).abs() < 0.05 {
+        format!("{}", hz.round())
+    } else {
+        format!("{hz:.1}")
+    }
+}
+
 /// How long a starting node listens for another that serves its names (discovery on a
 /// loopback takes well under a second; an assumption with room).
 const DISCOVERY_WAIT: Duration = Duration::from_secs(2);
@@ -480,19 +516,32 @@ fn run(args: Args) -> Result<(), String> {
         action_services("follow_joint_trajectory")?,
     );
 
+    // The rate joint_states can keep: a controller whose position read takes longer than a
+    // period (a C500: about a second) gets the rate its reads allow, said at start.
+    let read_s = read_time(&robot);
+    let rate = honest_rate(args.rate, read_s);
     let prefix = if ns == "/" { String::new() } else { ns.clone() };
     trol_cli::say!(
         "trol-ros2: node {prefix}/{NODE} on ROS 2 domain {domain}{}, arm on port {}: \
-         {prefix}/joint_states at {} Hz, {prefix}/robot_description, services {prefix}/home and \
-         {prefix}/halt, actions {prefix}/follow_joint_trajectory and \
+         {prefix}/joint_states at {} Hz{}, {prefix}/robot_description, services {prefix}/home \
+         and {prefix}/halt, actions {prefix}/follow_joint_trajectory and \
          {prefix}/gripper_cmd",
         if local { " (localhost only)" } else { "" },
         cfg.port,
-        args.rate
+        trim_rate(rate),
+        if rate < args.rate {
+            format!(
+                " (asked {} Hz: a position read takes {:.0} ms on this controller)",
+                trim_rate(args.rate),
+                read_s * 1e3
+            )
+        } else {
+            String::new()
+        }
     );
 
     let mut grips = actions::Served::gripper(action_services("gripper_cmd")?);
-    let period = Duration::from_secs_f64(1.0 / args.rate);
+    let period = Duration::from_secs_f64(1.0 / rate);
     let mut next = Instant::now();
     let mut last: Option<([f64; 6], Instant)> = None;
     // Halts served: a Home during which one came is not reported homed.
@@ -686,6 +735,18 @@ fn home_arm(robot: &Mutex<Robot>, halts: &std::sync::atomic::AtomicU64) -> Trigg
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn joint_states_keep_the_rate_the_controller_s_reads_allow() {
+        assert_eq!(honest_rate(50.0, 0.002), 50.0);
+        // A C500's read of about 1.2 s: well under a hertz, said as it is.
+        let r = honest_rate(50.0, 1.2);
+        assert!((r - 0.8 / 1.2).abs() < 1e-9);
+        assert_eq!(trim_rate(r), "0.7");
+        assert_eq!(trim_rate(50.0), "50");
+        // Reads that failed do not lower it (the loop says why it cannot read).
+        assert_eq!(honest_rate(50.0, 0.0), 50.0);
+    }
 
     #[test]
     fn a_prefix_names_every_link_and_joint_and_every_reference_stays_whole() {

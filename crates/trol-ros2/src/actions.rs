@@ -159,12 +159,13 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
         server: &AnyActionServer<G, R, F>,
         req_id: Asker,
         goal_id: GoalId,
+        replacing: bool,
     ) -> Option<GoalInfo> {
         let info = GoalInfo {
             goal_id,
             stamp: ros2_client::builtin_interfaces::Time::now(),
         };
-        let accepted = self.running.is_none();
+        let accepted = self.running.is_none() || replacing;
         if !accepted {
             trol_cli::tell!(
                 "trol-ros2: a goal of {} was rejected: one is under way",
@@ -341,6 +342,20 @@ pub trait Goals {
     ) -> Option<(GoalStatusEnum, Self::Result)>;
     /// The result of a goal cancelled with the arm halted (`None`), or whose halt failed.
     fn canceled(&self, failed: Option<String>) -> Self::Result;
+    /// Whether a new goal replaces the one under way (as ROS 2's joint_trajectory_controller
+    /// does) rather than being rejected.
+    fn replaces(&self) -> bool {
+        false
+    }
+    /// What can be known of a goal before anything stops or moves: its refusal, if any (a
+    /// new goal refused so leaves the one under way running).
+    fn check(&self, _goal: &Self::Goal) -> Result<(), Self::Result> {
+        Ok(())
+    }
+    /// The result of a goal replaced by a newer one, the arm halted for it.
+    fn replaced(&self) -> Self::Result {
+        self.canceled(None)
+    }
 }
 
 /// One action's server side: its goals and their bookkeeping.
@@ -370,7 +385,42 @@ impl<A: Goals> Served<A> {
         matches: &Matches,
     ) {
         while let Some((req_id, req)) = crate::mapping::next(|| server.receive_goal()) {
-            if let Some(info) = self.book.take_goal(server, req_id, req.goal_id) {
+            // A goal while one runs: replaced where this action replaces (the new one checked
+            // first: one refused leaves the running goal alone), else rejected.
+            let replacing = self.book.running.is_some()
+                && self.goals.replaces()
+                && self.goals.check(&req.goal).is_ok();
+            if let Some(info) = self.book.take_goal(server, req_id, req.goal_id, replacing) {
+                if replacing && let Some(old) = self.book.running.clone() {
+                    let goals = &self.goals;
+                    match halt_for_cancel(arm.robot, arm.halts) {
+                        Ok(()) => self
+                            .book
+                            .end(old, GoalStatusEnum::Canceled, goals.replaced()),
+                        Err(why) => {
+                            // The arm was not seen standing: the old goal ends aborted, and
+                            // the new one is not started on a moving arm.
+                            self.book.end(
+                                old,
+                                GoalStatusEnum::Aborted,
+                                goals.canceled(Some(format!(
+                                    "replaced by a newer goal, but the halt failed: {why}"
+                                ))),
+                            );
+                            self.run = None;
+                            self.book.end(
+                                info,
+                                GoalStatusEnum::Aborted,
+                                goals.canceled(Some(format!(
+                                    "not started: the arm was not seen to stand after the \
+                                     goal before it was halted: {why}"
+                                ))),
+                            );
+                            continue;
+                        }
+                    }
+                    self.run = None;
+                }
                 match self.goals.start(arm, &req.goal) {
                     Ok(run) => {
                         self.book.start(info.clone());
@@ -429,6 +479,8 @@ pub struct Follow {
     joints: [String; 6],
     /// Feedback in control_msgs 6.3's layout (Kilted, Rolling).
     kilted: bool,
+    /// A new goal replaces the running one (false: it is rejected).
+    replace: bool,
 }
 
 fn follow_result(code: i32, why: impl Into<String>) -> FollowResult {
@@ -449,6 +501,7 @@ impl Served<Follow> {
         clock: f64,
         joints: [String; 6],
         distro: crate::Distro,
+        replace: bool,
         services: ActionServices,
     ) -> Self {
         let kilted = distro.feedback_has_indices();
@@ -457,6 +510,7 @@ impl Served<Follow> {
                 clock,
                 joints,
                 kilted,
+                replace,
             },
             services,
         )
@@ -619,6 +673,25 @@ impl Goals for Follow {
             ),
             Some(why) => follow_result(follow_code::PATH_TOLERANCE_VIOLATED, why),
         }
+    }
+
+    fn replaces(&self) -> bool {
+        self.replace
+    }
+
+    fn check(&self, goal: &FollowGoal) -> Result<(), FollowResult> {
+        // Names, times, positions and tolerances: the start does not change them.
+        follow::plan(goal, [0.0; 6], &self.joints)
+            .map(drop)
+            .map_err(|no| follow_result(no.code, no.why))
+    }
+
+    fn replaced(&self) -> FollowResult {
+        follow_result(
+            follow_code::SUCCESSFUL,
+            "replaced by a newer goal: the arm was halted where it was and the new trajectory \
+             starts there",
+        )
     }
 }
 

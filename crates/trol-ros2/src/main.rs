@@ -87,6 +87,11 @@ struct Args {
     /// Rolling read FollowJointTrajectory's feedback in control_msgs 6.3's layout.
     #[arg(long, value_enum)]
     distro: Option<Distro>,
+    /// Reject a trajectory goal while one runs (by default a new goal replaces the running
+    /// one, as ROS 2's joint_trajectory_controller does: the arm is halted where it is, the
+    /// old goal ends canceled, and the new trajectory starts there).
+    #[arg(long)]
+    one_goal: bool,
     /// The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long, value_parser = clap::value_parser!(u16).range(0..=232))]
     domain: Option<u16>,
@@ -513,6 +518,7 @@ fn run(args: Args) -> Result<(), String> {
         },
         joints.clone(),
         distro,
+        !args.one_goal,
         action_services("follow_joint_trajectory")?,
     );
 

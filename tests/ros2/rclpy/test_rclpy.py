@@ -397,3 +397,40 @@ def test_a_prefix_names_the_joints_of_one_arm_of_a_cell(domain: int, ros: Ros) -
         assert standing(ros, states) == pytest.approx(end, abs=3e-3)
     finally:
         node.end()
+
+
+def test_a_new_goal_replaces_the_running_one_as_joint_trajectory_controller_does(domain: int, ros: Ros) -> None:
+    node = TrolNode(domain, "--port", "sim", "--time-scale", "1", "--namespace", "arm1")
+    try:
+        assert ros.call("/arm1/home").success
+        states = ros.states("arm1")
+        goals = Goals(ros, "arm1")
+        first = goals.send(trajectory(JOINTS, [(8.0, FAR_TARGET)]))
+        assert first.accepted
+        ros.spin_until("the arm moving", lambda: moving(states, max(0, len(states) - 25)))
+        # A goal the arm cannot have (an unknown joint) is rejected and leaves the first running.
+        bad = goals.send(trajectory(["elbow"] + JOINTS[1:], [(2.0, [0.1] * 6)]))
+        assert not bad.accepted
+        end = [0.1, 0.1, 0.2, 0.1, 0.1, 0.1]
+        second = goals.send(trajectory(JOINTS, [(3.0, end)]))
+        assert second.accepted
+        out = goals.outcome(first)
+        assert out.status == CANCELED and "replaced" in out.result.error_string, out.result.error_string
+        out = goals.outcome(second)
+        assert out.status == SUCCEEDED, out.result.error_string
+        assert standing(ros, states) == pytest.approx(end, abs=3e-3)
+    finally:
+        node.end()
+
+
+def test_with_one_goal_a_goal_while_one_runs_is_rejected(domain: int, ros: Ros) -> None:
+    node = TrolNode(domain, "--port", "sim", "--time-scale", "1", "--namespace", "arm1", "--one-goal")
+    try:
+        assert ros.call("/arm1/home").success
+        goals = Goals(ros, "arm1")
+        first = goals.send(trajectory(JOINTS, [(4.0, [0.3] * 6)]))
+        assert first.accepted
+        assert not goals.send(trajectory(JOINTS, [(2.0, [0.1] * 6)])).accepted
+        assert goals.outcome(first).status == SUCCEEDED
+    finally:
+        node.end()

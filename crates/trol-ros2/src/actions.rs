@@ -167,7 +167,7 @@ impl<R: Message + Clone + Default + 'static> Book<R> {
         };
         let accepted = self.running.is_none() || replacing;
         if !accepted {
-            trol_cli::tell!(
+            crate::warn_ros!(
                 "trol-ros2: a goal of {} was rejected: one is under way",
                 server.name()
             );
@@ -720,7 +720,7 @@ impl Goals for Gripper {
     fn start(&mut self, arm: &Arm<'_>, goal: &GripperGoal) -> Result<f64, GripperResult> {
         let mm = goal.command.position * 1000.0;
         if !(mm.is_finite() && (0.0..=GRIP_MAX_MM + 0.5).contains(&mm)) {
-            trol_cli::tell!(
+            crate::warn_ros!(
                 "trol-ros2: gripper_cmd refused: a gap of {} m is outside 0 .. {} m",
                 goal.command.position,
                 GRIP_MAX_MM / 1000.0
@@ -731,7 +731,7 @@ impl Goals for Gripper {
         match arm.robot.lock().map(|mut r| r.grip(target as u16)) {
             Ok(Ok(())) => Ok(target),
             Ok(Err(e)) => {
-                trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
+                crate::warn_ros!("trol-ros2: gripper_cmd: {}", words(&e));
                 Err(GripperResult::default())
             }
             Err(_) => Err(GripperResult::default()),
@@ -755,7 +755,7 @@ impl Goals for Gripper {
         let g = match gripper {
             Ok(g) => g,
             Err(e) => {
-                trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
+                crate::warn_ros!("trol-ros2: gripper_cmd: {}", words(&e));
                 return failed;
             }
         };
@@ -776,7 +776,7 @@ impl Goals for Gripper {
             Ok(false) if reached || stalled => Some((GoalStatusEnum::Succeeded, state)),
             Ok(false) => Some((GoalStatusEnum::Aborted, state)),
             Err(e) => {
-                trol_cli::tell!("trol-ros2: gripper_cmd: {}", words(&e));
+                crate::warn_ros!("trol-ros2: gripper_cmd: {}", words(&e));
                 Some((GoalStatusEnum::Aborted, state))
             }
         }

@@ -24,6 +24,7 @@ mod follow;
 mod mapping;
 mod msgs;
 mod replies;
+mod rosout;
 
 use std::net::{IpAddr, Ipv4Addr};
 use std::sync::mpsc;
@@ -174,7 +175,7 @@ fn catch_termination() {
             signal_hook::flag::register_conditional_shutdown(signal, 143, TERMINATED.clone())
                 .and_then(|_| signal_hook::flag::register(signal, TERMINATED.clone()));
         if let Err(e) = caught {
-            trol_cli::tell!(
+            crate::warn_ros!(
                 "trol-ros2: signal {signal} will end the node without halting the arm: {e}"
             );
         }
@@ -200,7 +201,7 @@ fn main() {
         "rustdds=error,rustdds::network::udp_listener=off,ros2_client=error",
     );
     if let Err(e) = run(args) {
-        trol_cli::tell!("trol-ros2: {e}");
+        crate::warn_ros!("trol-ros2: {e}");
         std::process::exit(1);
     }
 }
@@ -363,7 +364,7 @@ fn run(args: Args) -> Result<(), String> {
     let joints = joint_names(&args.prefix);
     let distro = Distro::pick(args.distro)?;
     if distro == Distro::Humble {
-        trol_cli::tell!(
+        crate::warn_ros!(
             "trol-ros2: on Humble, `ros2 node list` does not show this node: its discovery \
              message is written in Jazzy's layout"
         );
@@ -402,9 +403,13 @@ fn run(args: Args) -> Result<(), String> {
     let robot = Arc::new(Mutex::new(robot));
     let context = Context::from_domain_participant(participant)
         .map_err(|e| format!("cannot start ROS 2: {e:?}"))?;
+    // Its words go to /rosout too (rosout.rs); it declares no parameters (it runs no
+    // ros2-client spinner, whose parameter services would take the participant's status
+    // events replies.rs reads).
     let mut node = context
-        .new_node(node_name.clone(), NodeOptions::new().enable_rosout(false))
+        .new_node(node_name.clone(), NodeOptions::new().enable_rosout(true))
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
+    rosout::attach(&node);
     // Which clients' reply readers this node's writers have matched: a reply waits for its
     // client's (replies.rs).
     let mut matches = replies::Matches::new(context.domain_participant());
@@ -527,7 +532,7 @@ fn run(args: Args) -> Result<(), String> {
     let read_s = read_time(&robot);
     let rate = honest_rate(args.rate, read_s);
     let prefix = if ns == "/" { String::new() } else { ns.clone() };
-    trol_cli::say!(
+    rosout::info(&format!(
         "trol-ros2: node {prefix}/{NODE} on ROS 2 domain {domain}{}, arm on port {}: \
          {prefix}/joint_states at {} Hz{}, {prefix}/robot_description, services {prefix}/home \
          and {prefix}/halt, actions {prefix}/follow_joint_trajectory and \
@@ -544,7 +549,7 @@ fn run(args: Args) -> Result<(), String> {
         } else {
             String::new()
         }
-    );
+    ));
 
     let mut grips = actions::Served::gripper(action_services("gripper_cmd")?);
     let period = Duration::from_secs_f64(1.0 / rate);
@@ -600,7 +605,7 @@ fn run(args: Args) -> Result<(), String> {
                 Err(e) => {
                     // Said once per run of failures; publishing resumes when readings do.
                     if !reading_failed {
-                        trol_cli::tell!("trol-ros2: cannot read the arm: {e}");
+                        crate::warn_ros!("trol-ros2: cannot read the arm: {e}");
                     }
                     reading_failed = true;
                     last = None;
@@ -679,10 +684,11 @@ fn run(args: Args) -> Result<(), String> {
     };
     if r.is_moving().unwrap_or(false) {
         match r.halt() {
-            Ok(()) => {
-                trol_cli::tell!("trol-ros2: ending: the arm was moving; it is halted and stands")
-            }
-            Err(e) => trol_cli::tell!(
+            Ok(()) => rosout::said(
+                rosout::LogLevel::Info,
+                "trol-ros2: ending: the arm was moving; it is halted and stands",
+            ),
+            Err(e) => crate::warn_ros!(
                 "trol-ros2: ending: the arm was moving and its halt failed: {}",
                 words(&e)
             ),

@@ -176,7 +176,7 @@ pub fn next<T>(mut take: impl FnMut() -> Result<Option<T>, String>) -> Option<T>
     for _ in 0..UNREADABLE_PER_TURN {
         match take() {
             Ok(r) => return r,
-            Err(e) => trol_cli::tell!("trol-ros2: {e}; not answered"),
+            Err(e) => crate::warn_ros!("trol-ros2: {e}; not answered"),
         }
     }
     None

@@ -192,7 +192,7 @@ impl<T> Replies<T> {
                 break;
             }
             if !all {
-                trol_cli::tell!(
+                crate::warn_ros!(
                     "trol-ros2: a reply on {} waited {} s for its client's reader; sent anyway \
                      (the client may not hear it)",
                     self.service.reply,

@@ -423,14 +423,22 @@ def test_a_new_goal_replaces_the_running_one_as_joint_trajectory_controller_does
         node.end()
 
 
-def test_with_one_goal_a_goal_while_one_runs_is_rejected(domain: int, ros: Ros) -> None:
+def test_with_one_goal_a_goal_while_one_runs_is_rejected_and_rosout_says_why(domain: int, ros: Ros) -> None:
+    from rcl_interfaces.msg import Log
+
     node = TrolNode(domain, "--port", "sim", "--time-scale", "1", "--namespace", "arm1", "--one-goal")
     try:
+        logs: list[Log] = []
+        ros.node.create_subscription(Log, "/rosout", logs.append,
+                                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         assert ros.call("/arm1/home").success
         goals = Goals(ros, "arm1")
         first = goals.send(trajectory(JOINTS, [(4.0, [0.3] * 6)]))
         assert first.accepted
         assert not goals.send(trajectory(JOINTS, [(2.0, [0.1] * 6)])).accepted
+        said = ros.spin_until("the rejection on /rosout", lambda: [
+            m for m in logs if m.name == "trol_a465" and "rejected" in m.msg])
+        assert said[0].level == Log.WARN, said
         assert goals.outcome(first).status == SUCCEEDED
     finally:
         node.end()

@@ -22,6 +22,7 @@ mod action_server;
 mod actions;
 mod follow;
 mod mapping;
+mod moveit;
 mod msgs;
 mod replies;
 mod rosout;
@@ -88,6 +89,11 @@ struct Args {
     /// Rolling read FollowJointTrajectory's feedback in control_msgs 6.3's layout.
     #[arg(long, value_enum)]
     distro: Option<Distro>,
+    /// Write MoveIt's files for this node into DIR and end (the URDF and SRDF with
+    /// --prefix's names, joint_limits.yaml within what TROL accepts, kinematics.yaml,
+    /// moveit_controllers.yaml for --namespace's action, move_group.launch.py); no arm, no DDS.
+    #[arg(long, value_name = "DIR")]
+    write_config: Option<std::path::PathBuf>,
     /// Reject a trajectory goal while one runs (by default a new goal replaces the running
     /// one, as ROS 2's joint_trajectory_controller does: the arm is halted where it is, the
     /// old goal ends canceled, and the new trajectory starts there).
@@ -256,8 +262,17 @@ fn prefixed_urdf(urdf: &str, prefix: &str) -> String {
     }
     let mut out = String::with_capacity(urdf.len() + 64 * prefix.len());
     let mut rest = urdf;
-    // `<link name="`, `<joint name="`, `link="` (parent, child): each name after them.
-    let marks = ["<link name=\"", "<joint name=\"", " link=\""];
+    // `<link name="`, `<joint name="`, `link="` (parent, child), and the SRDF's link
+    // references: each name after them.
+    let marks = [
+        "<link name=\"",
+        "<joint name=\"",
+        " link=\"",
+        " base_link=\"",
+        " tip_link=\"",
+        " link1=\"",
+        " link2=\"",
+    ];
     while let Some((at, mark)) = marks
         .iter()
         .filter_map(|m| rest.find(m).map(|i| (i, *m)))
@@ -362,6 +377,26 @@ pub(crate) fn words(e: &trol::Error) -> String {
 fn run(args: Args) -> Result<(), String> {
     let ns = namespace(&args.namespace)?;
     let joints = joint_names(&args.prefix);
+    if let Some(dir) = &args.write_config {
+        moveit::controller_name(&ns)?;
+        let files = moveit::files(
+            &joints,
+            &ns,
+            &prefixed_urdf(&trol_a465::urdf::urdf(), &args.prefix),
+            &prefixed_urdf(&trol_a465::urdf::srdf(), &args.prefix),
+        );
+        moveit::write(dir, &files)?;
+        trol_cli::say!(
+            "trol-ros2: wrote {} for MoveIt into {}",
+            files
+                .iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            dir.display()
+        );
+        return Ok(());
+    }
     let distro = Distro::pick(args.distro)?;
     if distro == Distro::Humble {
         crate::warn_ros!(

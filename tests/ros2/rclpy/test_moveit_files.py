@@ -1,0 +1,70 @@
+"""`trol ros2 --write-config DIR`: MoveIt's files for the node, read as MoveIt reads them
+(YAML, the URDF and SRDF as XML, the launch file as Python) and checked against each other and
+against the URDF: no ROS 2 machine needed (MoveIt does not install from PyPI)."""
+
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def write_config(tmp: Path, *args: str) -> subprocess.CompletedProcess:
+    binary = Path(os.environ.get("TROL_ROS2_BIN", ROOT / "target" / "debug" / "trol-ros2"))
+    return subprocess.run([str(binary), "--write-config", str(tmp), *args], capture_output=True, text=True, timeout=60)
+
+
+@pytest.mark.parametrize("prefix", ["", "arm1_"])
+def test_the_files_agree_with_the_urdf_and_with_each_other(tmp_path: Path, prefix: str) -> None:
+    done = write_config(tmp_path, "--namespace", "cell", "--prefix", prefix)
+    assert done.returncode == 0, done.stderr
+    urdf = ET.parse(tmp_path / "crs_a465.urdf").getroot()
+    links = {l.get("name") for l in urdf.findall("link")}
+    joints = {j.get("name"): j for j in urdf.findall("joint")}
+    arm = [f"{prefix}joint_{i}" for i in range(1, 7)]
+    assert all(joints[j].get("type") == "revolute" for j in arm)
+    assert all(l.startswith(prefix) for l in links)
+    for j in joints.values():
+        assert j.find("parent").get("link") in links and j.find("child").get("link") in links
+    # The bulk of the arm has collision shapes, MoveIt plans around them (the elbow's, the
+    # wrist's and the flange's small links have none yet: issue 61).
+    for name in ["base_link", "link_1", "link_2", "link_4", "tool0"]:
+        assert urdf.find(f"link[@name='{prefix}{name}']/collision") is not None, name
+
+    srdf = ET.parse(tmp_path / "crs_a465.srdf").getroot()
+    chain = srdf.find("group[@name='arm']/chain")
+    assert chain.get("base_link") == f"{prefix}base_link" and chain.get("tip_link") == f"{prefix}tool0"
+    for d in srdf.findall("disable_collisions"):
+        assert d.get("link1") in links and d.get("link2") in links
+    assert [j.get("name") for j in srdf.findall("group_state/joint")] == arm
+
+    limits = yaml.safe_load((tmp_path / "joint_limits.yaml").read_text())["joint_limits"]
+    assert sorted(limits) == sorted(arm)
+    for j in arm:
+        v = limits[j]["max_velocity"]
+        assert limits[j]["has_velocity_limits"] and limits[j]["has_acceleration_limits"]
+        assert 0 < v <= float(joints[j].find("limit").get("velocity")) + 1e-9
+        assert limits[j]["max_acceleration"] > 0
+
+    controllers = yaml.safe_load((tmp_path / "moveit_controllers.yaml").read_text())
+    manager = controllers["moveit_simple_controller_manager"]
+    assert manager["controller_names"] == ["cell"]
+    cell = manager["cell"]
+    assert (cell["type"], cell["action_ns"], cell["joints"]) == ("FollowJointTrajectory", "follow_joint_trajectory", arm)
+
+    kinematics = yaml.safe_load((tmp_path / "kinematics.yaml").read_text())
+    assert "kinematics_solver" in kinematics["arm"]
+    source = (tmp_path / "move_group.launch.py").read_text()
+    compile(source, "move_group.launch.py", "exec")
+    assert "/cell/joint_states" in source and "generate_launch_description" in source
+
+
+def test_a_namespace_moveit_cannot_name_is_refused_with_what_to_give(tmp_path: Path) -> None:
+    done = write_config(tmp_path / "out")
+    assert done.returncode == 1
+    assert "one-level --namespace" in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()

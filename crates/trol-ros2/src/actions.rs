@@ -366,6 +366,11 @@ pub struct Served<A: Goals> {
 }
 
 impl<A: Goals> Served<A> {
+    /// Whether a goal is under way.
+    pub fn is_running(&self) -> bool {
+        self.run.is_some()
+    }
+
     /// No goal yet; `services`: the action's services on DDS.
     pub fn new(goals: A, services: ActionServices) -> Served<A> {
         Served {

@@ -287,6 +287,36 @@ fn prefixed_urdf(urdf: &str, prefix: &str) -> String {
     out
 }
 
+/// How often (in joint_states ticks) the gripper's gap is read when no gripper goal runs.
+const GRIP_EVERY: u64 = 25;
+
+/// The gripper's gap, m (TROLGetGripper), or None where the controller cannot read it.
+fn read_gap(robot: &Mutex<Robot>) -> Option<f64> {
+    robot
+        .lock()
+        .ok()?
+        .gripper()
+        .ok()
+        .map(|g| g.opening_mm / 1000.0)
+}
+
+/// The URDF the node publishes and writes: `trol urdf`'s with `prefix`, and the gripper as
+/// one prismatic joint, `gripper_joint`, whose value is the fingers' gap in metres (0 ..
+/// 0.05, as GripperCommand's `position`), so that MoveIt's gripper controller can name it.
+pub(crate) fn described(prefix: &str) -> String {
+    let urdf = trol_a465::urdf::urdf();
+    let fingers = format!(
+        "  <link name=\"fingers\">\n    <inertial><mass value=\"0.05\"/><inertia ixx=\"1e-5\" \
+         ixy=\"0\" ixz=\"0\" iyy=\"1e-5\" iyz=\"0\" izz=\"1e-5\"/></inertial>\n  </link>\n  \
+         <joint name=\"gripper_joint\" type=\"prismatic\">\n    <parent link=\"tool0\"/>\n    \
+         <child link=\"fingers\"/>\n    <axis xyz=\"0 1 0\"/>\n    <limit lower=\"0\" \
+         upper=\"{:.3}\" velocity=\"0.04\" effort=\"50\"/>\n  </joint>\n",
+        actions::GRIP_MAX_MM / 1000.0
+    );
+    let with = urdf.replacen("</robot>", &format!("{fingers}</robot>"), 1);
+    prefixed_urdf(&with, prefix)
+}
+
 /// How long one reading of the arm's joints takes: the slowest of three (0 when they fail:
 /// the loop says so when it reads).
 fn read_time(robot: &Mutex<Robot>) -> f64 {
@@ -382,7 +412,7 @@ fn run(args: Args) -> Result<(), String> {
         let files = moveit::files(
             &joints,
             &ns,
-            &prefixed_urdf(&trol_a465::urdf::urdf(), &args.prefix),
+            &described(&args.prefix),
             &prefixed_urdf(&trol_a465::urdf::srdf(), &args.prefix),
         );
         moveit::write(dir, &files)?;
@@ -489,7 +519,7 @@ fn run(args: Args) -> Result<(), String> {
         .create_publisher::<String>(&description_topic, None)
         .map_err(create)?;
     description
-        .publish(prefixed_urdf(&trol_a465::urdf::urdf(), &args.prefix))
+        .publish(described(&args.prefix))
         .map_err(|e| format!("robot_description: {e:?}"))?;
     // Services answer each client in its middleware's mapping (mapping.rs); their reply
     // writers are the DDS's own, in a publisher of their own.
@@ -595,6 +625,11 @@ fn run(args: Args) -> Result<(), String> {
     // Homes under way: their answers come back on a channel, so joint_states keeps going.
     let (done_tx, done_rx) = mpsc::channel::<(mapping::Asker, TriggerResponse)>();
     let mut reading_failed = false;
+    // The gripper's gap for joint_states: read at start, then every GRIP_EVERY ticks and
+    // at every tick while a gripper goal runs (None: this controller cannot read it).
+    let gripper_joint = format!("{}gripper_joint", args.prefix);
+    let mut gap_m = read_gap(&robot);
+    let mut ticks: u64 = 0;
     while !ending() {
         // The arm is read, and the actions follow it, once a period; requests are taken
         // every SERVE_EVERY between, so a goal or a halt waits for no period.
@@ -623,13 +658,24 @@ fn run(args: Args) -> Result<(), String> {
                         _ => vec![0.0; 6],
                     };
                     last = Some((q, now));
+                    ticks += 1;
+                    if gap_m.is_some() && (ticks.is_multiple_of(GRIP_EVERY) || grips.is_running()) {
+                        gap_m = read_gap(&robot);
+                    }
+                    let (mut name, mut position, mut velocity) =
+                        (joints.to_vec(), q.to_vec(), velocity);
+                    if let Some(gap) = gap_m {
+                        name.push(gripper_joint.clone());
+                        position.push(gap);
+                        velocity.push(0.0);
+                    }
                     let msg = JointState {
                         header: Header {
                             stamp: Time::now(),
                             frame_id: String::new(),
                         },
-                        name: joints.to_vec(),
-                        position: q.to_vec(),
+                        name,
+                        position,
                         velocity,
                         effort: Vec::new(),
                     };

@@ -27,6 +27,10 @@ def test_the_files_agree_with_the_urdf_and_with_each_other(tmp_path: Path, prefi
     joints = {j.get("name"): j for j in urdf.findall("joint")}
     arm = [f"{prefix}joint_{i}" for i in range(1, 7)]
     assert all(joints[j].get("type") == "revolute" for j in arm)
+    # The gripper: one prismatic joint whose value is the gap, as GripperCommand's position.
+    grip = joints[f"{prefix}gripper_joint"]
+    assert grip.get("type") == "prismatic"
+    assert (float(grip.find("limit").get("lower")), float(grip.find("limit").get("upper"))) == (0.0, 0.05)
     assert all(l.startswith(prefix) for l in links)
     for j in joints.values():
         assert j.find("parent").get("link") in links and j.find("child").get("link") in links

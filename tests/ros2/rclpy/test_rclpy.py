@@ -103,18 +103,24 @@ class Ros:
         rclpy.shutdown(context=self.context)
 
 
-_START = random.randrange(100)
+# Domains 201..230 (tests/ros2/test_ros2.py's Cyclone tests use 1..200): with pytest-xdist
+# worker k of N takes k, k + N, k + 2N, ... from a start all the run's workers share (its run
+# id), so two tests running at once never share a domain; one at a time, a random start.
+_SPAN = 30
+_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+_WORKER = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+_RUN = os.environ.get("PYTEST_XDIST_TESTRUNUID")
+_START = sum(_RUN.encode()) if _RUN else random.randrange(_SPAN)
 _handed = 0
 
 
 @pytest.fixture
 def domain() -> int:
-    """A domain per test (from 101 on: tests/ros2/test_ros2.py's Cyclone tests use 1..200 at
-    random; a worker of pytest-xdist is kept apart by its number)."""
     global _handed
-    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0")[2:] or 0)
+    span = _SPAN - _SPAN % _WORKERS
+    d = 201 + (_START + _WORKER + _WORKERS * _handed) % span
     _handed += 1
-    return 201 + (_START + 2 * _handed + worker) % 30
+    return d
 
 
 @pytest.fixture
@@ -143,8 +149,9 @@ def test_the_middleware_is_ros_2_s_default_fast_dds(ros: Ros) -> None:
 def test_joint_states_arrive_with_the_urdf_s_names(arm1: TrolNode, ros: Ros) -> None:
     got = ros.states("arm1")
     ros.spin_until("five joint states", lambda: len(got) >= 5)
-    assert list(got[-1].name) == JOINTS
-    assert len(got[-1].position) == 6
+    # The six joints, then the gripper's gap as one prismatic joint.
+    assert list(got[-1].name) == JOINTS + ["gripper_joint"]
+    assert len(got[-1].position) == 7
 
 
 def test_robot_description_reaches_a_subscriber_that_comes_late(arm1: TrolNode, ros: Ros) -> None:
@@ -275,7 +282,7 @@ def standing(ros: Ros, states: list[JointState]) -> list[float]:
     start = len(states)
     ros.spin_until("twenty joint states", lambda: len(states) >= start + 20)
     assert not moving(states, start), "the arm still moves"
-    return list(states[-1].position)
+    return list(states[-1].position)[:6]
 
 
 def test_a_trajectory_goal_runs_to_its_end_with_feedback(arm1: TrolNode, ros: Ros) -> None:
@@ -336,6 +343,10 @@ def test_the_gripper_action_reaches_its_gap(arm1: TrolNode, ros: Ros) -> None:
     assert out.status == SUCCEEDED
     assert out.result.reached_goal and not out.result.stalled
     assert out.result.position == pytest.approx(0.02, abs=1e-3)
+    # joint_states carries the gap as `gripper_joint`, in metres.
+    states = ros.states("arm1")
+    ros.spin_until("the gap in joint_states", lambda: [
+        s for s in states if abs(s.position[list(s.name).index("gripper_joint")] - 0.02) < 1e-3])
 
 
 def test_two_arms_in_two_namespaces_run_one_goal_each(domain: int, ros: Ros) -> None:
@@ -375,7 +386,7 @@ def test_a_prefix_names_the_joints_of_one_arm_of_a_cell(domain: int, ros: Ros) -
         names = [f"arm2_{j}" for j in JOINTS]
         states = ros.states("cell")
         ros.spin_until("joint states", lambda: states)
-        assert list(states[-1].name) == names
+        assert list(states[-1].name) == names + ["arm2_gripper_joint"]
         got: list[String] = []
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)

@@ -40,12 +40,20 @@ fn ctrl_c_during_home_comes_back_once_the_arm_stands() {
     drop(input);
     let mut err = String::new();
     std::io::Read::read_to_string(&mut interp.stderr.take().unwrap(), &mut err).unwrap();
-    assert_eq!(ended.code(), Some(130), "{err}");
+    // What the simulator logged, for a failure's reader (a CI run once saw it close the
+    // connection during the Halt).
+    let log = || sim.output().join("\n");
+    assert_eq!(ended.code(), Some(130), "{err}\nsimulator:\n{}", log());
     assert!(
         answered < Duration::from_secs(6),
-        "Ctrl-C answered after {answered:?}: {err}"
+        "Ctrl-C answered after {answered:?}: {err}\nsimulator:\n{}",
+        log()
     );
-    assert!(err.contains("before it was homed"), "{err}");
+    assert!(
+        err.contains("before it was homed"),
+        "{err}\nsimulator:\n{}",
+        log()
+    );
     // The arm stands, not homed: a motion is refused for that.
     let o = trol(
         &dir,

@@ -32,9 +32,14 @@ pub const TELLS_APART_DEG: f64 = 1.0;
 /// How far apart the WORLD row's first and last angle must be for `print` of a location
 /// `here` set to tell their order, degrees.
 const CLOC_APART_DEG: f64 = 1.0;
-/// How far a location `here` set just now may read from the WORLD row read just before
-/// (the rows' three decimals and the resting arm's dither).
+/// How far apart a motion's end's first and last angle may be for their order not to matter,
+/// degrees (the rows' three decimals).
 const CLOC_SAME: f64 = 0.05;
+/// How far a location `here` set just now may read from the WORLD row read just before, mm
+/// and degrees: the resting arm's dither between the two reads (a CI run under load saw
+/// 0.051 degrees). Well below [`CLOC_APART_DEG`], so that angles in another order (at least
+/// that far apart) never pass for the same.
+const CLOC_DITHER: f64 = 0.3;
 
 /// An angle's difference as a turn, -180 to 180 degrees (ash may print -180 or 180 for the
 /// same angle).
@@ -51,8 +56,8 @@ pub(crate) fn cloc_order_tells(world: &[f64; 6]) -> bool {
 
 /// Whether two rows of values as ash prints them are one pose's, as read a moment apart.
 pub(crate) fn same_values(a: &[f64; 6], b: &[f64; 6]) -> bool {
-    (0..3).all(|j| (a[j] - b[j]).abs() <= CLOC_SAME)
-        && (3..6).all(|j| turn_deg(a[j] - b[j]).abs() <= CLOC_SAME)
+    (0..3).all(|j| (a[j] - b[j]).abs() <= CLOC_DITHER)
+        && (3..6).all(|j| turn_deg(a[j] - b[j]).abs() <= CLOC_DITHER)
 }
 
 /// How far apart the two readings put values as ash prints them, degrees.
@@ -468,6 +473,28 @@ impl C500cBackend {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_location_read_with_the_arm_s_dither_is_the_same_and_one_in_another_order_is_not() {
+        // As a CI run under load read them: `print trolgo` after `here`, and the WORLD row.
+        let got = [419.999, -30.012, 200.007, 22.645, 73.920, -18.781];
+        let world = [419.991, -29.985, 199.982, 22.696, 73.924, -18.832];
+        assert!(cloc_order_tells(&world));
+        assert!(same_values(&got, &world));
+        // The first and last angle the other way round: at least CLOC_APART_DEG apart.
+        let reversed = [got[0], got[1], got[2], got[5], got[4], got[3]];
+        assert!(!same_values(&reversed, &world));
+        let barely = [
+            420.0,
+            -30.0,
+            200.0,
+            10.0,
+            45.0,
+            10.0 + CLOC_APART_DEG + 0.01,
+        ];
+        let swapped = [420.0, -30.0, 200.0, barely[5], 45.0, barely[3]];
+        assert!(cloc_order_tells(&barely) && !same_values(&swapped, &barely));
+    }
 
     fn l(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()

@@ -14,6 +14,7 @@ bytes, and a sequence number, 8 bytes) before a request and its reply
 (shared/reference/ros2.md)."""
 
 
+import contextlib
 import json
 import os
 import random
@@ -779,12 +780,12 @@ class Controller:
         self.proc.wait()
 
 
-@pytest.mark.timeout(300)
-@pytest.mark.parametrize("kind,timed", [("--mars", True), ("--rapl", False)])
-def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
-        kind: str, timed: bool, tmp_path: Path, domain: int) -> None:
-    controller = Controller(kind, tmp_path)
+@contextlib.contextmanager
+def node_on(controller: "Controller", domain: int) -> Iterator[tuple[str, list[str]]]:
+    """`trol-ros2 --namespace cell -v` on `controller`'s port: its first line, and its log
+    as it comes; the node and the controller ended after."""
     env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
+    env.pop("ROS_DISTRO", None)
     node = subprocess.Popen([str(node_binary()), "--config", str(controller.cfg), "--namespace", "cell", "-v"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
                             text=True, env=env)
@@ -795,6 +796,21 @@ def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
         first = node.stdout.readline()
         assert "node /cell/trol_a465" in first and controller.port in first, first
         threading.Thread(target=node.stdout.read, daemon=True).start()
+        yield first, log
+    finally:
+        node.terminate()
+        try:
+            node.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            node.kill()
+        controller.stop()
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("kind,timed", [("--mars", True), ("--rapl", False)])
+def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
+        kind: str, timed: bool, tmp_path: Path, domain: int) -> None:
+    with node_on(Controller(kind, tmp_path), domain) as (_, log):
         dp = DomainParticipant(domain)
         r = call_trigger(dp, "cell", "home", 1, limit=120)
         assert r.success, r.message
@@ -809,13 +825,6 @@ def test_trol_ros2_drives_the_simulated_real_controllers_through_their_ports(
         s = wait_for("joint states", lambda: next(
             (x for x in reversed(states.take(N=50)) if isinstance(x, JointState)), None))
         assert list(s.position)[:6] == pytest.approx(end, abs=3e-3)
-    finally:
-        node.terminate()
-        try:
-            node.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            node.kill()
-        controller.stop()
 
 
 @pytest.mark.timeout(240)
@@ -907,19 +916,9 @@ def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) 
 @pytest.mark.timeout(300)
 def test_a_dense_plan_is_thinned_for_a_c500_and_reaches_its_end(tmp_path: Path, domain: int) -> None:
     # 40 points, as MoveIt plans them; a C500 runs at most 16 (one joint move each).
-    controller = Controller("--rapl", tmp_path)
-    env = dict(os.environ, ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
-    env.pop("ROS_DISTRO", None)
-    node = subprocess.Popen([str(node_binary()), "--config", str(controller.cfg), "--namespace", "cell"],
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
-                            text=True, env=env)
-    try:
-        assert node.stdout is not None
-        first = node.stdout.readline()
-        assert "node /cell/trol_a465" in first, first
+    with node_on(Controller("--rapl", tmp_path), domain) as (first, _):
         # A C500's position read is slow: joint_states says the rate it keeps, and why.
         assert "(asked 50 Hz: a position read takes" in first, first
-        threading.Thread(target=node.stdout.read, daemon=True).start()
         dp = DomainParticipant(domain)
         assert call_trigger(dp, "cell", "home", 1, limit=120).success
         action = Action(dp, "cell")
@@ -932,10 +931,3 @@ def test_a_dense_plan_is_thinned_for_a_c500_and_reaches_its_end(tmp_path: Path, 
         s = wait_for("joint states", lambda: next(
             (x for x in reversed(states.take(N=50)) if isinstance(x, JointState)), None))
         assert list(s.position)[:6] == pytest.approx(end, abs=3e-3)
-    finally:
-        node.terminate()
-        try:
-            node.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            node.kill()
-        controller.stop()

@@ -24,6 +24,7 @@ mod follow;
 mod mapping;
 mod moveit;
 mod msgs;
+mod params;
 mod replies;
 mod rosout;
 
@@ -616,6 +617,19 @@ fn run(args: Args) -> Result<(), String> {
         }
     ));
 
+    // The parameters, read-only, say how the node was started (`ros2 param list`).
+    let mut parameters = params::Services::new(
+        params::Place {
+            node: &mut node,
+            node_name: &node_name,
+            ns: &ns,
+            participant: &dds,
+            writers: &writers,
+            qos: &service_qos,
+            vendors: vendors.clone(),
+        },
+        node_params(&args, &cfg.port, rate, distro),
+    )?;
     let mut grips = actions::Served::gripper(action_services("gripper_cmd")?);
     let period = Duration::from_secs_f64(1.0 / rate);
     let mut next = Instant::now();
@@ -723,6 +737,7 @@ fn run(args: Args) -> Result<(), String> {
             };
             halt_replies.push(id, answer, Instant::now());
         }
+        parameters.serve(&matches);
         matches.refresh();
         let actual = if tick { last.map(|(q, _)| q) } else { None };
         let arm = actions::Arm {
@@ -779,6 +794,51 @@ fn run(args: Args) -> Result<(), String> {
     // learn it is gone), and no other thread of it talks to the controller again.
     std::mem::forget(r);
     Ok(())
+}
+
+/// The node's parameters: how it was started.
+fn node_params(args: &Args, port: &str, rate: f64, distro: Distro) -> params::Params {
+    use params::{Declared, Value};
+    params::Params(vec![
+        Declared {
+            name: "port",
+            value: Value::Text(port.to_string()),
+            description: "the arm's port (sim, a serial device, tcp:, rapl:, mars:, c500c:)",
+            option: "--port",
+        },
+        Declared {
+            name: "rate",
+            value: Value::Double(rate),
+            description: "how often joint_states is published, Hz (what the controller's \
+                          reads allow, where that is less than --rate)",
+            option: "--rate",
+        },
+        Declared {
+            name: "prefix",
+            value: Value::Text(args.prefix.clone()),
+            description: "what every joint's and link's name starts with",
+            option: "--prefix",
+        },
+        Declared {
+            name: "distro",
+            value: Value::Text(format!("{distro:?}").to_lowercase()),
+            description: "the ROS 2 distribution whose message layouts the node writes",
+            option: "--distro (or ROS_DISTRO)",
+        },
+        Declared {
+            name: "one_goal",
+            value: Value::Bool(args.one_goal),
+            description: "true: a trajectory goal that comes while one runs is refused; \
+                          false: it replaces the running one",
+            option: "--one-goal",
+        },
+        Declared {
+            name: "use_sim_time",
+            value: Value::Bool(false),
+            description: "the node's stamps are the machine's clock, as the arm's motion is",
+            option: "nothing (the arm keeps real time)",
+        },
+    ])
 }
 
 /// TROLHome(0), then wait until the arm is done with the connection free between polls (a

@@ -185,6 +185,33 @@ def test_the_node_is_listed_once_in_its_namespace(arm1: TrolNode, ros: Ros) -> N
     assert ours == [("trol_a465", "/arm1")], names
 
 
+def test_the_parameters_say_how_the_node_was_started_and_refuse_a_set(arm1: TrolNode, ros: Ros) -> None:
+    # rclpy's own parameter client, as `ros2 param list/get/describe/set` use these services.
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rclpy.parameter_client import AsyncParameterClient
+
+    client = AsyncParameterClient(ros.node, "/arm1/trol_a465")
+    ros.spin_until("the parameter services", lambda: client.services_are_ready())
+
+    def wait(future):  # type: ignore[no-untyped-def]
+        return ros.spin_until("a parameter service's answer", lambda: future.result() if future.done() else None)
+
+    names = list(wait(client.list_parameters()).result.names)
+    assert sorted(names) == sorted(["port", "rate", "prefix", "distro", "one_goal", "use_sim_time"]), names
+    values = wait(client.get_parameters(["port", "rate", "one_goal", "nothing"])).values
+    assert (values[0].type, values[0].string_value) == (ParameterType.PARAMETER_STRING, "sim")
+    assert (values[1].type, values[1].double_value) == (ParameterType.PARAMETER_DOUBLE, 50.0)
+    assert (values[2].type, values[2].bool_value) == (ParameterType.PARAMETER_BOOL, False)
+    assert values[3].type == ParameterType.PARAMETER_NOT_SET
+    described = wait(client.describe_parameters(["rate"])).descriptors
+    assert described[0].read_only and "--rate" in described[0].additional_constraints
+    # A set is refused, says what to do, and changes nothing.
+    asked = Parameter(name="rate", value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=5.0))
+    result = wait(client.set_parameters([asked])).results[0]
+    assert not result.successful and "restart trol-ros2 with --rate" in result.reason, result.reason
+    assert wait(client.get_parameters(["rate"])).values[0].double_value == 50.0
+
+
 def moving(states: list[JointState], since: int) -> bool:
     """Whether the joint states after the `since`-th moved."""
     seen = [tuple(s.position) for s in states[since:]]

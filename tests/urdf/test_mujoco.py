@@ -1,6 +1,5 @@
 """`trol urdf` in another simulator: MuJoCo (from the package registry) loads the A465's
-URDF (every moving link has mass and inertia; the column, the upper arm, the forearm and the
-tool a collision shape) and its kinematics agree with TROL's: at several joint sets, the
+URDF (every moving link has mass, inertia and a collision shape) and its kinematics agree with TROL's: at several joint sets, the
 wrist centre MuJoCo computes is where TROL's simulated arm puts it. Dropped under gravity
 with contacts on, the arm folds as with contacts off (issue 42: the shapes of links joined
 by a joint touched at every pose, and held the forearm horizontal)."""
@@ -37,11 +36,11 @@ def test_mujoco_loads_it_with_mass_and_collision_shapes(model: mujoco.MjModel) -
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, i) for i in range(model.nbody)]
     for i in range(1, 7):
         assert f"link_{i}" in names, names
-    # Every moving body has mass (MuJoCo refuses a URDF without); the foot plate, the
-    # column, the upper arm, the forearm and the tool have collision shapes.
+    # Every moving body has mass (MuJoCo refuses a URDF without) and a collision shape (the
+    # flange and the tool are fused into link_6, fixed to it).
     assert all(m > 0 for m in model.body_mass[1:]), model.body_mass
     bodies = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, int(b)) for b in model.geom_bodyid}
-    assert {"link_1", "link_2", "link_4", "link_6"} <= bodies, bodies
+    assert {f"link_{i}" for i in range(1, 7)} <= bodies, bodies
 
 
 @pytest.mark.timeout(120)
@@ -65,9 +64,10 @@ def test_its_kinematics_are_trols(model: mujoco.MjModel) -> None:
             assert np.allclose(data.xpos[link_5] * 1000.0, wrist, atol=0.1), (q, data.xpos[link_5], wrist)
 
 
-# Links joined by a joint (directly, or through a joint's own link of no length): their
-# shapes must never touch.
-JOINED = {("world", "link_1"), ("link_1", "link_2"), ("link_2", "link_4"), ("link_4", "link_6")}
+# Links joined by a joint, and those either side of the elbow's and the wrist's spheres:
+# their shapes must never touch.
+JOINED = {("world", "link_1"), ("link_1", "link_2"), ("link_2", "link_3"), ("link_3", "link_4"),
+          ("link_2", "link_4"), ("link_4", "link_5"), ("link_5", "link_6"), ("link_4", "link_6")}
 
 
 def drop(model_path: str, contacts: bool) -> tuple[np.ndarray, set[tuple[str, str]]]:

@@ -114,8 +114,8 @@ fn origin_attrs(p: &Pose) -> String {
 /// plate and ends 100 mm below the shoulder, where the upper arm starts 80 mm out; the upper
 /// arm and the forearm keep 100 mm from the elbow (at J3 = ±110° their ends are
 /// 115 mm apart, their radii 95 mm), the forearm 70 mm from the wrist (at J5 = ±105° the
-/// tool's box starts 89 mm from it, the radii 76 mm). The joints' own links (at the elbow, the
-/// wrist and the flange, of no length) have no collision shape. Checked over 20,000 random
+/// tool's box starts 93 mm from it, the radii 76 mm). The stub from the wrist to the flange
+/// (link_6) keeps 55 mm from the wrist and 12.2 mm from the flange. Checked over 20,000 random
 /// poses by `adjacent_collision_shapes_never_touch` (crates/trol-a465/tests/urdf.rs).
 pub const COLLISION_TRIM_MM: [(f64, f64); 7] = [
     (0.0, 0.0),
@@ -124,29 +124,60 @@ pub const COLLISION_TRIM_MM: [(f64, f64); 7] = [
     (0.0, 0.0),
     (100.0, 70.0),
     (0.0, 0.0),
-    // The flange stub lies within the tool's reach of the forearm: the tool's box stands
-    // for it.
-    (100.0, 0.0),
+    (55.0, 12.2),
 ];
 
 /// The links' radii, mm (`base_link`, `link_1` .. `link_6`): the foot plate's, the column's and
 /// the upper arm's 55, the forearm's 40 (the drawing's; the casting is not modelled).
 pub const RADIUS_MM: [f64; 7] = [100.0, 55.0, 55.0, 55.0, 40.0, 35.0, 35.0];
 
+/// The radii of the links' collision shapes, mm (`base_link`, `link_1` .. `link_6`): their
+/// cylinders' where they have length, else a sphere's at the joint (the elbow's link_3 and
+/// the wrist's link_5), each as large as the shapes of the links it joins leave room for with
+/// 10 mm to spare; the stub to the flange narrower than its drawing, so that it keeps clear of
+/// the forearm with the wrist bent to its limit. Every link of the arm has a shape: MoveIt
+/// plans around the whole arm (issue 61).
+pub const COLLISION_RADIUS_MM: [f64; 7] = [100.0, 55.0, 55.0, 30.0, 40.0, 12.0, 25.0];
+
+/// The flange's own shape: a plate of this radius and thickness (mm), 1 mm behind the flange
+/// face (the tool's box starts 4 mm in front of it; the stub ends 12.2 mm behind it).
+pub const FLANGE_PLATE_MM: (f64, f64) = (30.0, 4.0);
+
+/// Where the tool's box (the gripper's body) starts and ends along the tool's x axis, mm from
+/// the flange face, and its size across (y, z).
+pub const TOOL_BOX_MM: ((f64, f64), (f64, f64)) = ((4.0, 80.0), (60.0, 40.0));
+
+/// A link's collision shape: its radius, and what its cylinder leaves out at each end (mm).
+#[derive(Clone, Copy)]
+struct Shape {
+    radius: f64,
+    trim: (f64, f64),
+}
+
+/// The collision shape of link `i` (0: `base_link`).
+fn shape(i: usize) -> Shape {
+    Shape {
+        radius: COLLISION_RADIUS_MM[i],
+        trim: COLLISION_TRIM_MM[i],
+    }
+}
+
 /// A cylinder from this link's origin to `to` (mm, in the link's frame): its visual, and its
-/// inertia as a solid of `mass` kg; its collision the same cylinder less `trim` (mm at its
-/// start and its end), none for a link of no length or where the trim leaves nothing.
-fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64, trim: (f64, f64)) {
+/// inertia as a solid of `mass` kg; its collision a cylinder of `shape`'s radius, less its
+/// trim (none where the trim leaves nothing); a link of no length, a sphere.
+fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64, shape: Shape) {
     let len = to.length();
     if len < 1e-6 {
         let r = radius_mm * 1.2 / 1000.0;
-        let shape = format!("<geometry><sphere radius=\"{r:.4}\"/></geometry>");
+        let visual = format!("<geometry><sphere radius=\"{r:.4}\"/></geometry>");
         let i = 0.4 * mass * r * r;
         let _ = writeln!(
             out,
-            "    <visual>{shape}<material name=\"{colour}\"/></visual>\n    \
+            "    <visual>{visual}<material name=\"{colour}\"/></visual>\n    \
              <inertial><mass value=\"{mass}\"/><inertia ixx=\"{i:.6}\" ixy=\"0\" \
-             ixz=\"0\" iyy=\"{i:.6}\" iyz=\"0\" izz=\"{i:.6}\"/></inertial>"
+             ixz=\"0\" iyy=\"{i:.6}\" iyz=\"0\" izz=\"{i:.6}\"/></inertial>\n    \
+             <collision><geometry><sphere radius=\"{:.4}\"/></geometry></collision>",
+            shape.radius / 1000.0
         );
         return;
     }
@@ -161,15 +192,16 @@ fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64,
     };
     let (r, l) = (radius_mm / 1000.0, len / 1000.0);
     let origin = origin_attrs(&pose);
-    let shape = format!("<geometry><cylinder radius=\"{r:.4}\" length=\"{l:.4}\"/></geometry>");
+    let visual = format!("<geometry><cylinder radius=\"{r:.4}\" length=\"{l:.4}\"/></geometry>");
     // A solid cylinder about its own axis (z) and across it.
     let (across, along) = (mass * (3.0 * r * r + l * l) / 12.0, mass * r * r / 2.0);
     let _ = writeln!(
         out,
-        "    <visual><origin {origin}/>{shape}<material name=\"{colour}\"/></visual>\n    \
+        "    <visual><origin {origin}/>{visual}<material name=\"{colour}\"/></visual>\n    \
          <inertial><origin {origin}/><mass value=\"{mass}\"/><inertia ixx=\"{across:.6}\" \
          ixy=\"0\" ixz=\"0\" iyy=\"{across:.6}\" iyz=\"0\" izz=\"{along:.6}\"/></inertial>"
     );
+    let trim = shape.trim;
     let kept = len - trim.0 - trim.1;
     if kept > 1.0 {
         let centre = Pose {
@@ -178,9 +210,10 @@ fn segment(out: &mut String, to: DVec3, radius_mm: f64, colour: &str, mass: f64,
         };
         let _ = writeln!(
             out,
-            "    <collision><origin {}/><geometry><cylinder radius=\"{r:.4}\" \
+            "    <collision><origin {}/><geometry><cylinder radius=\"{:.4}\" \
              length=\"{:.4}\"/></geometry></collision>",
             origin_attrs(&centre),
+            shape.radius / 1000.0,
             kept / 1000.0
         );
     }
@@ -208,7 +241,7 @@ pub fn urdf() -> String {
         RADIUS_MM[0],
         "joint",
         MASS_KG[0],
-        COLLISION_TRIM_MM[0],
+        shape(0),
     );
     s.push_str("  </link>\n");
     let names = [
@@ -234,7 +267,7 @@ pub fn urdf() -> String {
             RADIUS_MM[i + 1],
             if i % 2 == 0 { "body" } else { "joint" },
             MASS_KG[i + 1],
-            COLLISION_TRIM_MM[i + 1],
+            shape(i + 1),
         );
         s.push_str("  </link>\n");
         let _ = writeln!(
@@ -253,33 +286,47 @@ pub fn urdf() -> String {
             EFFORT_NM[i]
         );
     }
+    // The flange's plate, just behind its face (z out of the flange).
+    let (plate_r, plate_t) = FLANGE_PLATE_MM;
+    let plate = Pose {
+        rot: DMat3::IDENTITY,
+        pos: DVec3::new(0.0, 0.0, -1.0 - plate_t / 2.0),
+    };
     let _ = writeln!(
         s,
         "  <link name=\"flange\">\n    <inertial><mass value=\"{FLANGE_KG}\"/><inertia \
          ixx=\"1e-7\" ixy=\"0\" ixz=\"0\" iyy=\"1e-7\" iyz=\"0\" izz=\"1e-7\"/>\
-         </inertial>\n  </link>\n  <joint name=\"flange_joint\" type=\"fixed\">\n    \
-         <parent link=\"link_6\"/>\n    <child link=\"flange\"/>\n    <origin {}/>\n  </joint>",
+         </inertial>\n    <collision><origin {}/><geometry><cylinder radius=\"{:.4}\" \
+         length=\"{:.4}\"/></geometry></collision>\n  </link>\n  <joint name=\"flange_joint\" \
+         type=\"fixed\">\n    <parent link=\"link_6\"/>\n    <child link=\"flange\"/>\n    \
+         <origin {}/>\n  </joint>",
+        origin_attrs(&plate),
+        plate_r / 1000.0,
+        plate_t / 1000.0,
         origin_attrs(&flange)
     );
+    let ((from, to), (wide, high)) = TOOL_BOX_MM;
+    let (l, w, h) = ((to - from) / 1000.0, wide / 1000.0, high / 1000.0);
     let gripper = Pose {
         rot: DMat3::IDENTITY,
-        pos: DVec3::new(40.0, 0.0, 0.0),
+        pos: DVec3::new((from + to) / 2.0, 0.0, 0.0),
     };
+    let size = format!("{l:.3} {w:.3} {h:.3}");
     let _ = writeln!(
         s,
-        "  <link name=\"tool0\">\n    <visual><origin {g}/><geometry><box size=\"0.08 0.06 \
-         0.04\"/></geometry><material name=\"gripper\"/></visual>\n    <collision><origin \
-         {g}/><geometry><box size=\"0.08 0.06 0.04\"/></geometry></collision>\n    \
+        "  <link name=\"tool0\">\n    <visual><origin {g}/><geometry><box size=\"{size}\"/>\
+         </geometry><material name=\"gripper\"/></visual>\n    <collision><origin \
+         {g}/><geometry><box size=\"{size}\"/></geometry></collision>\n    \
          <inertial><origin {g}/><mass value=\"{m}\"/><inertia ixx=\"{ix:.6}\" ixy=\"0\" \
          ixz=\"0\" iyy=\"{iy:.6}\" iyz=\"0\" izz=\"{iz:.6}\"/></inertial>\n  </link>\n  \
          <joint name=\"tool0_joint\" type=\"fixed\">\n    <parent link=\"flange\"/>\n    \
          <child link=\"tool0\"/>\n    <origin {t}/>\n  </joint>",
         g = origin_attrs(&gripper),
         m = MASS_KG[7],
-        // A solid box 0.08 x 0.06 x 0.04 m.
-        ix = MASS_KG[7] * (0.06f64.powi(2) + 0.04f64.powi(2)) / 12.0,
-        iy = MASS_KG[7] * (0.08f64.powi(2) + 0.04f64.powi(2)) / 12.0,
-        iz = MASS_KG[7] * (0.08f64.powi(2) + 0.06f64.powi(2)) / 12.0,
+        // A solid box.
+        ix = MASS_KG[7] * (w * w + h * h) / 12.0,
+        iy = MASS_KG[7] * (l * l + h * h) / 12.0,
+        iz = MASS_KG[7] * (l * l + w * w) / 12.0,
         t = origin_attrs(&tool_in_flange())
     );
     s.push_str("</robot>\n");
@@ -324,6 +371,86 @@ pub fn srdf() -> String {
     s
 }
 
+/// The widest gap of the gripper's fingers, mm (the range of TROLGrip's `dist`).
+pub const GRIP_MAX_MM: f64 = 50.0;
+
+/// Each finger's box, mm: its length along the tool's x axis (from the end of the tool's box),
+/// its thickness across the gap (y), its height (z). An assumption: the fingers' size is not
+/// published.
+pub const FINGER_MM: (f64, f64, f64) = (40.0, 10.0, 20.0);
+
+/// The fingers as links for a description with the gripper (`trol ros2`, MoveIt): the joint
+/// `gripper_joint` whose value is the gap in metres (0 .. [`GRIP_MAX_MM`], GripperCommand's
+/// `position`), the fingers apart by it and symmetric about the tool's axis. `finger_right`
+/// hangs from `tool0` by `finger_right_joint`, which mimics `gripper_joint` times -0.5 (it
+/// stands at -gap/2), and `finger_left` from it by `gripper_joint` (at +gap/2); a program
+/// publishes `gripper_joint` only (robot_state_publisher and MoveIt follow the mimic).
+pub fn gripper_links() -> String {
+    let ((_, tool_end), _) = TOOL_BOX_MM;
+    let (len, thick, high) = FINGER_MM;
+    let mass = 0.05;
+    let (l, t, h) = (len / 1000.0, thick / 1000.0, high / 1000.0);
+    let inertia = format!(
+        "<inertia ixx=\"{:.8}\" ixy=\"0\" ixz=\"0\" iyy=\"{:.8}\" iyz=\"0\" izz=\"{:.8}\"/>",
+        mass * (t * t + h * h) / 12.0,
+        mass * (l * l + h * h) / 12.0,
+        mass * (l * l + t * t) / 12.0
+    );
+    let finger = |name: &str, side: f64| {
+        let at = Pose {
+            rot: DMat3::IDENTITY,
+            pos: DVec3::new(tool_end + len / 2.0, side * thick / 2.0, 0.0),
+        };
+        let o = origin_attrs(&at);
+        format!(
+            "  <link name=\"{name}\">\n    <visual><origin {o}/><geometry><box size=\"{l:.3} \
+             {t:.3} {h:.3}\"/></geometry><material name=\"gripper\"/></visual>\n    \
+             <collision><origin {o}/><geometry><box size=\"{l:.3} {t:.3} {h:.3}\"/></geometry>\
+             </collision>\n    <inertial><origin {o}/><mass value=\"{mass}\"/>{inertia}\
+             </inertial>\n  </link>\n"
+        )
+    };
+    let max = GRIP_MAX_MM / 1000.0;
+    format!(
+        "{}  <joint name=\"finger_right_joint\" type=\"prismatic\">\n    <parent \
+         link=\"tool0\"/>\n    <child link=\"finger_right\"/>\n    <axis xyz=\"0 1 0\"/>\n    \
+         <limit lower=\"{:.3}\" upper=\"0\" velocity=\"0.02\" effort=\"50\"/>\n    <mimic \
+         joint=\"gripper_joint\" multiplier=\"-0.5\" offset=\"0\"/>\n  </joint>\n{}  <joint \
+         name=\"gripper_joint\" type=\"prismatic\">\n    <parent link=\"finger_right\"/>\n    \
+         <child link=\"finger_left\"/>\n    <axis xyz=\"0 1 0\"/>\n    <limit lower=\"0\" \
+         upper=\"{max:.3}\" velocity=\"0.04\" effort=\"50\"/>\n  </joint>\n",
+        finger("finger_right", -1.0),
+        -max / 2.0,
+        finger("finger_left", 1.0),
+    )
+}
+
+/// [`urdf`] with the gripper's fingers ([`gripper_links`]).
+pub fn urdf_with_gripper() -> String {
+    urdf().replacen("</robot>", &format!("{}</robot>", gripper_links()), 1)
+}
+
+/// [`srdf`] for [`urdf_with_gripper`]: the group `gripper` (the fingers), the
+/// end effector on `tool0`, and the fingers' pairs with the tool and each other (they touch
+/// when closed, and cannot part from the tool).
+pub fn srdf_with_gripper() -> String {
+    // The group by its links, as MoveIt's own examples give a hand: both fingers' joints,
+    // the mimic one too.
+    let extra = "  <group name=\"gripper\">\n    <link name=\"finger_right\"/>\n    <link \
+                 name=\"finger_left\"/>\n  </group>\n  \
+                 <group_state name=\"open\" group=\"gripper\">\n    <joint \
+                 name=\"gripper_joint\" value=\"0.05\"/>\n  </group_state>\n  \
+                 <group_state name=\"closed\" group=\"gripper\">\n    <joint \
+                 name=\"gripper_joint\" value=\"0\"/>\n  </group_state>\n  \
+                 <end_effector name=\"hand\" parent_link=\"tool0\" group=\"gripper\" \
+                 parent_group=\"arm\"/>\n  \
+                 <disable_collisions link1=\"tool0\" link2=\"finger_right\" reason=\"Adjacent\"/>\n  \
+                 <disable_collisions link1=\"tool0\" link2=\"finger_left\" reason=\"Adjacent\"/>\n  \
+                 <disable_collisions link1=\"finger_right\" link2=\"finger_left\" \
+                 reason=\"Adjacent\"/>\n";
+    srdf().replacen("</robot>", &format!("{extra}</robot>"), 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -348,10 +475,10 @@ mod tests {
     #[test]
     fn every_link_has_a_collision_shape_and_a_mass() {
         let u = urdf();
-        // base_link, link_1, link_2, link_4 (the column, the upper arm, the forearm) and
-        // tool0: the joints' own links of no length (link_3, link_5) and the flange stub
-        // (link_6, inside the tool's reach) have none.
-        assert_eq!(u.matches("<collision>").count(), 5, "{u}");
+        // Every link: base_link, link_1 .. link_6, flange, tool0.
+        assert_eq!(u.matches("<collision>").count(), 9, "{u}");
+        let g = urdf_with_gripper();
+        assert_eq!(g.matches("<collision>").count(), 11, "{g}");
         // Every link has a mass, the flange frame too.
         assert_eq!(u.matches("<inertial>").count(), 9, "{u}");
         assert!(!u.contains("<mass value=\"0\""), "{u}");

@@ -2,11 +2,14 @@
 //! `base_link` to `tool0`, multiplied out at random joint values, is trol-a465's forward
 //! kinematics; its joints' limits and speeds are the model's.
 
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DQuat, DVec3};
+use parry3d_f64::math::Pose;
+use parry3d_f64::shape::Shape;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use trol_a465::kinematics::Kinematics;
-use trol_a465::model::{LIMITS_RAD, max_speeds};
+use trol_a465::model::{D1, LIMITS_RAD, max_speeds};
+use trol_a465::urdf::RADIUS_MM;
 
 /// `origin` as a rotation and a translation (m).
 fn origin(p: &urdf_rs::Pose) -> (DMat3, DVec3) {
@@ -18,6 +21,12 @@ fn origin(p: &urdf_rs::Pose) -> (DMat3, DVec3) {
 
 /// The pose of `tip` in `base_link` at joint values `q` (joint_k takes q[k-1]).
 fn chain(robot: &urdf_rs::Robot, tip: &str, q: &[f64; 6]) -> (DMat3, DVec3) {
+    chain_gripped(robot, tip, q, 0.0)
+}
+
+/// The pose of `tip` at joint values `q` and the gripper's gap `gap` (m): `gripper_joint`
+/// takes it, a mimic joint its multiple.
+fn chain_gripped(robot: &urdf_rs::Robot, tip: &str, q: &[f64; 6], gap: f64) -> (DMat3, DVec3) {
     let mut joints = Vec::new();
     let mut link = tip.to_string();
     while link != "base_link" {
@@ -29,15 +38,27 @@ fn chain(robot: &urdf_rs::Robot, tip: &str, q: &[f64; 6]) -> (DMat3, DVec3) {
         joints.push(j);
         link = j.parent.link.clone();
     }
+    let value = |j: &urdf_rs::Joint| -> f64 {
+        if let Some(m) = &j.mimic {
+            assert_eq!(m.joint, "gripper_joint", "{}", j.name);
+            return m.multiplier.unwrap_or(1.0) * gap + m.offset.unwrap_or(0.0);
+        }
+        match j.name.strip_prefix("joint_") {
+            Some(k) => q[k.parse::<usize>().unwrap() - 1],
+            None => gap,
+        }
+    };
     let (mut rot, mut pos) = (DMat3::IDENTITY, DVec3::ZERO);
     for j in joints.iter().rev() {
         let (r, t) = origin(&j.origin);
         pos += rot * t;
         rot *= r;
-        if matches!(j.joint_type, urdf_rs::JointType::Revolute) {
-            let k: usize = j.name.strip_prefix("joint_").unwrap().parse().unwrap();
-            let axis = DVec3::from_array(*j.axis.xyz);
-            rot *= DMat3::from_axis_angle(axis.normalize(), q[k - 1]);
+        let axis = DVec3::from_array(*j.axis.xyz).normalize();
+        match j.joint_type {
+            urdf_rs::JointType::Revolute => rot *= DMat3::from_axis_angle(axis, value(j)),
+            urdf_rs::JointType::Prismatic => pos += rot * (axis * value(j)),
+            urdf_rs::JointType::Fixed => {}
+            ref other => panic!("{}: a joint this check does not know: {other:?}", j.name),
         }
     }
     (rot, pos)
@@ -109,6 +130,7 @@ fn capsules(robot: &urdf_rs::Robot, link: &str) -> Vec<(DVec3, DVec3, f64)> {
                     let half = rot * DVec3::new(0.0, 0.0, length / 2.0);
                     (at - half, at + half, *radius)
                 }
+                urdf_rs::Geometry::Sphere { radius } => (at, at, *radius),
                 urdf_rs::Geometry::Box { size } => {
                     let [x, y, z] = **size;
                     let half = rot * DVec3::new(x / 2.0, 0.0, 0.0);
@@ -126,6 +148,18 @@ fn segment_distance(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> f64 {
     let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
     let c = d1.dot(r);
     let b = d1.dot(d2);
+    // A segment of no length (a sphere's): a point against the other segment.
+    if a < 1e-12 && e < 1e-12 {
+        return (p0 - q0).length();
+    }
+    if a < 1e-12 {
+        let t = (f / e).clamp(0.0, 1.0);
+        return (p0 - (q0 + d2 * t)).length();
+    }
+    if e < 1e-12 {
+        let s = (-c / a).clamp(0.0, 1.0);
+        return ((p0 + d1 * s) - q0).length();
+    }
     let denom = a * e - b * b;
     let mut s = if denom > 1e-12 {
         ((b * f - c * e) / denom).clamp(0.0, 1.0)
@@ -168,9 +202,19 @@ fn adjacent_collision_shapes_never_touch() {
         "the column {} mm above the plate",
         gap * 1000.0
     );
+    // Each link and the next through a revolute joint, and the links either side of the
+    // elbow's and the wrist's spheres, where the arm folds.
     let joined = [
         ("link_1", "link_2"),
+        ("link_2", "link_3"),
+        ("link_3", "link_4"),
         ("link_2", "link_4"),
+        ("link_4", "link_5"),
+        ("link_5", "link_6"),
+        ("link_5", "flange"),
+        ("link_5", "tool0"),
+        ("link_4", "link_6"),
+        ("link_4", "flange"),
         ("link_4", "tool0"),
     ];
     let mut rng = ChaCha8Rng::seed_from_u64(42);
@@ -251,5 +295,202 @@ fn the_srdf_names_every_joined_pair_of_the_urdf() {
             pairs.contains(&(p.clone(), c.clone())) || pairs.contains(&(c.clone(), p.clone())),
             "{p} and {c} are not listed"
         );
+    }
+}
+
+/// Where each of a link's collision shapes lies along the axis it shares with the arm at
+/// READY (mm, in `base_link`): the shapes rigidly joined at the flange (link_6's stub, the
+/// flange's plate, the tool's box) follow each other along it without touching, so that a
+/// simulator that checks them against each other finds no contact.
+#[test]
+fn the_shapes_fixed_together_at_the_flange_keep_apart_along_its_axis() {
+    let robot = urdf_rs::read_from_string(&trol_a465::urdf::urdf()).unwrap();
+    let q = trol_a465::model::READY;
+    let extent = |link: &str| -> (f64, f64) {
+        let (rot, pos) = chain(&robot, link, &q);
+        let l = robot.links.iter().find(|l| l.name == link).unwrap();
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for c in &l.collision {
+            let (r, at) = origin(&c.origin);
+            let (rot, at) = (rot * r, pos + rot * at);
+            let half = match &c.geometry {
+                urdf_rs::Geometry::Cylinder { length, .. } => {
+                    (rot * DVec3::Z * length / 2.0).z.abs()
+                }
+                urdf_rs::Geometry::Box { size } => {
+                    (0..3).map(|i| (rot.col(i) * size[i] / 2.0).z.abs()).sum()
+                }
+                other => panic!("{other:?}"),
+            };
+            lo = lo.min(at.z - half);
+            hi = hi.max(at.z + half);
+        }
+        (lo * 1000.0, hi * 1000.0)
+    };
+    let (stub, plate, tool) = (extent("link_6"), extent("flange"), extent("tool0"));
+    assert!(plate.0 - stub.1 >= 4.0, "stub {stub:?}, plate {plate:?}");
+    assert!(tool.0 - plate.1 >= 4.0, "plate {plate:?}, tool {tool:?}");
+}
+
+/// The pairs the SRDF tells MoveIt not to check.
+fn disabled(srdf: &str) -> Vec<(String, String)> {
+    srdf.lines()
+        .filter_map(|l| l.trim().strip_prefix("<disable_collisions link1=\""))
+        .map(|rest| {
+            let (a, rest) = rest.split_once('"').unwrap();
+            let b = rest.split('"').nth(1).unwrap();
+            (a.to_string(), b.to_string())
+        })
+        .collect()
+}
+
+/// A link's collision shapes as parry3d shapes, each with its pose in the link's frame.
+fn solids(robot: &urdf_rs::Robot, link: &str) -> Vec<(parry3d_f64::math::Pose, Box<dyn Shape>)> {
+    use parry3d_f64::shape::{Ball, Cuboid, Cylinder};
+    let l = robot.links.iter().find(|l| l.name == link).unwrap();
+    l.collision
+        .iter()
+        .map(|c| {
+            let (rot, at) = origin(&c.origin);
+            let mut pose = Pose::from_parts(at, DQuat::from_mat3(&rot));
+            let shape: Box<dyn Shape> = match &c.geometry {
+                urdf_rs::Geometry::Sphere { radius } => Box::new(Ball::new(*radius)),
+                urdf_rs::Geometry::Box { size } => {
+                    Box::new(Cuboid::new(DVec3::new(size[0], size[1], size[2]) / 2.0))
+                }
+                urdf_rs::Geometry::Cylinder { radius, length } => {
+                    // parry's cylinder stands on its y axis, URDF's on its z.
+                    pose *=
+                        Pose::from_rotation(DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2));
+                    Box::new(Cylinder::new(length / 2.0, *radius))
+                }
+                other => panic!("{link}: a shape this check does not know: {other:?}"),
+            };
+            (pose, shape)
+        })
+        .collect()
+}
+
+/// With the gripper, no two links that MoveIt checks (every pair the SRDF does not disable)
+/// touch at READY nor at any corner of the joints' range (each joint at one of its limits,
+/// 64 poses), the fingers closed or open: a planner sees the arm as free there, as it is.
+/// Except where the arm itself runs into itself: with J2 and J3 at their limits one way and
+/// J5 at its limit the other, the forearm folds down beside the base and the wrist turns the
+/// tool back into the column; there the tool's tip is inside the column's radius, and a
+/// planner must see the contact. Distances are exact (parry3d's, of the URDF's own shapes).
+#[test]
+fn no_two_links_moveit_checks_touch_at_ready_or_at_the_range_s_corners() {
+    let robot = urdf_rs::read_from_string(&trol_a465::urdf::urdf_with_gripper()).unwrap();
+    let off = disabled(&trol_a465::urdf::srdf_with_gripper());
+    let links: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
+    let mut poses = vec![trol_a465::model::READY];
+    for corner in 0..64u32 {
+        poses.push(std::array::from_fn(|i| {
+            if corner & (1 << i) == 0 {
+                -LIMITS_RAD[i]
+            } else {
+                LIMITS_RAD[i]
+            }
+        }));
+    }
+    let mut closest = (f64::INFINITY, String::new());
+    let tool_side = ["tool0", "finger_left", "finger_right"];
+    let tip_m = (trol_a465::urdf::TOOL_BOX_MM.0.1 + trol_a465::urdf::FINGER_MM.0) / 1000.0;
+    let mut folded = std::collections::HashSet::new();
+    for q in &poses {
+        for gap in [0.0, trol_a465::urdf::GRIP_MAX_MM / 1000.0] {
+            let world = |link: &str| -> Vec<(Pose, Box<dyn Shape>)> {
+                let (rot, pos) = if link == "base_link" {
+                    (DMat3::IDENTITY, DVec3::ZERO)
+                } else {
+                    chain_gripped(&robot, link, q, gap)
+                };
+                let at = Pose::from_parts(pos, DQuat::from_mat3(&rot));
+                solids(&robot, link)
+                    .into_iter()
+                    .map(|(p, s)| (at * p, s))
+                    .collect()
+            };
+            for (i, a) in links.iter().enumerate() {
+                for b in &links[i + 1..] {
+                    let pair = |x: &str, y: &str| (x.to_string(), y.to_string());
+                    if off.contains(&pair(a, b)) || off.contains(&pair(b, a)) {
+                        continue;
+                    }
+                    for (pa, sa) in world(a) {
+                        for (pb, sb) in world(b) {
+                            let d = parry3d_f64::query::distance(&pa, &*sa, &pb, &*sb).unwrap();
+                            if d > 0.0 && d < closest.0 {
+                                closest = (d, format!("{a} and {b} at {q:?}, gap {gap}"));
+                            }
+                            if d <= 0.0 {
+                                // Only the tool folded back into its own column: a true
+                                // contact, which the arm's tool also makes there.
+                                assert!(
+                                    *a == "link_1" && tool_side.contains(b),
+                                    "{a} and {b} touch at {q:?} with the fingers {gap} m apart"
+                                );
+                                let (rot, pos) = chain(&robot, "tool0", q);
+                                let tip = (pos + rot.col(0) * tip_m) * 1000.0;
+                                assert!(
+                                    tip.truncate().length() < RADIUS_MM[1]
+                                        && (0.0..D1).contains(&tip.z),
+                                    "{b} touches the column at {q:?}, but the tool's tip is \
+                                     not in it: {tip}"
+                                );
+                                folded.insert(q.map(f64::to_bits));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "the closest two links apart: {:.1} mm, {}",
+        closest.0 * 1000.0,
+        closest.1
+    );
+    // The corners with J2 and J3 at their limits one way and J5 the other: the arm folded
+    // down beside its base, the tool turned back into it (16 of the 64).
+    assert_eq!(folded.len(), 16, "{folded:?}");
+}
+
+/// Whether `p` (in the shape's frame, m) lies in `geometry` (1 µm given).
+fn inside(geometry: &urdf_rs::Geometry, p: DVec3) -> bool {
+    let e = 1e-6;
+    match geometry {
+        urdf_rs::Geometry::Sphere { radius } => p.length() <= radius + e,
+        urdf_rs::Geometry::Cylinder { radius, length } => {
+            p.z.abs() <= length / 2.0 + e && (p.x * p.x + p.y * p.y).sqrt() <= radius + e
+        }
+        urdf_rs::Geometry::Box { size } => (0..3).all(|i| p[i].abs() <= size[i] / 2.0 + e),
+        other => panic!("a shape this check does not know: {other:?}"),
+    }
+}
+
+/// A ray up the stretched arm (READY: every joint 0, the arm straight up the base's axis),
+/// from the floor to past the fingers, passes through a collision shape of every link: no
+/// part of the arm is left without one for MoveIt to plan through.
+#[test]
+fn a_ray_along_the_stretched_arm_hits_every_link() {
+    let robot = urdf_rs::read_from_string(&trol_a465::urdf::urdf_with_gripper()).unwrap();
+    let q = trol_a465::model::READY;
+    for l in &robot.links {
+        let (rot, pos) = if l.name == "base_link" {
+            (DMat3::IDENTITY, DVec3::ZERO)
+        } else {
+            chain(&robot, &l.name, &q)
+        };
+        let hit = (0..=1400).any(|mm| {
+            let p = DVec3::new(0.0, 0.0, mm as f64 / 1000.0);
+            l.collision.iter().any(|c| {
+                let (r, at) = origin(&c.origin);
+                let (rot, at) = (rot * r, pos + rot * at);
+                inside(&c.geometry, rot.transpose() * (p - at))
+            })
+        });
+        assert!(hit, "the ray up the arm misses {}", l.name);
     }
 }

@@ -703,8 +703,9 @@ impl Goals for Follow {
 /// How close (mm) the fingers must stand to the asked gap for `reached_goal` (assumption: the
 /// gripper's own resolution is not public; 1 mm).
 pub const GRIP_REACHED_MM: f64 = 1.0;
-/// The widest gap TROLGrip takes, mm (the table's range of `dist`).
-pub const GRIP_MAX_MM: f64 = 50.0;
+/// The widest gap TROLGrip takes, mm (the table's range of `dist`; the URDF's gripper_joint
+/// has it as its upper limit).
+pub const GRIP_MAX_MM: f64 = trol_a465::urdf::GRIP_MAX_MM;
 
 /// GripperCommand's goals; a run is the asked gap, mm.
 pub struct Gripper;

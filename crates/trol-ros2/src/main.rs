@@ -273,6 +273,8 @@ fn prefixed_urdf(urdf: &str, prefix: &str) -> String {
         " tip_link=\"",
         " link1=\"",
         " link2=\"",
+        " parent_link=\"",
+        "<mimic joint=\"",
     ];
     while let Some((at, mark)) = marks
         .iter()
@@ -301,21 +303,17 @@ fn read_gap(robot: &Mutex<Robot>) -> Option<f64> {
         .map(|g| g.opening_mm / 1000.0)
 }
 
-/// The URDF the node publishes and writes: `trol urdf`'s with `prefix`, and the gripper as
-/// one prismatic joint, `gripper_joint`, whose value is the fingers' gap in metres (0 ..
-/// 0.05, as GripperCommand's `position`), so that MoveIt's gripper controller can name it.
+/// The URDF the node publishes and writes: the A465 with its gripper's fingers
+/// (trol_a465::urdf::urdf_with_gripper: `gripper_joint`'s value is the fingers' gap in metres,
+/// 0 .. 0.05, as GripperCommand's `position`, so that MoveIt's gripper controller can name
+/// it), with `prefix`.
 pub(crate) fn described(prefix: &str) -> String {
-    let urdf = trol_a465::urdf::urdf();
-    let fingers = format!(
-        "  <link name=\"fingers\">\n    <inertial><mass value=\"0.05\"/><inertia ixx=\"1e-5\" \
-         ixy=\"0\" ixz=\"0\" iyy=\"1e-5\" iyz=\"0\" izz=\"1e-5\"/></inertial>\n  </link>\n  \
-         <joint name=\"gripper_joint\" type=\"prismatic\">\n    <parent link=\"tool0\"/>\n    \
-         <child link=\"fingers\"/>\n    <axis xyz=\"0 1 0\"/>\n    <limit lower=\"0\" \
-         upper=\"{:.3}\" velocity=\"0.04\" effort=\"50\"/>\n  </joint>\n",
-        actions::GRIP_MAX_MM / 1000.0
-    );
-    let with = urdf.replacen("</robot>", &format!("{fingers}</robot>"), 1);
-    prefixed_urdf(&with, prefix)
+    prefixed_urdf(&trol_a465::urdf::urdf_with_gripper(), prefix)
+}
+
+/// The SRDF beside [`described`], with `prefix`.
+pub(crate) fn semantic(prefix: &str) -> String {
+    prefixed_urdf(&trol_a465::urdf::srdf_with_gripper(), prefix)
 }
 
 /// How long one reading of the arm's joints takes: the slowest of three (0 when they fail:
@@ -409,12 +407,11 @@ fn run(args: Args) -> Result<(), String> {
     let ns = namespace(&args.namespace)?;
     let joints = joint_names(&args.prefix);
     if let Some(dir) = &args.write_config {
-        moveit::controller_name(&ns)?;
         let files = moveit::files(
             &joints,
             &ns,
             &described(&args.prefix),
-            &prefixed_urdf(&trol_a465::urdf::srdf(), &args.prefix),
+            &semantic(&args.prefix),
         );
         moveit::write(dir, &files)?;
         trol_cli::say!(
@@ -903,8 +900,8 @@ mod tests {
 
     #[test]
     fn a_prefix_names_every_link_and_joint_and_every_reference_stays_whole() {
-        let plain = trol_a465::urdf::urdf();
-        let urdf = prefixed_urdf(&plain, "arm1_");
+        let plain = trol_a465::urdf::urdf_with_gripper();
+        let urdf = described("arm1_");
         let names = |kind: &str, text: &str| -> Vec<String> {
             text.split(&format!("<{kind} name=\""))
                 .skip(1)
@@ -923,6 +920,21 @@ mod tests {
         }
         // Every parent and child names a link of this URDF.
         for r in urdf.split(" link=\"").skip(1) {
+            let l = r.split('"').next().unwrap();
+            assert!(links.iter().any(|x| x == l), "{l} is no link of {links:?}");
+        }
+        // The fingers' mimic joint names the prefixed gripper_joint; the SRDF's references
+        // are all prefixed.
+        assert!(
+            urdf.contains("<mimic joint=\"arm1_gripper_joint\""),
+            "{urdf}"
+        );
+        let srdf = semantic("arm1_");
+        for r in srdf.split("link=\"").skip(1) {
+            let l = r.split('"').next().unwrap();
+            assert!(links.iter().any(|x| x == l), "{l} is no link of {links:?}");
+        }
+        for r in srdf.split("<link name=\"").skip(1) {
             let l = r.split('"').next().unwrap();
             assert!(links.iter().any(|x| x == l), "{l} is no link of {links:?}");
         }

@@ -47,24 +47,31 @@ pub fn files(joints: &[String; 6], ns: &str, urdf: &str, srdf: &str) -> Vec<(Str
          arm:\n  kinematics_solver: kdl_kinematics_plugin/KDLKinematicsPlugin\n  \
          kinematics_solver_search_resolution: 0.005\n  kinematics_solver_timeout: 0.05\n"
             .to_string();
-    // moveit_simple_controller_manager finds a controller's action at `<name>/<action_ns>`:
-    // the node's namespace is the controller's name ([`controller_name`]).
-    let controller = controller_name(ns).unwrap_or_default();
-    let action_ns = |action: &str| action.to_string();
-    let mut controllers = format!(
-        "# moveit_simple_controller_manager on `trol ros2`'s actions.\n\
+    // moveit_simple_controller_manager finds a controller's action at `<name>/<action_ns>`,
+    // or at `<name>` where action_ns is empty, relative to move_group's namespace: move_group
+    // runs in the node's namespace, and each controller is named after the node's action.
+    let mut controllers = String::from(
+        "# moveit_simple_controller_manager on `trol ros2`'s actions; move_group runs in the\n\
+         # node's namespace, so each controller's name is the node's action.\n\
          moveit_controller_manager: moveit_simple_controller_manager/MoveItSimpleControllerManager\n\
-         moveit_simple_controller_manager:\n  controller_names: [{controller}]\n  {controller}:\n    \
-         type: FollowJointTrajectory\n    action_ns: {}\n    default: true\n    joints:\n",
-        action_ns("follow_joint_trajectory")
+         moveit_simple_controller_manager:\n  controller_names: [follow_joint_trajectory, gripper_cmd]\n  \
+         follow_joint_trajectory:\n    type: FollowJointTrajectory\n    action_ns: \"\"\n    \
+         default: true\n    joints:\n",
     );
     for j in joints {
         let _ = writeln!(controllers, "      - {j}");
     }
+    let gripper_joint = joints[0].replace("joint_1", "gripper_joint");
+    let _ = write!(
+        controllers,
+        "  gripper_cmd:\n    type: GripperCommand\n    action_ns: \"\"\n    default: true\n    \
+         joints:\n      - {gripper_joint}\n"
+    );
+    let namespace = ns.trim_matches('/');
     let launch = format!(
         "\"\"\"move_group for the CRS A465 on `trol ros2` (written by `trol ros2 --write-config`).\n\n\
          Start `trol ros2` with the same --namespace and --prefix on the machine with the arm's\n\
-         line; this starts MoveIt's move_group with the files beside it.\n\"\"\"\n\n\
+         line; this starts MoveIt's move_group, in the node's namespace, with the files beside it.\n\"\"\"\n\n\
          import os\n\n\
          import yaml\n\
          from launch import LaunchDescription\n\
@@ -79,11 +86,10 @@ pub fn files(joints: &[String; 6], ns: &str, urdf: &str, srdf: &str) -> Vec<(Str
          \"robot_description_kinematics\": data(\"kinematics.yaml\"),\n        \
          \"robot_description_planning\": data(\"joint_limits.yaml\"),\n        \
          **data(\"moveit_controllers.yaml\"),\n    }}\n    \
+         # In the node's namespace: joint_states and the controllers' actions are the node's.\n    \
          return LaunchDescription([\n        \
          Node(package=\"moveit_ros_move_group\", executable=\"move_group\", output=\"screen\",\n             \
-         parameters=[params],\n             \
-         remappings=[(\"/joint_states\", \"{}/joint_states\")]),\n    ])\n",
-        if ns == "/" { "" } else { ns }
+         namespace=\"{namespace}\", parameters=[params]),\n    ])\n"
     );
     vec![
         ("crs_a465.urdf".into(), urdf.to_string()),
@@ -93,19 +99,6 @@ pub fn files(joints: &[String; 6], ns: &str, urdf: &str, srdf: &str) -> Vec<(Str
         ("moveit_controllers.yaml".into(), controllers),
         ("move_group.launch.py".into(), launch),
     ]
-}
-
-/// The controller's name MoveIt gives the node serving under `ns`: its namespace, one level
-/// (`/arm1`: `arm1`). Err: a namespace MoveIt's simple controller manager cannot name.
-pub fn controller_name(ns: &str) -> Result<String, String> {
-    let name = ns.trim_matches('/');
-    if name.is_empty() || name.contains('/') {
-        return Err(format!(
-            "MoveIt's simple controller manager finds a controller's action under the \
-             controller's name: give this node a one-level --namespace (`arm1`), not `{ns}`"
-        ));
-    }
-    Ok(name.to_string())
 }
 
 /// Write [`files`] into `dir` (made if missing).

@@ -34,17 +34,19 @@ def test_the_files_agree_with_the_urdf_and_with_each_other(tmp_path: Path, prefi
     assert all(l.startswith(prefix) for l in links)
     for j in joints.values():
         assert j.find("parent").get("link") in links and j.find("child").get("link") in links
-    # The bulk of the arm has collision shapes, MoveIt plans around them (the elbow's, the
-    # wrist's and the flange's small links have none yet: issue 61).
-    for name in ["base_link", "link_1", "link_2", "link_4", "tool0"]:
-        assert urdf.find(f"link[@name='{prefix}{name}']/collision") is not None, name
+    # Every link has a collision shape: MoveIt plans around the whole arm and the fingers.
+    for link in urdf.findall("link"):
+        assert link.find("collision") is not None, link.get("name")
+    # The fingers: one on a mimic joint (at minus half the gap), one on gripper_joint.
+    mimic = joints[f"{prefix}finger_right_joint"].find("mimic")
+    assert (mimic.get("joint"), float(mimic.get("multiplier"))) == (f"{prefix}gripper_joint", -0.5)
 
     srdf = ET.parse(tmp_path / "crs_a465.srdf").getroot()
     chain = srdf.find("group[@name='arm']/chain")
     assert chain.get("base_link") == f"{prefix}base_link" and chain.get("tip_link") == f"{prefix}tool0"
     for d in srdf.findall("disable_collisions"):
         assert d.get("link1") in links and d.get("link2") in links
-    assert [j.get("name") for j in srdf.findall("group_state/joint")] == arm
+    assert [j.get("name") for j in srdf.findall("group_state[@name='ready']/joint")] == arm
 
     limits = yaml.safe_load((tmp_path / "joint_limits.yaml").read_text())["joint_limits"]
     assert sorted(limits) == sorted(arm)
@@ -54,21 +56,30 @@ def test_the_files_agree_with_the_urdf_and_with_each_other(tmp_path: Path, prefi
         assert 0 < v <= float(joints[j].find("limit").get("velocity")) + 1e-9
         assert limits[j]["max_acceleration"] > 0
 
+    # move_group runs in the node's namespace; each controller is named after the node's
+    # action there (an empty action_ns: the action is at the controller's name).
     controllers = yaml.safe_load((tmp_path / "moveit_controllers.yaml").read_text())
     manager = controllers["moveit_simple_controller_manager"]
-    assert manager["controller_names"] == ["cell"]
-    cell = manager["cell"]
-    assert (cell["type"], cell["action_ns"], cell["joints"]) == ("FollowJointTrajectory", "follow_joint_trajectory", arm)
+    assert manager["controller_names"] == ["follow_joint_trajectory", "gripper_cmd"]
+    arm_controller, gripper = manager["follow_joint_trajectory"], manager["gripper_cmd"]
+    assert (arm_controller["type"], arm_controller["action_ns"], arm_controller["joints"]) == \
+        ("FollowJointTrajectory", "", arm)
+    assert (gripper["type"], gripper["action_ns"], gripper["joints"]) == \
+        ("GripperCommand", "", [f"{prefix}gripper_joint"])
+    group = {l.get("name") for l in srdf.findall("group[@name='gripper']/link")}
+    assert group == {f"{prefix}finger_left", f"{prefix}finger_right"}
+    assert srdf.find("end_effector").get("parent_link") == f"{prefix}tool0"
 
     kinematics = yaml.safe_load((tmp_path / "kinematics.yaml").read_text())
     assert "kinematics_solver" in kinematics["arm"]
     source = (tmp_path / "move_group.launch.py").read_text()
     compile(source, "move_group.launch.py", "exec")
-    assert "/cell/joint_states" in source and "generate_launch_description" in source
+    assert 'namespace="cell"' in source and "generate_launch_description" in source
 
 
-def test_a_namespace_moveit_cannot_name_is_refused_with_what_to_give(tmp_path: Path) -> None:
-    done = write_config(tmp_path / "out")
-    assert done.returncode == 1
-    assert "one-level --namespace" in done.stderr, done.stderr
-    assert not (tmp_path / "out").exists()
+def test_a_node_in_a_deeper_namespace_or_none_gets_its_move_group_there(tmp_path: Path) -> None:
+    for ns, want in [("cell/arm2", 'namespace="cell/arm2"'), ("/", 'namespace=""')]:
+        done = write_config(tmp_path / ns.strip("/").replace("/", "_"), "--namespace", ns)
+        assert done.returncode == 0, done.stderr
+        source = (tmp_path / ns.strip("/").replace("/", "_") / "move_group.launch.py").read_text()
+        assert want in source, source

@@ -913,6 +913,61 @@ def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) 
         node.stop()
 
 
+def humble_peer(domain: int, seconds: float) -> tuple[subprocess.Popen, list[str]]:
+    """tests/ros2/humble_peer.py on `domain`, ready, its lines gathered as they come."""
+    peer = subprocess.Popen([sys.executable, str(Path(__file__).with_name("humble_peer.py")), str(domain), "arm1",
+                             str(seconds)], stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                            cwd=Path(__file__).parent)
+    assert peer.stdout is not None and peer.stdout.readline().strip() == "ready"
+    lines: list[str] = []
+    threading.Thread(target=lambda: lines.extend(peer.stdout), daemon=True).start()  # type: ignore[arg-type]
+    return peer, lines
+
+
+def ours(lines: list[str]) -> list[dict]:
+    """The discovery messages a Humble peer decoded that name the node /arm1/trol_a465."""
+    got = [json.loads(x) for x in list(lines)]
+    return [x for x in got if "nodes" in x and any(n["ns"] == "/arm1" and n["name"] == "trol_a465"
+                                                    for n in x["nodes"])]
+
+
+@pytest.mark.timeout(300)
+def test_a_humble_peer_sees_the_node_and_reads_its_feedback_with_distro_humble(domain: int) -> None:
+    # Without --distro humble (Jazzy's layout, 16-byte ids) a Humble peer cannot read the
+    # node's discovery message: `ros2 node list` on Humble would not show it.
+    node = Node(domain, "arm1", time_scale=1)
+    peer, lines = humble_peer(domain, 8)
+    try:
+        peer.wait(timeout=60)
+        assert not ours(lines), lines
+    finally:
+        peer.kill()
+        node.stop()
+    node = Node(domain, "arm1", time_scale=1, extra=("--distro", "humble"))
+    peer, lines = humble_peer(domain, 60)
+    try:
+        seen = wait_for("the node in Humble's discovery layout", lambda: ours(lines) or None)
+        info = next(n for n in seen[-1]["nodes"] if n["name"] == "trol_a465")
+        # Its readers (requests, goals) and writers (joint_states, replies' topics), each
+        # id a DDS GUID padded to 24 bytes as Humble's rmw pads it.
+        assert info["readers"] >= 8 and info["writers"] >= 5, info
+        assert seen[-1]["padded"], seen[-1]
+        dp = DomainParticipant(domain)
+        assert call_trigger(dp, "arm1", "home", 1).success
+        action = Action(dp, "arm1")
+        gid = action.goal(trajectory_goal(JOINTS, [(0.8, [0.1] * 6)]))
+        r = action.outcome(gid)
+        assert (r.status, r.result.error_code) == (SUCCEEDED, 0), r.result.error_string
+        goal = bytes(gid.uuid).hex()
+        fed = wait_for("feedback read in Humble's layout", lambda: [
+            x for x in map(json.loads, list(lines)) if x.get("goal") == goal] or None)
+        assert all(x["names"] == JOINTS and x["actual"] == 6 for x in fed), fed
+    finally:
+        peer.kill()
+        peer.wait()
+        node.stop()
+
+
 @pytest.mark.timeout(300)
 def test_a_dense_plan_is_thinned_for_a_c500_and_reaches_its_end(tmp_path: Path, domain: int) -> None:
     # 40 points, as MoveIt plans them; a C500 runs at most 16 (one joint move each).

@@ -21,6 +21,7 @@
 mod action_server;
 mod actions;
 mod follow;
+mod humble;
 mod mapping;
 mod moveit;
 mod msgs;
@@ -426,12 +427,6 @@ fn run(args: Args) -> Result<(), String> {
         return Ok(());
     }
     let distro = Distro::pick(args.distro)?;
-    if distro == Distro::Humble {
-        crate::warn_ros!(
-            "trol-ros2: on Humble, `ros2 node list` does not show this node: its discovery \
-             message is written in Jazzy's layout"
-        );
-    }
     let domain = domain(args.domain)?;
     let local = localhost_only(args.localhost_only);
 
@@ -628,6 +623,15 @@ fn run(args: Args) -> Result<(), String> {
         node_params(&args, &cfg.port, rate, distro),
     )?;
     let mut grips = actions::Served::gripper(action_services("gripper_cmd")?);
+    // Humble's peers read the node's discovery message only in their own layout (humble.rs):
+    // written once every entity of the node is made.
+    let humble_discovery = if distro == Distro::Humble {
+        let d = humble::Discovery::new(&dds, &writers)?;
+        d.publish(&context.participant_entities_info())?;
+        Some(d)
+    } else {
+        None
+    };
     let period = Duration::from_secs_f64(1.0 / rate);
     let mut next = Instant::now();
     let mut last: Option<([f64; 6], Instant)> = None;
@@ -767,6 +771,14 @@ fn run(args: Args) -> Result<(), String> {
             },
         );
         std::thread::sleep(next.saturating_duration_since(now).min(SERVE_EVERY));
+    }
+    // Humble's peers learn the node is gone (ros2-client says so in its own layout).
+    if let Some(d) = &humble_discovery {
+        let gid = context.participant_entities_info().gid();
+        let _ = d.publish(&ros2_client::entities_info::ParticipantEntitiesInfo::new(
+            gid,
+            Vec::new(),
+        ));
     }
     // Leaving: an arm that still moves by this node's doing is stopped, and seen standing.
     // The connection stays locked from here on: a Home's thread must not start a transaction

@@ -880,7 +880,7 @@ def test_gripper_cmd_says_stalled_when_the_fingers_close_on_an_object(tmp_path: 
 
 
 @pytest.mark.timeout(240)
-def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) -> None:
+def test_a_kilted_peer_reads_the_discovery_message_and_the_trajectory_feedback_in_its_layouts(domain: int) -> None:
     # The Kilted peer in a process of its own (tests/ros2/kilted_peer.py): Cyclone DDS keeps
     # one definition of a type name per process, and this one's are Jazzy's.
     node = Node(domain, "arm1", time_scale=1, extra=("--distro", "kilted"))
@@ -892,19 +892,22 @@ def test_a_kilted_peer_reads_the_trajectory_feedback_in_its_layout(domain: int) 
         assert peer.stdout is not None and peer.stdout.readline().strip() == "ready"
         lines: list[str] = []
         threading.Thread(target=lambda: lines.extend(peer.stdout), daemon=True).start()  # type: ignore[arg-type]
+        # The discovery message in Kilted's layout (that of Jazzy, ros2-client's own).
+        seen = wait_for("the node in Kilted's discovery layout", lambda: ours(lines) or None)
+        assert seen[-1]["padded"], seen[-1]
         dp = DomainParticipant(domain)
         assert call_trigger(dp, "arm1", "home", 1).success
         action = Action(dp, "arm1")
         gid = action.goal(trajectory_goal(JOINTS, [(0.8, [0.1] * 6), (1.6, [0.2] * 6)]))
         r = action.outcome(gid)
         assert (r.status, r.result.error_code) == (SUCCEEDED, 0), r.result.error_string
-        ours = bytes(gid.uuid).hex()
+        goal = bytes(gid.uuid).hex()
         got = wait_for("feedback read in Kilted's layout", lambda: [
-            x for x in map(json.loads, list(lines)) if x["goal"] == ours] or None)
+            x for x in map(json.loads, list(lines)) if x.get("goal") == goal] or None)
         assert all(x["names"] == JOINTS and x["actual"] == 6 for x in got), got
         # The point in use goes from the first to the second; the multi-DOF index stays 0.
         wait_for("the second point in use", lambda: True if any(
-            json.loads(x)["index"] == 1 for x in list(lines) if json.loads(x)["goal"] == ours) else None)
+            json.loads(x)["index"] == 1 for x in list(lines) if json.loads(x).get("goal") == goal) else None)
         assert {x["index"] for x in got} <= {0, 1}, got
         assert all(x["multi_dof_index"] == 0 for x in got), got
     finally:

@@ -428,7 +428,7 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
             })
         })
     };
-    let from = |flag: bool, file: bool| {
+    let from = |flag: bool, file: bool| -> String {
         if flag {
             "the command line"
         } else if file {
@@ -436,6 +436,7 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         } else {
             "default"
         }
+        .to_string()
     };
     let has_file = file_text.is_some();
     let tool: Vec<String> = cfg.tool.iter().map(|v| format!("{v}")).collect();
@@ -443,17 +444,31 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         p.as_ref()
             .map_or("none".into(), |p| p.display().to_string())
     };
-    let rows: Vec<(&str, String, &str)> = vec![
-        (
-            "baud",
-            cfg.baud.to_string(),
-            from(conn.baud.is_some(), has_file),
+    // The line speed the port is opened at: a real controller's profile sets it there, not
+    // trol.cfg's `baud`.
+    let cfg_baud = from(conn.baud.is_some(), has_file);
+    let (baud, baud_from) = match trol::Connect::config(&cfg).line_speed() {
+        Ok(Some((b, source))) if source == "trol.cfg's baud" => (b.to_string(), cfg_baud),
+        Ok(Some((b, source))) => (
+            b.to_string(),
+            format!(
+                "{source}; `baud` {} ({cfg_baud}) is not used on this port",
+                cfg.baud
+            ),
         ),
+        Ok(None) => (
+            "none".to_string(),
+            "the embedded simulator has no line".to_string(),
+        ),
+        Err(e) => ("unknown".to_string(), format!("{e}")),
+    };
+    let rows: Vec<(&str, String, String)> = vec![
         (
             "port",
             cfg.port.clone(),
             from(conn.port.is_some(), has_file),
         ),
+        ("baud", baud, baud_from),
         ("tool", tool.join(" "), from(false, has_file)),
         (
             "check",
@@ -497,6 +512,16 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
             "rapl-profile",
             shown(&cfg.rapl_profile),
             from(false, in_file(&["rapl-profile", "rapl_profile"])),
+        ),
+        (
+            "mars-profile",
+            shown(&cfg.mars_profile),
+            from(false, in_file(&["mars-profile", "mars_profile"])),
+        ),
+        (
+            "c500c-profile",
+            shown(&cfg.c500c_profile),
+            from(false, in_file(&["c500c-profile", "c500c_profile"])),
         ),
     ];
     for (key, value, src) in rows {

@@ -136,6 +136,70 @@ pub(super) fn a_missing_trol_cfg_means_the_simulator_everywhere_and_a_bad_one_st
     );
     assert!(row("time_scale").ends_with("(trol.cfg)"));
     assert!(row("check").ends_with("(default)"));
+
+    // On a real controller's port the profile sets the line speed, and `trol config` says
+    // so, with every profile key (issue 68, item 2).
+    let profiles = [
+        ("mars:", "mars-profile", "19200", "the MARS 8 profile"),
+        (
+            "c500c:",
+            "c500c-profile",
+            "57600",
+            "the default C500C profile",
+        ),
+        (
+            "rapl:",
+            "rapl-profile",
+            "38400",
+            "the default RAPL-II profile",
+        ),
+    ];
+    let crs93 = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../trol-mars/profiles/crs93.toml")
+        .canonicalize()
+        .unwrap();
+    for (prefix, key, baud, source) in profiles {
+        let extra = if prefix == "mars:" {
+            format!("mars-profile = {}\n", crs93.display())
+        } else {
+            String::new()
+        };
+        std::fs::write(
+            dir.join("trol.cfg"),
+            format!("9600\n{prefix}/dev/ttyUSB0\n0 0 0 0 0 0\n{extra}"),
+        )
+        .unwrap();
+        let o = trol(&dir, &["config"], "");
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{err}");
+        let baud_row = out.lines().find(|l| l.starts_with("baud")).unwrap();
+        assert!(baud_row.contains(baud), "{prefix}: {out}");
+        assert!(baud_row.contains(source), "{prefix}: {out}");
+        assert!(
+            baud_row.contains("`baud` 9600 (trol.cfg) is not used on this port"),
+            "{prefix}: {out}"
+        );
+        for k in ["rapl-profile", "mars-profile", "c500c-profile"] {
+            let r = out.lines().find(|l| l.starts_with(k)).unwrap();
+            if k == key && prefix == "mars:" {
+                assert!(
+                    r.contains("crs93.toml") && r.ends_with("(trol.cfg)"),
+                    "{out}"
+                );
+            } else {
+                assert!(r.contains("none"), "{k}: {out}");
+            }
+        }
+    }
+    // The embedded simulator has no line.
+    std::fs::write(dir.join("trol.cfg"), "9600\nsim\n0 0 0 0 0 0\n").unwrap();
+    let o = trol(&dir, &["config"], "");
+    let (out, _) = text(&o);
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("baud") && l.contains("the embedded simulator has no line")),
+        "{out}"
+    );
 }
 
 #[test]

@@ -203,6 +203,93 @@ impl Connect {
         Ok(robot)
     }
 
+    /// The MARS 8 profile this connection uses: the one given, else trol.cfg's file.
+    #[cfg(feature = "mars")]
+    fn mars_profile_chosen(&self) -> Result<trol_mars::Profile> {
+        match (&self.mars, &self.cfg.mars_profile) {
+            (Some(p), _) => Ok(p.clone()),
+            (None, Some(path)) => trol_mars::Profile::from_file(path)
+                .map_err(|e| SetupError::Config(e.to_string()).into()),
+            (None, None) => Err(SetupError::Config(format!(
+                "port {}: an A465 on a MARS 8 needs its arm profile: add `mars-profile = FILE` \
+                 to trol.cfg (crates/trol-mars/profiles/crs93.toml is CTU's CRS93; \
+                 docs/mars.md), or give it to Connect::mars_profile",
+                self.cfg.port
+            ))
+            .into()),
+        }
+    }
+
+    /// The C500C profile this connection uses: the one given, else trol.cfg's file, else the
+    /// default (nothing settled: every motion is refused, naming the key).
+    #[cfg(feature = "c500c")]
+    fn c500c_profile_chosen(&self) -> Result<trol_c500c::Profile> {
+        match (&self.c500c, &self.cfg.c500c_profile) {
+            (Some(p), _) => Ok(p.clone()),
+            (None, Some(path)) => trol_c500c::Profile::from_file(path)
+                .map_err(|e| SetupError::Config(e.to_string()).into()),
+            (None, None) => Ok(trol_c500c::Profile::default()),
+        }
+    }
+
+    /// The RAPL-II profile this connection uses: the one given, else trol.cfg's file, else
+    /// the default.
+    #[cfg(feature = "rapl")]
+    fn rapl_profile_chosen(&self) -> Result<trol_rapl::Profile> {
+        match (&self.rapl, &self.cfg.rapl_profile) {
+            (Some(p), _) => Ok(p.clone()),
+            (None, Some(path)) => trol_rapl::Profile::from_file(path)
+                .map_err(|e| SetupError::Config(e.to_string()).into()),
+            (None, None) => Ok(trol_rapl::Profile::default()),
+        }
+    }
+
+    /// The line speed this connection opens its port at, and what sets it: a real
+    /// controller's profile (`rapl:`, `mars:`, `c500c:`: trol.cfg's `baud` is not used
+    /// there), else trol.cfg's `baud` (None for the embedded simulator, which has no line).
+    /// Err: the profile cannot be read (the message the connection would give).
+    pub fn line_speed(&self) -> Result<Option<(u32, String)>> {
+        let cfg = &self.cfg;
+        #[cfg_attr(
+            not(any(feature = "rapl", feature = "mars", feature = "c500c")),
+            allow(unused_variables)
+        )]
+        let from_profile = |kind: &str, given: bool, file: &Option<std::path::PathBuf>| {
+            if given {
+                format!("the {kind} profile given to Connect")
+            } else if let Some(f) = file {
+                format!("the {kind} profile {}", f.display())
+            } else {
+                format!("the default {kind} profile")
+            }
+        };
+        if cfg.port.starts_with(MARS_PREFIX) {
+            #[cfg(feature = "mars")]
+            return Ok(Some((
+                self.mars_profile_chosen()?.baud,
+                from_profile("MARS 8", self.mars.is_some(), &cfg.mars_profile),
+            )));
+        }
+        if cfg.port.starts_with(C500C_PREFIX) {
+            #[cfg(feature = "c500c")]
+            return Ok(Some((
+                self.c500c_profile_chosen()?.baud,
+                from_profile("C500C", self.c500c.is_some(), &cfg.c500c_profile),
+            )));
+        }
+        if cfg.port.starts_with(RAPL_PREFIX) {
+            #[cfg(feature = "rapl")]
+            return Ok(Some((
+                self.rapl_profile_chosen()?.baud,
+                from_profile("RAPL-II", self.rapl.is_some(), &cfg.rapl_profile),
+            )));
+        }
+        if cfg.port == "sim" {
+            return Ok(None);
+        }
+        Ok(Some((cfg.baud, "trol.cfg's baud".into())))
+    }
+
     /// The connection, unchecked: the embedded controllers by the port's prefix, else the
     /// port itself.
     fn open(&self) -> Result<Robot> {
@@ -220,20 +307,7 @@ impl Connect {
             return Err(open::not_built(device, "mars", "the MARS 8 backend"));
             #[cfg(feature = "mars")]
             {
-                let profile = match (&self.mars, &cfg.mars_profile) {
-                    (Some(p), _) => p.clone(),
-                    (None, Some(path)) => trol_mars::Profile::from_file(path)
-                        .map_err(|e| SetupError::Config(e.to_string()))?,
-                    (None, None) => {
-                        return Err(SetupError::Config(format!(
-                            "port {}: an A465 on a MARS 8 needs its arm profile: add \
-                             `mars-profile = FILE` to trol.cfg (crates/trol-mars/profiles/crs93.toml \
-                             is CTU's CRS93; docs/mars.md), or give it to Connect::mars_profile",
-                            cfg.port
-                        ))
-                        .into());
-                    }
-                };
+                let profile = self.mars_profile_chosen()?;
                 let locations = crate::config_locations(cfg)?;
                 // TROLSaveLocations writes trol.cfg's locations file back (docs/teach.md).
                 return Robot::open_mars(device, profile, (locations, cfg.locations.clone()), link);
@@ -244,13 +318,7 @@ impl Connect {
             return Err(open::not_built(device, "c500c", "the C500C backend"));
             #[cfg(feature = "c500c")]
             {
-                let profile = match (&self.c500c, &cfg.c500c_profile) {
-                    (Some(p), _) => p.clone(),
-                    (None, Some(path)) => trol_c500c::Profile::from_file(path)
-                        .map_err(|e| SetupError::Config(e.to_string()))?,
-                    // Nothing settled: every motion is refused, naming the key.
-                    (None, None) => trol_c500c::Profile::default(),
-                };
+                let profile = self.c500c_profile_chosen()?;
                 return Robot::open_c500c(device, profile, link);
             }
         }
@@ -259,12 +327,7 @@ impl Connect {
             return Err(open::not_built(device, "rapl", "the RAPL-II backend"));
             #[cfg(feature = "rapl")]
             {
-                let profile = match (&self.rapl, &cfg.rapl_profile) {
-                    (Some(p), _) => p.clone(),
-                    (None, Some(path)) => trol_rapl::Profile::from_file(path)
-                        .map_err(|e| SetupError::Config(e.to_string()))?,
-                    (None, None) => trol_rapl::Profile::default(),
-                };
+                let profile = self.rapl_profile_chosen()?;
                 return Robot::open_rapl(device, profile, link);
             }
         }

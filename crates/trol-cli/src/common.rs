@@ -16,8 +16,10 @@ pub struct Conn {
     /// embedded simulator, port `sim`).
     #[arg(long, value_name = "FILE", global = true)]
     pub config: Option<PathBuf>,
-    /// The port, overriding trol.cfg: `sim` (the embedded simulator), a serial device
-    /// (/dev/ttyUSB0, /dev/pts/3, COM1), socket://HOST:PORT or listen://HOST:PORT.
+    /// The port, overriding trol.cfg: `sim` (the embedded simulator); a TROL server on a
+    /// serial device (/dev/ttyUSB0, /dev/pts/3, COM1), socket://HOST:PORT or
+    /// listen://HOST:PORT; or a real controller driven from this PC: rapl:DEVICE (a C500 in
+    /// RAPL-II), mars:DEVICE (a MARS 8), c500c:DEVICE (a C500C).
     #[arg(long, value_name = "PORT", global = true)]
     pub port: Option<String>,
     /// The baud rate, overriding trol.cfg.

@@ -37,9 +37,9 @@ use trol_cli::common;
 use clap::{Parser, Subcommand};
 
 /// TROL, the TU Vienna Robot Control Library: utilities for driving a CRS A465 on a C500 in
-/// RAPL-II, on a PiKRON MARS 8, or simulated. Every command reads trol.cfg (or $TROL_CONFIG) like any TROL program;
-/// --port, --baud and --config override it. Without trol.cfg the port is `sim`, the
-/// embedded simulator.
+/// RAPL-II, on a PiKRON MARS 8, on a C500C, or simulated. Every command reads trol.cfg (or
+/// $TROL_CONFIG) like any TROL program; --port, --baud and --config override it. Without
+/// trol.cfg the port is `sim`, the embedded simulator.
 #[derive(Parser)]
 #[command(name = "trol", version, long_about = None, after_help = "\
 Examples:
@@ -67,10 +67,11 @@ enum Command {
     /// End the controller's TROL server, back to terminal mode (cluptrol).
     #[command(after_help = "Example: trol cleanup --port /dev/ttyUSB0")]
     Cleanup(common::Conn),
-    /// The simulated controller (C500 with an A465) as its own process.
+    /// A simulated A465 as its own process: the TROL server (by default), or the twin of a
+    /// C500 in RAPL-II (--rapl), a MARS 8 (--mars) or a C500C (--c500c).
     Sim(sim::SimArgs),
-    /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md) or
-    /// an A465 on a MARS 8 (docs/mars.md).
+    /// TROL's controller side on this PC, driving a real C500 in RAPL-II (docs/c500.md), an
+    /// A465 on a MARS 8 (docs/mars.md) or an A465 on its C500C (docs/c500c.md).
     Gateway(gateway::GatewayArgs),
     /// A real C500 in RAPL-II: first contact (probe) and a plain terminal (term).
     #[command(subcommand)]

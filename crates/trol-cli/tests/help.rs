@@ -70,11 +70,49 @@ fn the_help_names_every_controller() {
         .split_whitespace()
         .collect::<Vec<_>>()
         .join(" ");
-    for name in ["C500", "RAPL-II", "MARS 8", "simulated"] {
+    for name in ["C500", "RAPL-II", "MARS 8", "C500C", "simulated"] {
         assert!(
             first.contains(name),
             "the help's top does not name {name}: {first}"
         );
+    }
+    // The lines of the commands that serve or simulate a controller name every one.
+    let words: String = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    for (command, names) in [
+        ("gateway", &["C500", "MARS 8", "C500C"][..]),
+        ("sim", &["RAPL-II", "MARS 8", "C500C"]),
+    ] {
+        let line = words
+            .split(&format!(" {command} "))
+            .nth(1)
+            .unwrap_or_else(|| panic!("no `{command}` in {help}"));
+        let line = &line[..line.find(" rapl ").or(line.find(" link ")).unwrap_or(line.len())];
+        for name in names {
+            assert!(line.contains(name), "`{command}` does not name {name}: {line}");
+        }
+    }
+}
+
+/// Every command that takes `--port` names every kind of port in its help: the simulator,
+/// a TROL server's devices and sockets, and each real controller's prefix (issue 68, item 4:
+/// `trol interp --port` named no `rapl:`, `mars:`, `c500c:`).
+#[test]
+fn every_port_option_names_every_prefix() {
+    let dir = scratch("help-ports");
+    for command in ["interp", "init", "cleanup", "config", "demo"] {
+        let out = trol(&dir, &[command, "--help"], "");
+        let (help, _) = text(&out);
+        let words: String = help.split_whitespace().collect::<Vec<_>>().join(" ");
+        let port = words
+            .split("--port <PORT>")
+            .nth(1)
+            .unwrap_or_else(|| panic!("`trol {command}` has no --port: {help}"));
+        for prefix in ["sim", "socket://", "listen://", "rapl:", "mars:", "c500c:"] {
+            assert!(
+                port.contains(prefix),
+                "`trol {command} --help` does not name {prefix} at --port: {port}"
+            );
+        }
     }
 }
 

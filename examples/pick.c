@@ -18,6 +18,9 @@ static int check(const char *what, TINT r)
 
 int main(void)
 {
+    /* A location's name is TUCCHAR (unsigned char) in the manual's API: an array of it
+     * takes the name without a cast. */
+    TUCCHAR test_001[] = "test_001";
     SLocData loc;
     int bad = 0;
 
@@ -30,14 +33,14 @@ int main(void)
 
     loc.tag = POS_CART; loc.data.cart[0] = -90.0;
     loc.numDims = 1;
-    bad |= check("TROLAppro(test_001, -90, 0)", TROLAppro("test_001", &loc, 0));
+    bad |= check("TROLAppro(test_001, -90, 0)", TROLAppro(test_001, &loc, 0));
         /* from READY (tool up) get above the object joint-interpolated first: a straight
          * line from there would turn the tool through the joint limits */
 
     /* The manual's example: */
-    bad |= check("TROLAppro(test_001, -90, 1)", TROLAppro("test_001", &loc, 1));
+    bad |= check("TROLAppro(test_001, -90, 1)", TROLAppro(test_001, &loc, 1));
         /* approach along the tool x axis to 9 cm, in a straight line */
-    bad |= check("TROLMove(test_001, 1)", TROLMove("test_001", 1));
+    bad |= check("TROLMove(test_001, 1)", TROLMove(test_001, 1));
         /* move the TCP straight onto the object */
     bad |= check("TROLFinish(FINISH_WAIT)", TROLFinish(FINISH_WAIT));
         /* wait until the motion is done */

@@ -19,6 +19,7 @@ int main(void)
     int last = 0;
     TINT called, r;
     int bad = 0;
+    TUCCHAR nowhere[] = "nowhere"; /* a location's name is TUCCHAR in the manual's API */
 
     if (InitTROL(1) != INITTROL_SUCCESS) {
         fprintf(stderr, "InitTROL failed\n");
@@ -36,7 +37,7 @@ int main(void)
     bad |= (pos.numDims != 6 || pos.data.joint[0] < 0.49f || pos.data.joint[0] > 0.51f);
     pos.tag = POS_PREC;  bad |= TROLGetPosition(&pos, POS_ACT) != 0;       show("prec", &pos);
 
-    r = TROLMove("nowhere", 0);
+    r = TROLMove(nowhere, 0);
     called = TROLGetStatus(&last);
     printf("TROLMove(nowhere) -> %d; GetStatus: BIOS called %d, reason %d\n", r, called, last);
     bad |= (r != TROL_ERR_LOCATION || called != 0 || last != TROL_ERR_LOCATION);

@@ -272,3 +272,39 @@ fn the_readme_c_example_compiles_without_a_warning() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Every C example (examples/*.c) compiles with every warning an error (`-Wall -Wextra
+/// -Werror`): pick.c passed its location's name as a string to the manual's unsigned char
+/// name and warned (issue 68, item 4).
+#[test]
+fn the_c_examples_compile_without_a_warning() {
+    let root = common::cbuild::root();
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("trol-examples-c");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let mut seen = 0;
+    for entry in std::fs::read_dir(root.join("examples")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "c") {
+            continue;
+        }
+        seen += 1;
+        let out = std::process::Command::new(&cc)
+            .arg("-c")
+            .arg(&path)
+            .arg("-I")
+            .arg(root.join("include"))
+            .args(["-Wall", "-Wextra", "-Werror", "-o"])
+            .arg(dir.join("example.o"))
+            .output()
+            .expect("run the C compiler (cc)");
+        assert!(
+            out.status.success(),
+            "{} does not compile cleanly:\n{}",
+            path.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(seen >= 3, "only {seen} C examples found");
+}

@@ -86,9 +86,15 @@ fn the_help_names_every_controller() {
             .split(&format!(" {command} "))
             .nth(1)
             .unwrap_or_else(|| panic!("no `{command}` in {help}"));
-        let line = &line[..line.find(" rapl ").or(line.find(" link ")).unwrap_or(line.len())];
+        let line = &line[..line
+            .find(" rapl ")
+            .or(line.find(" link "))
+            .unwrap_or(line.len())];
         for name in names {
-            assert!(line.contains(name), "`{command}` does not name {name}: {line}");
+            assert!(
+                line.contains(name),
+                "`{command}` does not name {name}: {line}"
+            );
         }
     }
 }

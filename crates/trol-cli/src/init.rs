@@ -9,13 +9,18 @@ const CHECK: &str = "check that the controller is on and connected to this port,
                      port is the right one (`trol ports` lists them), and that the baud rate \
                      matches the controller's";
 
-/// Why the port did not open, with what to check; a port another program holds needs no
-/// cable hint: the message names the holder.
+/// Why the port did not open, with what to check; a port another program holds, or one
+/// whose error says what to do already, needs no cable hint.
 fn open_failed(e: trol::Error) -> String {
     match e {
         trol::Error::Setup(trol::SetupError::Port(trol_port::OpenError::Busy { .. })) => {
             e.to_string()
         }
+        // The port's own hint already says what to do (a name that is not there, a
+        // refusal, a socket nobody listens on).
+        trol::Error::Setup(trol::SetupError::Port(trol_port::OpenError::Io {
+            ref hint, ..
+        })) if !hint.is_empty() => e.to_string(),
         e => format!("{e}; {CHECK}"),
     }
 }

@@ -32,6 +32,46 @@ fn a_locations_folder_that_does_not_exist_is_refused_at_start() {
     assert!(err.contains("TROLSaveLocations creates the file"), "{err}");
 }
 
+/// The note that a locations file does not exist yet is said once per path, as notices are
+/// once each: the same misspelt name in another folder is said again (issue 68, item 3: it
+/// was said once per name ever, so a typo repeated elsewhere was a silent empty table).
+#[test]
+fn a_missing_locations_file_is_noted_once_for_each_path() {
+    let cache = scratch("notice-cache");
+    let run = |dir: &std::path::Path| {
+        std::fs::write(dir.join("list.trol"), "listl\n").unwrap();
+        let o = std::process::Command::new(common::TROL)
+            .args(["interp", "list.trol", "--locations", "lcoations.txt"])
+            .current_dir(dir)
+            .env_remove("TROL_CONFIG")
+            .env_remove("TROL_VERBOSE")
+            .env("XDG_CACHE_HOME", &cache)
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        let (_, err) = text(&o);
+        err
+    };
+    let (a, b) = (scratch("notice-a"), scratch("notice-b"));
+    let first = run(&a);
+    assert!(
+        first.contains("lcoations.txt does not exist yet"),
+        "{first}"
+    );
+    assert!(
+        first.contains(&a.join("lcoations.txt").display().to_string()),
+        "{first}"
+    );
+    // The same folder again: said already.
+    assert!(!run(&a).contains("does not exist yet"));
+    // Another folder, the same name: its own path, said.
+    let other = run(&b);
+    assert!(
+        other.contains(&b.join("lcoations.txt").display().to_string()),
+        "{other}"
+    );
+}
+
 /// After Home the arm stands stretched upright at the edge of its reach: a jog there is out
 /// of reach, and the hint says what goes instead, which then works.
 #[test]
@@ -57,4 +97,36 @@ fn a_jog_out_of_reach_after_home_says_what_to_do() {
     );
     let (out, err) = text(&o);
     assert!(o.status.success(), "{out}\n{err}");
+}
+
+/// A port that is not there says the name it is near and where the ports are; a help topic
+/// misspelt, the command it is near (issue 68, item 3: `help hme` and `--port Sim` said
+/// nothing to go on; `trol interp` with a wrong device said less than `trol init`).
+#[test]
+fn a_misspelt_port_or_help_topic_suggests_what_is_near() {
+    let dir = scratch("misspelt");
+    let o = trol(&dir, &["interp", "--port", "Sim"], "home 0\n");
+    let (_, err) = text(&o);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("did you mean `sim` (the embedded simulator)?"),
+        "{err}"
+    );
+    for args in [
+        &["interp", "--port", "/dev/ttyNOPE0"][..],
+        &["init", "--port", "/dev/ttyNOPE0"],
+    ] {
+        let o = trol(&dir, args, "home 0\n");
+        let (_, err) = text(&o);
+        assert!(
+            err.contains("serial ports: ") || err.contains("shows no serial port"),
+            "{args:?}: {err}"
+        );
+    }
+    let o = trol(&dir, &["interp", "--port", "marz:/dev/ttyUSB0"], "home 0\n");
+    let (_, err) = text(&o);
+    assert!(err.contains("did you mean `mars:/dev/ttyUSB0`?"), "{err}");
+    let o = trol(&dir, &["interp"], "help hme\n");
+    let (_, err) = text(&o);
+    assert!(err.contains("did you mean `Home`?"), "{err}");
 }

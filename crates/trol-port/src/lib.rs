@@ -132,14 +132,93 @@ pub enum OpenError {
         holders: Vec<Holder>,
     },
     /// The operating system refused.
-    #[error("cannot open port '{name}': {source}")]
+    #[error("cannot open port '{name}': {source}{hint}")]
     Io {
         /// The name given.
         name: String,
         /// The cause.
         #[source]
         source: io::Error,
+        /// What to do about it ([`open_hint`]), led by "; ", or empty.
+        hint: String,
     },
+}
+
+impl OpenError {
+    /// The system's refusal to open `name`, with what to do about it.
+    pub fn io(name: &str, source: io::Error) -> OpenError {
+        let hint = open_hint(name, &source, &serial::list().unwrap_or_default());
+        OpenError::Io {
+            name: name.to_string(),
+            source,
+            hint,
+        }
+    }
+}
+
+/// The names a port name may be a slip of: the embedded simulator, the real controllers'
+/// prefixes and the socket schemes.
+const KNOWN: [&str; 6] = ["sim", "rapl:", "mars:", "c500c:", "socket://", "listen://"];
+
+/// What to do when `name` could not be opened for `why`, given this machine's serial ports
+/// (`ports`: name and description, as `trol ports` lists them): led by "; ", else empty.
+/// A name that does not exist gets the nearest known name or device ("did you mean"), and
+/// where to find the devices; a refusal, the group that gives access; a socket nobody
+/// listens on, what to start.
+pub fn open_hint(name: &str, why: &io::Error, ports: &[(String, String)]) -> String {
+    match why.kind() {
+        io::ErrorKind::NotFound if !name.contains("://") => {
+            // A prefix's slip is the part before its `:` (`mars/dev/...` is no slip of ours).
+            let head = name.split_inclusive(':').next().unwrap_or(name);
+            let nearest = KNOWN
+                .iter()
+                .map(|k| {
+                    (
+                        strsim::levenshtein(&head.to_ascii_lowercase(), k),
+                        k.to_string(),
+                        *k,
+                    )
+                })
+                .chain(
+                    ports
+                        .iter()
+                        .map(|(p, _)| (strsim::levenshtein(name, p), p.clone(), "")),
+                )
+                .filter(|(d, _, _)| *d <= 2)
+                .min_by_key(|(d, _, _)| *d);
+            let guess = match nearest {
+                Some((_, _, k)) if !k.is_empty() && k.ends_with(':') => {
+                    format!(" did you mean `{k}{}`?", &name[head.len()..])
+                }
+                Some((_, p, "sim")) => format!(" did you mean `{p}` (the embedded simulator)?"),
+                Some((_, p, _)) => format!(" did you mean `{p}`?"),
+                None => String::new(),
+            };
+            let listed = if ports.is_empty() {
+                "this machine shows no serial port (is the adapter plugged in?)".to_string()
+            } else {
+                format!(
+                    "this machine's serial ports: {} (`trol ports` says more)",
+                    ports
+                        .iter()
+                        .map(|(p, _)| p.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            };
+            format!(";{guess} {listed}")
+        }
+        io::ErrorKind::PermissionDenied => format!(
+            "; this user may not open it: add the user to the group that owns it (`ls -l \
+             {name}`; usually dialout or uucp) and log in again"
+        ),
+        io::ErrorKind::ConnectionRefused => {
+            "; nothing listens there: start the TROL server first (`trol sim --port \
+             listen://HOST:PORT`, or `trol gateway --port listen://HOST:PORT`)"
+                .to_string()
+        }
+        _ => String::new(),
+    }
 }
 
 /// Open the port called `name`: `socket://HOST:PORT`, `listen://HOST:PORT`, or the path of a
@@ -148,18 +227,14 @@ pub enum OpenError {
 pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenError> {
     if let Some(addr) = name.strip_prefix("socket://") {
         return Ok(Box::new(
-            tcp::TcpLine::connect(addr, settings.open_timeout).map_err(|source| OpenError::Io {
-                name: name.to_string(),
-                source,
-            })?,
+            tcp::TcpLine::connect(addr, settings.open_timeout)
+                .map_err(|source| OpenError::io(name, source))?,
         ));
     }
     if let Some(addr) = name.strip_prefix("listen://") {
         return Ok(Box::new(
-            tcp::TcpLine::listen(addr, settings.open_timeout).map_err(|source| OpenError::Io {
-                name: name.to_string(),
-                source,
-            })?,
+            tcp::TcpLine::listen(addr, settings.open_timeout)
+                .map_err(|source| OpenError::io(name, source))?,
         ));
     }
     if name.contains("://") {
@@ -195,10 +270,7 @@ pub fn open(name: &str, settings: &PortSettings) -> Result<Box<dyn Port>, OpenEr
                 holders: holders(name),
             }
         } else {
-            OpenError::Io {
-                name: name.to_string(),
-                source,
-            }
+            OpenError::io(name, source)
         }
     })?))
 }
@@ -306,4 +378,51 @@ fn master_of(fdinfo: &Path, index: u32) -> bool {
 /// Time left until `deadline`, zero when it has passed.
 pub(crate) fn remaining(deadline: Instant) -> Duration {
     deadline.saturating_duration_since(Instant::now())
+}
+
+#[cfg(test)]
+mod hint_tests {
+    use super::*;
+
+    fn not_found() -> io::Error {
+        io::Error::from(io::ErrorKind::NotFound)
+    }
+
+    #[test]
+    fn a_name_that_does_not_exist_gets_the_nearest_known_one_and_the_ports() {
+        let ports = vec![("/dev/ttyUSB0".to_string(), "USB serial".to_string())];
+        let h = open_hint("Sim", &not_found(), &ports);
+        assert!(
+            h.contains("did you mean `sim` (the embedded simulator)?"),
+            "{h}"
+        );
+        assert!(
+            h.contains("this machine's serial ports: /dev/ttyUSB0"),
+            "{h}"
+        );
+        let h = open_hint("/dev/ttyUSB7", &not_found(), &ports);
+        assert!(h.contains("did you mean `/dev/ttyUSB0`?"), "{h}");
+        let h = open_hint("marz:/dev/ttyUSB0", &not_found(), &ports);
+        assert!(h.contains("did you mean `mars:/dev/ttyUSB0`?"), "{h}");
+        let h = open_hint("/dev/somewhere/else", &not_found(), &[]);
+        assert!(!h.contains("did you mean"), "{h}");
+        assert!(h.contains("shows no serial port"), "{h}");
+    }
+
+    #[test]
+    fn a_refusal_names_the_group_and_a_refused_socket_what_to_start() {
+        let h = open_hint(
+            "/dev/ttyS0",
+            &io::Error::from(io::ErrorKind::PermissionDenied),
+            &[],
+        );
+        assert!(h.contains("dialout"), "{h}");
+        let h = open_hint(
+            "socket://127.0.0.1:9",
+            &io::Error::from(io::ErrorKind::ConnectionRefused),
+            &[],
+        );
+        assert!(h.contains("nothing listens there"), "{h}");
+        assert_eq!(open_hint("x", &io::Error::other("odd"), &[]), "");
+    }
 }

@@ -578,3 +578,23 @@ def test_teaching_stores_lists_deletes_and_survives_a_restart(tmp_path: Path) ->
     finally:
         proc.kill()
         proc.wait()
+
+
+def test_a_refusal_says_what_to_do_next_as_the_interpreter_does(robot: trol.Robot) -> None:
+    # Issue 68, item 3: a jog after home() (the arm stretched upright, at the edge of its
+    # reach) said only BIOS_OUT_OF_REACH; the interpreter and the pendant say what goes.
+    robot.home()
+    with pytest.raises(trol.RefusedError) as refused:
+        robot.jog([0.0, 0.0, 100.0], straight=True)
+    assert refused.value.name == "BIOS_OUT_OF_REACH"
+    assert refused.value.next_step and "robot.jog([0, 0, -100], straight=True)" in refused.value.next_step
+    assert refused.value.next_step in str(refused.value)
+    # The step it names works.
+    robot.jog([0.0, 0.0, -100.0], straight=True)
+    robot.finish()
+
+
+def test_a_misspelt_port_suggests_the_name_it_is_near() -> None:
+    with pytest.raises(trol.SetupError) as failed:
+        trol.Robot.open("Sim")
+    assert "did you mean `sim` (the embedded simulator)?" in str(failed.value), failed.value

@@ -169,16 +169,7 @@ pub fn parse(tokens: &[Token], line_len: usize, catalog: &Catalog) -> Result<Act
         _ => {}
     }
     let Some(def) = catalog.find(word).copied() else {
-        let mut names: Vec<&str> = catalog.iter().map(|d| d.short_name()).collect();
-        names.extend(OWN.iter().map(|o| o.0));
-        let bare = lower.strip_prefix("trol").unwrap_or(&lower);
-        let hint = names
-            .iter()
-            .map(|n| (edit_distance(&n.to_ascii_lowercase(), bare), n))
-            .filter(|(d, _)| *d <= 2)
-            .min_by_key(|(d, _)| *d)
-            .map(|(_, n)| format!("; did you mean `{n}`?"))
-            .unwrap_or_default();
+        let hint = did_you_mean(catalog, &lower);
         return Err(SyntaxError::at(
             first,
             format!("unknown command `{word}`{hint} (`help` lists the commands)"),
@@ -193,22 +184,19 @@ pub fn parse(tokens: &[Token], line_len: usize, catalog: &Catalog) -> Result<Act
     Ok(Action::Call(def, values))
 }
 
-/// Levenshtein distance, for "did you mean".
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for j in 0..b.len() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != b[j]))
-                .min(row[j] + 1)
-                .min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
+/// "; did you mean `Home`?" for a command name `word` (lower case, with or without `trol`)
+/// within two edits of one of the catalog's or the interpreter's own, else nothing.
+pub fn did_you_mean(catalog: &Catalog, word: &str) -> String {
+    let mut names: Vec<&str> = catalog.iter().map(|d| d.short_name()).collect();
+    names.extend(OWN.iter().map(|o| o.0));
+    let bare = word.strip_prefix("trol").unwrap_or(word);
+    names
+        .iter()
+        .map(|n| (strsim::levenshtein(&n.to_ascii_lowercase(), bare), n))
+        .filter(|(d, _)| *d <= 2)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, n)| format!("; did you mean `{n}`?"))
+        .unwrap_or_default()
 }
 
 struct Cursor<'a> {

@@ -540,7 +540,12 @@ Results print as the value and its name (0 (success), -1 (BIOS_NOT_HOMED), ...).
             OWN.iter()
                 .find(|o| o.0.eq_ignore_ascii_case(t))
                 .map(|(n, a, w)| format!("{n} {a}: {w}"))
-                .ok_or_else(|| format!("no command `{t}` (`help` lists them)"))
+                .ok_or_else(|| {
+                    format!(
+                        "no command `{t}`{} (`help` lists them)",
+                        commands::did_you_mean(catalog, &t.to_ascii_lowercase())
+                    )
+                })
         }
     }
 }

@@ -66,7 +66,8 @@ pub const TROL_ERR_ARG_RANGE: Code = Code(-32003);
 /// No connection: the C API was called before InitTROL succeeded, or after CleanupTROL;
 /// nothing was sent (host; not in the manual, where such a call failed as TROL_ERR_COMM).
 pub const TROL_ERR_NOT_INIT: Code = Code(-32004);
-/// The controller does not know the command code (controller).
+/// The controller does not know the command code, or its robot cannot do the command
+/// (controller).
 pub const TROL_ERR_UNKNOWN: Code = Code(-32051);
 /// The request has not the size its command expects (controller).
 pub const TROL_ERR_BAD_CSIZE: Code = Code(-32052);
@@ -119,7 +120,9 @@ pub const TROL_CODES: &CodeTable = &[
     CodeInfo {
         value: TROL_ERR_UNKNOWN.0,
         name: "TROL_ERR_UNKNOWN",
-        meaning: "the controller does not know the command code",
+        meaning: "the controller cannot do this command: it does not know its code, or its \
+                  robot cannot do it (a C500 in RAPL-II reads no gripper; the controller's \
+                  page in docs/ says what it does); nothing ran",
     },
     CodeInfo {
         value: TROL_ERR_BAD_CSIZE.0,

@@ -187,12 +187,14 @@ impl Connect {
             robot.set_delay(delay)?;
         }
         // A locations file that is not there yet is an empty table (docs/teach.md): said
-        // once, so that a misspelt name is not a silent empty table.
+        // once per path (the notice names it whole, and notices are said once each), so that
+        // a misspelt name is not a silent empty table, in whatever folder it is misspelt.
         if let Some(file) = self.cfg.locations.as_ref().filter(|f| !f.exists()) {
+            let whole = std::path::absolute(file).unwrap_or_else(|_| file.clone());
             robot.add_notice(&format!(
                 "{} does not exist yet: the location table starts empty, and \
                  TROLSaveLocations creates the file",
-                file.display()
+                whole.display()
             ));
         }
         if self.activate {

@@ -21,6 +21,11 @@ fn open_failed(e: trol::Error) -> String {
         trol::Error::Setup(trol::SetupError::Port(trol_port::OpenError::Io {
             ref hint, ..
         })) if !hint.is_empty() => e.to_string(),
+        // The controller answered (it refused a step of the activation, or speaks another
+        // version): the line is fine, and the message says what to do.
+        trol::Error::Refused { .. }
+        | trol::Error::Argument(_)
+        | trol::Error::Setup(trol::SetupError::Incompatible { .. }) => e.to_string(),
         e => format!("{e}; {CHECK}"),
     }
 }

@@ -568,8 +568,14 @@ fn run_c500c(a: &SimArgs) -> Result<(), String> {
             p.display()
         );
     }
+    let print = if variant == "default" {
+        "trol sim --c500c --print-profile".to_string()
+    } else {
+        format!("trol sim --c500c --variant {variant} --print-profile")
+    };
     say!(
-        "  drive it with: port c500c:{name} in trol.cfg (c500c-profile: `trol sim --c500c          --print-profile` prints the one that matches)"
+        "  drive it with: port c500c:{name} in trol.cfg (c500c-profile: `{print}` prints \
+         the one that matches)"
     );
     let unit = std::sync::Arc::new(std::sync::Mutex::new(unit));
     if a.console {

@@ -1126,3 +1126,35 @@ int main(void)
         );
     }
 }
+
+/// The simulator's banner names the command that prints its variant's profile, whole and
+/// without a run of spaces inside it (issue 68, item 4: a wrapped source line had put ten
+/// spaces into the command), and that command runs.
+#[test]
+fn the_banner_names_the_print_profile_command_of_its_variant() {
+    let dir = scratch("c500c-banner");
+    let sim = Background::start(
+        &dir,
+        &["sim", "--c500c", "--variant", "echo-off", "--time-scale", "10"],
+        "serving on ",
+    );
+    let until = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    let mut seen = Vec::new();
+    let line = loop {
+        seen.extend(sim.output());
+        if let Some(l) = seen.iter().find(|l| l.contains("drive it with")) {
+            break l.clone();
+        }
+        assert!(std::time::Instant::now() < until, "{seen:?}");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let command = line.split('`').nth(1).unwrap();
+    assert_eq!(
+        command,
+        "trol sim --c500c --variant echo-off --print-profile"
+    );
+    let args: Vec<&str> = command.split(' ').skip(1).collect();
+    let out = trol(&dir, &args, "");
+    assert!(out.status.success(), "{}", text(&out).1);
+    assert!(text(&out).0.contains("baud = "), "{}", text(&out).0);
+}

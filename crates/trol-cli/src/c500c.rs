@@ -35,12 +35,17 @@ Examples:
     /// joint turned). Every byte goes to --out.
     #[command(after_help = "\
 Examples:
-  trol c500c step motion-return --controller /dev/ttyUSB0 --profile c500c.toml --out step.txt
-  trol c500c step world-angles --controller /dev/ttyUSB0 --profile c500c.toml --out angles.txt
-  trol c500c step pulses --controller /dev/ttyUSB0 --profile c500c.toml --out pulses.txt
-  trol c500c step home-pose --controller /dev/ttyUSB0 --profile c500c.toml --out home.txt
+  trol c500c step motion-return --controller /dev/ttyUSB0 \\
+    --profile c500c.toml --out step.txt
+  trol c500c step world-angles --controller /dev/ttyUSB0 \\
+    --profile c500c.toml --out angles.txt
+  trol c500c step pulses --controller /dev/ttyUSB0 \\
+    --profile c500c.toml --out pulses.txt
+  trol c500c step home-pose --controller /dev/ttyUSB0 \\
+    --profile c500c.toml --out home.txt
   trol sim --c500c --homed &    # a simulated C500C; then:
-  trol c500c step motion-return --controller /dev/pts/4 --profile c500c.toml --out step.txt --yes")]
+  trol c500c step motion-return --controller /dev/pts/4 \\
+    --profile c500c.toml --out step.txt --yes")]
     Step(StepArgs),
     /// The application's location variables (precision points and cartesian locations, as
     /// ash prints them) into a text file on the PC. Reads only; connects as `c500c:` does

@@ -18,9 +18,9 @@ use crate::common::{
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol demo                      # embedded simulator, 5 times faster than real time
+  trol demo                      # embedded simulator, 5 times real time
   trol demo --time-scale 1       # in real time
-  trol demo --port /dev/ttyUSB0  # a real controller (location test_001 must exist there)")]
+  trol demo --port /dev/ttyUSB0  # a real controller, with location test_001")]
 pub struct DemoArgs {
     #[command(flatten)]
     conn: Conn,

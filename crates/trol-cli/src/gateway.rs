@@ -16,13 +16,20 @@ use crate::link::{Side, open_side};
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol gateway --controller /dev/ttyUSB0 --profile c500.toml            # TROL on a new pty
+  # TROL on a new pty (or on a socket), driving a C500:
+  trol gateway --controller /dev/ttyUSB0 --profile c500.toml
   trol gateway --controller /dev/ttyUSB0 --port listen://127.0.0.1:7000
-  trol sim --rapl &                                                      # a simulated C500 ...
-  trol gateway --controller /dev/pts/4 --profile <(trol sim --rapl --print-profile)
-  trol gateway --controller mars:/dev/ttyUSB0 --profile crates/trol-mars/profiles/crs93.toml  # a MARS 8
-  trol gateway --controller c500c:/dev/ttyUSB0 --profile c500c.toml     # a C500C (docs/c500c.md)
-  trol gateway --controller /dev/ttyUSB0 --profile c500.toml --journal c500.journal  # exactly once across restarts
+  # a simulated C500, and TROL in front of it:
+  trol sim --rapl &
+  trol gateway --controller /dev/pts/4 \\
+    --profile <(trol sim --rapl --print-profile)
+  # an A465 on a MARS 8; one on its C500C (docs/c500c.md):
+  trol gateway --controller mars:/dev/ttyUSB0 \\
+    --profile crates/trol-mars/profiles/crs93.toml
+  trol gateway --controller c500c:/dev/ttyUSB0 --profile c500c.toml
+  # each motion runs exactly once across restarts of the gateway:
+  trol gateway --controller /dev/ttyUSB0 --profile c500.toml \\
+    --journal c500.journal
 
 The first line of output names where TROL clients connect: `trol gateway: serving on NAME`.
 Activate the server there with `trol init --port NAME`.")]

@@ -13,10 +13,12 @@ use trol_proto::link::LinkConfig;
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol link /dev/ttyS0 listen://7000             # serial controller, applications on this machine over TCP
-  trol link /dev/ttyS0 listen://0.0.0.0:7000     # ... and from other machines (no authentication!)
-  trol link /dev/ttyUSB0 /dev/ttyUSB1             # serial to serial
-  trol link /dev/pts/3 pty                        # to a new pty (its path is printed)
+  # a serial controller; applications on this machine over TCP:
+  trol link /dev/ttyS0 listen://7000
+  # ... and from other machines (no authentication!):
+  trol link /dev/ttyS0 listen://0.0.0.0:7000
+  trol link /dev/ttyUSB0 /dev/ttyUSB1  # serial to serial
+  trol link /dev/pts/3 pty             # to a new pty (its path is printed)
 
 The application then opens B's other end (socket://HOST:7000, the pty's path, ...).")]
 pub struct LinkArgs {

@@ -43,12 +43,12 @@ use clap::{Parser, Subcommand};
 #[derive(Parser)]
 #[command(name = "trol", version, long_about = None, after_help = "\
 Examples:
-  trol demo                                   # the manual's pick example on the simulator
-  trol interp                                 # type TROL commands
-  trol sim                                    # a simulated controller on a new pty
-  trol init --port /dev/pts/3                 # activate the controller's TROL server
-  trol interp script.trol --port /dev/pts/3   # run a script against it
-  trol cleanup --port /dev/pts/3              # end the server")]
+  trol demo                        # the manual's pick example, simulated
+  trol interp                      # type TROL commands
+  trol sim                         # a simulated controller on a new pty
+  trol init --port /dev/pts/3      # activate the controller's TROL server
+  trol interp pick.trol --port /dev/pts/3  # run a script against it
+  trol cleanup --port /dev/pts/3   # end the server")]
 struct Cli {
     /// More log output on stderr (-v info, -vv debug, -vvv trace); RUST_LOG also works.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
@@ -130,7 +130,7 @@ enum Command {
     /// Print the A465's URDF (links base_link, link_1..link_6, flange, tool0; joints
     /// joint_1..joint_6 with TROL's zero and directions), generated from the arm's model.
     #[command(
-        after_help = "Examples:\n  trol urdf > crs_a465.urdf      # for RViz, a description package, docs/ros2.md\n  trol urdf --srdf > crs_a465.srdf  # the pairs MoveIt need not check, beside it"
+        after_help = "Examples:\n  trol urdf > crs_a465.urdf         # for RViz and description packages\n  trol urdf --srdf > crs_a465.srdf  # for MoveIt, beside it (docs/ros2.md)"
     )]
     Urdf {
         /// Print the SRDF for MoveIt instead (the arm's group, READY, and the pairs of
@@ -142,7 +142,8 @@ enum Command {
     #[command(after_help = "\
 Examples:
   trol completions bash > ~/.local/share/bash-completion/completions/trol
-  trol completions zsh > ~/.zfunc/_trol          # with fpath+=(~/.zfunc) in ~/.zshrc
+  # zsh, with fpath+=(~/.zfunc) in ~/.zshrc:
+  trol completions zsh > ~/.zfunc/_trol
   trol completions fish > ~/.config/fish/completions/trol.fish")]
     Completions {
         /// The shell.

@@ -22,13 +22,14 @@ pub enum Rapl {
     /// kinematics). What was learned is written to --profile-out.
     #[command(after_help = "\
 Examples:
-  trol rapl probe --controller /dev/ttyUSB0 --out first.txt --profile-out contact.toml
-  trol rapl probe --controller /dev/ttyUSB0 --profile contact.toml --out poses.txt --poses 4 \\
-    --profile-out poses.toml
-  trol rapl probe --controller /dev/ttyUSB0 --profile poses.toml --out home.txt --home-pose \\
-    --profile-out homed.toml
-  trol rapl probe --controller /dev/ttyUSB0 --profile homed.toml --out steps.txt --measure \\
-    --profile-out c500.toml
+  trol rapl probe --controller /dev/ttyUSB0 --out first.txt \\
+    --profile-out contact.toml
+  trol rapl probe --controller /dev/ttyUSB0 --profile contact.toml \\
+    --out poses.txt --poses 4 --profile-out poses.toml
+  trol rapl probe --controller /dev/ttyUSB0 --profile poses.toml \\
+    --out home.txt --home-pose --profile-out homed.toml
+  trol rapl probe --controller /dev/ttyUSB0 --profile homed.toml \\
+    --out steps.txt --measure --profile-out c500.toml
 
 At each pose the probe waits for Enter (end of input stops the poses early). Keep the
 controller's tool the bare flange while probing: the fit assumes it.")]

@@ -18,8 +18,8 @@ use crate::link::{Side, open_side};
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol sim                                   # on a new pty; prints its path
-  trol sim --port listen://127.0.0.1:7000    # clients connect to socket://127.0.0.1:7000
+  trol sim                                 # on a new pty; prints its path
+  trol sim --port listen://127.0.0.1:7000  # clients: socket://127.0.0.1:7000
   trol sim --port /dev/ttyUSB1 --baud 38400 --locations examples/locations.txt
   trol sim --time-scale 20 --table-z -10 --homed
 

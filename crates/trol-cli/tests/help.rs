@@ -37,6 +37,19 @@ fn help_wraps_to_the_terminal() {
         &["rapl", "probe", "--help"],
         &["mars", "probe", "--help"],
         &["c500c", "probe", "--help"],
+        &["init", "--help"],
+        &["config", "--help"],
+        &["demo", "--help"],
+        &["trace", "--help"],
+        &["link", "--help"],
+        &["urdf", "--help"],
+        &["completions", "--help"],
+        &["rapl", "term", "--help"],
+        &["c500c", "step", "--help"],
+        &["c500c", "backup", "--help"],
+        &["c500c", "restore", "--help"],
+        &["ports", "--help"],
+        &["cleanup", "--help"],
     ] {
         let out = std::process::Command::new(common::TROL)
             .args(args)
@@ -46,13 +59,30 @@ fn help_wraps_to_the_terminal() {
             .unwrap();
         let (help, err) = text(&out);
         assert!(out.status.success(), "{args:?}: {err}");
-        for line in help.lines() {
+        // Clap writes the usage line whole (a shell command; it does not wrap it).
+        for line in help.lines().filter(|l| !l.starts_with("Usage:")) {
             assert!(
                 line.chars().count() <= 80,
                 "`trol {}` has a line of {} columns:\n{line}",
                 args.join(" "),
                 line.chars().count()
             );
+        }
+        // An example whose comment wrapped leaves a line of prose among the examples
+        // (issue 68, item 4: "  (or the simulator)"): every line of them is a command.
+        // A command may go on after a `\`, and a comment may stand on a line of its own.
+        for block in help.split("Examples:\n").skip(1) {
+            let mut continued = false;
+            for line in block.lines().take_while(|l| !l.is_empty()) {
+                let ok = line.starts_with("  ")
+                    && (continued || line.contains("trol") || line.trim_start().starts_with('#'));
+                assert!(
+                    ok,
+                    "`trol {}`: an example's comment wrapped:\n{line}",
+                    args.join(" ")
+                );
+                continued = line.ends_with('\\');
+            }
         }
     }
 }

@@ -24,9 +24,9 @@ use commands::{Action, OWN, usage};
 #[derive(Args, Debug)]
 #[command(after_help = "\
 Examples:
-  trol interp                          # interactive, against trol.cfg's port (or the simulator)
-  trol interp pick.trol                # run a script, stop at the first failed command
-  trol interp -k pick.trol             # run every line, exit 1 if any failed
+  trol interp               # interactive, on trol.cfg's port (or the simulator)
+  trol interp pick.trol     # run a script, stop at the first failed command
+  trol interp -k pick.trol  # run every line, exit 1 if any failed
   echo 'home 0' | trol interp --port socket://localhost:7000
 
 A line is a command and its arguments; the manual's pick example, with

@@ -6,6 +6,8 @@
 # target/py, a virtual environment), npm Playwright (into tests/browser/node_modules), and
 # apt Debian's Chromium and libmodbus-dev if they are missing and this runs as root.
 set -euo pipefail
+# The utilities wrap their messages to $COLUMNS where it is set; the tests read them whole.
+unset COLUMNS
 cd "$(dirname "$0")/.."
 
 # Every stage runs, even after one failed; the failures are listed at the end (and the

@@ -387,10 +387,54 @@ pub fn say(line: std::fmt::Arguments) {
 }
 
 /// A line to standard error; a failed write (nobody reads it) is dropped, never a panic.
+/// On a terminal (or where $COLUMNS is set) it is wrapped at word boundaries to the width
+/// ([`wrapped`]); to a pipe or a file it goes whole, for the program that reads it.
 pub fn tell(line: std::fmt::Arguments) {
-    use std::io::Write;
-    let mut err = std::io::stderr().lock();
-    let _ = writeln!(err, "{line}").and_then(|()| err.flush());
+    use std::io::{IsTerminal, Write};
+    let err = std::io::stderr();
+    let width = wrap_width(err.is_terminal(), || {
+        terminal_size::terminal_size_of(std::io::stderr()).map(|(w, _)| usize::from(w.0))
+    });
+    let text = wrapped(&line.to_string(), width);
+    let mut err = err.lock();
+    let _ = writeln!(err, "{text}").and_then(|()| err.flush());
+}
+
+/// The width messages are wrapped to: $COLUMNS where it is set (as clap takes it for
+/// `--help`), else the terminal's (`terminal`) where the stream is one; None (whole lines)
+/// for a pipe or a file.
+pub fn wrap_width(is_terminal: bool, terminal: impl FnOnce() -> Option<usize>) -> Option<usize> {
+    let columns = std::env::var("COLUMNS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok());
+    columns
+        .or_else(|| if is_terminal { terminal() } else { None })
+        .map(|w| w.clamp(20, 500))
+}
+
+/// `text` with each line longer than `width` broken at word boundaries, its continuation
+/// indented two more than the line (`hint: ...` goes on under its text); unchanged without a
+/// width.
+pub fn wrapped(text: &str, width: Option<usize>) -> String {
+    let Some(width) = width else {
+        return text.to_string();
+    };
+    text.split('\n')
+        .map(|line| {
+            if line.chars().count() <= width {
+                return line.to_string();
+            }
+            let indent: String = line.chars().take_while(|c| *c == ' ').collect();
+            let more = format!("{indent}  ");
+            // Between words only: a path or a command stays whole.
+            let options = textwrap::Options::new(width)
+                .subsequent_indent(&more)
+                .word_separator(textwrap::WordSeparator::AsciiSpace)
+                .break_words(false);
+            textwrap::fill(line, options)
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// Whether nobody reads stdout any more: the demo and the interpreter then halt the arm and
@@ -530,4 +574,26 @@ pub fn show_config(conn: &Conn) -> Result<(), String> {
         crate::say!("{key:<13} {value:<30} ({src})");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod wrap_tests {
+    use super::wrapped;
+
+    #[test]
+    fn long_lines_break_between_words_and_go_on_indented() {
+        let text = "stdin:1: error: TROLHome failed: cannot open port '/dev/ttyUSB7': No such \
+                    file or directory (docs/c500.md)\n  hint: is the controller there?";
+        let out = wrapped(text, Some(40));
+        for line in out.lines() {
+            assert!(line.chars().count() <= 40, "{line}");
+        }
+        // No word is cut: the words are the text's.
+        let words = |t: &str| t.split_whitespace().map(str::to_string).collect::<Vec<_>>();
+        assert_eq!(words(&out), words(text));
+        assert!(out.lines().nth(1).unwrap().starts_with("  "), "{out}");
+        // A short line, and no width, stay as they are.
+        assert_eq!(wrapped("short", Some(40)), "short");
+        assert_eq!(wrapped(text, None), text);
+    }
 }

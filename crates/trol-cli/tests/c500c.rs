@@ -1135,7 +1135,14 @@ fn the_banner_names_the_print_profile_command_of_its_variant() {
     let dir = scratch("c500c-banner");
     let sim = Background::start(
         &dir,
-        &["sim", "--c500c", "--variant", "echo-off", "--time-scale", "10"],
+        &[
+            "sim",
+            "--c500c",
+            "--variant",
+            "echo-off",
+            "--time-scale",
+            "10",
+        ],
         "serving on ",
     );
     let until = std::time::Instant::now() + std::time::Duration::from_secs(30);

@@ -130,3 +130,43 @@ fn a_misspelt_port_or_help_topic_suggests_what_is_near() {
     let (_, err) = text(&o);
     assert!(err.contains("did you mean `Home`?"), "{err}");
 }
+
+/// On a terminal of 60 columns (COLUMNS, as a terminal gives it) the interpreter's errors and
+/// hints break between words and go on indented (issue 68, item 4: they broke mid-word at
+/// the terminal's edge); to a pipe without COLUMNS they stay whole lines.
+#[test]
+fn errors_and_hints_wrap_between_words_to_the_terminal_s_width() {
+    let dir = scratch("wrap-60");
+    let run = |columns: Option<&str>| {
+        let mut c = std::process::Command::new(common::TROL);
+        c.args(["interp", "--port", "/dev/ttyNOPE0"])
+            .current_dir(&dir)
+            .env_remove("TROL_CONFIG")
+            .env("TROL_VERBOSE", "1")
+            .env_remove("COLUMNS")
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        if let Some(w) = columns {
+            c.env("COLUMNS", w);
+        }
+        let mut child = c.spawn().unwrap();
+        use std::io::Write;
+        let _ = child.stdin.take().unwrap().write_all(b"home 0\n");
+        let o = child.wait_with_output().unwrap();
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let whole = run(None);
+    let narrow = run(Some("60"));
+    assert!(whole.lines().any(|l| l.chars().count() > 60), "{whole}");
+    for line in narrow.lines() {
+        assert!(
+            line.chars().count() <= 60,
+            "a line of {}: {line}",
+            line.chars().count()
+        );
+    }
+    // The same words, none cut.
+    let words = |t: &str| t.split_whitespace().map(str::to_string).collect::<Vec<_>>();
+    assert_eq!(words(&narrow), words(&whole));
+}

@@ -563,7 +563,7 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
     catch_interrupts();
     let interactive = a.script.is_none() && std::io::stdin().is_terminal();
     if interactive {
-        say!(
+        let banner = format!(
             "configuration: {} (port {}, baud {}; `trol config` shows every value)",
             match &source {
                 trol::config::ConfigSource::Defaults => "the defaults".to_string(),
@@ -572,6 +572,8 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
             cfg.port,
             cfg.baud
         );
+        let width = trol_cli::common::wrap_width(true, || Some(textwrap::termwidth()));
+        say!("{}", trol_cli::common::wrapped(&banner, width));
         return repl(&mut session);
     }
     let (name, reader): (String, Box<dyn BufRead>) = match &a.script {

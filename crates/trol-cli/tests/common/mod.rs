@@ -28,6 +28,8 @@ pub fn trol(dir: &Path, args: &[&str], stdin: &str) -> Output {
         .current_dir(dir)
         .env_remove("TROL_CONFIG")
         .env_remove("RUST_LOG")
+        // Messages whole, as to a pipe, whatever the shell exports (COLUMNS wraps them).
+        .env_remove("COLUMNS")
         // Every notice at every start: the output does not depend on the cache folder.
         .env("TROL_VERBOSE", "1")
         .stdin(Stdio::piped())

@@ -231,7 +231,7 @@ python_setup() {
     python3 -m venv target/py &&
     no_rust bash -c '! command -v cargo && ! command -v rustc' >/dev/null &&
     no_rust "$PY" -m pip install --quiet --disable-pip-version-check \
-      target/wheels/trol-*.whl pytest pytest-timeout pytest-xdist numpy mypy matplotlib &&
+      target/wheels/trol_robot-*.whl pytest pytest-timeout pytest-xdist numpy mypy matplotlib &&
     # The module is the wheel's, not the source tree's.
     no_rust "$PY" -c 'import trol, sys; assert "/target/py/" in trol.__file__, trol.__file__; print("   trol for Python from", trol.__file__)'
 }

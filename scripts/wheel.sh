@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Build TROL for Python as a binary wheel into target/wheels/ (issue 44, item 1).
 #
-#   bash scripts/wheel.sh            # target/wheels/trol-0.1.0-cp310-abi3-manylinux_2_NN_x86_64.whl
-#   pip install target/wheels/trol-*.whl
+#   bash scripts/wheel.sh            # target/wheels/trol_robot-0.1.0-cp310-abi3-manylinux_2_NN_x86_64.whl
+#   pip install target/wheels/trol_robot-*.whl
 #
 # One wheel serves CPython 3.10 and later (PyO3's abi3). It carries the whole library: the
 # native module links TROL's Rust crates in (the client, the embedded simulator, the live
@@ -29,7 +29,7 @@ if [ ! -f "$venv/.installed" ] || [ ! -x "$venv/bin/maturin" ] ||
   touch "$venv/.installed"
 fi
 mkdir -p "$out"
-rm -f "$out"/trol-*.whl
+rm -f "$out"/trol_robot-*.whl
 echo "scripts/wheel.sh: building the wheel (release build of the Rust extension; a few minutes the first time)"
 started=$SECONDS
 # maturin prints cargo's progress (one line per crate compiled), so a long first build
@@ -37,5 +37,5 @@ started=$SECONDS
 "$venv/bin/maturin" build --release --locked --strip \
   --manifest-path crates/trol-py/Cargo.toml --out "$out" \
   --interpreter "$venv/bin/python"
-wheel=$(ls "$out"/trol-*.whl)
+wheel=$(ls "$out"/trol_robot-*.whl)
 echo "scripts/wheel.sh: $wheel ($(du -k "$wheel" | cut -f1) KiB, $((SECONDS - started)) s)"

@@ -387,29 +387,34 @@ pub fn say(line: std::fmt::Arguments) {
 }
 
 /// A line to standard error; a failed write (nobody reads it) is dropped, never a panic.
-/// On a terminal (or where $COLUMNS is set) it is wrapped at word boundaries to the width
-/// ([`wrapped`]); to a pipe or a file it goes whole, for the program that reads it.
+/// On a terminal it is wrapped at word boundaries to the width ([`wrapped`]); to a pipe or a
+/// file it goes whole, for the program that reads it (a test harness may set $COLUMNS).
 pub fn tell(line: std::fmt::Arguments) {
     use std::io::{IsTerminal, Write};
     let err = std::io::stderr();
-    let width = wrap_width(err.is_terminal(), || {
-        terminal_size::terminal_size_of(std::io::stderr()).map(|(w, _)| usize::from(w.0))
-    });
+    let width = if err.is_terminal() {
+        wrap_width(true, || {
+            terminal_size::terminal_size_of(std::io::stderr()).map(|(w, _)| usize::from(w.0))
+        })
+    } else {
+        None
+    };
     let text = wrapped(&line.to_string(), width);
     let mut err = err.lock();
     let _ = writeln!(err, "{text}").and_then(|()| err.flush());
 }
 
-/// The width messages are wrapped to: $COLUMNS where it is set (as clap takes it for
-/// `--help`), else the terminal's (`terminal`) where the stream is one; None (whole lines)
-/// for a pipe or a file.
+/// The width messages to a terminal are wrapped to: $COLUMNS where it is set (as clap takes
+/// it for `--help`), else the terminal's (`terminal`); None (whole lines) for a stream that
+/// is no terminal.
 pub fn wrap_width(is_terminal: bool, terminal: impl FnOnce() -> Option<usize>) -> Option<usize> {
     let columns = std::env::var("COLUMNS")
         .ok()
         .and_then(|v| v.trim().parse::<usize>().ok());
-    columns
-        .or_else(|| if is_terminal { terminal() } else { None })
-        .map(|w| w.clamp(20, 500))
+    if !is_terminal {
+        return None;
+    }
+    columns.or_else(terminal).map(|w| w.clamp(20, 500))
 }
 
 /// `text` with each line longer than `width` broken at word boundaries, its continuation
@@ -430,6 +435,7 @@ pub fn wrapped(text: &str, width: Option<usize>) -> String {
             let options = textwrap::Options::new(width)
                 .subsequent_indent(&more)
                 .word_separator(textwrap::WordSeparator::AsciiSpace)
+                .word_splitter(textwrap::WordSplitter::NoHyphenation)
                 .break_words(false);
             textwrap::fill(line, options)
         })
@@ -583,7 +589,8 @@ mod wrap_tests {
     #[test]
     fn long_lines_break_between_words_and_go_on_indented() {
         let text = "stdin:1: error: TROLHome failed: cannot open port '/dev/ttyUSB7': No such \
-                    file or directory (docs/c500.md)\n  hint: is the controller there?";
+                    file or directory (docs/c500.md); one of error-bracketed, echo-off\n  \
+                    hint: is the controller there?";
         let out = wrapped(text, Some(40));
         for line in out.lines() {
             assert!(line.chars().count() <= 40, "{line}");

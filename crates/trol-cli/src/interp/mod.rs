@@ -572,7 +572,9 @@ pub fn run(a: InterpArgs) -> Result<ExitCode, String> {
             cfg.port,
             cfg.baud
         );
-        let width = trol_cli::common::wrap_width(true, || Some(textwrap::termwidth()));
+        let width = trol_cli::common::wrap_width(std::io::stdout().is_terminal(), || {
+            Some(textwrap::termwidth())
+        });
         say!("{}", trol_cli::common::wrapped(&banner, width));
         return repl(&mut session);
     }

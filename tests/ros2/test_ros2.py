@@ -884,14 +884,9 @@ def test_a_kilted_peer_reads_the_discovery_message_and_the_trajectory_feedback_i
     # The Kilted peer in a process of its own (tests/ros2/kilted_peer.py): Cyclone DDS keeps
     # one definition of a type name per process, and this one's are Jazzy's.
     node = Node(domain, "arm1", time_scale=1, extra=("--distro", "kilted"))
-    peer = subprocess.Popen([sys.executable, str(Path(__file__).with_name("kilted_peer.py")), str(domain), "arm1", "60"],
-                            stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                            cwd=Path(__file__).parent)
+    peer, lines = peer_process("kilted_peer.py", domain, 60)
     try:
         assert "/arm1/follow_joint_trajectory" in node.first, node.first
-        assert peer.stdout is not None and peer.stdout.readline().strip() == "ready"
-        lines: list[str] = []
-        threading.Thread(target=lambda: lines.extend(peer.stdout), daemon=True).start()  # type: ignore[arg-type]
         # The discovery message in Kilted's layout (that of Jazzy, ros2-client's own).
         seen = wait_for("the node in Kilted's discovery layout", lambda: ours(lines) or None)
         assert seen[-1]["padded"], seen[-1]
@@ -916,9 +911,10 @@ def test_a_kilted_peer_reads_the_discovery_message_and_the_trajectory_feedback_i
         node.stop()
 
 
-def humble_peer(domain: int, seconds: float) -> tuple[subprocess.Popen, list[str]]:
-    """tests/ros2/humble_peer.py on `domain`, ready, its lines gathered as they come."""
-    peer = subprocess.Popen([sys.executable, str(Path(__file__).with_name("humble_peer.py")), str(domain), "arm1",
+def peer_process(script: str, domain: int, seconds: float) -> tuple[subprocess.Popen, list[str]]:
+    """A peer of another distribution's layouts (tests/ros2/`script`) on `domain`, for the
+    namespace arm1, ready, its lines gathered as they come."""
+    peer = subprocess.Popen([sys.executable, str(Path(__file__).with_name(script)), str(domain), "arm1",
                              str(seconds)], stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
                             cwd=Path(__file__).parent)
     assert peer.stdout is not None and peer.stdout.readline().strip() == "ready"
@@ -939,7 +935,7 @@ def test_a_humble_peer_sees_the_node_and_reads_its_feedback_with_distro_humble(d
     # Without --distro humble (Jazzy's layout, 16-byte ids) a Humble peer cannot read the
     # node's discovery message: `ros2 node list` on Humble would not show it.
     node = Node(domain, "arm1", time_scale=1)
-    peer, lines = humble_peer(domain, 8)
+    peer, lines = peer_process("humble_peer.py", domain, 8)
     try:
         peer.wait(timeout=60)
         assert not ours(lines), lines
@@ -947,7 +943,7 @@ def test_a_humble_peer_sees_the_node_and_reads_its_feedback_with_distro_humble(d
         peer.kill()
         node.stop()
     node = Node(domain, "arm1", time_scale=1, extra=("--distro", "humble"))
-    peer, lines = humble_peer(domain, 60)
+    peer, lines = peer_process("humble_peer.py", domain, 60)
     try:
         seen = wait_for("the node in Humble's discovery layout", lambda: ours(lines) or None)
         info = next(n for n in seen[-1]["nodes"] if n["name"] == "trol_a465")
